@@ -1,0 +1,34 @@
+# pmmw: two commands on a fresh machine.
+#   make render   create .venv, install pmmw, render the shipped cinderblocks scenario
+#   make test     create .venv, install pmmw with test extras, run the test suite
+PYTHON ?= python3
+VENV   ?= .venv
+BIN     = $(VENV)/bin
+SCENARIO ?= configs/cinderblocks_35ghz.yaml
+PYTEST_ARGS ?=
+
+.PHONY: render test install install-test clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --upgrade pip >/dev/null
+
+$(VENV)/.installed: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -e .
+	touch $@
+
+$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -e '.[test]'
+	touch $@ $(VENV)/.installed
+
+install: $(VENV)/.installed
+install-test: $(VENV)/.installed-test
+
+render: install
+	$(BIN)/pmmw render $(SCENARIO)
+
+test: install-test
+	$(BIN)/python -m pytest $(PYTEST_ARGS)
+
+clean:
+	rm -rf out .pytest_cache .hypothesis

@@ -1,0 +1,115 @@
+"""The ``pmmw`` command line (typer): parse arguments, call the pipeline; no physics here.
+
+User errors (`pmmw_cli.errors.UserError`) print one paragraph naming the file and key path and
+exit with status 2, never with a traceback.
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+import yaml
+
+from pmmw_cli import __version__
+from pmmw_cli.errors import UserError
+
+app = typer.Typer(
+    add_completion=False, no_args_is_help=True,
+    help="pmmw: passive millimetre-wave imaging simulator (polarized geometrical optics).",
+)
+materials_app = typer.Typer(no_args_is_help=True, help="The material database: permittivity, temperature, source.")
+app.add_typer(materials_app, name="materials")
+
+EXIT_USER_ERROR = 2
+
+
+def _user_errors(fn):
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except UserError as e:
+            typer.echo(f"error: {e}", err=True)
+            raise typer.Exit(EXIT_USER_ERROR) from None
+        except KeyboardInterrupt:
+            typer.echo("interrupted: finished tiles are kept; run again with --resume to continue", err=True)
+            raise typer.Exit(130) from None
+
+    return wrapper
+
+
+SetOpt = typer.Option(None, "--set", metavar="KEY.PATH=VALUE", help="Override a scenario key (repeatable).")
+
+
+@app.command()
+@_user_errors
+def render(
+    scenario: Path = typer.Argument(..., help="Scenario YAML file."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default: output.dir or ./out/<name>)."),
+    set_: Optional[List[str]] = SetOpt,
+    spp: Optional[int] = typer.Option(None, "--spp", min=1, help="Samples per pixel (render.spp)."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Worker processes (default: all cores)."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Random seed (render.seed)."),
+    resume: bool = typer.Option(False, "--resume", help="Reuse tiles finished by an interrupted run."),
+    keep_tiles: bool = typer.Option(False, "--keep-tiles", help="Keep per-tile files after the image is written."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar; one summary line per image."),
+):
+    """Render a scenario to an EXR polarization stack and a report."""
+    from pmmw_cli.pipeline import render as run
+
+    run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
+        quiet=quiet, keep_tiles=keep_tiles)
+
+
+@app.command()
+@_user_errors
+def validate(
+    scenario: Path = typer.Argument(..., help="Scenario YAML file."),
+    set_: Optional[List[str]] = SetOpt,
+):
+    """Check a scenario and every asset it names; print the resolved job. Renders nothing."""
+    from pmmw_cli.pipeline import validate as run
+
+    resolved = run(scenario, set_ or [])
+    typer.echo(yaml.safe_dump(resolved, sort_keys=False, default_flow_style=None, width=100).rstrip())
+
+
+@materials_app.command("list")
+@_user_errors
+def materials_list(
+    frequency: Optional[str] = typer.Option(None, "--frequency", "-f", help="e.g. '95 GHz': show eps there."),
+):
+    """List every material id with its kind, permittivity, temperature and source."""
+    from pmmw_cli.scene.materials import MaterialDB, format_material_table
+    from pmmw_cli.units import parse_quantity
+
+    f = parse_quantity(frequency, "frequency", file="--frequency") if frequency else None
+    typer.echo(format_material_table(MaterialDB.load(), f))
+
+
+@materials_app.command("show")
+@_user_errors
+def materials_show(
+    material_id: str = typer.Argument(..., metavar="ID"),
+    frequency: Optional[str] = typer.Option(None, "--frequency", "-f", help="e.g. '95 GHz'."),
+):
+    """Show one material: its permittivity table (or value at a frequency), coating, source."""
+    from pmmw_cli.scene.materials import MaterialDB, format_material
+    from pmmw_cli.units import parse_quantity
+
+    f = parse_quantity(frequency, "frequency", file="--frequency") if frequency else None
+    typer.echo(format_material(MaterialDB.load(), material_id, f))
+
+
+@app.command()
+def version():
+    """Print the pmmw version."""
+    typer.echo(f"pmmw {__version__}")
+
+
+def main():  # pragma: no cover - console entry point alias
+    sys.exit(app())

@@ -1,0 +1,67 @@
+"""User-facing errors and warnings.
+
+A `UserError` is a problem with the user's input (scenario, asset, material, command line). The
+CLI prints it as one paragraph, ``error: FILE: KEY.PATH: message``, and exits with status 2; it
+never shows a traceback. Everything else is a bug and may show one.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+
+class UserError(Exception):
+    """An error in the user's input, located by file and dotted key path.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and what was expected.
+    file : str or Path, optional
+        The file the problem is in (scenario, mesh, material database, texture).
+    key : str, optional
+        Dotted key path inside that file, e.g. ``materials.runway.eps`` or ``scene[2].mesh``.
+    """
+
+    def __init__(self, message: str, file: str | Path | None = None, key: str | None = None):
+        super().__init__(message)
+        self.message = message
+        self.file = str(file) if file is not None else None
+        self.key = key
+
+    def __str__(self) -> str:
+        parts = [p for p in (self.file, self.key) if p]
+        return ": ".join(parts + [self.message])
+
+
+class UserErrors(UserError):
+    """Several user errors collected at once (parse everything, then report everything)."""
+
+    def __init__(self, errors: list[UserError]):
+        self.errors = list(errors)
+        super().__init__("; ".join(str(e) for e in self.errors))
+
+    def __str__(self) -> str:
+        if len(self.errors) == 1:
+            return str(self.errors[0])
+        return f"{len(self.errors)} problems:\n" + "\n".join(f"  - {e}" for e in self.errors)
+
+
+_WARNINGS: list[str] = []
+
+
+def warn(message: str) -> None:
+    """Record a warning for the report and print it to stderr once."""
+    if message not in _WARNINGS:
+        _WARNINGS.append(message)
+        print(f"warning: {message}", file=sys.stderr)
+
+
+def collected_warnings() -> list[str]:
+    """Warnings recorded so far in this process, in order."""
+    return list(_WARNINGS)
+
+
+def clear_warnings() -> None:
+    _WARNINGS.clear()

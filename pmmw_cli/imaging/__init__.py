@@ -1,0 +1,1 @@
+"""From traced radiance to the sensor image: PSF, noise, display scaling."""

@@ -1,0 +1,1 @@
+"""Writers and readers: atomic files, OpenEXR images, PNG previews and the run report."""

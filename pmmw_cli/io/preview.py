@@ -1,0 +1,118 @@
+"""PNG previews of temperature images with the display scaling of seed 000 sec. 3.2.
+
+Display scaling (seed 000 sec. 3.2 footnote): the coldest and hottest 1/256 of the pixels clip to
+black and white, and the range between is mapped linearly onto 256 grey levels.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import OpenImageIO as oiio
+
+from pmmw_cli.io.atomic import atomic_path
+
+#: Fraction of the pixels clipped at each end of the display range (seed 000 sec. 3.2 footnote).
+CLIP_FRACTION = 1.0 / 256.0
+
+#: Grey level of an image without contrast (a constant image).
+MID_GREY = 128
+
+
+def display_range(img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+    """Temperatures [K] shown as black and white.
+
+    With n finite pixels sorted ascending as t, and k = floor(clip_fraction * n): low = t[k] and
+    high = t[n - 1 - k], so exactly k pixels lie below low and k above high (fewer where values
+    tie). When that range collapses (more than 1 - 2 clip_fraction of the pixels share one
+    temperature) the full finite range is used instead. Non-finite pixels are ignored; with no
+    finite pixel the result is (nan, nan).
+
+    Parameters
+    ----------
+    img : array_like, any shape, float
+        Temperatures [K].
+    clip_fraction : float
+        Fraction of the pixels clipped at each end, in [0, 0.5).
+    """
+    if not 0.0 <= clip_fraction < 0.5:
+        raise ValueError(f"clip_fraction must lie in [0, 0.5), got {clip_fraction}")
+    t = np.asarray(img, dtype=np.float64).ravel()
+    t = t[np.isfinite(t)]
+    n = t.size
+    if n == 0:
+        return float("nan"), float("nan")
+    k = int(np.floor(clip_fraction * n))
+    low, high = np.partition(t, (k, n - 1 - k))[[k, n - 1 - k]]
+    if high <= low:
+        low, high = t.min(), t.max()
+    return float(low), float(high)
+
+
+def scale_to_u8(img, low: float, high: float) -> np.ndarray:
+    """Map temperatures [K] onto 256 equal bins between low and high, clipping outside.
+
+    Returns an ndarray of img's shape, uint8. NaN -> 0, +inf -> 255, -inf -> 0. Without a range
+    (high <= low, or either end not finite) pixels equal to low are mid grey, colder ones 0 and
+    hotter ones 255.
+    """
+    t = np.asarray(img, dtype=np.float64)
+    if np.isfinite(low) and np.isfinite(high) and high > low:
+        with np.errstate(invalid="ignore", over="ignore"):
+            out = np.floor((t - low) * (256.0 / (high - low)))
+    else:
+        out = np.where(t > low, 255.0, np.where(t < low, 0.0, float(MID_GREY)))
+    out = np.clip(np.nan_to_num(out, nan=0.0, posinf=255.0, neginf=0.0), 0, 255)
+    out[np.isnan(t)] = 0
+    return out.astype(np.uint8)
+
+
+def display_scale(img, clip_fraction: float = CLIP_FRACTION) -> np.ndarray:
+    """An 8-bit display image of a temperature image.
+
+    Parameters
+    ----------
+    img : array_like, shape (H, W), float
+        Temperatures [K]; NaN pixels are shown black and do not move the range.
+    clip_fraction : float
+        Fraction of the pixels clipped at each end (seed 000 sec. 3.2 footnote: 1/256).
+
+    Returns
+    -------
+    ndarray, shape (H, W), uint8
+        0 at and below the display range's low end, 255 at and above its high end, 256 equal
+        bins between; a constant image is mid grey (128).
+    """
+    low, high = display_range(img, clip_fraction)
+    return scale_to_u8(img, low, high)
+
+
+def write_png(path: str | os.PathLike, img_u8: np.ndarray) -> None:
+    """Write a grey (H, W) uint8 image as PNG, atomically; RuntimeError if OIIO fails."""
+    img = np.ascontiguousarray(img_u8, dtype=np.uint8)
+    if img.ndim != 2:
+        raise ValueError(f"write_png: expected an (H, W) image, got shape {img.shape}")
+    spec = oiio.ImageSpec(img.shape[1], img.shape[0], 1, oiio.UINT8)
+    spec.channelnames = ("Y",)
+    with atomic_path(path) as tmp:
+        out = oiio.ImageOutput.create("png")
+        if out is None:
+            raise RuntimeError(f"OpenImageIO has no PNG writer: {oiio.geterror()}")
+        if not out.open(str(tmp), spec):
+            raise RuntimeError(f"cannot open {path} for writing: {out.geterror() or oiio.geterror()}")
+        # (H, W, 1): OIIO's binding misreads a 2-D array's strides (it scrambles the pixels)
+        ok = out.write_image(img[:, :, np.newaxis])
+        closed = out.close()
+        if not (ok and closed):
+            raise RuntimeError(f"cannot write {path}: {out.geterror() or oiio.geterror()}")
+
+
+def write_preview(path: str | os.PathLike, img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+    """Write the display-scaled PNG preview of a temperature image [K].
+
+    Returns the (low, high) temperatures [K] shown as black and white.
+    """
+    low, high = display_range(img, clip_fraction)
+    write_png(path, scale_to_u8(img, low, high))
+    return low, high

@@ -1,0 +1,160 @@
+"""The run report: ``report.json`` for programs and ``report.md`` for people.
+
+Expected report keys (any may be absent): ``name``, ``version``, ``frequency_hz``, ``output_exr``,
+``channels`` {name: {min, mean, max, display_low, display_high}} [K], ``timing`` {step: seconds},
+``rays``, ``pixels``, ``spp``, ``workers``, ``warnings`` [str], ``scenario`` (the resolved scenario
+as plain data). Other keys go into the JSON only.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path, PurePath
+
+import numpy as np
+import yaml
+
+from pmmw_cli.io.atomic import write_text_atomic
+
+
+def _plain(value):
+    """Plain JSON/YAML data: numpy scalars and arrays to Python, paths to str, NaN/inf to None."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return _plain(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, PurePath):
+        return str(value)
+    if value is None or isinstance(value, (str, int, float, bool)):
+        return value
+    return str(value)
+
+
+def _num(x, fmt: str = ".2f") -> str:
+    if x is None:
+        return "-"
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    return format(x, fmt) if math.isfinite(x) else str(x)
+
+
+def _md_link(target: str) -> str:
+    """A Markdown link target; angle brackets keep spaces and parentheses in the path."""
+    target = target.replace(os.sep, "/")
+    return f"<{target}>" if any(c in target for c in " ()<>") else target
+
+
+def _cell(text) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _range(stats: Mapping) -> str:
+    if stats.get("display_low") is None and stats.get("display_high") is None:
+        return "-"
+    return f"{_num(stats.get('display_low'))} .. {_num(stats.get('display_high'))}"
+
+
+def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
+    """The human report as Markdown text (see the module docstring for the keys used)."""
+    report = _plain(report)
+    lines = [f"# {report.get('name', 'pmmw report')}", ""]
+
+    facts = []
+    if report.get("version") is not None:
+        facts.append(f"- pmmw version: {report['version']}")
+    f = report.get("frequency_hz")
+    if isinstance(f, (int, float)) and not isinstance(f, bool):
+        facts.append(f"- frequency: {f / 1e9:g} GHz")
+    if report.get("output_exr") is not None:
+        facts.append(f"- image: `{report['output_exr']}`")
+    for key, label in (("pixels", "pixels"), ("spp", "samples per pixel"), ("workers", "workers")):
+        if report.get(key) is not None:
+            facts.append(f"- {label}: {report[key]}")
+    if report.get("rays") is not None:
+        rays = report["rays"]
+        facts.append(f"- rays traced: {rays:,}" if isinstance(rays, int) else f"- rays traced: {rays}")
+    if facts:
+        lines += facts + [""]
+
+    channels = report.get("channels") or {}
+    if channels:
+        lines += [
+            "## Channels [K]", "",
+            "| channel | min | mean | max | display range |",
+            "| --- | ---: | ---: | ---: | --- |",
+        ]
+        for name, stats in channels.items():
+            stats = stats or {}
+            lines.append(
+                f"| {_cell(name)} | {_num(stats.get('min'))} | {_num(stats.get('mean'))} | "
+                f"{_num(stats.get('max'))} | {_range(stats)} |"
+            )
+        lines.append("")
+
+    if previews:
+        lines += [
+            "## Previews", "",
+            "Display scaling: the coldest and hottest 1/256 of the pixels clip to black and white "
+            "(seed 000 sec. 3.2).", "",
+        ]
+        for name, rel in previews.items():
+            stats = channels.get(name) or {}
+            lines += [f"### {name}", "", f"![{name}]({_md_link(str(rel))})", ""]
+            if _range(stats) != "-":
+                lines += [f"black {_num(stats.get('display_low'))} K, "
+                          f"white {_num(stats.get('display_high'))} K", ""]
+
+    timing = report.get("timing") or {}
+    if timing:
+        lines += ["## Timing", "", "| step | seconds |", "| --- | ---: |"]
+        lines += [f"| {_cell(step)} | {_num(sec, '.3f')} |" for step, sec in timing.items()]
+        lines.append("")
+
+    warnings = report.get("warnings")
+    if warnings is not None:
+        lines += ["## Warnings", ""]
+        lines += [f"- {w}" for w in warnings] if warnings else ["None."]
+        lines.append("")
+
+    if report.get("scenario") is not None:
+        text = yaml.safe_dump(report["scenario"], sort_keys=False, allow_unicode=True)
+        lines += ["## Resolved scenario", "", "```yaml", text.rstrip("\n"), "```", ""]
+
+    return "\n".join(lines)
+
+
+def write_report(out_dir: str | os.PathLike, report: Mapping, previews: Mapping[str, str], *,
+                 basename: str = "report") -> tuple[Path, Path]:
+    """Write ``<basename>.json`` and ``<basename>.md`` in ``out_dir``, each atomically.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The run's output directory (created if needed).
+    report : mapping
+        The report (module docstring); numpy values, paths and non-finite floats are made plain
+        JSON (NaN and inf become null).
+    previews : mapping of str to str
+        Channel name -> preview PNG path relative to ``out_dir``.
+
+    Returns
+    -------
+    (json_path, md_path) : tuple of Path
+    """
+    out_dir = Path(out_dir)
+    json_path = out_dir / f"{basename}.json"
+    md_path = out_dir / f"{basename}.md"
+    write_text_atomic(json_path, json.dumps(_plain(report), indent=2, default=str) + "\n")
+    write_text_atomic(md_path, render_markdown(report, previews))
+    return json_path, md_path

@@ -1,0 +1,269 @@
+"""Scenario -> scene -> trace jobs -> process pool -> images -> imager model -> files.
+
+Parse, then resolve, then build: the scenario is validated first (`pmmw_cli.config`), every
+material id and asset is resolved and checked (all user errors reported together), and only then
+are meshes loaded, Embree scenes built and rays traced.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pmmw_cli import __version__
+from pmmw_cli.config import load_scenario
+from pmmw_cli.config.load import scenario_to_display
+from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
+from pmmw_cli.imaging.imager import apply_imager
+from pmmw_cli.io.exr import write_exr
+from pmmw_cli.io.preview import write_preview
+from pmmw_cli.io.report import write_report
+from pmmw_cli.physics.jones import stokes_images
+from pmmw_cli.scene.camera import Camera
+from pmmw_cli.scene.geometry import build_geometry
+from pmmw_cli.scene.materials import MaterialDB
+from pmmw_cli.scene.sky import make_sky
+from pmmw_cli.trace.job import (
+    BLACKBODY, C0, DIELECTRIC, KIND_CODES, METAL, THIN, Coating, Media, RenderSettings, TraceJob,
+)
+from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
+
+CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
+
+
+@dataclass
+class Resolved:
+    """A scenario with its materials and geometry resolved, ready to make trace jobs."""
+
+    scenario: object
+    db: MaterialDB
+    geometry: object
+
+
+def resolve(path, overrides=(), cli=None) -> Resolved:
+    """Load and check the scenario and every asset it names; raise `UserErrors` on problems."""
+    scn = load_scenario(path, list(overrides), cli=cli)
+    db = MaterialDB.load().with_overrides(dict(scn.materials), file=scn.source_file)
+    db.check()
+    errors = []
+    for i, entry in enumerate(scn.scene):
+        pairs = (
+            [(f"{entry.key}.material", entry.material)] if entry.material is not None
+            else [(f"{entry.key}.materials.{name}", mid) for name, mid in entry.materials.items()]
+        )
+        for key, mid in pairs:
+            try:
+                db.get(mid, file=scn.source_file, key=key)
+            except UserError as e:
+                errors.append(e)
+    if errors:
+        raise UserErrors(errors)
+    geom = build_geometry(scn.scene, scenario_file=scn.source_file)
+    refracting = {m for m in geom.material_ids if db.get(m).kind == "dielectric"}
+    for obj, tight in zip(geom.objects, geom.object_watertight):
+        mats = {geom.material_ids[i] for i in np.unique(geom.face_material[geom.face_object == geom.objects.index(obj)])}
+        if not tight and mats & refracting:
+            warn(
+                f"{obj} is not watertight but refracts ({', '.join(sorted(mats & refracting))}): "
+                "rays that enter it may not find the way out; close the mesh or use kind opaque/thin"
+            )
+    return Resolved(scn, db, geom)
+
+
+def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
+    """Optical properties of the ambient medium and every scene material at frequency f [Hz]."""
+    k0 = 2.0 * np.pi * f / C0
+    t_default = scn.render.default_temperature
+    atm = scn.atmosphere
+    ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
+    temp.append(atm.temperature if atm is not None else t_default)
+    alpha.append(atm.loss if atm is not None else 0.0)
+    for mid in material_ids:
+        m = db.get(mid)
+        code = KIND_CODES[m.kind]
+        t_m = m.temperature if m.temperature is not None else t_default
+        e = m.eps_at(f) if m.eps else 1.0 + 0j
+        ids.append(mid)
+        kind.append(code)
+        eps.append(complex(e))
+        temp.append(t_m)
+        alpha.append(2.0 * k0 * np.sqrt(complex(e)).imag if code == DIELECTRIC else 0.0)
+        layers = []
+        for layer in m.coating:
+            lm = db.get(layer.material)
+            t_l = layer.temperature if layer.temperature is not None else (lm.temperature if lm.temperature is not None else t_m)
+            layers.append((lm.eps_at(f), layer.thickness, t_l))
+        if code == THIN:
+            layers.append((e, m.thickness or 0.0, t_m))
+        coat.append(Coating.from_layers(*zip(*layers)) if layers else None)
+    return Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp, float), np.array(alpha, float), tuple(coat))
+
+
+def scenario_hash(scn) -> str:
+    text = json.dumps(scenario_to_display(scn), sort_keys=True, default=str)
+    return hashlib.sha256((text + __version__).encode()).hexdigest()[:16]
+
+
+def make_job(res: Resolved, f: float) -> TraceJob:
+    scn, geom = res.scenario, res.geometry
+    im = scn.imager
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)
+    r = scn.render
+    settings = RenderSettings(
+        spp=r.spp, max_depth=r.max_depth, threshold=r.threshold, seed=r.seed,
+        termination=r.termination, tile=r.tile, aux=tuple(scn.output.aux),
+    )
+    return TraceJob(
+        vertices=geom.vertices, faces=geom.faces, face_normals=geom.face_normals,
+        face_medium=(geom.face_material + 1).astype(np.int32),
+        media=build_media(res.db, geom.material_ids, f, scn), camera=cam, sky=make_sky(scn.sky, f),
+        frequency=f, settings=settings,
+    )
+
+
+class _Progress:
+    """Progress on a terminal; silent otherwise (the summary line is printed by `render`)."""
+
+    def __init__(self, label: str, quiet: bool):
+        self.label = label
+        self.enabled = not quiet and sys.stderr.isatty()
+
+    def __call__(self, done, total, rays, elapsed):
+        if not self.enabled:
+            return
+        rate = rays / elapsed if elapsed > 0 else 0.0
+        left = elapsed / done * (total - done) if done else 0.0
+        sys.stderr.write(f"\r{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left ")
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+def _stem(scn, f: float) -> str:
+    return scn.name if len(scn.frequencies) == 1 else f"{scn.name}_{f / 1e9:g}GHz"
+
+
+def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
+           quiet=False, keep_tiles=False) -> list[Path]:
+    """The ``pmmw render`` job. Returns the EXR paths written."""
+    clear_warnings()
+    t0 = time.perf_counter()
+    cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed), ("out", out)) if v is not None}
+    res = resolve(path, overrides, cli=cli)
+    scn = res.scenario
+    out_dir = Path(scn.output.dir) if scn.output.dir is not None else Path.cwd() / "out" / scn.name
+    out_dir.mkdir(parents=True, exist_ok=True)
+    n_workers = scn.render.workers or default_workers()
+    t_resolve = time.perf_counter() - t0
+    written, renders = [], []
+    shash = scenario_hash(scn)
+    for f in scn.frequencies:
+        t1 = time.perf_counter()
+        job = make_job(res, f)
+        stem = _stem(scn, f)
+        tile_dir = out_dir / ".pmmw-tiles" / f"{stem}-{shash}"
+        results = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=resume,
+                               progress=_Progress(stem, quiet))
+        mean, stderr, depth, material, rays = assemble(job, results)
+        t_trace = time.perf_counter() - t1
+        ideal = stokes_images(mean)
+        sensor = apply_imager(
+            ideal, pixel_angle=job.camera.pixel_angle, k0=job.k0,
+            aperture_diameter=scn.imager.aperture_diameter, noise=scn.imager.noise, seed=scn.render.seed,
+        )
+        channels = {c: sensor[c].astype(np.float32) for c in scn.output.channels}
+        channels.update({f"ideal.{c}": ideal[c].astype(np.float32) for c in scn.output.channels})
+        if "stderr" in scn.output.aux:
+            err = stokes_images(stderr)
+            channels["aux.stderr.I"] = np.sqrt(stderr[..., 0] ** 2 + stderr[..., 1] ** 2).astype(np.float32)
+            channels["aux.stderr.Ex2"] = err["Ex2"].astype(np.float32)
+            channels["aux.stderr.Ey2"] = err["Ey2"].astype(np.float32)
+        if "depth" in scn.output.aux:
+            channels["aux.depth"] = depth.astype(np.float32)
+        if "material" in scn.output.aux:
+            channels["aux.material"] = material.astype(np.float32)
+        cam = job.camera
+        attrs = {
+            "pmmw:version": __version__, "pmmw:units": "K (Rayleigh-Jeans brightness temperature)",
+            "pmmw:frequency_hz": float(f), "pmmw:fov_deg": float(np.degrees(cam.fov)),
+            "pmmw:resolution": f"{cam.width}x{cam.height}",
+            "pmmw:imager_position_m": " ".join(f"{v:g}" for v in cam.position),
+            "pmmw:imager_x": " ".join(f"{v:.9g}" for v in cam.x),
+            "pmmw:imager_y": " ".join(f"{v:.9g}" for v in cam.y),
+            "pmmw:imager_k": " ".join(f"{v:.9g}" for v in cam.k),
+            "pmmw:scenario": str(scn.source_file), "pmmw:scenario_hash": shash,
+            "pmmw:spp": int(scn.render.spp), "pmmw:seed": int(scn.render.seed),
+            "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (seed 000 eq. 2.12)",
+            "pmmw:materials": ",".join(job.media.ids),
+        }
+        exr_path = out_dir / f"{stem}.exr"
+        write_exr(exr_path, channels, attrs)
+        written.append(exr_path)
+        t_total = time.perf_counter() - t1
+        stats, previews = {}, {}
+        for c in scn.output.channels:
+            img = sensor[c]
+            stats[c] = {"min": float(np.min(img)), "mean": float(np.mean(img)), "max": float(np.max(img))}
+            if scn.output.previews:
+                rel = f"previews/{stem}_{c}.png"
+                lo, hi = write_preview(out_dir / rel, img)
+                stats[c].update(display_low=lo, display_high=hi)
+                previews[c] = rel
+        renders.append({
+            "frequency_hz": f, "output_exr": str(exr_path), "channels": stats, "previews": previews,
+            "rays": rays, "timing": {"trace_s": round(t_trace, 3), "frequency_total_s": round(t_total, 3)},
+            "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
+        })
+        if not keep_tiles:
+            shutil.rmtree(tile_dir, ignore_errors=True)
+    tiles_root = out_dir / ".pmmw-tiles"
+    if not keep_tiles and tiles_root.is_dir() and not any(tiles_root.iterdir()):
+        tiles_root.rmdir()
+    total = time.perf_counter() - t0
+    for r in renders:
+        report = {
+            "name": _stem(scn, r["frequency_hz"]), "version": __version__, **r,
+            "timing": {"resolve_s": round(t_resolve, 3), **r["timing"], "total_s": round(total, 3)},
+            "warnings": collected_warnings(), "scenario": scenario_to_display(scn),
+        }
+        suffix = "" if len(renders) == 1 else f"_{r['frequency_hz'] / 1e9:g}GHz"
+        write_report(out_dir, report, r["previews"], basename=f"report{suffix}")
+        print(
+            f"{report['name']}: {r['pixels']} px x {r['spp']} spp, {r['rays'] / 1e6:.2f} M rays, "
+            f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}"
+        )
+    return written
+
+
+def validate(path, overrides=()) -> dict:
+    """The ``pmmw validate`` job: the resolved scenario and, per frequency, the media."""
+    res = resolve(path, overrides)
+    scn, geom = res.scenario, res.geometry
+    out = {"scenario": scenario_to_display(scn), "geometry": {
+        "triangles": int(geom.faces.shape[0]), "objects": list(geom.objects),
+        "watertight": dict(zip(geom.objects, map(bool, geom.object_watertight))),
+        "bounds_m": [list(map(float, geom.bounds[0])), list(map(float, geom.bounds[1]))],
+    }, "media": {}}
+    for f in scn.frequencies:
+        media = build_media(res.db, geom.material_ids, f, scn)
+        kinds = {v: k for k, v in KIND_CODES.items()}
+        out["media"][f"{f / 1e9:g} GHz"] = {
+            mid: {
+                "kind": kinds[int(media.kind[i])],
+                **({"eps": [float(media.eps[i].real), float(media.eps[i].imag)]}
+                   if int(media.kind[i]) not in (METAL, BLACKBODY) else {}),
+                "temperature_K": float(media.temperature[i]),
+                **({"loss_dB_per_km": float(media.alpha[i] * 1e3 * 10 / np.log(10))} if media.alpha[i] > 0 else {}),
+                **({"coating_layers": int(media.coating[i].eps.size)} if media.coating[i] is not None else {}),
+            }
+            for i, mid in enumerate(media.ids)
+        }
+    out["warnings"] = collected_warnings()
+    return out

@@ -1,0 +1,1 @@
+"""The scene: geometry, materials, imager pose and rays, sky."""

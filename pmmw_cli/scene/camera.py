@@ -1,0 +1,128 @@
+"""Imager pose, pixel grid and primary rays.
+
+The imager is a pinhole with a horizontal field of view ``fov`` and square pixels. Pixel (i, j)
+has column i (0 = left) and row j (0 = top). Its basis is x = image right, y = image up,
+k_view = viewing direction (see `pmmw_cli.physics.jones` for the polarization convention).
+
+Sub-pixel positions come from the R2 low-discrepancy sequence (Roberts 2018) with a
+Cranley-Patterson rotation drawn per pixel from a hash of (seed, pixel): every pixel's samples
+depend only on the run seed and the pixel, never on tiling or worker count.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+# R2 sequence: fractional parts of k / g and k / g^2, g the plastic number (root of x^3 = x + 1).
+_G = 1.32471795724474602596
+R2_ALPHA = np.array([1.0 / _G, 1.0 / (_G * _G)])
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole imager.
+
+    Attributes
+    ----------
+    position : ndarray, shape (3,) [m]
+    x, y, k : ndarray, shape (3,)
+        Unit vectors: image right, image up, viewing direction (x, y, -k right-handed).
+    fov : float
+        Horizontal field of view [rad].
+    width, height : int
+        Resolution [pixels].
+    """
+
+    position: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    k: np.ndarray
+    fov: float
+    width: int
+    height: int
+
+    @classmethod
+    def look_at(cls, position, look_at, up, fov, resolution):
+        position = np.asarray(position, float)
+        k = np.asarray(look_at, float) - position
+        k /= np.linalg.norm(k)
+        x = np.cross(k, np.asarray(up, float))
+        x /= np.linalg.norm(x)
+        y = np.cross(x, k)
+        return cls(position, x, y, k, float(fov), int(resolution[0]), int(resolution[1]))
+
+    @property
+    def pixel_angle(self) -> float:
+        """Angular width of a pixel at the image centre [rad]."""
+        return 2.0 * np.arctan(np.tan(self.fov / 2.0) / self.width)
+
+    def directions(self, u, v):
+        """Unit viewing directions through image-plane positions.
+
+        Parameters
+        ----------
+        u, v : ndarray, shape (n,), float64
+            Continuous pixel coordinates: u in [0, width) from the left, v in [0, height) from the top.
+
+        Returns
+        -------
+        ndarray, shape (n, 3), float64
+        """
+        half = np.tan(self.fov / 2.0)
+        a = (2.0 * u / self.width - 1.0) * half
+        b = (self.height - 2.0 * v) / self.width * half  # square pixels
+        d = self.k[None, :] + a[:, None] * self.x[None, :] + b[:, None] * self.y[None, :]
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def _splitmix64(x):
+    """Vectorized splitmix64 finalizer on uint64 arrays (a good integer hash)."""
+    with np.errstate(over="ignore"):
+        x = (x + np.uint64(0x9E3779B97F4A7C15)) & np.uint64(0xFFFFFFFFFFFFFFFF)
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        return x ^ (x >> np.uint64(31))
+
+
+def hash_uniform(seed: int, keys, stream: int = 0):
+    """Uniform [0, 1) floats from a hash of (seed, stream, key), shape of ``keys``."""
+    k = np.asarray(keys, dtype=np.uint64)
+    with np.errstate(over="ignore"):
+        h = _splitmix64(k ^ _splitmix64(np.uint64(seed) * np.uint64(0x100000001B3) + np.uint64(stream)))
+    return (h >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
+
+
+def pixel_samples(width: int, pixels, spp: int, seed: int):
+    """Sub-pixel sample positions for a set of pixels.
+
+    Parameters
+    ----------
+    width : int
+        Image width [pixels] (pixel index = row * width + column).
+    pixels : ndarray, shape (p,), int64
+        Flat pixel indices.
+    spp : int
+        Samples per pixel. With one sample the pixel centre is used.
+    seed : int
+
+    Returns
+    -------
+    u, v : ndarray, shape (p * spp,), float64
+        Continuous pixel coordinates, sample-major within each pixel.
+    pix : ndarray, shape (p * spp,), int64
+        The pixel index of each sample.
+    """
+    pixels = np.asarray(pixels, dtype=np.int64)
+    pix = np.repeat(pixels, spp)
+    col = (pix % width).astype(np.float64)
+    row = (pix // width).astype(np.float64)
+    if spp == 1:
+        return col + 0.5, row + 0.5, pix
+    s = np.tile(np.arange(spp, dtype=np.float64), pixels.size)
+    rot_u = hash_uniform(seed, pix, stream=1)
+    rot_v = hash_uniform(seed, pix, stream=2)
+    ju = np.mod(rot_u + (s + 0.5) * R2_ALPHA[0], 1.0)
+    jv = np.mod(rot_v + (s + 0.5) * R2_ALPHA[1], 1.0)
+    return col + ju, row + jv, pix

@@ -1,0 +1,811 @@
+"""The material database: ``materials/*.yaml`` plus a scenario's ``materials:`` overrides.
+
+An entry (the same schema in the database files and in a scenario's ``materials:`` map)::
+
+    concrete:
+      name: Concrete
+      eps: {35 GHz: [5.5, 0.5], 95 GHz: [2.49, 6.8e-2]}   # [eps', eps''] per frequency
+      temperature: 300 K          # optional physical temperature
+      kind: dielectric            # dielectric (default) | metal | blackbody | opaque | thin
+      source: "seed 000 Table A.1, refs [19, 15]"
+      coating:                    # optional, outermost layer first
+        - {material: denim, thickness: 0.8 mm, temperature: 300 K}
+      thickness: 1 mm             # only for kind thin (the sheet's own thickness)
+
+``eps: [eps', eps'']`` (no frequencies) is one value for every frequency. eps = eps' + i eps'',
+eps'' >= 0 lossy (``docs/ARCHITECTURE.md``). ``metal`` and ``blackbody`` have no ``eps``
+(seed 000 sec. 2.2.9); every other kind needs one. Between tabulated frequencies eps' and eps''
+are interpolated linearly in frequency; outside the table the nearest tabulated value is used and
+a warning names the material and its range.
+
+Everything is validated at load time and every problem is reported with its file and dotted key
+path (``materials.runway.eps."95 GHz"``); problems are collected across entries and raised
+together (`pmmw_cli.errors.UserErrors`).
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, Iterable, Literal, Optional
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, BeforeValidator, ConfigDict, StrictStr, ValidationError
+
+from pmmw_cli.errors import UserError, UserErrors, warn
+from pmmw_cli.units import parse_quantity
+
+KINDS = ("dielectric", "metal", "blackbody", "opaque", "thin")
+_NO_EPS_KINDS = ("metal", "blackbody")
+_ID_RE = re.compile(r"^[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
+_ENTRY_KEYS = ("name", "eps", "temperature", "kind", "source", "coating", "thickness")
+_LAYER_KEYS = ("material", "thickness", "temperature")
+_EPS_EXAMPLE = "[eps', eps''] or {35 GHz: [eps', eps''], 95 GHz: [eps', eps'']}"
+_LAYER_EXAMPLE = "{material: ID, thickness: '0.8 mm', temperature: '300 K'}"
+_REL_TOL = 1e-9  # frequencies closer than this (relative) are the same frequency
+
+
+# ----------------------------------------------------------------------------------------------
+# Public data types
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CoatingLayer:
+    """One coherent layer of a coating (seed 000 sec. 2.2.3).
+
+    Attributes
+    ----------
+    material : str
+        Database id of the layer's material (a kind with a permittivity, itself uncoated).
+    thickness : float
+        [m].
+    temperature : float or None
+        [K]; None -> the layer material's temperature (and if that is None too, the caller's
+        default, e.g. the coated material's temperature).
+    """
+
+    material: str
+    thickness: float
+    temperature: float | None
+
+
+@dataclass(frozen=True)
+class Material:
+    """One resolved material.
+
+    Attributes
+    ----------
+    id, name : str
+    kind : str
+        One of `KINDS`.
+    freqs : tuple of float
+        Tabulated frequencies [Hz], ascending. Empty for metal/blackbody, and for a dielectric
+        given one frequency-independent ``eps: [eps', eps'']`` (then `eps` has one value).
+    eps : tuple of complex
+        eps' + 1j eps'' at each of `freqs` (or the single frequency-independent value).
+    temperature : float or None
+        Physical temperature [K]; None -> the scenario decides.
+    coating : tuple of CoatingLayer
+        Outermost layer first.
+    thickness : float or None
+        The sheet's own thickness [m] (kind ``thin`` only).
+    source : str
+        Where the numbers come from.
+    origin : str
+        File the entry came from (the scenario file for an override), for error messages.
+    """
+
+    id: str
+    name: str
+    kind: str
+    freqs: tuple[float, ...]
+    eps: tuple[complex, ...]
+    temperature: float | None
+    coating: tuple[CoatingLayer, ...] = ()
+    thickness: float | None = None
+    source: str = ""
+    origin: str = ""
+
+    def eps_at(self, f: float) -> complex:
+        """Relative permittivity at frequency `f` [Hz].
+
+        Linear interpolation of eps' and eps'' in frequency between tabulated points; outside
+        the tabulated range the nearest tabulated value, with a warning (once per material)
+        naming the material and its range. A frequency-independent entry returns its value.
+
+        Raises
+        ------
+        ValueError
+            For ``metal`` and ``blackbody`` (no permittivity), or a frequency that is not
+            finite and positive. Callers never ask in those cases.
+        """
+        value, clamped = self._lookup(f)
+        if clamped:
+            warn(
+                f"material {self.id!r}: permittivity is tabulated only {_range_text(self.freqs)}; "
+                "the nearest tabulated value is used outside that range"
+            )
+        return value
+
+    def _lookup(self, f: float) -> tuple[complex, bool]:
+        """(eps at f, whether f lies outside the tabulated range) without warning."""
+        if self.kind in _NO_EPS_KINDS or not self.eps:
+            raise ValueError(f"material {self.id!r} is of kind {self.kind!r} and has no permittivity")
+        f = float(f)
+        if not (math.isfinite(f) and f > 0):
+            raise ValueError(f"frequency must be finite and > 0 Hz, got {f!r}")
+        if not self.freqs:
+            return complex(self.eps[0]), False
+        fs = self.freqs
+        lo, hi = fs[0], fs[-1]
+        if f < lo * (1 - _REL_TOL):
+            return complex(self.eps[0]), True
+        if f > hi * (1 + _REL_TOL):
+            return complex(self.eps[-1]), True
+        for fi, ei in zip(fs, self.eps):  # exact hits (and single-frequency tables)
+            if abs(f - fi) <= _REL_TOL * fi:
+                return complex(ei), False
+        re_ = float(np.interp(f, fs, [e.real for e in self.eps]))
+        im_ = float(np.interp(f, fs, [e.imag for e in self.eps]))
+        return complex(re_, im_), False
+
+
+# ----------------------------------------------------------------------------------------------
+# Key paths
+# ----------------------------------------------------------------------------------------------
+
+_PLAIN_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def _join(base: str | None, *parts) -> str:
+    """Dotted key path: `base` (already a key path, taken as is) then `parts`, each quoted if it
+    is not a plain name: ``_join("materials", "runway", "eps", "95 GHz", 1)`` ->
+    ``materials.runway.eps."95 GHz"[1]``."""
+    out = base or ""
+    for p in parts:
+        if p is None or p == "":
+            continue
+        if isinstance(p, int) and not isinstance(p, bool):
+            out += f"[{p}]"
+            continue
+        s = str(p)
+        seg = s if _PLAIN_KEY.match(s) else json.dumps(s, ensure_ascii=False)
+        out = f"{out}.{seg}" if out else seg
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# Entry schema (pydantic v2): structure here, numbers through `parse_quantity`
+# ----------------------------------------------------------------------------------------------
+
+
+class _Problems(ValueError):
+    """Problems found inside one field, each with a key path relative to that field."""
+
+    def __init__(self, problems: list[tuple[tuple, str]]):
+        super().__init__("; ".join(m for _, m in problems))
+        self.problems = problems
+
+
+def _temperature(value):
+    if value is None:
+        return None
+    try:
+        t = parse_quantity(value, "temperature")
+    except UserError as e:
+        raise ValueError(e.message) from None
+    if not t > 0:
+        raise ValueError(f"temperature must be > 0 K, got {value!r}")
+    return t
+
+
+def _length(value):
+    if value is None:
+        return None
+    try:
+        d = parse_quantity(value, "length")
+    except UserError as e:
+        raise ValueError(e.message) from None
+    if not d >= 0:
+        raise ValueError(f"thickness must be >= 0, got {value!r}")
+    return d
+
+
+def _number(x) -> float:
+    """A finite real number; YAML 1.1 reads ``7e-3`` (no dot) as a string, so accept those."""
+    if isinstance(x, bool):
+        raise ValueError
+    if isinstance(x, (int, float)):
+        v = float(x)
+    elif isinstance(x, str):
+        v = float(x.strip())
+    else:
+        raise ValueError
+    if not math.isfinite(v):
+        raise ValueError
+    return v
+
+
+def _eps_pair(value, path: tuple, problems: list) -> complex | None:
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        problems.append((path, f"expected [eps', eps''] (two numbers), got {value!r}"))
+        return None
+    out = []
+    for i, x in enumerate(value):
+        try:
+            out.append(_number(x))
+        except (ValueError, TypeError):
+            problems.append((path + (i,), f"expected a finite number, got {x!r}"))
+    if len(out) != 2:
+        return None
+    re_, im_ = out
+    if im_ < 0:
+        problems.append(
+            (path + (1,), f"eps'' must be >= 0 (eps = eps' + i eps'', eps'' > 0 is lossy), got {im_:g}")
+        )
+        return None
+    if re_ == 0 and im_ == 0:
+        problems.append((path, "eps = 0 is not a medium"))
+        return None
+    return complex(re_, im_)
+
+
+def _eps(value):
+    """``[a, b]`` or ``{freq: [a, b], ...}`` -> (freqs, eps) ascending in frequency."""
+    if value is None:
+        return None
+    problems: list[tuple[tuple, str]] = []
+    if isinstance(value, (list, tuple)):
+        e = _eps_pair(value, (), problems)
+        if problems:
+            raise _Problems(problems)
+        return ((), (e,))
+    if not isinstance(value, dict):
+        raise ValueError(f"expected {_EPS_EXAMPLE}, got {value!r}")
+    if not value:
+        raise ValueError(f"empty permittivity table; expected {_EPS_EXAMPLE}")
+    table: dict[float, complex] = {}
+    seen: dict[float, Any] = {}
+    for k, v in value.items():
+        path = (str(k),)
+        f = None
+        try:
+            f = parse_quantity(k, "frequency")
+            if not f > 0:
+                problems.append((path, f"frequency must be > 0, got {k!r}"))
+                f = None
+        except UserError as err:
+            problems.append((path, err.message))
+        e = _eps_pair(v, path, problems)
+        if f is None or e is None:
+            continue
+        dup = next((g for g in seen if abs(g - f) <= _REL_TOL * f), None)
+        if dup is not None:
+            problems.append((path, f"frequency {k!r} given twice (also as {seen[dup]!r})"))
+            continue
+        seen[f] = k
+        table[f] = e
+    if problems:
+        raise _Problems(problems)
+    freqs = tuple(sorted(table))
+    return (freqs, tuple(table[f] for f in freqs))
+
+
+_Temperature = Annotated[Any, BeforeValidator(_temperature)]
+_Length = Annotated[Any, BeforeValidator(_length)]
+_Eps = Annotated[Any, BeforeValidator(_eps)]
+
+
+class _LayerIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    material: StrictStr
+    thickness: _Length
+    temperature: _Temperature = None
+
+
+class _EntryIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    name: Optional[StrictStr] = None
+    eps: _Eps = None
+    temperature: _Temperature = None
+    kind: Optional[Literal[KINDS]] = None  # type: ignore[valid-type]
+    source: Optional[StrictStr] = None
+    coating: Optional[list[_LayerIn]] = None
+    thickness: _Length = None
+
+
+def _suggest(word: str, choices: Iterable[str], n: int = 5) -> str:
+    close = difflib.get_close_matches(str(word), list(choices), n=n, cutoff=0.6)
+    return f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+
+
+def _pydantic_errors(ex: ValidationError, file, base_key: str) -> list[UserError]:
+    out = []
+    for er in ex.errors():
+        loc = tuple(er["loc"])
+        typ = er["type"]
+        in_layer = len(loc) >= 2 and loc[0] == "coating"
+        if typ == "value_error":
+            err = er.get("ctx", {}).get("error")
+            if isinstance(err, _Problems):
+                out += [UserError(m, file, _join(base_key, *loc, *p)) for p, m in err.problems]
+                continue
+            msg = str(err) if err is not None else er["msg"].removeprefix("Value error, ")
+        elif typ == "extra_forbidden":
+            allowed = _LAYER_KEYS if in_layer else _ENTRY_KEYS
+            what = "coating layer" if in_layer else "material"
+            msg = (f"unknown key {loc[-1]!r} for a {what}{_suggest(loc[-1], allowed, 3)} "
+                   f"(allowed keys: {', '.join(allowed)})")
+        elif typ == "missing":
+            msg = f"missing required key {loc[-1]!r}"
+            if in_layer:
+                msg += f" (a coating layer is {_LAYER_EXAMPLE})"
+        elif typ in ("model_type", "model_attributes_type", "dict_type"):
+            if in_layer:
+                msg = f"expected a coating layer {_LAYER_EXAMPLE}, got {er.get('input')!r}"
+            else:
+                msg = f"expected a mapping of material fields ({', '.join(_ENTRY_KEYS)}), got {er.get('input')!r}"
+        elif typ == "list_type":
+            msg = "expected a list of layers, outermost first, e.g. [{material: denim, thickness: 0.8 mm}]"
+        elif typ == "literal_error":
+            got = er.get("input")
+            msg = f"unknown kind {got!r}{_suggest(got, KINDS, 1)} (expected one of {', '.join(KINDS)})"
+        elif typ == "string_type":
+            msg = f"expected a string, got {er.get('input')!r}"
+        else:
+            msg = er["msg"]
+        out.append(UserError(msg, file, _join(base_key, *loc)))
+    return out
+
+
+def _parse_entry(mid, raw, file, base_key: str) -> tuple[dict | None, list[UserError]]:
+    """Validate one raw entry -> the fields it sets (SI values), or None and the errors."""
+    if raw is None:
+        raw = {}
+    try:
+        m = _EntryIn.model_validate(raw)
+    except ValidationError as ex:
+        return None, _pydantic_errors(ex, file, base_key)
+    fields = {k: getattr(m, k) for k in m.model_fields_set}
+    if "coating" in fields:
+        fields["coating"] = tuple(
+            CoatingLayer(layer.material, float(layer.thickness), layer.temperature) for layer in (m.coating or [])
+        )
+    return fields, []
+
+
+def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material | None, list[UserError]]:
+    """Apply defaults and the per-entry rules to validated fields."""
+    errors = []
+    kind = fields.get("kind") or "dielectric"
+    eps = fields.get("eps")
+    thickness = fields.get("thickness")
+    freqs: tuple = ()
+    values: tuple = ()
+    if kind in _NO_EPS_KINDS:
+        if eps is not None:
+            errors.append(UserError(
+                f"a {kind} has no permittivity (seed 000 sec. 2.2.9): remove `eps`, or use kind dielectric or opaque",
+                origin, _join(base_key, "eps")))
+    elif eps is None:
+        errors.append(UserError(f"kind {kind} needs `eps`: {_EPS_EXAMPLE}", origin, base_key))
+    else:
+        freqs, values = eps
+    if kind == "thin" and thickness is None:
+        errors.append(UserError("kind thin needs `thickness` (the sheet's own thickness, e.g. 0.1 mm)", origin, base_key))
+    if kind != "thin" and thickness is not None:
+        errors.append(UserError(
+            "`thickness` is only for kind thin (the sheet's own thickness); layers on a surface go in `coating`",
+            origin, _join(base_key, "thickness")))
+    if errors:
+        return None, errors
+    mat = Material(
+        id=mid,
+        name=fields.get("name") or mid.replace("_", " ").capitalize(),
+        kind=kind,
+        freqs=tuple(float(f) for f in freqs),
+        eps=tuple(complex(e) for e in values),
+        temperature=fields.get("temperature"),
+        coating=tuple(fields.get("coating") or ()),
+        thickness=thickness,
+        source=fields.get("source") or "",
+        origin=str(origin),
+    )
+    return mat, []
+
+
+def _check_id(mid, file, base_key: str) -> list[UserError]:
+    if not isinstance(mid, str):
+        return [UserError(f"a material id must be a string, got {mid!r}", file, base_key)]
+    if not _ID_RE.match(mid):
+        return [UserError(f"material id {mid!r} must be lower_snake_case (e.g. moist_soil)", file, base_key)]
+    return []
+
+
+def _raise(errors: list[UserError]) -> None:
+    if len(errors) == 1:
+        raise errors[0]
+    if errors:
+        raise UserErrors(errors)
+
+
+# ----------------------------------------------------------------------------------------------
+# YAML reading: line numbers on syntax errors, duplicate keys are errors
+# ----------------------------------------------------------------------------------------------
+
+
+class _Loader(yaml.SafeLoader):
+    pass
+
+
+def _construct_mapping(loader, node, deep=False):
+    loader.flatten_mapping(node)
+    seen = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        try:
+            dup = key in seen
+            seen.add(key)
+        except TypeError:  # unhashable key: let the stock constructor report it
+            break
+        if dup:
+            raise yaml.constructor.ConstructorError(
+                "while constructing a mapping", node.start_mark, f"found duplicate key {key!r}", key_node.start_mark
+            )
+    return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
+
+
+_Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+
+def _read_yaml(path: Path):
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as e:
+        raise UserError(f"cannot read material database file: {e.strerror or e}", path) from None
+    try:
+        return yaml.load(text, Loader=_Loader)  # noqa: S506 (a SafeLoader subclass)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+        what = ": ".join(p for p in (e.context, e.problem) if p)
+        raise UserError(f"invalid YAML at {where}{what}", path) from None
+    except yaml.YAMLError as e:
+        raise UserError(f"invalid YAML: {e}", path) from None
+
+
+# ----------------------------------------------------------------------------------------------
+# The database
+# ----------------------------------------------------------------------------------------------
+
+
+def default_materials_dir() -> Path:
+    """``$PMMW_MATERIALS`` if set, else ``<repo root>/materials``."""
+    env = os.environ.get("PMMW_MATERIALS")
+    if env:
+        return Path(env).expanduser()
+    return Path(__file__).resolve().parents[2] / "materials"
+
+
+def _database_files(paths) -> list[Path]:
+    if paths is None:
+        d = default_materials_dir()
+        if not d.is_dir():
+            raise UserError("material database folder not found (set PMMW_MATERIALS to override)", d)
+        paths = [d]
+    elif isinstance(paths, (str, os.PathLike)):
+        paths = [paths]
+    files: list[Path] = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            found = sorted([*p.glob("*.yaml"), *p.glob("*.yml")])
+            if not found:
+                raise UserError("no *.yaml material files in this folder", p)
+            files += found
+        elif p.is_file():
+            files.append(p)
+        else:
+            raise UserError("material database file not found", p)
+    return files
+
+
+class MaterialDB:
+    """The material database: immutable; `with_overrides` returns a new one.
+
+    Use `MaterialDB.load()` (every ``*.yaml`` in `default_materials_dir()`), then
+    ``db.with_overrides(scenario_materials, file=scenario_path)``, then ``db.get(id)``.
+    """
+
+    def __init__(self, materials: dict[str, Material], fields: dict[str, dict], keys: dict[str, str]):
+        self._materials = dict(materials)
+        self._fields = {k: dict(v) for k, v in fields.items()}  # validated SI fields, for overrides
+        self._keys = dict(keys)  # id -> key path of the entry in its origin file
+
+    # -- construction ------------------------------------------------------------------------
+
+    @classmethod
+    def load(cls, paths=None) -> "MaterialDB":
+        """Read and validate database files.
+
+        Parameters
+        ----------
+        paths : path or list of paths, optional
+            Files, or folders whose ``*.yaml`` files are read (sorted by name). None ->
+            every ``*.yaml`` in `default_materials_dir()`.
+
+        Raises
+        ------
+        UserError or UserErrors
+            Malformed YAML (file and line), an invalid entry (file and key path), the same id
+            in two files (naming both), a coating naming an unknown or unusable material.
+        """
+        errors: list[UserError] = []
+        materials: dict[str, Material] = {}
+        fields: dict[str, dict] = {}
+        keys: dict[str, str] = {}
+        where: dict[str, Path] = {}
+        for path in _database_files(paths):
+            try:
+                data = _read_yaml(path)
+            except UserError as e:
+                errors.append(e)
+                continue
+            if data is None:
+                continue
+            if not isinstance(data, dict):
+                errors.append(UserError(
+                    f"expected a mapping of material id -> entry, got {type(data).__name__}", path))
+                continue
+            for mid, raw in data.items():
+                base_key = _join(None, mid if isinstance(mid, str) else str(mid))
+                id_errors = _check_id(mid, path, base_key)
+                if id_errors:
+                    errors += id_errors
+                    continue
+                if mid in where:
+                    errors.append(UserError(
+                        f"material id {mid!r} is defined twice: in {where[mid]} and in {path}", path, base_key))
+                    continue
+                where[mid] = path
+                f, errs = _parse_entry(mid, raw, path, base_key)
+                if errs:
+                    errors += errs
+                    continue
+                mat, errs = _build(mid, f, str(path), base_key)
+                if errs:
+                    errors += errs
+                    continue
+                materials[mid], fields[mid], keys[mid] = mat, f, base_key
+        db = cls(materials, fields, keys)
+        errors += db._problems()
+        _raise(errors)
+        return db
+
+    def with_overrides(self, raw: dict | None, *, file, key_prefix: str = "materials") -> "MaterialDB":
+        """A new database with a scenario's ``materials:`` map applied.
+
+        An existing id with some fields replaces just those fields (a given ``eps`` replaces
+        the whole table; a given ``coating`` the whole stack; ``null`` unsets a field). A new id
+        is a new material under the same rules as the database files.
+
+        Parameters
+        ----------
+        raw : dict or None
+            The scenario's ``materials:`` mapping (id -> entry), as read from YAML.
+        file : str or Path
+            The scenario file, for error messages (and the overridden materials' `origin`).
+        key_prefix : str
+            Key path of `raw` inside `file`.
+        """
+        if raw is None:
+            return self
+        if not isinstance(raw, dict):
+            raise UserError(
+                f"expected a mapping of material id -> entry (fields as in materials/*.yaml), got {type(raw).__name__}",
+                file, key_prefix or None)
+        errors: list[UserError] = []
+        materials = dict(self._materials)
+        fields = {k: dict(v) for k, v in self._fields.items()}
+        keys = dict(self._keys)
+        for mid, entry in raw.items():
+            base_key = _join(key_prefix, mid if isinstance(mid, str) else str(mid))
+            id_errors = _check_id(mid, file, base_key)
+            if id_errors and mid not in self._materials:
+                errors += id_errors
+                continue
+            new, errs = _parse_entry(mid, entry, file, base_key)
+            if errs:
+                errors += errs
+                continue
+            if mid in self._materials:
+                merged = dict(self._fields[mid])
+                merged.update(new)
+                kind = merged.get("kind") or "dielectric"
+                if "kind" in new:  # fields the new kind cannot have, unless given again
+                    if kind in _NO_EPS_KINDS and "eps" not in new:
+                        merged.pop("eps", None)
+                    if kind != "thin" and "thickness" not in new:
+                        merged.pop("thickness", None)
+                base_source = self._materials[mid].source
+                changed = ", ".join(k for k in _ENTRY_KEYS if k in new and k not in ("source", "name"))
+                if "source" not in new and changed:
+                    merged["source"] = f"{base_source}; {changed} overridden in {file}" if base_source else \
+                        f"{changed} overridden in {file}"
+                new = merged
+            mat, errs = _build(mid, new, str(file), base_key)
+            if errs:
+                errors += errs
+                continue
+            materials[mid], fields[mid], keys[mid] = mat, new, base_key
+        _raise(errors)
+        db = MaterialDB(materials, fields, keys)
+        _raise(db._problems())
+        return db
+
+    # -- queries -------------------------------------------------------------------------------
+
+    def get(self, mid: str, *, file=None, key=None) -> Material:
+        """The material `mid`; an unknown id is a UserError (at `file`, `key`) with close matches."""
+        try:
+            return self._materials[mid]
+        except (KeyError, TypeError):
+            pass
+        close = difflib.get_close_matches(str(mid), list(self._materials), n=5, cutoff=0.6)
+        hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+        raise UserError(
+            f"unknown material {mid!r}{hint} (`pmmw materials list` shows every id; a scenario's "
+            "`materials:` map can define new ones)", file, key)
+
+    def ids(self) -> list[str]:
+        """Every id, in load order (files by name, entries in file order; new overrides last)."""
+        return list(self._materials)
+
+    def __contains__(self, mid) -> bool:
+        return mid in self._materials
+
+    def __len__(self) -> int:
+        return len(self._materials)
+
+    def check(self) -> None:
+        """Cross-entry rules: every coating layer names an existing, uncoated material with a
+        permittivity. Raises UserError/UserErrors naming the file and key of each problem."""
+        _raise(self._problems())
+
+    def _problems(self) -> list[UserError]:
+        errors = []
+        for mid, mat in self._materials.items():
+            base_key = self._keys.get(mid, mid)
+            for i, layer in enumerate(mat.coating):
+                key = _join(base_key, "coating", i, "material")
+                other = self._materials.get(layer.material)
+                if other is None:
+                    close = difflib.get_close_matches(layer.material, list(self._materials), n=5, cutoff=0.6)
+                    hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+                    errors.append(UserError(f"unknown coating material {layer.material!r}{hint}", mat.origin, key))
+                elif other.kind in _NO_EPS_KINDS:
+                    errors.append(UserError(
+                        f"coating layer material {layer.material!r} is a {other.kind}: a layer needs a permittivity "
+                        "(a metal or blackbody can be coated, but not be a coating layer)", mat.origin, key))
+                elif other.coating:
+                    errors.append(UserError(
+                        f"coating layer material {layer.material!r} has a coating of its own; nested coatings are "
+                        "not supported: list all the layers here, outermost first", mat.origin, key))
+        return errors
+
+
+# ----------------------------------------------------------------------------------------------
+# Text for `pmmw materials list|show`
+# ----------------------------------------------------------------------------------------------
+
+
+def _fmt_f(f: float) -> str:
+    return f"{f / 1e9:g} GHz"
+
+
+def _fmt_eps(e: complex, compact: bool = False) -> str:
+    sep = "+" if compact else " + "
+    return f"{e.real:.4g}{sep}{e.imag:.3g}j"
+
+
+def _fmt_t(t: float | None) -> str:
+    return f"{t:g} K" if t is not None else "-"
+
+
+def _fmt_len(d: float) -> str:
+    return f"{d * 1e3:g} mm" if d < 1 else f"{d:g} m"
+
+
+def _range_text(freqs: tuple[float, ...]) -> str:
+    if len(freqs) == 1:
+        return f"at {_fmt_f(freqs[0])}"
+    return f"from {_fmt_f(freqs[0])} to {_fmt_f(freqs[-1])}"
+
+
+def _eps_cell(mat: Material, f: float | None) -> tuple[str, bool]:
+    """(text, clamped) for the list's eps column."""
+    if mat.kind == "metal":
+        return "perfect conductor", False
+    if mat.kind == "blackbody":
+        return "perfect absorber", False
+    if f is None:
+        if not mat.freqs:
+            return f"{_fmt_eps(mat.eps[0], True)} (all f)", False
+        return ", ".join(f"{f_ / 1e9:g} GHz: {_fmt_eps(e, True)}" for f_, e in zip(mat.freqs, mat.eps)), False
+    value, clamped = mat._lookup(f)
+    return _fmt_eps(value, True) + ("*" if clamped else ""), clamped
+
+
+def _shorten(text: str, n: int) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= n else text[: n - 3].rstrip() + "..."
+
+
+def format_material_table(db: MaterialDB, f: float | None = None) -> str:
+    """The whole database as aligned columns: id, kind, eps (at `f` [Hz], or the table), T,
+    source (shortened; ``pmmw materials show ID`` gives it in full)."""
+    eps_head = f"eps at {_fmt_f(f)}" if f is not None else "eps"
+    rows = [("id", "kind", eps_head, "T", "source")]
+    any_clamped = False
+    for mid in db.ids():
+        mat = db.get(mid)
+        cell, clamped = _eps_cell(mat, f)
+        any_clamped |= clamped
+        kind = mat.kind + (" +coating" if mat.coating else "")
+        rows.append((mid, kind, cell, _fmt_t(mat.temperature), _shorten(mat.source, 72)))
+    widths = [max(len(r[i]) for r in rows) for i in range(4)]
+    lines = []
+    for r in rows:
+        lines.append("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + "  " + r[4])
+    lines.insert(1, "  ".join("-" * w for w in widths) + "  " + "-" * 6)
+    if any_clamped:
+        lines.append(f"* {_fmt_f(f)} is outside the tabulated range: nearest tabulated value")
+    lines.append("T '-': the scenario's temperature applies")
+    return "\n".join(line.rstrip() for line in lines)
+
+
+def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
+    """One material in full: kind, permittivity table (and the value at `f` [Hz]), temperature,
+    coating, thickness, source and file. Unknown `mid` -> UserError with close matches."""
+    mat = db.get(mid)
+    lines = [f"{mat.id}: {mat.name}"]
+
+    def row(label: str, value: str) -> None:
+        lines.append(f"  {label + ':' if label else '':<16}{value}")
+
+    row("kind", mat.kind)
+    if mat.kind == "metal":
+        row("eps", "- (perfect conductor: r_s = -1, r_p = 1)")
+    elif mat.kind == "blackbody":
+        row("eps", "- (perfect absorber)")
+    elif not mat.freqs:
+        row("eps", f"{_fmt_eps(mat.eps[0])} at every frequency")
+    else:
+        for i, (f_, e) in enumerate(zip(mat.freqs, mat.eps)):
+            row("eps" if i == 0 else "", f"{_fmt_f(f_):>8}  {_fmt_eps(e)}")
+    if f is not None and mat.kind not in _NO_EPS_KINDS:
+        value, clamped = mat._lookup(f)
+        how = ""
+        if clamped:
+            how = f" (outside the table: nearest tabulated value; tabulated {_range_text(mat.freqs)})"
+        elif mat.freqs and not any(abs(f - g) <= _REL_TOL * g for g in mat.freqs):
+            how = " (interpolated linearly)"
+        row(f"eps at {_fmt_f(f)}", f"{_fmt_eps(value)}{how}")
+    row("temperature", _fmt_t(mat.temperature)
+        + ("" if mat.temperature is not None else " (the scenario's temperature applies)"))
+    if mat.thickness is not None:
+        row("thickness", f"{_fmt_len(mat.thickness)} (the sheet's own)")
+    if mat.coating:
+        row("coating", "outermost layer first")
+        for i, layer in enumerate(mat.coating, 1):
+            t = _fmt_t(layer.temperature) if layer.temperature is not None else "the layer material's T"
+            row("", f"{i}. {layer.material}, {_fmt_len(layer.thickness)}, {t}")
+    row("source", " ".join(mat.source.split()) or "-")
+    row("file", mat.origin or "-")
+    return "\n".join(lines)

@@ -1,0 +1,120 @@
+"""Sky brightness temperature for rays that leave the scene.
+
+Models are chosen by ``sky.model`` through `SKY_MODELS`:
+
+* ``uniform``: one temperature in every direction above the horizon, unpolarized.
+* ``slab``: a single isothermal atmospheric slab of zenith opacity tau [Np] at temperature
+  T_atm over the cosmic background, flat-earth air mass 1/sin(el):
+  ``T(el) = T_atm (1 - exp(-tau / sin el)) + T_cmb exp(-tau / sin el)``, unpolarized. The default
+  until the layered atmosphere lands. Without a given opacity, tau comes from a clear-sky table
+  (US standard atmosphere zenith temperatures of about 18.5 K at 35 GHz and 46 K at 95 GHz).
+* ``texture``: a user's equirectangular EXR with ``Tv``, ``Th`` channels [K]
+  (`pmmw_cli.scene.sky_texture`), polarized in the sky basis of `pmmw_cli.physics.jones`.
+
+Below the horizon (el < 0) rays see ``sky.ground_temperature``, unless a texture covers it.
+Temperatures are Rayleigh-Jeans brightness temperatures [K].
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pmmw_cli.errors import warn
+
+T_CMB = 2.725  # cosmic microwave background [K]
+T_SLAB_DEFAULT = 275.0  # mean radiating temperature of the lower troposphere [K]
+
+# Clear-sky zenith opacity [Np] at window frequencies [Hz], derived from the zenith brightness
+# temperatures quoted in PHYSICS.md (US standard atmosphere: 18.5 K at 35 GHz, 46 K at 95 GHz)
+# with T_atm = 275 K; log-linear in frequency in between. The layered model replaces this.
+_TAU_TABLE_F = np.array([35e9, 95e9])
+_TAU_TABLE = -np.log((T_SLAB_DEFAULT - np.array([18.5, 46.0])) / (T_SLAB_DEFAULT - T_CMB))
+
+
+def default_zenith_opacity(f: float) -> float:
+    """Clear-sky zenith opacity [Np] at frequency f [Hz] for the slab model."""
+    if not (_TAU_TABLE_F[0] <= f <= _TAU_TABLE_F[-1]):
+        warn(
+            f"slab sky: no clear-sky opacity tabulated at {f / 1e9:g} GHz (35-95 GHz known); "
+            "extrapolating: give sky.zenith_opacity for a better sky"
+        )
+    x = (np.log(f) - np.log(_TAU_TABLE_F[0])) / (np.log(_TAU_TABLE_F[1]) - np.log(_TAU_TABLE_F[0]))
+    return float(np.exp(np.log(_TAU_TABLE[0]) + x * (np.log(_TAU_TABLE[1]) - np.log(_TAU_TABLE[0]))))
+
+
+class UniformSky:
+    """Unpolarized sky of one brightness temperature [K] above the horizon."""
+
+    unpolarized = True
+
+    def __init__(self, temperature: float, ground_temperature: float):
+        self.temperature = float(temperature)
+        self.ground_temperature = float(ground_temperature)
+
+    def brightness(self, directions):
+        """(Tv, Th) [K], each shape (n,), for unit directions (n, 3) leaving the scene."""
+        t = np.where(directions[:, 2] >= 0.0, self.temperature, self.ground_temperature)
+        return t, t
+
+
+class SlabSky:
+    """Isothermal slab of zenith opacity ``tau`` [Np] at ``temperature`` [K] over the CMB."""
+
+    unpolarized = True
+
+    def __init__(self, temperature: float, tau: float, ground_temperature: float):
+        self.temperature = float(temperature)
+        self.tau = float(tau)
+        self.ground_temperature = float(ground_temperature)
+
+    def zenith_angle_temperature(self, elevation):
+        """Sky temperature [K] at elevation angles [rad] >= 0."""
+        sin_el = np.sin(np.asarray(elevation, float))
+        with np.errstate(divide="ignore"):
+            trans = np.exp(-self.tau / np.maximum(sin_el, 0.0))
+        return self.temperature * (1.0 - trans) + T_CMB * trans
+
+    def brightness(self, directions):
+        sin_el = np.clip(directions[:, 2], -1.0, 1.0)
+        with np.errstate(divide="ignore", over="ignore"):
+            trans = np.where(sin_el > 0.0, np.exp(-self.tau / np.where(sin_el > 0.0, sin_el, 1.0)), 0.0)
+        t = self.temperature * (1.0 - trans) + T_CMB * trans
+        t = np.where(sin_el >= 0.0, t, self.ground_temperature)
+        return t, t
+
+
+class TextureSky:
+    """A user's polarized sky map (`pmmw_cli.scene.sky_texture.SkyTexture`)."""
+
+    unpolarized = False
+
+    def __init__(self, texture):
+        self.texture = texture
+
+    def brightness(self, directions):
+        return self.texture.sample(directions)
+
+
+def _make_uniform(cfg, f):
+    return UniformSky(cfg.temperature, cfg.ground_temperature)
+
+
+def _make_slab(cfg, f):
+    tau = cfg.zenith_opacity if cfg.zenith_opacity is not None else default_zenith_opacity(f)
+    temp = cfg.temperature if cfg.temperature is not None else T_SLAB_DEFAULT
+    return SlabSky(temp, tau, cfg.ground_temperature)
+
+
+def _make_texture(cfg, f):
+    from pmmw_cli.scene.sky_texture import SkyTexture
+
+    return TextureSky(SkyTexture.load(cfg.file, key="sky.file"))
+
+
+#: sky.model -> factory(sky config, frequency [Hz]) -> sky object with ``brightness(dirs)``.
+SKY_MODELS = {"uniform": _make_uniform, "slab": _make_slab, "texture": _make_texture}
+
+
+def make_sky(cfg, f: float):
+    """Build the sky for one frequency [Hz] from the scenario's ``sky`` record."""
+    return SKY_MODELS[cfg.model](cfg, f)

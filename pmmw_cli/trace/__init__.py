@@ -1,0 +1,1 @@
+"""Tracing: the trace job, ray-triangle intersection, the bounce loop and the process pool."""

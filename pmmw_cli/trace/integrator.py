@@ -1,0 +1,438 @@
+"""The bounce loop: a wavefront of backward rays per bounce, vectorized over rays.
+
+Follows the flowchart of seed 000 sec. 2.2.5 (fig. 2.5). Every ray carries a Jones matrix M
+(convention in `pmmw_cli.physics.jones`). At each bounce, for all rays at once:
+
+1. intersect (Embree); rays that miss see the sky;
+2. the segment just travelled attenuates M by exp(-alpha d / 2) and emits at the medium's
+   temperature with weight 1 - exp(-alpha d) (eq. 2.37, 2.38);
+3. media are tracked with closed orientable meshes and a per-ray medium stack (sec. 2.2.9):
+   crossing a face outward-to-inward enters the face's material; crossing inward-to-outward
+   leaves it if it is the current medium, or silently drops it from the stack if it is a medium
+   further down (slightly interpenetrating touching objects, as the seed prescribes);
+4. at an interaction, the surface's coating stack (or bare interface) gives r, t, R, T, A; the
+   coating's absorption A emits at the coating temperature (eq. 2.36); ``metal`` reflects
+   everything, ``blackbody`` and ``opaque`` emit the transmitted power at their temperature,
+   ``thin`` sheets transmit without changing medium or direction;
+5. the reflected and transmitted children continue (deterministic splitting). A child beyond
+   ``max_depth`` ends on the last object's temperature (seed). A child whose weight (the power
+   it can still bring to the detector) is below ``threshold`` ends by Russian roulette
+   (unbiased: survivors are scaled by 1/p) or, with ``termination: temperature``, on the last
+   object's temperature as the seed does.
+
+With these rules the weights of all events of a primary ray add to 1 per polarization, so an
+isothermal enclosure reads its temperature exactly (PHYSICS.md, "Energy bookkeeping").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pmmw_cli.physics import fresnel, multilayer
+from pmmw_cli.physics.jones import basis_change, row_power, stokes_terms
+from pmmw_cli.scene.camera import pixel_samples
+from pmmw_cli.trace.intersect import offset_origins
+from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
+
+_Z = np.array([0.0, 0.0, 1.0])
+_TINY = 1e-12
+
+
+@dataclass
+class TileResult:
+    """What one tile produced.
+
+    Attributes
+    ----------
+    index : int
+    box : tuple (x0, y0, x1, y1)
+    mean : ndarray, shape (h, w, 4), float64
+        Per-pixel mean of (Ex2, Ey2, U, V) over samples [K].
+    stderr : ndarray, shape (h, w, 4), float64
+        Monte Carlo standard error of that mean [K] (zero with one sample).
+    depth : ndarray, shape (h, w), float64
+        Mean first-hit distance [m] (inf where every sample saw the sky).
+    material : ndarray, shape (h, w), float64
+        Medium index hit by the pixel's first sample (-1: sky).
+    rays : int
+        Ray segments intersected.
+    """
+
+    index: int
+    box: tuple
+    mean: np.ndarray
+    stderr: np.ndarray
+    depth: np.ndarray
+    material: np.ndarray
+    rays: int
+
+
+class _Wave:
+    """Struct of arrays for the rays of one bounce."""
+
+    __slots__ = ("o", "d", "s", "p", "m", "sid", "depth", "stack", "top", "last_t")
+
+    def __init__(self, **kw):
+        for k, v in kw.items():
+            setattr(self, k, v)
+
+    def take(self, idx):
+        return _Wave(**{k: getattr(self, k)[idx] for k in self.__slots__})
+
+    @staticmethod
+    def concat(waves):
+        waves = [w for w in waves if w is not None and w.o.shape[0] > 0]
+        if not waves:
+            return None
+        return _Wave(**{k: np.concatenate([getattr(w, k) for w in waves]) for k in _Wave.__slots__})
+
+    def __len__(self):
+        return self.o.shape[0]
+
+
+def _normalize(v):
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def _scale_columns(m, a, b):
+    """M @ diag(a, b) for (n, 2, 2) M and (n,) a, b."""
+    out = m.copy()
+    out[:, :, 0] *= a[:, None]
+    out[:, :, 1] *= b[:, None]
+    return out
+
+
+def _amplitude(amp, power):
+    """An amplitude with the phase of ``amp`` and the magnitude sqrt(power) (renormalized R, T)."""
+    mag = np.abs(amp)
+    phase = np.where(mag > 0.0, amp / np.where(mag > 0.0, mag, 1.0), 1.0)
+    return phase * np.sqrt(np.maximum(power, 0.0))
+
+
+def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
+    """Interface coefficients for a group of rays with the same media and orientation.
+
+    Parameters
+    ----------
+    job : TraceJob
+    cur, face_med, other : int
+        Medium of the incident side, medium of the face's object, medium on the far side.
+    leaving : bool
+        The ray leaves ``face_med`` (coating layers are then met innermost first).
+    cos1 : ndarray, shape (n,), float64
+        Cosine of the incidence angle in the incident medium.
+
+    Returns
+    -------
+    coeffs : fresnel.Fresnel
+        Amplitudes and powers, arrays of shape (n,).
+    t_coat : float
+        Temperature at which the coating's absorption emits [K]. For a bare interface the
+        absorbed remainder only exists when the incident medium is lossy (homogeneous-wave
+        approximation, PHYSICS.md) and is emitted at the incident medium's temperature.
+    """
+    media = job.media
+    kind = media.kind[face_med]
+    eps1 = media.eps[cur]
+    coat = media.coating[face_med]
+    if kind == METAL and coat is None:
+        n = cos1.shape[0]
+        one, zero = np.ones(n), np.zeros(n)
+        c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
+        return c, float(media.temperature[face_med])
+    if kind == THIN:
+        eps2 = eps1  # the sheet keeps the incident medium on both sides
+    elif kind == BLACKBODY:
+        # index-matched body: nothing reflects at its own surface, all that enters is absorbed
+        eps2 = coat.eps[-1] if coat is not None else eps1
+    else:
+        eps2 = media.eps[other]
+    if coat is None:
+        c = fresnel.interface(np.full(cos1.shape, eps1), np.full(cos1.shape, eps2), cos1)
+        return c, float(media.temperature[cur])
+    layers_eps, layers_d = coat.eps, coat.thickness
+    if leaving:
+        layers_eps, layers_d = layers_eps[::-1], layers_d[::-1]
+    eps = np.concatenate([[eps1], layers_eps, [eps2]])
+    substrate = "metal" if kind == METAL else "dielectric"
+    c = multilayer.stack(eps[None, :], layers_d[None, :], cos1, job.k0, substrate=substrate)
+    return c, coat.temperature
+
+
+class Integrator:
+    """Renders tiles of one `TraceJob` with one intersector (built once per worker)."""
+
+    def __init__(self, job: TraceJob, intersector):
+        self.job = job
+        self.isect = intersector
+
+    # -- public -----------------------------------------------------------------------------
+    def render_tile(self, tile) -> TileResult:
+        index, x0, y0, x1, y1 = tile
+        job, st, cam = self.job, self.job.settings, self.job.camera
+        w, h = x1 - x0, y1 - y0
+        cols, rows = np.meshgrid(np.arange(x0, x1), np.arange(y0, y1))
+        pixels = (rows * cam.width + cols).ravel().astype(np.int64)
+        u, v, _ = pixel_samples(cam.width, pixels, st.spp, st.seed)
+        n = u.shape[0]
+        self.acc = np.zeros((n, 4))
+        self.first_t = np.full(n, np.inf)
+        self.first_m = np.full(n, -1.0)
+        self.rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([st.seed, index])))
+        self.rays = 0
+
+        d = cam.directions(u, v)
+        k = -d
+        s = _normalize(cam.x[None, :] - np.einsum("ij,j->i", d, cam.x)[:, None] * d)
+        p = np.cross(k, s)
+        # The pixel's polarization basis is (s, p): the imager's x projected perpendicular to
+        # the ray and y completing it (jones.py), so M starts as the identity (eq. 2.11b).
+        m = np.zeros((n, 2, 2), complex)
+        m[:, 0, 0] = m[:, 1, 1] = 1.0
+        stack = np.zeros((n, st.stack_size), np.int16)
+        wave = _Wave(
+            o=np.repeat(cam.position[None, :], n, axis=0), d=d, s=s, p=p, m=m,
+            sid=np.arange(n), depth=np.zeros(n, np.int32), stack=stack,
+            top=np.zeros(n, np.int32), last_t=np.full(n, np.nan),
+        )
+        first = True
+        while wave is not None and len(wave) > 0:
+            wave = self._bounce(wave, first)
+            first = False
+
+        per_sample = self.acc.reshape(h * w, st.spp, 4)
+        mean = per_sample.mean(axis=1)
+        if st.spp > 1:
+            stderr = per_sample.std(axis=1, ddof=1) / np.sqrt(st.spp)
+        else:
+            stderr = np.zeros_like(mean)
+        with np.errstate(invalid="ignore"):
+            depth = self.first_t.reshape(h * w, st.spp).mean(axis=1)
+        material = self.first_m.reshape(h * w, st.spp)[:, 0]
+        return TileResult(
+            index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
+            depth.reshape(h, w), material.reshape(h, w), self.rays,
+        )
+
+    # -- one bounce -----------------------------------------------------------------------
+    def _emit(self, sid, m, ta, tb=None):
+        """Add incoherent emission seen through N = m (already scaled by emission amplitudes)."""
+        if sid.size == 0:
+            return
+        terms = stokes_terms(m, ta, ta if tb is None else tb)
+        nsamp = self.acc.shape[0]
+        for c in range(4):
+            self.acc[:, c] += np.bincount(sid, weights=terms[:, c], minlength=nsamp)
+
+    def _bounce(self, wave: _Wave, first: bool):
+        job = self.job
+        media = job.media
+        n = len(wave)
+        t, prim = self.isect.intersect(wave.o, wave.d)
+        self.rays += n
+        miss = prim < 0
+        if first:
+            self.first_t[wave.sid] = t
+            self.first_m[wave.sid[~miss]] = job.face_medium[prim[~miss]]
+        if miss.any():
+            self._sky(wave.take(miss))
+        hit = ~miss
+        if not hit.any():
+            return None
+        wv = wave.take(hit)
+        t, prim = t[hit], prim[hit]
+        rows = np.arange(len(wv))
+        cur = wv.stack[rows, wv.top].astype(np.int64)
+
+        # Absorption and emission along the segment just travelled (eq. 2.37, 2.38).
+        alpha = media.alpha[cur]
+        lossy = alpha > 0.0
+        if lossy.any():
+            tau = np.exp(-alpha[lossy] * t[lossy])
+            e = np.sqrt(1.0 - tau)
+            self._emit(wv.sid[lossy], wv.m[lossy] * e[:, None, None], media.temperature[cur[lossy]])
+            wv.m[lossy] *= np.sqrt(tau)[:, None, None]
+
+        pos = wv.o + t[:, None] * wv.d
+        face_med = job.face_medium[prim].astype(np.int64)
+        nf = job.face_normals[prim]
+        cosf = np.einsum("ij,ij->i", wv.d, nf)
+        kind = media.kind[face_med]
+        entering = cosf < 0.0
+        below = wv.stack[rows, np.maximum(wv.top - 1, 0)].astype(np.int64)
+        below = np.where(wv.top > 0, below, 0)
+        dielectric = kind == DIELECTRIC
+        leaving_cur = dielectric & ~entering & (face_med == cur)
+        full = wv.top >= wv.stack.shape[1] - 1
+        enter_ok = dielectric & entering & ~full
+        interact = (~dielectric | enter_ok | leaving_cur) & (cosf != 0.0)
+
+        out = []
+        passing = ~interact
+        if passing.any():
+            out.append(self._pass_through(wv.take(passing), pos[passing], face_med[passing], prim[passing]))
+        if interact.any():
+            idx = np.nonzero(interact)[0]
+            other = np.where(kind[idx] != DIELECTRIC, face_med[idx], np.where(entering[idx], face_med[idx], below[idx]))
+            n_in = np.where(cosf[idx, None] < 0.0, nf[idx], -nf[idx])  # normal facing the incident side
+            leaving = ~entering[idx] & dielectric[idx]
+            out.extend(
+                self._interact(wv.take(idx), pos[idx], n_in, cur[idx], face_med[idx], other, leaving, prim[idx])
+            )
+        return _Wave.concat(out)
+
+    def _sky(self, wv: _Wave):
+        sky = self.job.sky
+        ta, tb = sky.brightness(wv.d)
+        if sky.unpolarized:
+            self._emit(wv.sid, wv.m, np.asarray(ta, float))
+            return
+        k = -wv.d
+        hvec = np.cross(_Z[None, :], k)
+        norm = np.linalg.norm(hvec, axis=1, keepdims=True)
+        hvec = np.where(norm > _TINY, hvec / np.where(norm > _TINY, norm, 1.0), wv.s)
+        vvec = np.cross(k, hvec)
+        m = wv.m @ basis_change(wv.s, wv.p, hvec, vvec)
+        self._emit(wv.sid, m, np.asarray(tb, float), np.asarray(ta, float))  # columns (h, v) = (Th, Tv)
+
+    def _pass_through(self, wv: _Wave, pos, face_med, prim):
+        """Cross a face without interacting; drop its medium from the stack if it is there."""
+        wv.o = offset_origins(pos, self.job.face_normals[prim], wv.d, scale=self.isect.face_scale[prim])
+        depth_idx = np.arange(wv.stack.shape[1])[None, :]
+        in_stack = (wv.stack == face_med[:, None]) & (depth_idx <= wv.top[:, None]) & (depth_idx > 0)
+        has = in_stack.any(axis=1)
+        if has.any():
+            rows = np.nonzero(has)[0]
+            pos_k = np.argmax(in_stack[rows], axis=1)
+            for r, kpos in zip(rows, pos_k):  # rare: only at interpenetrating objects
+                top = wv.top[r]
+                wv.stack[r, kpos:top] = wv.stack[r, kpos + 1 : top + 1]
+                wv.top[r] = top - 1
+        return wv
+
+    def _interact(self, wv: _Wave, pos, n_in, cur, face_med, other, leaving, prim):
+        job = self.job
+        scale = self.isect.face_scale[prim]
+        media = job.media
+        nr = len(wv)
+        cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_in), 0.0, 1.0)
+
+        # Coefficients per group of equal (cur, face medium, other, leaving).
+        coeff = {k: np.empty(nr, complex) for k in ("rs", "rp", "ts", "tp")}
+        coeff.update({k: np.empty(nr) for k in ("Rs", "Rp", "Ts", "Tp", "As", "Ap")})
+        t_coat = np.zeros(nr)
+        key = ((cur * 4096 + face_med) * 4096 + other) * 2 + leaving
+        for kv in np.unique(key):
+            g = key == kv
+            i0 = np.argmax(g)
+            c, tc = surface_response(job, int(cur[i0]), int(face_med[i0]), int(other[i0]), bool(leaving[i0]), cos1[g])
+            for name in coeff:
+                coeff[name][g] = getattr(c, name)
+            t_coat[g] = tc
+
+        # Local (s, p) basis of the outgoing wave k = -d (eq. 2.23).
+        k_out = -wv.d
+        s = np.cross(n_in, k_out)
+        norm = np.linalg.norm(s, axis=1, keepdims=True)
+        s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), wv.s)
+        p_out = np.cross(k_out, s)
+        ml = wv.m @ basis_change(wv.s, wv.p, s, p_out)
+
+        kind = media.kind[face_med]
+        t_body = media.temperature[face_med]
+        absorb = (coeff["As"] > 0.0) | (coeff["Ap"] > 0.0)
+        if absorb.any():
+            a = absorb
+            self._emit(wv.sid[a], _scale_columns(ml[a], np.sqrt(coeff["As"][a]), np.sqrt(coeff["Ap"][a])), t_coat[a])
+        sink = (kind == BLACKBODY) | (kind == OPAQUE)
+        if sink.any():
+            a = sink
+            self._emit(wv.sid[a], _scale_columns(ml[a], np.sqrt(coeff["Ts"][a]), np.sqrt(coeff["Tp"][a])), t_body[a])
+
+        children = []
+        # Reflected child (eq. 2.21, 2.39).
+        cosd = np.einsum("ij,ij->i", wv.d, n_in)
+        d_r = wv.d - 2.0 * cosd[:, None] * n_in
+        m_r = _scale_columns(ml, _amplitude(coeff["rs"], coeff["Rs"]), _amplitude(coeff["rp"], coeff["Rp"]))
+        refl = _Wave(
+            o=offset_origins(pos, n_in, d_r, scale=scale), d=d_r, s=s, p=np.cross(-d_r, s), m=m_r,
+            sid=wv.sid, depth=wv.depth + 1, stack=wv.stack.copy(), top=wv.top.copy(), last_t=t_body,
+        )
+        children.append(refl)
+
+        # Transmitted child (eq. 2.19, 2.40): dielectrics refract into the other medium, thin
+        # sheets pass straight through.
+        trans = ((kind == DIELECTRIC) | (kind == THIN)) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
+        if trans.any():
+            i = np.nonzero(trans)[0]
+            d_t = wv.d[i].copy()
+            diel = kind[i] == DIELECTRIC
+            if diel.any():
+                j = i[diel]
+                d_t[diel] = _refract(wv.d[j], n_in[j], media.eps[cur[j]], media.eps[other[j]])
+            m_t = _scale_columns(ml[i], _amplitude(coeff["ts"][i], coeff["Ts"][i]), _amplitude(coeff["tp"][i], coeff["Tp"][i]))
+            stack, top = wv.stack[i].copy(), wv.top[i].copy()
+            enter = diel & ~leaving[i]
+            top[enter] += 1
+            stack[np.nonzero(enter)[0], top[enter]] = face_med[i][enter]
+            leave = diel & leaving[i]
+            top[leave] -= 1
+            children.append(_Wave(
+                o=offset_origins(pos[i], n_in[i], d_t, scale=scale[i]), d=d_t, s=s[i], p=np.cross(-d_t, s[i]), m=m_t,
+                sid=wv.sid[i], depth=wv.depth[i] + 1, stack=stack, top=top, last_t=t_body[i],
+            ))
+
+        nxt = _Wave.concat(children)
+        return [self._terminate(nxt)] if nxt is not None else []
+
+    def _terminate(self, wv: _Wave):
+        """Depth cut-off and weight threshold (seed 000 sec. 2.2.5, 2.2.9)."""
+        st = self.job.settings
+        weight = row_power(wv.m)
+        dead = weight <= 0.0
+        at_depth = (wv.depth >= st.max_depth) & ~dead
+        if at_depth.any():
+            self._emit(wv.sid[at_depth], wv.m[at_depth], wv.last_t[at_depth])
+        low = (weight < st.threshold) & ~at_depth & ~dead
+        if low.any():
+            if st.termination == "temperature":
+                self._emit(wv.sid[low], wv.m[low], wv.last_t[low])
+                dead |= low
+            else:
+                q = weight[low] / st.threshold
+                survive = self.rng.random(q.shape[0]) < q
+                idx = np.nonzero(low)[0]
+                wv.m[idx[survive]] /= np.sqrt(q[survive])[:, None, None]
+                dead[idx[~survive]] = True
+        keep = ~(dead | at_depth)
+        return wv.take(keep) if not keep.all() else wv
+
+
+def _refract(d, n_in, eps1, eps2):
+    """Real transmitted direction under the homogeneous-wave assumption (seed 000 sec. 2.2.4).
+
+    The tangential wave-vector component is conserved (eq. 2.18) and the normal component is
+    Re q2 = Re sqrt(eps2 - eps1 sin^2 th1) (eq. 2.20, branch Im q2 >= 0), so that for lossless
+    media this is Snell's law exactly.
+
+    Parameters
+    ----------
+    d : ndarray, shape (n, 3)
+        Incident (trace) direction.
+    n_in : ndarray, shape (n, 3)
+        Unit normal facing the incident side (d . n_in < 0).
+    eps1, eps2 : ndarray, shape (n,), complex128
+
+    Returns
+    -------
+    ndarray, shape (n, 3), float64
+    """
+    cos1 = -np.einsum("ij,ij->i", d, n_in)
+    tang = d + cos1[:, None] * n_in  # |tang| = sin th1
+    sin2 = np.clip(1.0 - cos1**2, 0.0, 1.0)
+    n1 = np.sqrt(eps1 + 0j)
+    q2 = fresnel.normal_component(eps2, eps1 * sin2)
+    dt = n1.real[:, None] * tang - q2.real[:, None] * n_in
+    return _normalize(dt)

@@ -1,0 +1,132 @@
+"""The trace job: everything a worker needs to render tiles, as plain arrays.
+
+Built once in the main process by `pmmw_cli.pipeline` from the resolved scenario, then handed to
+workers (inherited on fork). Media are numbered: 0 is the ambient medium (air, or vacuum with
+``atmosphere: none``), 1.. are the scene's materials in `SceneGeometry.material_ids` order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pmmw_cli.scene.camera import Camera
+
+# Material kind codes (seed 000 sec. 2.2.9).
+DIELECTRIC, METAL, BLACKBODY, OPAQUE, THIN = 0, 1, 2, 3, 4
+KIND_CODES = {"dielectric": DIELECTRIC, "metal": METAL, "blackbody": BLACKBODY, "opaque": OPAQUE, "thin": THIN}
+
+C0 = 299_792_458.0  # speed of light [m/s]
+
+
+@dataclass(frozen=True)
+class Coating:
+    """A coherent layer stack on a surface, outermost layer first (seed 000 sec. 2.2.3).
+
+    Attributes
+    ----------
+    eps : ndarray, shape (L,), complex128
+    thickness : ndarray, shape (L,), float64 [m]
+    temperature : float
+        Temperature at which the stack's own absorption emits [K] (seed 000 eq. 2.36): the
+        layers' temperatures weighted by eps'' x thickness, a proxy of each layer's share of the
+        absorbed power for layers thinner than a penetration depth.
+    """
+
+    eps: np.ndarray
+    thickness: np.ndarray
+    temperature: float
+
+    @classmethod
+    def from_layers(cls, eps, thickness, temperatures):
+        eps = np.asarray(eps, complex)
+        thickness = np.asarray(thickness, float)
+        temps = np.asarray(temperatures, float)
+        w = np.maximum(eps.imag, 0.0) * thickness
+        t = float(np.sum(w * temps) / np.sum(w)) if np.sum(w) > 0 else float(np.mean(temps))
+        return cls(eps, thickness, t)
+
+
+@dataclass(frozen=True)
+class Media:
+    """Optical properties of every medium at one frequency.
+
+    Attributes
+    ----------
+    ids : list of str
+        Names, index 0 = ``ambient``.
+    eps : ndarray, shape (K,), complex128
+        Relative permittivity (metal/blackbody: unused).
+    kind : ndarray, shape (K,), int8
+        Kind codes (`DIELECTRIC` ...).
+    temperature : ndarray, shape (K,), float64 [K]
+    alpha : ndarray, shape (K,), float64
+        Power absorption coefficient [Np/m] (seed 000 eq. 2.37: alpha = 2 k0 Im n).
+    coating : tuple of (Coating or None), length K
+        For ``thin`` media the sheet itself is the last layer of the stack.
+    """
+
+    ids: list
+    eps: np.ndarray
+    kind: np.ndarray
+    temperature: np.ndarray
+    alpha: np.ndarray
+    coating: tuple
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    spp: int = 16
+    max_depth: int = 6
+    threshold: float = 1e-3
+    seed: int = 1
+    termination: str = "roulette"  # or "temperature" (seed 000 sec. 2.2.9)
+    tile: int = 32
+    stack_size: int = 8
+    aux: tuple = ()
+
+
+@dataclass(frozen=True)
+class TraceJob:
+    """One frequency of one scenario, ready to trace.
+
+    Attributes
+    ----------
+    vertices : ndarray, shape (V, 3), float64 [m]
+    faces : ndarray, shape (F, 3), int64
+    face_normals : ndarray, shape (F, 3), float64
+        Outward unit normals (counter-clockwise winding).
+    face_medium : ndarray, shape (F,), int32
+        Medium index of each face's object (>= 1).
+    media : Media
+    camera : Camera
+    sky : object with ``brightness(directions) -> (Tv, Th)`` and ``unpolarized``
+    frequency : float [Hz]
+    settings : RenderSettings
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_normals: np.ndarray
+    face_medium: np.ndarray
+    media: Media
+    camera: Camera
+    sky: object
+    frequency: float
+    settings: RenderSettings = field(default_factory=RenderSettings)
+
+    @property
+    def k0(self) -> float:
+        """Free-space wavenumber [1/m]."""
+        return 2.0 * np.pi * self.frequency / C0
+
+    def tiles(self):
+        """Fixed tiling of the image: list of (index, x0, y0, x1, y1), independent of workers."""
+        ts = self.settings.tile
+        w, h = self.camera.width, self.camera.height
+        out = []
+        for y0 in range(0, h, ts):
+            for x0 in range(0, w, ts):
+                out.append((len(out), x0, y0, min(x0 + ts, w), min(y0 + ts, h)))
+        return out

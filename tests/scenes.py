@@ -1,0 +1,96 @@
+"""In-memory scenes for render tests: trimesh primitives -> a TraceJob, without YAML or files."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from pmmw_cli.scene.camera import Camera
+from pmmw_cli.scene.sky import UniformSky
+from pmmw_cli.trace.integrator import Integrator
+from pmmw_cli.trace.intersect import make_intersector
+from pmmw_cli.trace.job import C0, DIELECTRIC, KIND_CODES, Coating, Media, RenderSettings, TraceJob
+from pmmw_cli.trace.pool import assemble
+from pmmw_cli.physics.jones import stokes_images
+
+
+def box(lo, hi):
+    """Closed, outward-oriented box between corners lo and hi [m]."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    m = trimesh.creation.box(extents=hi - lo)
+    m.apply_translation((lo + hi) / 2)
+    return m
+
+
+def hollow_box(lo, hi, wall):
+    """A closed shell: the wall volume between two boxes (the inner surface faces the cavity)."""
+    outer = box(lo, hi)
+    inner = box(np.asarray(lo) + wall, np.asarray(hi) - wall)
+    inner.invert()
+    return trimesh.util.concatenate([outer, inner])
+
+
+def sphere(center, radius, subdivisions=3):
+    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+    m.apply_translation(center)
+    return m
+
+
+def material(kind="dielectric", eps=1 + 0j, temperature=300.0, coating=(), thickness=None):
+    """A material spec: coating is a list of (eps, thickness [m], temperature [K]), outermost first."""
+    return dict(kind=kind, eps=complex(eps), temperature=float(temperature), coating=list(coating), thickness=thickness)
+
+
+def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
+    """objects: list of (trimesh.Trimesh, material spec). ambient: (alpha [Np/m], T [K]) or None."""
+    k0 = 2 * np.pi * frequency / C0
+    verts, faces, normals, fmed = [], [], [], []
+    ids, eps, kind, temp, alpha, coat = ["ambient"], [1 + 0j], [DIELECTRIC], [], [], [None]
+    temp.append(ambient[1] if ambient else 290.0)
+    alpha.append(ambient[0] if ambient else 0.0)
+    off = 0
+    for i, (mesh, spec) in enumerate(objects):
+        verts.append(np.asarray(mesh.vertices, float))
+        faces.append(np.asarray(mesh.faces, np.int64) + off)
+        normals.append(np.asarray(mesh.face_normals, float))
+        fmed.append(np.full(len(mesh.faces), i + 1, np.int32))
+        off += len(mesh.vertices)
+        code = KIND_CODES[spec["kind"]]
+        ids.append(f"m{i}")
+        kind.append(code)
+        eps.append(spec["eps"])
+        temp.append(spec["temperature"])
+        alpha.append(2 * k0 * np.sqrt(spec["eps"]).imag if code == DIELECTRIC else 0.0)
+        layers = list(spec["coating"])
+        if spec["kind"] == "thin":
+            layers.append((spec["eps"], spec["thickness"], spec["temperature"]))
+        coat.append(Coating.from_layers(*zip(*layers)) if layers else None)
+    media = Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp), np.array(alpha), tuple(coat))
+    return TraceJob(
+        vertices=np.concatenate(verts), faces=np.concatenate(faces), face_normals=np.concatenate(normals),
+        face_medium=np.concatenate(fmed), media=media, camera=camera, sky=sky, frequency=frequency,
+        settings=settings or RenderSettings(spp=1, max_depth=8, threshold=1e-6, termination="temperature"),
+    )
+
+
+def render(job, intersector="embree"):
+    """Render every tile in-process; returns the six channels as (H, W) arrays [K]."""
+    integ = Integrator(job, make_intersector(job.vertices, job.faces, kind=intersector))
+    results = [integ.render_tile(t) for t in job.tiles()]
+    mean, stderr, depth, material, rays = assemble(job, results)
+    return stokes_images(mean)
+
+
+def looking_down_at(theta_deg, height=1.0, width=1, height_px=1, fov_deg=0.01):
+    """A camera at (0, 0, height) looking at the ground z=0 at incidence angle theta from the normal.
+
+    The image x axis is horizontal, so Ex2 is s-polarized and Ey2 p-polarized for the ground.
+    """
+    th = np.radians(theta_deg)
+    pos = np.array([0.0, 0.0, height])
+    target = np.array([0.0, height * np.tan(th), 0.0])
+    up = np.array([0.0, 0.0, 1.0]) if theta_deg > 1e-6 else np.array([0.0, 1.0, 0.0])
+    return Camera.look_at(pos, target, up, np.radians(fov_deg), (width, height_px))
+
+
+__all__ = ["box", "hollow_box", "sphere", "material", "make_job", "render", "looking_down_at", "UniformSky"]

@@ -1,0 +1,137 @@
+"""End to end, as a user runs it: `pmmw render`, `pmmw validate`, `pmmw materials`, and errors."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from pmmw_cli.cli import app
+from pmmw_cli.io.exr import read_exr
+
+runner = CliRunner()
+
+
+def _scene(tmp_path: Path, extra: str = "", render: str = "{spp: 2, max_depth: 4, tile: 8}") -> Path:
+    ground = trimesh.creation.box(extents=[40, 40, 1])
+    ground.apply_translation([0, 0, -0.5])
+    block = trimesh.creation.box(extents=[0.4, 0.2, 0.2])
+    block.apply_translation([0, 4, 0.1])
+    ground.export(tmp_path / "ground.obj")
+    block.export(tmp_path / "block.obj")
+    yaml = f"""
+name: tiny
+frequency: 35 GHz
+imager: {{position: [0, 0, 1.5], look_at: [0, 4, 0.1], fov: 20 deg, resolution: [24, 16]}}
+scene:
+  - {{mesh: ground.obj, material: concrete}}
+  - {{mesh: block.obj, material: metal}}
+sky: {{model: uniform, temperature: 40 K}}
+render: {render}
+{extra}
+"""
+    path = tmp_path / "tiny.yaml"
+    path.write_text(yaml)
+    return path
+
+
+def _run(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def test_render_writes_exr_report_and_previews(tmp_path):
+    scn = _scene(tmp_path)
+    out = tmp_path / "out"
+    res = _run("render", scn, "--out", out, "--workers", "1")
+    assert res.exit_code == 0, res.output
+    chans, attrs = read_exr(out / "tiny.exr")
+    for c in ("I", "Q", "U", "V", "Ex2", "Ey2", "ideal.I", "ideal.Ey2"):
+        assert c in chans and chans[c].shape == (16, 24)
+    np.testing.assert_allclose(chans["I"], chans["Ex2"] + chans["Ey2"], rtol=1e-6)
+    assert abs(attrs["pmmw:frequency_hz"] - 35e9) < 1
+    # metal block reflects the 40 K sky and the ground at 290 K default temperature: the image
+    # spans both and stays inside the scene's temperature range
+    assert 40.0 - 1e-3 <= chans["Ex2"].min() and chans["Ex2"].max() <= 290.0 + 1e-3
+    assert (out / "report.json").exists() and (out / "report.md").exists()
+    assert (out / "previews" / "tiny_I.png").exists()
+    assert not (out / ".pmmw-tiles").exists()
+
+
+def test_render_is_deterministic_whatever_the_worker_count(tmp_path):
+    scn = _scene(tmp_path, render="{spp: 3, max_depth: 4, tile: 8, termination: roulette, threshold: 0.2}")
+    assert _run("render", scn, "--out", tmp_path / "w1", "--workers", "1").exit_code == 0
+    assert _run("render", scn, "--out", tmp_path / "w2", "--workers", "2").exit_code == 0
+    a, _ = read_exr(tmp_path / "w1" / "tiny.exr")
+    b, _ = read_exr(tmp_path / "w2" / "tiny.exr")
+    for c in a:
+        np.testing.assert_array_equal(a[c], b[c])
+
+
+def test_resume_reuses_finished_tiles(tmp_path):
+    scn = _scene(tmp_path)
+    out = tmp_path / "out"
+    assert _run("render", scn, "--out", out, "--workers", "1", "--keep-tiles").exit_code == 0
+    tiles = sorted((out / ".pmmw-tiles").rglob("tile_*.npz"))
+    assert len(tiles) == 6  # 24x16 pixels in 8x8 tiles
+    first, _ = read_exr(out / "tiny.exr")
+    tiles[0].unlink()  # as if the run had been interrupted before this tile
+    res = _run("render", scn, "--out", out, "--workers", "1", "--resume")
+    assert res.exit_code == 0, res.output
+    again, _ = read_exr(out / "tiny.exr")
+    for c in first:
+        np.testing.assert_array_equal(first[c], again[c])
+
+
+def test_validate_prints_the_resolved_job(tmp_path):
+    res = _run("validate", _scene(tmp_path))
+    assert res.exit_code == 0, res.output
+    assert "35 GHz" in res.output and "concrete" in res.output and "triangles" in res.output
+
+
+def test_materials_list_and_show():
+    res = _run("materials", "list", "--frequency", "95 GHz")
+    assert res.exit_code == 0 and "human_skin" in res.output
+    res = _run("materials", "show", "concrete")
+    assert res.exit_code == 0 and "5.5" in res.output
+
+
+@pytest.mark.parametrize(
+    "extra, override, key",
+    [
+        ("", ["--set", "render.sppp=3"], "render.sppp"),
+        ("", ["--set", "render.spp=many"], "render.spp"),
+        ("", ["--set", "scene[1].material=unobtainium"], "scene[1].material"),
+        ("", ["--set", "scene[0].mesh=missing.obj"], "scene[0].mesh"),
+        ("", ["--set", "imager.noise=-3 K"], "imager.noise"),
+        ("", ["--set", "frequency=95 m"], "frequency"),
+        ("materials: {concrete: {eps: {35 GHz: [5.5, -0.5]}}}", [], "materials.concrete"),
+    ],
+)
+def test_user_errors_name_file_and_key_without_traceback(tmp_path, extra, override, key):
+    scn = _scene(tmp_path, extra=extra)
+    res = _run("render", scn, "--out", tmp_path / "o", *override)
+    assert res.exit_code == 2, res.output
+    assert "Traceback" not in res.output
+    assert key in res.output
+    assert ("tiny.yaml" in res.output) or ("--set" in res.output)
+
+
+def test_malformed_yaml_and_missing_file(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nimager: {position: [0, 0\n")
+    res = _run("validate", bad)
+    assert res.exit_code == 2 and "bad.yaml" in res.output and "line" in res.output
+    res = _run("render", tmp_path / "nope.yaml")
+    assert res.exit_code == 2 and "nope.yaml" in res.output
+
+
+def test_console_script_runs_without_traceback(tmp_path):
+    """The installed `pmmw` entry point, as a shell user calls it."""
+    exe = Path(sys.executable).parent / "pmmw"
+    proc = subprocess.run([str(exe), "validate", str(tmp_path / "nope.yaml")], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and "nope.yaml" in proc.stderr

@@ -1,0 +1,185 @@
+"""Renders of simple scenes against references that share no code with the renderer.
+
+Closed-form Fresnel (written here), the Brewster angle, an isothermal enclosure, and the `tmm`
+package for coated surfaces. The scenes use a vanishing field of view so every pixel sees the
+same incidence angle.
+"""
+
+import numpy as np
+import pytest
+import tmm
+
+from pmmw_cli.trace.job import RenderSettings
+from tests.scenes import (
+    UniformSky, box, hollow_box, looking_down_at, make_job, material, render, sphere,
+)
+
+F35 = 35e9
+F95 = 95e9
+C0 = 299_792_458.0
+
+
+def fresnel_closed_form(eps, theta):
+    """Textbook power reflectances of a half-space from vacuum (Born & Wolf), independent of pmmw."""
+    c = np.cos(theta)
+    root = np.sqrt(eps - np.sin(theta) ** 2 + 0j)
+    rs = (c - root) / (c + root)
+    rp = (eps * c - root) / (eps * c + root)
+    return abs(rs) ** 2, abs(rp) ** 2
+
+
+def ground(eps, temperature, depth=20.0, size=2000.0):
+    return (box([-size / 2, -size / 2, -depth], [size / 2, size / 2, 0.0]), material(eps=eps, temperature=temperature))
+
+
+@pytest.mark.parametrize("theta", [0, 10, 30, 45, 60, 75, 85])
+def test_lossy_half_space_matches_fresnel(theta):
+    """Ex2 = (1-Rs)T + Rs Tsky, Ey2 = (1-Rp)T + Rp Tsky within 0.1 K.
+
+    Sand at 35 GHz (eps 3.9+0.56j) is so lossy that nothing comes back out of a 20 m deep ground
+    (exp(-2 k0 Im(n) 20 m) ~ 1e-900), so the closed form is exact and 0.1 K only covers float32
+    geometry (the hit angle is exact to ~1e-7 rad, a ~1e-5 K effect).
+    """
+    eps, t_ground, t_sky = 3.9 + 0.56j, 300.0, 40.0
+    job = make_job([ground(eps, t_ground)], looking_down_at(theta), UniformSky(t_sky, 290.0), F35)
+    img = render(job)
+    rs, rp = fresnel_closed_form(eps, np.radians(theta))
+    np.testing.assert_allclose(img["Ex2"], (1 - rs) * t_ground + rs * t_sky, atol=0.1)
+    np.testing.assert_allclose(img["Ey2"], (1 - rp) * t_ground + rp * t_sky, atol=0.1)
+    # no circular polarization from a single reflection; U vanishes in the s/p-aligned imager basis
+    np.testing.assert_allclose(img["U"], 0.0, atol=0.1)
+    np.testing.assert_allclose(img["V"], 0.0, atol=0.1)
+
+
+def test_brewster_angle_reflects_no_p():
+    """A lossless dielectric at the Brewster angle: Ey2 sees no sky at all.
+
+    Rays transmitted into the lossless ground are absorbed by a blackbody nested inside it (an
+    index-matched absorber), so Ey2 = Rp Tsky + (1 - Rp) Tbb. At Brewster Rp = 0 exactly, so
+    Ey2 = Tbb to float32 geometry precision (1e-3 K); 5 degrees off Brewster Rp > 0 is visible.
+    """
+    eps, t_bb, t_sky = 2.25, 300.0, 0.0
+    lossless = (box([-1000, -1000, -50], [1000, 1000, 0]), material(eps=eps, temperature=300.0))
+    absorber = (box([-900, -900, -40], [900, 900, -1]), material(kind="blackbody", temperature=t_bb))
+    brewster = np.degrees(np.arctan(np.sqrt(eps)))
+    img = render(make_job([lossless, absorber], looking_down_at(brewster), UniformSky(t_sky, 290.0), F35))
+    np.testing.assert_allclose(img["Ey2"], t_bb, atol=1e-3)
+    rs, _ = fresnel_closed_form(eps, np.radians(brewster))
+    np.testing.assert_allclose(img["Ex2"], (1 - rs) * t_bb, atol=1e-3)
+    off = render(make_job([lossless, absorber], looking_down_at(brewster - 5), UniformSky(t_sky, 290.0), F35))
+    _, rp = fresnel_closed_form(eps, np.radians(brewster - 5))
+    assert rp > 1e-3
+    np.testing.assert_allclose(off["Ey2"], (1 - rp) * t_bb, atol=1e-3)
+
+
+def _room(temperature=300.0):
+    """An isothermal closed room: lossy walls, a metal sphere, a coated lossy sphere, a plastic box."""
+    t = temperature
+    return [
+        (hollow_box([-5, -5, -3], [5, 5, 3], 0.3), material(eps=5.5 + 0.5j, temperature=t)),
+        (sphere([1.0, 2.0, 0.0], 0.8), material(kind="metal", temperature=t)),
+        (sphere([-1.2, 2.5, 0.3], 0.7), material(eps=5.9 + 9.4j, temperature=t, coating=[(1.61 + 0.121j, 0.8e-3, t)])),
+        (box([-0.6, 1.0, -1.5], [0.6, 1.8, -0.5]), material(eps=2.26 + 0.0013j, temperature=t)),
+        (box([1.5, 0.5, -2.0], [2.5, 1.5, -1.0]), material(kind="opaque", eps=3.0 + 0.2j, temperature=t)),
+    ]
+
+
+def _room_camera():
+    from pmmw_cli.scene.camera import Camera
+
+    return Camera.look_at([0.0, -4.0, 0.5], [0.0, 2.0, 0.0], [0, 0, 1], np.radians(70), (48, 36))
+
+
+def test_isothermal_enclosure_reads_its_temperature():
+    """Energy conservation: every pixel reads T in Ex2 and Ey2, Q, U, V vanish.
+
+    With deterministic splitting and the seed's depth/threshold termination on the last object's
+    temperature, every event's weights add to exactly 1 (PHYSICS.md), so the tolerance is
+    rounding only (1e-6 K), whatever the materials. The sky (0 K) must never be seen.
+    """
+    t = 300.0
+    settings = RenderSettings(spp=2, max_depth=6, threshold=1e-3, termination="temperature", tile=16)
+    job = make_job(_room(t), _room_camera(), UniformSky(0.0, 0.0), F95, settings)
+    img = render(job)
+    for c in ("Ex2", "Ey2"):
+        np.testing.assert_allclose(img[c], t, atol=1e-6)
+    for c in ("Q", "U", "V"):
+        np.testing.assert_allclose(img[c], 0.0, atol=1e-6)
+
+
+def test_isothermal_enclosure_with_russian_roulette_is_unbiased():
+    """With Russian roulette the expectation is still T; each roulette event adds noise.
+
+    A statistical test: the mean over the 1728 pixels must be within 5 standard errors of T (the
+    standard error estimated from the pixels themselves; a false alarm has probability ~6e-7),
+    and the per-pixel noise at this coarse threshold (0.05) stays below 3 K (measured ~1.7 K).
+    """
+    t = 300.0
+    settings = RenderSettings(spp=16, max_depth=12, threshold=0.05, termination="roulette", tile=16)
+    img = render(make_job(_room(t), _room_camera(), UniformSky(0.0, 0.0), F95, settings))
+    for c in ("Ex2", "Ey2"):
+        std = img[c].std()
+        assert 0.0 < std < 3.0
+        assert abs(img[c].mean() - t) < 5.0 * std / np.sqrt(img[c].size)
+
+
+def _tmm_rt_absorb(pol, eps_layers, d_layers, theta, lam):
+    n_list = [1.0] + [np.sqrt(e + 0j) for e in eps_layers]
+    d_list = [np.inf] + list(d_layers) + [np.inf]
+    res = tmm.coh_tmm(pol, n_list, d_list, theta, lam)
+    absorb = tmm.absorp_in_each_layer(res)
+    return res["R"], res["T"], absorb
+
+
+@pytest.mark.parametrize("theta", [0, 20, 40, 60, 80])
+def test_coated_half_space_matches_tmm(theta):
+    """0.8 mm denim on dry skin at 95 GHz, coating emitting at its own temperature.
+
+    Ex2 = Rs Tsky + A_denim,s T_denim + T_s T_skin with Rs, A, T from `tmm` (independent transfer
+    matrix code). Skin absorbs everything that enters a 20 m deep body. Tolerance 0.02 K: both
+    codes are double precision; the remaining difference is float32 geometry.
+    """
+    eps_denim, eps_skin = 1.61 + 0.121j, 5.9 + 9.4j
+    t_denim, t_skin, t_sky = 300.0, 310.0, 40.0
+    lam = C0 / F95
+    body = (box([-500, -500, -20], [500, 500, 0]),
+            material(eps=eps_skin, temperature=t_skin, coating=[(eps_denim, 0.8e-3, t_denim)]))
+    img = render(make_job([body], looking_down_at(theta), UniformSky(t_sky, 290.0), F95))
+    th = np.radians(theta)
+    for pol, chan in (("s", "Ex2"), ("p", "Ey2")):
+        r, tr, absorb = _tmm_rt_absorb(pol, [eps_denim, eps_skin], [0.8e-3], th, lam)
+        a_denim = absorb[1]
+        expected = r * t_sky + a_denim * t_denim + (1 - r - a_denim) * t_skin
+        np.testing.assert_allclose(img[chan], expected, atol=0.02)
+
+
+def test_thick_water_coating_equals_water_half_space():
+    """A 50 mm water coating (|exp(2i beta)| ~ 1e-220) renders as the water half-space.
+
+    The coating absorbs everything that enters it, so Ex2 = (1-Rs) T + Rs Tsky for water alone;
+    tolerance 1e-6 K: the substrate's contribution is ~1e-200 of T.
+    """
+    eps_water = 6.65 + 9.4j
+    t, t_sky = 300.0, 40.0
+    body = (box([-500, -500, -20], [500, 500, 0]),
+            material(eps=5.5 + 0.5j, temperature=t, coating=[(eps_water, 50e-3, t)]))
+    img = render(make_job([body], looking_down_at(30), UniformSky(t_sky, 290.0), F95))
+    rs, rp = fresnel_closed_form(eps_water, np.radians(30))
+    np.testing.assert_allclose(img["Ex2"], (1 - rs) * t + rs * t_sky, atol=1e-3)
+    np.testing.assert_allclose(img["Ey2"], (1 - rp) * t + rp * t_sky, atol=1e-3)
+
+
+def test_metal_mirror_at_45_degrees_sees_the_sky_overhead():
+    """A 45-degree metal plate reflects the zenith: Ex2 = Ey2 = Tsky(zenith)."""
+    from pmmw_cli.scene.camera import Camera
+    from pmmw_cli.scene.sky import SlabSky
+
+    plate = box([-1, -0.01, -1], [1, 0.01, 1])
+    plate.apply_transform(__import__("trimesh").transformations.rotation_matrix(np.radians(-45), [1, 0, 0]))
+    plate.apply_translation([0, 10, 1.5])
+    cam = Camera.look_at([0, 0, 1.5], [0, 10, 1.5], [0, 0, 1], np.radians(0.5), (4, 4))
+    sky = SlabSky(275.0, 0.06, 290.0)
+    img = render(make_job([(plate, material(kind="metal", temperature=300.0))], cam, sky, F35))
+    zenith = sky.zenith_angle_temperature(np.pi / 2)
+    np.testing.assert_allclose(img["Ex2"], zenith, atol=0.05)
+    np.testing.assert_allclose(img["Ey2"], zenith, atol=0.05)
