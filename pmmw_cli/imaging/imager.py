@@ -89,8 +89,7 @@ def blur(img, kernel):
     """Convolve an image (H, W) with a kernel, mirroring the borders. Returns (H, W) float64."""
     r = kernel.shape[0] // 2
     h, w = img.shape
-    mode = "reflect" if min(h, w) > r else "symmetric"
-    padded = np.pad(img, r, mode=mode) if min(h, w) > 1 or r == 0 else np.pad(img, r, mode="edge")
+    padded = np.pad(img, r, mode="symmetric")  # numpy repeats the reflection for large r
     out = fftconvolve(padded, kernel, mode="same")
     return out[r : r + h, r : r + w]
 

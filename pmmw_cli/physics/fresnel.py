@@ -8,18 +8,22 @@ Conventions (docs/ARCHITECTURE.md, shared/spec/PHYSICS.md)
 * Normal wave-vector components in units of k0: ``q1 = n1 cos1`` with ``n1 = sqrt(eps1)``
   (Im n1 >= 0), and in any other medium j ``q_j = sqrt(eps_j - kpar2)`` with
   ``kpar2 = eps1 sin^2(theta_1)`` (phase matching, seed 000 eq. 2.18-2.20), branch Im q_j >= 0
-  (the wave decays away from the interface; evanescent under total internal reflection).
+  (the wave decays away from the interface; evanescent under total internal reflection) when
+  the incident medium is lossless. Under a lossy incident medium kpar2 is complex and Im q >= 0
+  can pick a backward-running wave; the medium the wave is transmitted into then takes the
+  outgoing root Re q >= 0 (seed eq. 2.20: kt points the same way as ki), see `normal_component`.
 * Admittances: ``Y = q`` for s, ``Y = q / eps`` for p. ``r = (Y1 - Y2)/(Y1 + Y2)`` and
-  ``t = 1 + r``: the E-field ratio for s and the H-field ratio for p (seed 000 eq. 2.24, 2.25), so
-  that at normal incidence ``rp = -rs`` and a perfect conductor has ``rs = -1, rp = +1``. This
-  pairs with ``p = k x s`` (`pmmw_cli.physics.jones`).
+  ``t = 1 + r``, evaluated as ``2 Y1/(Y1 + Y2)`` (no cancellation near r = -1): the E-field ratio
+  for s and the H-field ratio for p (seed 000 eq. 2.24, 2.25), so that at normal incidence
+  ``rp = -rs`` and a perfect conductor has ``rs = -1, rp = +1``. This pairs with ``p = k x s``
+  (`pmmw_cli.physics.jones`).
 * Powers are fluxes through the interface: ``R = |r|^2``, ``T = |t|^2 Re(Y2)/Re(Y1)``
   (seed 000 eq. 2.34 with its Re{} factors). From a lossy medium 1 the homogeneous-wave picture can
   give ``R + T != 1``: above 1, R and T are scaled down to sum to 1 (seed 000 sec. 2.2.4); below
   1, the remainder ``A = 1 - R - T`` is absorbed (and emitted) at the surface.
 
-The private helpers ``_incident`` and ``_close`` are shared with `pmmw_cli.physics.multilayer`, so
-that a two-medium stack is bit-for-bit this interface.
+The private helpers ``_incident``, ``_normal_below`` and ``_close`` are shared with
+`pmmw_cli.physics.multilayer`, so that a two-medium stack is bit for bit this interface.
 """
 
 from __future__ import annotations
@@ -33,6 +37,8 @@ __all__ = ["Fresnel", "normal_component", "interface"]
 # Tolerance on Im(eps - kpar2), in units of |eps| + |kpar2|, below which a negative imaginary part
 # is taken as rounding noise of an exactly real argument (a few ulp of the subtraction).
 _ROUNDING = 8.0 * np.finfo(np.float64).eps
+# Below this, cos1 counts as exactly grazing: cos1^2 would underflow (and the angle is 1e-150 rad).
+_TINY_COS = 1e-150
 
 
 class Fresnel(NamedTuple):
@@ -71,8 +77,8 @@ class Fresnel(NamedTuple):
     Ap: np.ndarray
 
 
-def normal_component(eps, kpar2):
-    """Normal wave-vector component ``q = sqrt(eps - kpar2)`` on the decaying branch.
+def normal_component(eps, kpar2, branch="decaying"):
+    """Normal wave-vector component ``q = sqrt(eps - kpar2)`` on an explicit branch.
 
     Parameters
     ----------
@@ -81,29 +87,41 @@ def normal_component(eps, kpar2):
     kpar2 : array_like, complex128, broadcastable
         Squared tangential wave-vector component in units of k0^2, ``(n1 sin theta_1)^2`` [-];
         complex when the incident medium is lossy.
+    branch : {"decaying", "outgoing"}
+        ``"decaying"``: Im q >= 0, and Re q >= 0 where Im q == 0 (the field decays away from the
+        interface). ``"outgoing"``: Re q >= 0, and Im q >= 0 where Re q == 0 (the wave runs away
+        from the interface: "kt pointing in the same direction as ki", seed 000 eq. 2.20).
+        The two agree whenever Im(eps - kpar2) >= 0, which always holds for a lossless incident
+        medium (kpar2 real) and a passive medium (Im eps >= 0); evanescent waves (eps real,
+        kpar2 > eps) are ``+i sqrt(kpar2 - eps)`` on both. They differ only under a lossy
+        incident medium (see ``interface``: a half-space the wave enters needs "outgoing").
 
     Returns
     -------
     ndarray, complex128, broadcast shape
-        ``q`` [-] with Im q >= 0, and Re q >= 0 where Im q == 0: a propagating wave goes forward,
-        an evanescent one (eps real, kpar2 > eps) is ``+i sqrt(kpar2 - eps)`` (seed 000 eq. 2.20,
-        "care must be taken computationally due to the branch cut"). No negative zeros.
+        ``q`` [-]. No negative zeros.
     """
+    if branch not in ("decaying", "outgoing"):
+        raise ValueError(f"branch must be 'decaying' or 'outgoing', got {branch!r}")
     eps = np.asarray(eps, dtype=np.complex128)
     kpar2 = np.asarray(kpar2, dtype=np.complex128)
-    z = eps - kpar2
-    # A slightly negative (or -0.0) Im z from rounding an exactly real argument would put q just
-    # below the cut and, after the Im q >= 0 flip below, make a propagating wave run backwards
-    # (Re q < 0). Snap it to +0.0 so that the principal root (Re q >= 0) is taken.
-    tol = _ROUNDING * (np.abs(eps) + np.abs(kpar2))
-    noise = np.signbit(z.imag) & (z.imag >= -tol)
+    return _root(eps - kpar2, np.abs(eps) + np.abs(kpar2), branch)
+
+
+def _root(z, scale, branch):
+    """``sqrt(z)`` on ``branch`` (see `normal_component`); ``scale`` bounds |terms| of z [-]."""
+    # A slightly negative (or -0.0) Im z from rounding an exactly real argument would put z just
+    # below the branch cut: under TIR the principal root would then be -i sqrt (growing), and
+    # the "decaying" flip would make a propagating wave run backwards. Snap it to +0.0.
+    noise = np.signbit(z.imag) & (z.imag >= -_ROUNDING * scale)
     zz = np.empty_like(z)
     zz.real = z.real
     zz.imag = np.where(noise, 0.0, z.imag)
-    q = np.sqrt(zz)  # principal root: Re q >= 0, Im q has the sign of Im zz
-    # Im zz < 0 remains only for a lossy incident medium (complex kpar2): pick Im q >= 0 (seed 000
-    # eq. 2.20: the wave must decay away from the interface); Re q may then be negative.
-    q = np.where(q.imag < 0.0, -q, q)
+    q = np.sqrt(zz)  # principal root: Re q >= 0, Im q has the sign of Im zz, +i sqrt on the cut
+    if branch == "decaying":
+        # Im zz < 0 remains only under a lossy incident medium (complex kpar2): take Im q >= 0
+        # (Re q may then be negative).
+        q = np.where(q.imag < 0.0, -q, q)
     return q + 0.0  # turns -0.0 parts into +0.0
 
 
@@ -115,19 +133,40 @@ def _incident(eps1, cos1):
     eps1 : ndarray, complex128
         Permittivity of the incident medium [-].
     cos1 : ndarray, float64
-        Cosine of the (real) incidence angle [-]; clipped to [0, 1] against rounding.
+        Cosine of the (real) incidence angle [-]; clipped to [0, 1] against rounding, and
+        flushed to exactly 0 below 1e-150 (where its square would underflow).
 
     Returns
     -------
     q1 : ndarray, complex128
         ``n1 cos1`` [-], n1 the principal root (Im n1 >= 0).
-    kpar2 : ndarray, complex128
-        ``eps1 sin^2 theta_1`` [-] (seed 000 eq. 2.18).
+    q1sq : ndarray, complex128
+        ``eps1 cos1^2`` [-]; other media have ``q_j^2 = (eps_j - eps1) + q1sq``.
     """
     c = np.clip(np.asarray(cos1, dtype=np.float64), 0.0, 1.0)
+    c = np.where(c < _TINY_COS, 0.0, c)
     n1 = normal_component(eps1, 0.0)
-    sin2 = (1.0 - c) * (1.0 + c)  # accurate near normal incidence; exactly 1 at c = 0
-    return n1 * c, eps1 * sin2
+    return n1 * c, eps1 * (c * c)
+
+
+def _normal_below(eps, eps1, q1sq, branch):
+    """``q = sqrt(eps - eps1 sin^2 theta1)`` of a medium reached from medium 1.
+
+    Written ``(eps - eps1) + eps1 cos^2`` rather than ``eps - kpar2``: near grazing incidence
+    ``1 - cos^2`` rounds to 1 and a medium index-matched to medium 1 would get q = 0 instead of
+    q1 (and reflect everything); this form gives it q1 (r = 0) to rounding.
+
+    Parameters
+    ----------
+    eps, eps1, q1sq : ndarray, complex128, broadcastable
+        Permittivity of the medium, of the incident medium, and ``eps1 cos1^2`` [-].
+    branch : {"decaying", "outgoing"}
+
+    Returns
+    -------
+    ndarray, complex128
+    """
+    return _root((eps - eps1) + q1sq, np.abs(eps) + np.abs(eps1), branch)
 
 
 def _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
@@ -165,10 +204,10 @@ def _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
         num_p, den_p = q1 * bp - eps1 * cp, q1 * bp + eps1 * cp
         rs, ts = num_s / den_s, 2.0 * q1 * amp_s / den_s
         rp, tp = num_p / den_p, 2.0 * q1 * amp_p / den_p
-    # den == 0 only where Y1 = 0 (grazing) and Y_in = 0 too: the exit side is index-matched to the
-    # incident medium at grazing (only a metal's p wave under such layers gives C = 0 otherwise).
     # Exactly grazing (q1 = 0): r = -C/C, which complex division may round to 0.999...; the
-    # limit is r = -1, t = 0 (R = 1, T = 0), unless the exit is index-matched (den = 0 below).
+    # limit is r = -1, t = 0 (R = 1, T = 0), unless den = 0 too: Y_in = 0, i.e. everything below
+    # is index-matched to the incident medium at grazing (or, for p only, a metal under such
+    # layers). Passive media give den != 0 everywhere else.
     flat = q1 == 0.0
     rs, ts = _grazing(flat & (den_s != 0.0), rs, ts)
     rp, tp = _grazing(flat & (den_p != 0.0), rp, tp)
@@ -227,8 +266,8 @@ def _powers(r, t, y1, y2, opaque):
         # Exactly grazing (Re Y1 = 0) the flux ratio is 0/0; its limit from a lossless medium
         # 1 is 1 - R (R = 1 unless the exit is index-matched, then everything continues).
         T = np.where(grazing, 1.0 - R, T)
-        # Re Y2 < 0 (a backward-running decaying wave, only under a lossy incident medium)
-        # carries no power into medium 2.
+        # Re Y2 < 0 is possible only under a lossy incident medium (p: Re(q2/eps2) with q2 in
+        # the fourth quadrant): the homogeneous-wave flux is then meaningless, count none.
         T = np.maximum(T, 0.0)
     total = R + T
     over = total > 1.0
@@ -250,7 +289,7 @@ def interface(eps1, eps2, cos1):
         Relative permittivity of the far medium [-].
     cos1 : array_like, float64, shape (N,) or broadcastable
         Cosine of the real angle between the ray and the surface normal in medium 1, in [0, 1]
-        (values a rounding error outside are clipped).
+        (values a rounding error outside are clipped; below 1e-150 it is exactly grazing).
 
     Returns
     -------
@@ -265,8 +304,12 @@ def interface(eps1, eps2, cos1):
     cos1 = np.asarray(cos1, dtype=np.float64)
     shape = np.broadcast_shapes(eps1.shape, eps2.shape, cos1.shape)
     eps1, eps2, cos1 = (np.broadcast_to(a, shape) for a in (eps1, eps2, cos1))
-    q1, kpar2 = _incident(eps1, cos1)
-    q2 = normal_component(eps2, kpar2)  # seed 000 eq. 2.20
+    q1, q1sq = _incident(eps1, cos1)
+    # q2^2 = eps2 - eps1 sin^2 (seed 000 eq. 2.20), the transmitted wave runs forward. Under a
+    # lossy incident medium the decaying root can run backwards (Re q2 < 0: negative flux, R > 1
+    # and a jump to total reflection just off normal incidence); "outgoing" is continuous with
+    # the lossless case.
+    q2 = _normal_below(eps2, eps1, q1sq, branch="outgoing")
     one = np.ones(shape, dtype=np.complex128)
     with np.errstate(divide="ignore", invalid="ignore"):
         y2p = (q2 / eps2).real

@@ -1,4 +1,4 @@
-"""Coherent thin-film stacks (coatings) without overflow, vectorized over rays (seed 000 sec. 2.2.3).
+"""Coherent thin-film stacks (coatings) without overflow, vectorized over rays (seed 000 2.2.3).
 
 Method
 ------
@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pmmw_cli.physics.fresnel import Fresnel, _close, _incident, normal_component
+from pmmw_cli.physics.fresnel import _close, _incident, _normal_below
 
 __all__ = ["stack"]
 
@@ -58,20 +58,22 @@ def _expm1(z):
 
 
 def _phi1(z, em1):
-    """``phi1(z) = (exp(z) - 1)/z``, 1 at z = 0; |phi1| <= 1 for Re z <= 0.
+    """``phi1(z) = (exp(z) - 1)/z`` (1 at z = 0); |phi1| <= 1 for Re z <= 0.
 
     Parameters
     ----------
     z, em1 : ndarray, complex128
         Argument and ``expm1(z)``.
     """
-    zero = z == 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(zero, 1.0 + 0j, em1 / np.where(zero, 1.0, z))
+    # Small |z|: two terms of the series (error |z|^2/6 < 1e-16); also avoids dividing tiny
+    # (subnormal) numbers, which can overflow.
+    small = np.abs(z) < 1e-8
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return np.where(small, 1.0 + 0.5 * z, em1 / np.where(small, 1.0, z))
 
 
 def _rescale(b, c, exps):
-    """Divide (B, C) by the power of two nearest max(|B|, |C|) (exact) and record the exponent."""
+    """Scale (B, C) by a power of two (exact) to max(|B|, |C|) in [0.5, 1); add up the exponents."""
     m = np.maximum(np.abs(b), np.abs(c))
     _, e = np.frexp(np.where(m > 0.0, m, 1.0))
     f = np.ldexp(1.0, -e)
@@ -143,8 +145,12 @@ def stack(eps, thickness, cos1, k0, substrate="dielectric"):
     metal = substrate == "metal"
 
     eps1 = eps[..., 0]
-    q1, kpar2 = _incident(eps1, cos1)
-    q = normal_component(eps[..., 1:], kpar2[..., None])  # media 1..L-1, seed 000 eq. 2.20
+    q1, q1sq = _incident(eps1, cos1)
+    # seed 000 eq. 2.20. Layers: decaying root, so that |exp(i beta)| <= 1 (a layer's matrix is
+    # even in q_j, the sign does not change r or t). Exit half-space: outgoing root, as in
+    # `interface` (they differ only under a lossy incident medium).
+    q = _normal_below(eps[..., 1:], eps1[..., None], q1sq[..., None], branch="decaying")
+    q[..., -1] = _normal_below(eps[..., -1], eps1, q1sq, branch="outgoing")
 
     # Bottom: (B, C) of the exit half-space, Y_in = C/B (Y = q for s, q/eps for p), and the
     # exit-side U amplitude in the same units.

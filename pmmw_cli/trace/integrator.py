@@ -38,6 +38,7 @@ from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN, Trace
 
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
+_A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 
 
 @dataclass
@@ -342,7 +343,7 @@ class Integrator:
 
         kind = media.kind[face_med]
         t_body = media.temperature[face_med]
-        absorb = (coeff["As"] > 0.0) | (coeff["Ap"] > 0.0)
+        absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
         if absorb.any():
             a = absorb
             self._emit(wv.sid[a], _scale_columns(ml[a], np.sqrt(coeff["As"][a]), np.sqrt(coeff["Ap"][a])), t_coat[a])
@@ -414,8 +415,8 @@ def _refract(d, n_in, eps1, eps2):
     """Real transmitted direction under the homogeneous-wave assumption (seed 000 sec. 2.2.4).
 
     The tangential wave-vector component is conserved (eq. 2.18) and the normal component is
-    Re q2 = Re sqrt(eps2 - eps1 sin^2 th1) (eq. 2.20, branch Im q2 >= 0), so that for lossless
-    media this is Snell's law exactly.
+    Re q2 = Re sqrt(eps2 - eps1 sin^2 th1) (eq. 2.20, outgoing branch Re q2 >= 0), so that for
+    lossless media this is Snell's law exactly.
 
     Parameters
     ----------
@@ -433,6 +434,8 @@ def _refract(d, n_in, eps1, eps2):
     tang = d + cos1[:, None] * n_in  # |tang| = sin th1
     sin2 = np.clip(1.0 - cos1**2, 0.0, 1.0)
     n1 = np.sqrt(eps1 + 0j)
-    q2 = fresnel.normal_component(eps2, eps1 * sin2)
+    # the wave runs away from the interface (eq. 2.20): the outgoing root, Re q2 >= 0, which is
+    # also the decaying one unless the incident medium is lossy
+    q2 = fresnel.normal_component(eps2, eps1 * sin2, branch="outgoing")
     dt = n1.real[:, None] * tang - q2.real[:, None] * n_in
     return _normalize(dt)
