@@ -1,0 +1,360 @@
+"""The typed scenario: pydantic v2 models with every quantity in SI and every input path resolved.
+
+Unit strings are parsed here, at the edge (`pmmw_cli.units.parse_quantity`); the rest of pmmw
+only sees floats in [Hz], [m], [rad], [K], [Np/m]. Unknown keys are errors (``extra="forbid"``).
+Relative input paths resolve against the scenario file's folder, which the loader passes in the
+validation context as ``base_dir``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Literal, Optional, Union
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+
+from pmmw_cli.errors import UserError
+from pmmw_cli.units import parse_quantity
+
+MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".stl", ".off")
+CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
+AUX = ("depth", "material", "stderr")
+
+
+class ConfigValueError(ValueError):
+    """A validation failure whose message is already user-facing."""
+
+
+def _q(value, kind):
+    try:
+        return parse_quantity(value, kind)
+    except UserError as e:
+        raise ConfigValueError(e.message) from None
+
+
+def _vec3(value, kind="length"):
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise ConfigValueError(f"expected a list of 3 numbers, got {value!r}")
+    return tuple(_q(v, kind) for v in value)
+
+
+def _finite_number(value, what="number"):
+    if isinstance(value, bool):
+        raise ConfigValueError(f"expected a {what}, got {value!r}")
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            raise ConfigValueError(f"expected a {what}, got {value!r}") from None
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ConfigValueError(f"expected a finite {what}, got {value!r}")
+    return float(value)
+
+
+def _input_path(value, info: ValidationInfo) -> Path:
+    if not isinstance(value, (str, Path)):
+        raise ConfigValueError(f"expected a file path, got {value!r}")
+    p = Path(value).expanduser()
+    base = (info.context or {}).get("base_dir")
+    if not p.is_absolute() and base is not None:
+        p = Path(base) / p
+    p = p.resolve()
+    if not p.is_file():
+        raise ConfigValueError(f"file not found: {p}")
+    return p
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True)
+
+
+class Imager(_Model):
+    position: tuple[float, float, float]
+    look_at: tuple[float, float, float]
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    fov: float
+    resolution: tuple[int, int]
+    aperture_diameter: float = 0.0
+    noise: float = 0.0
+    frequency: Optional[Any] = Field(default=None, exclude=True)  # alias of the top-level key
+
+    @field_validator("position", "look_at", "up", mode="before")
+    @classmethod
+    def _vec(cls, v):
+        return _vec3(v)
+
+    @field_validator("fov", mode="before")
+    @classmethod
+    def _fov(cls, v):
+        fov = _q(v, "angle")
+        if not 0.0 < fov < math.pi:
+            raise ConfigValueError(f"field of view must be between 0 and 180 deg, got {v!r}")
+        return fov
+
+    @field_validator("resolution", mode="before")
+    @classmethod
+    def _res(cls, v):
+        if (not isinstance(v, (list, tuple)) or len(v) != 2
+                or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in v)):
+            raise ConfigValueError(f"expected [width, height], two integers >= 1, got {v!r}")
+        return tuple(v)
+
+    @field_validator("aperture_diameter", mode="before")
+    @classmethod
+    def _aperture(cls, v):
+        d = _q(v, "length")
+        if d < 0:
+            raise ConfigValueError(f"must be >= 0, got {v!r}")
+        return d
+
+    @field_validator("noise", mode="before")
+    @classmethod
+    def _noise(cls, v):
+        t = _q(v, "temperature")
+        if t < 0:
+            raise ConfigValueError(f"noise must be >= 0 K, got {v!r}")
+        return t
+
+    @model_validator(mode="after")
+    def _pose(self):
+        k = [b - a for a, b in zip(self.position, self.look_at)]
+        nk = math.sqrt(sum(c * c for c in k))
+        if nk == 0.0:
+            raise ConfigValueError("look_at equals position: no viewing direction")
+        up = self.up
+        cross = (k[1] * up[2] - k[2] * up[1], k[2] * up[0] - k[0] * up[2], k[0] * up[1] - k[1] * up[0])
+        nu = math.sqrt(sum(c * c for c in up))
+        if nu == 0.0 or math.sqrt(sum(c * c for c in cross)) < 1e-9 * nk * nu:
+            raise ConfigValueError("up is parallel to the viewing direction; give another up vector")
+        return self
+
+
+class Transform(_Model):
+    translate: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    scale: Union[float, tuple[float, float, float]] = 1.0
+
+    @field_validator("translate", mode="before")
+    @classmethod
+    def _t(cls, v):
+        return _vec3(v)
+
+    @field_validator("rotate_deg", mode="before")
+    @classmethod
+    def _r(cls, v):
+        if not isinstance(v, (list, tuple)) or len(v) != 3:
+            raise ConfigValueError(f"expected 3 angles in degrees, got {v!r}")
+        return tuple(_finite_number(a, "angle in degrees") for a in v)
+
+    @field_validator("scale", mode="before")
+    @classmethod
+    def _s(cls, v):
+        vals = v if isinstance(v, (list, tuple)) else [v]
+        if len(vals) not in (1, 3):
+            raise ConfigValueError(f"expected a number or 3 numbers, got {v!r}")
+        out = tuple(_finite_number(x, "scale factor") for x in vals)
+        if any(x <= 0 for x in out):
+            raise ConfigValueError(f"scale factors must be > 0, got {v!r}")
+        return out[0] if len(out) == 1 else out
+
+
+class SceneEntry(_Model):
+    mesh: Path
+    material: Optional[str] = None
+    materials: Optional[dict[str, str]] = None
+    transform: Transform = Transform()
+    up_axis: Optional[Literal["y", "z"]] = None
+    name: Optional[str] = None
+    key: str = Field(default="", exclude=True)
+
+    @field_validator("mesh", mode="before")
+    @classmethod
+    def _mesh(cls, v, info: ValidationInfo):
+        p = _input_path(v, info)
+        if p.suffix.lower() not in MESH_SUFFIXES:
+            raise ConfigValueError(f"unsupported mesh format {p.suffix!r}; use one of {', '.join(MESH_SUFFIXES)}")
+        return p
+
+    @model_validator(mode="after")
+    def _one_material(self):
+        if (self.material is None) == (self.materials is None):
+            raise ConfigValueError("give exactly one of 'material' (one id) or 'materials' (mesh name -> id)")
+        return self
+
+
+class Atmosphere(_Model):
+    loss: float = 0.0
+    temperature: float = 288.0
+
+    @field_validator("loss", mode="before")
+    @classmethod
+    def _loss(cls, v):
+        return _q(v, "attenuation")
+
+    @field_validator("temperature", mode="before")
+    @classmethod
+    def _t(cls, v):
+        return _positive_temperature(v)
+
+
+def _positive_temperature(v):
+    t = _q(v, "temperature")
+    if t <= 0:
+        raise ConfigValueError(f"temperature must be > 0 K, got {v!r}")
+    return t
+
+
+class Sky(_Model):
+    model: Literal["slab", "uniform", "texture"] = "slab"
+    temperature: Optional[float] = None
+    file: Optional[Path] = None
+    zenith_opacity: Optional[float] = None
+    ground_temperature: float = 290.0
+
+    @model_validator(mode="before")
+    @classmethod
+    def _texture_shorthand(cls, data):
+        if isinstance(data, dict) and "texture" in data:
+            data = dict(data)
+            if "file" in data:
+                raise ConfigValueError("give the texture once, as 'texture' or 'file'")
+            data["file"] = data.pop("texture")
+            data.setdefault("model", "texture")
+        return data
+
+    @field_validator("temperature", "ground_temperature", mode="before")
+    @classmethod
+    def _t(cls, v):
+        return None if v is None else _q(v, "temperature")
+
+    @field_validator("file", mode="before")
+    @classmethod
+    def _file(cls, v, info: ValidationInfo):
+        return None if v is None else _input_path(v, info)
+
+    @field_validator("zenith_opacity", mode="before")
+    @classmethod
+    def _tau(cls, v):
+        if v is None:
+            return None
+        tau = _finite_number(v, "opacity in nepers")
+        if tau < 0:
+            raise ConfigValueError(f"zenith opacity must be >= 0, got {v!r}")
+        return tau
+
+    @model_validator(mode="after")
+    def _needs(self):
+        if self.model == "uniform" and self.temperature is None:
+            raise ConfigValueError("a uniform sky needs 'temperature', e.g. {model: uniform, temperature: 60 K}")
+        if self.model == "texture" and self.file is None:
+            raise ConfigValueError("a texture sky needs 'texture: path/to/sky.exr' (channels Tv, Th)")
+        if self.temperature is not None and self.temperature < 0:
+            raise ConfigValueError("sky temperature must be >= 0 K")
+        return self
+
+
+class Render(_Model):
+    spp: int = Field(16, ge=1)
+    max_depth: int = Field(6, ge=1, le=64)
+    threshold: float = 1e-3
+    seed: int = 1
+    workers: Optional[int] = Field(None, ge=1)
+    tile: int = Field(32, ge=8, le=512)
+    termination: Literal["roulette", "temperature"] = "roulette"
+    default_temperature: float = 290.0
+
+    @field_validator("threshold", mode="before")
+    @classmethod
+    def _thr(cls, v):
+        t = _finite_number(v, "threshold")
+        if not 0.0 <= t < 1.0:
+            raise ConfigValueError(f"threshold must be in [0, 1), got {v!r}")
+        return t
+
+    @field_validator("workers", mode="before")
+    @classmethod
+    def _workers(cls, v):
+        return None if v in (None, "auto") else v
+
+    @field_validator("default_temperature", mode="before")
+    @classmethod
+    def _t(cls, v):
+        return _positive_temperature(v)
+
+
+class Output(_Model):
+    dir: Optional[Path] = None
+    channels: tuple[str, ...] = CHANNELS
+    previews: bool = True
+    aux: tuple[str, ...] = ()
+
+    @field_validator("dir", mode="before")
+    @classmethod
+    def _dir(cls, v):
+        return None if v is None else Path(v).expanduser().resolve()
+
+    @field_validator("channels", mode="before")
+    @classmethod
+    def _channels(cls, v):
+        return _subset(v, CHANNELS, "channel")
+
+    @field_validator("aux", mode="before")
+    @classmethod
+    def _aux(cls, v):
+        return _subset(v, AUX, "auxiliary channel")
+
+
+def _subset(v, allowed, what):
+    if isinstance(v, str):
+        v = [v]
+    if not isinstance(v, (list, tuple)):
+        raise ConfigValueError(f"expected a list of {what}s")
+    bad = [c for c in v if c not in allowed]
+    if bad:
+        raise ConfigValueError(f"unknown {what} {bad[0]!r}; known: {', '.join(allowed)}")
+    if len(set(v)) != len(v):
+        raise ConfigValueError(f"a {what} is listed twice")
+    return tuple(v)
+
+
+class Scenario(_Model):
+    name: str
+    source_file: Path
+    frequencies: tuple[float, ...]
+    imager: Imager
+    scene: tuple[SceneEntry, ...] = Field(min_length=1)
+    materials: dict[str, dict] = {}
+    atmosphere: Optional[Atmosphere] = None
+    sky: Sky = Sky()
+    render: Render = Render()
+    output: Output = Output()
+
+    @field_validator("frequencies", mode="before")
+    @classmethod
+    def _freqs(cls, v):
+        vals = v if isinstance(v, (list, tuple)) else [v]
+        if not vals:
+            raise ConfigValueError("give at least one frequency")
+        out = tuple(_q(f, "frequency") for f in vals)
+        if any(f <= 0 for f in out):
+            raise ConfigValueError("frequencies must be > 0")
+        if len(set(out)) != len(out):
+            raise ConfigValueError("a frequency is listed twice")
+        return out
+
+    @field_validator("materials", mode="before")
+    @classmethod
+    def _materials(cls, v):
+        if v is None:
+            return {}
+        if not isinstance(v, dict) or not all(isinstance(k, str) and isinstance(e, dict) for k, e in v.items()):
+            raise ConfigValueError("expected a mapping of material id -> material entry")
+        return v
+
+    @field_validator("atmosphere", mode="before")
+    @classmethod
+    def _atm(cls, v):
+        if v is None or (isinstance(v, str) and v.strip().lower() == "none"):
+            return None
+        return v
