@@ -135,3 +135,53 @@ def test_console_script_runs_without_traceback(tmp_path):
     proc = subprocess.run([str(exe), "validate", str(tmp_path / "nope.yaml")], capture_output=True, text=True)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr and "nope.yaml" in proc.stderr
+
+
+def test_interrupted_render_leaves_no_partial_file_and_resumes(tmp_path, monkeypatch):
+    """Ctrl-C during tracing: exit 130, no EXR (not even a truncated one), finished tiles kept;
+    `--resume` then renders only the rest and gives the same image as an uninterrupted run."""
+    from pmmw_cli.trace.integrator import Integrator
+
+    scn = _scene(tmp_path)
+    clean = tmp_path / "clean"
+    assert _run("render", scn, "--out", clean, "--workers", "1").exit_code == 0
+    original = Integrator.render_tile
+    calls = {"n": 0}
+
+    def flaky(self, tile):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise KeyboardInterrupt
+        return original(self, tile)
+
+    monkeypatch.setattr(Integrator, "render_tile", flaky)
+    out = tmp_path / "out"
+    res = _run("render", scn, "--out", out, "--workers", "1")
+    assert res.exit_code == 130 and "--resume" in res.output
+    assert not list(out.glob("*.exr")) and not list(out.glob(".*tmp*"))
+    assert len(list((out / ".pmmw-tiles").rglob("tile_*.npz"))) == 3
+    monkeypatch.setattr(Integrator, "render_tile", original)
+    calls["n"] = 0
+    assert _run("render", scn, "--out", out, "--workers", "1", "--resume").exit_code == 0
+    a, _ = read_exr(clean / "tiny.exr")
+    b, _ = read_exr(out / "tiny.exr")
+    for c in a:
+        np.testing.assert_array_equal(a[c], b[c])
+
+
+def test_refracting_mesh_that_is_not_watertight_is_warned_about(tmp_path):
+    """An open dielectric mesh gets a warning naming it (and goes on, as a user may intend it)."""
+    from pmmw_cli.errors import clear_warnings, collected_warnings
+    from pmmw_cli.pipeline import resolve
+
+    plane = trimesh.Trimesh(vertices=[[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], faces=[[0, 1, 2], [0, 2, 3]])
+    plane.export(tmp_path / "plane.obj")
+    scn = _scene(tmp_path, extra="")
+    text = scn.read_text().replace("mesh: block.obj, material: metal", "mesh: plane.obj, material: polypropylene")
+    scn.write_text(text)
+    clear_warnings()
+    resolve(scn)
+    assert any("not watertight" in w and "plane.obj" in w for w in collected_warnings())
+    clear_warnings()
+    resolve(_scene(tmp_path))  # closed meshes: no such warning
+    assert not any("not watertight" in w for w in collected_warnings())
