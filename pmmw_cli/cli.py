@@ -57,12 +57,14 @@ def render(
     resume: bool = typer.Option(False, "--resume", help="Reuse tiles finished by an interrupted run."),
     keep_tiles: bool = typer.Option(False, "--keep-tiles", help="Keep per-tile files after the image is written."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar; one summary line per image."),
+    shard: Optional[str] = typer.Option(None, "--shard", metavar="I/N",
+                                        help="Render only tiles I mod N (cluster jobs); assemble later with --resume."),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
-    from pmmw_cli.pipeline import render as run
+    from pmmw_cli.pipeline import parse_shard, render as run
 
     run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
-        quiet=quiet, keep_tiles=keep_tiles)
+        quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard))
 
 
 @app.command()

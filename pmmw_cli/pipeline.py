@@ -107,8 +107,25 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
 
 
 def scenario_hash(scn) -> str:
-    text = json.dumps(scenario_to_display(scn), sort_keys=True, default=str)
+    """Hash of everything that changes the traced tiles (not workers, not output settings)."""
+    d = scenario_to_display(scn)
+    d.pop("output", None)
+    d["render"].pop("workers", None)
+    text = json.dumps(d, sort_keys=True, default=str)
     return hashlib.sha256((text + __version__).encode()).hexdigest()[:16]
+
+
+def parse_shard(text: str | None):
+    """``"I/N"`` -> (I, N) with 0 <= I < N; None -> None."""
+    if text is None:
+        return None
+    try:
+        i, n = (int(v) for v in text.split("/"))
+    except ValueError:
+        raise UserError(f"expected I/N (e.g. 3/16), got {text!r}", file="--shard") from None
+    if not (n >= 1 and 0 <= i < n):
+        raise UserError(f"need 0 <= I < N, got {text!r}", file="--shard")
+    return i, n
 
 
 def make_job(res: Resolved, f: float) -> TraceJob:
@@ -151,8 +168,13 @@ def _stem(scn, f: float) -> str:
 
 
 def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
-           quiet=False, keep_tiles=False) -> list[Path]:
-    """The ``pmmw render`` job. Returns the EXR paths written."""
+           quiet=False, keep_tiles=False, shard=None) -> list[Path]:
+    """The ``pmmw render`` job. Returns the EXR paths written.
+
+    With ``shard=(i, n)`` only tiles whose index is i modulo n are rendered into the tile folder
+    and no image is written: run the n shards anywhere that shares the output folder, then run
+    once more with ``resume=True`` (and no shard) to assemble the image.
+    """
     clear_warnings()
     t0 = time.perf_counter()
     cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed), ("out", out)) if v is not None}
@@ -169,6 +191,13 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
         job = make_job(res, f)
         stem = _stem(scn, f)
         tile_dir = out_dir / ".pmmw-tiles" / f"{stem}-{shash}"
+        if shard is not None:
+            mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0]]
+            done = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=True,
+                                progress=_Progress(stem, quiet), tiles=mine)
+            print(f"{stem}: shard {shard[0]}/{shard[1]}: {len(done)} tiles in {tile_dir}; "
+                  "assemble with `pmmw render ... --resume` once every shard is done")
+            continue
         results = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=resume,
                                progress=_Progress(stem, quiet))
         mean, stderr, depth, material, rays = assemble(job, results)

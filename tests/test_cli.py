@@ -185,3 +185,21 @@ def test_refracting_mesh_that_is_not_watertight_is_warned_about(tmp_path):
     clear_warnings()
     resolve(_scene(tmp_path))  # closed meshes: no such warning
     assert not any("not watertight" in w for w in collected_warnings())
+
+
+def test_shards_then_resume_assemble_the_same_image(tmp_path):
+    """Cluster use: two shards render disjoint tiles (any worker count), --resume assembles."""
+    scn = _scene(tmp_path)
+    assert _run("render", scn, "--out", tmp_path / "clean", "--workers", "1").exit_code == 0
+    out = tmp_path / "out"
+    for i, w in ((0, 1), (1, 2)):
+        res = _run("render", scn, "--out", out, "--workers", w, "--shard", f"{i}/2")
+        assert res.exit_code == 0, res.output
+        assert not list(out.glob("*.exr"))
+    assert len(list((out / ".pmmw-tiles").rglob("tile_*.npz"))) == 6
+    assert _run("render", scn, "--out", out, "--resume").exit_code == 0
+    a, _ = read_exr(tmp_path / "clean" / "tiny.exr")
+    b, _ = read_exr(out / "tiny.exr")
+    for c in a:
+        np.testing.assert_array_equal(a[c], b[c])
+    assert _run("render", scn, "--shard", "2/2").exit_code == 2
