@@ -135,7 +135,8 @@ def make_job(res: Resolved, f: float) -> TraceJob:
     r = scn.render
     settings = RenderSettings(
         spp=r.spp, max_depth=r.max_depth, threshold=r.threshold, seed=r.seed,
-        termination=r.termination, tile=r.tile, aux=tuple(scn.output.aux),
+        termination=r.termination, strategy=r.strategy, split_depth=r.split_depth,
+        target_error=r.target_error, min_spp=min(r.min_spp, r.spp), tile=r.tile, aux=tuple(scn.output.aux),
     )
     return TraceJob(
         vertices=geom.vertices, faces=geom.faces, face_normals=geom.face_normals,
@@ -200,7 +201,8 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
             continue
         results = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=resume,
                                progress=_Progress(stem, quiet))
-        mean, stderr, depth, material, rays = assemble(job, results)
+        img = assemble(job, results)
+        mean, stderr, depth, material, rays = img.mean, img.stderr, img.depth, img.material, img.rays
         t_trace = time.perf_counter() - t1
         ideal = stokes_images(mean)
         sensor = apply_imager(
@@ -218,6 +220,8 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
             channels["aux.depth"] = depth.astype(np.float32)
         if "material" in scn.output.aux:
             channels["aux.material"] = material.astype(np.float32)
+        if "samples" in scn.output.aux:
+            channels["aux.samples"] = img.samples.astype(np.float32)
         cam = job.camera
         attrs = {
             "pmmw:version": __version__, "pmmw:units": "K (Rayleigh-Jeans brightness temperature)",
@@ -238,16 +242,18 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
         t_total = time.perf_counter() - t1
         stats, previews = {}, {}
         for c in scn.output.channels:
-            img = sensor[c]
-            stats[c] = {"min": float(np.min(img)), "mean": float(np.mean(img)), "max": float(np.max(img))}
+            chan = sensor[c]
+            stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
             if scn.output.previews:
                 rel = f"previews/{stem}_{c}.png"
-                lo, hi = write_preview(out_dir / rel, img)
+                lo, hi = write_preview(out_dir / rel, chan)
                 stats[c].update(display_low=lo, display_high=hi)
                 previews[c] = rel
         renders.append({
             "frequency_hz": f, "output_exr": str(exr_path), "channels": stats, "previews": previews,
-            "rays": rays, "timing": {"trace_s": round(t_trace, 3), "frequency_total_s": round(t_total, 3)},
+            "rays": rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),
+                                     "frequency_total_s": round(t_total, 3)},
+            "mean_samples_per_pixel": float(img.samples.mean()),
             "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
         })
         if not keep_tiles:

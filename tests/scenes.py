@@ -77,8 +77,7 @@ def render(job, intersector="embree"):
     """Render every tile in-process; returns the six channels as (H, W) arrays [K]."""
     integ = Integrator(job, make_intersector(job.vertices, job.faces, kind=intersector))
     results = [integ.render_tile(t) for t in job.tiles()]
-    mean, stderr, depth, material, rays = assemble(job, results)
-    return stokes_images(mean)
+    return stokes_images(assemble(job, results).mean)
 
 
 def looking_down_at(theta_deg, height=1.0, width=1, height_px=1, fov_deg=0.01):

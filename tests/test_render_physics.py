@@ -244,3 +244,56 @@ def test_polarized_sky_texture_in_the_imager_basis(tmp_path, roll_deg):
     np.testing.assert_allclose(img["V"], 0.0, atol=1e-9)
     if roll_deg == 45.0:
         assert abs(img["U"][0, 0]) > 79.0  # |Th - Tv| = 80 K all in U
+
+
+@pytest.mark.parametrize("strategy", ["stochastic", "hybrid"])
+def test_branch_choice_strategies_are_unbiased(strategy):
+    """Stochastic branch choice (and the hybrid) converge to the closed form of the half-space.
+
+    A lossless dielectric half-space with a nested blackbody (as the Brewster test) at 50 deg:
+    Ex2 = Rs Tsky + (1 - Rs) Tbb exactly. 64 samples on 8x8 pixels = 4096 independent paths of
+    weight 1/(P or 1-P): the image mean must lie within 5 standard errors (estimated from the
+    samples) of the closed form.
+    """
+    from pmmw_cli.scene.camera import Camera
+
+    eps, t_bb, t_sky = 2.25, 300.0, 20.0
+    lossless = (box([-1000, -1000, -50], [1000, 1000, 0]), material(eps=eps, temperature=300.0))
+    absorber = (box([-900, -900, -40], [900, 900, -1]), material(kind="blackbody", temperature=t_bb))
+    theta = 50.0
+    base = looking_down_at(theta)
+    cam = Camera(base.position, base.x, base.y, base.k, np.radians(0.01), 8, 8)
+    settings = RenderSettings(spp=64, max_depth=8, threshold=1e-9, termination="temperature",
+                              strategy=strategy, split_depth=1, tile=8)
+    job = make_job([lossless, absorber], cam, UniformSky(t_sky, 290.0), F35, settings)
+    from pmmw_cli.trace.integrator import Integrator
+    from pmmw_cli.trace.intersect import make_intersector
+
+    res = Integrator(job, make_intersector(job.vertices, job.faces)).render_tile(job.tiles()[0])
+    rs, rp = fresnel_closed_form(eps, np.radians(theta))
+    for c, r in ((0, rs), (1, rp)):
+        expected = r * t_sky + (1 - r) * t_bb
+        est = res.mean[..., c].mean()
+        se = np.sqrt((res.stderr[..., c] ** 2).mean() / res.mean[..., c].size)
+        assert se > 0.0  # the choice does add noise
+        assert abs(est - expected) < 5 * se + 1e-9
+
+
+def test_adaptive_sampling_reaches_the_target_error():
+    """render.target_error: pixels stop at min_spp where they converge (smooth ground) and get
+    more samples only where needed; every pixel that stopped early meets the target."""
+    from pmmw_cli.scene.camera import Camera
+
+    settings = RenderSettings(spp=64, max_depth=6, threshold=0.05, termination="roulette",
+                              target_error=0.5, min_spp=4, tile=16)
+    job = make_job(_room(300.0), _room_camera(), UniformSky(0.0, 0.0), F95, settings)
+    from pmmw_cli.trace.integrator import Integrator
+    from pmmw_cli.trace.intersect import make_intersector
+
+    integ = Integrator(job, make_intersector(job.vertices, job.faces))
+    results = [integ.render_tile(t) for t in job.tiles()]
+    samples = np.concatenate([r.samples.ravel() for r in results])
+    err = np.concatenate([np.max(r.stderr[..., :2], axis=-1).ravel() for r in results])
+    assert samples.min() == 4 and samples.max() == 64  # both ends are used
+    assert np.all(err[samples < 64] <= 0.5)
+    assert samples.mean() < 64

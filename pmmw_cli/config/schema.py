@@ -19,7 +19,7 @@ from pmmw_cli.units import parse_quantity
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".stl", ".off")
 CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
-AUX = ("depth", "material", "stderr")
+AUX = ("depth", "material", "stderr", "samples")
 
 
 class ConfigValueError(ValueError):
@@ -262,7 +262,21 @@ class Render(_Model):
     workers: Optional[int] = Field(None, ge=1)
     tile: int = Field(32, ge=8, le=512)
     termination: Literal["roulette", "temperature"] = "roulette"
+    strategy: Literal["split", "stochastic", "hybrid"] = "split"
+    split_depth: int = Field(2, ge=0)
+    target_error: Optional[float] = None
+    min_spp: int = Field(4, ge=2)
     default_temperature: float = 290.0
+
+    @field_validator("target_error", mode="before")
+    @classmethod
+    def _target(cls, v):
+        if v is None:
+            return None
+        t = _q(v, "temperature")
+        if t <= 0:
+            raise ConfigValueError(f"target_error must be > 0 K, got {v!r}")
+        return t
 
     @field_validator("threshold", mode="before")
     @classmethod

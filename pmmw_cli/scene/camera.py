@@ -94,7 +94,7 @@ def hash_uniform(seed: int, keys, stream: int = 0):
     return (h >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
 
 
-def pixel_samples(width: int, pixels, spp: int, seed: int):
+def pixel_samples(width: int, pixels, spp: int, seed: int, start: int = 0, total: int | None = None):
     """Sub-pixel sample positions for a set of pixels.
 
     Parameters
@@ -104,8 +104,13 @@ def pixel_samples(width: int, pixels, spp: int, seed: int):
     pixels : ndarray, shape (p,), int64
         Flat pixel indices.
     spp : int
-        Samples per pixel. With one sample the pixel centre is used.
+        Samples per pixel to make now: sample numbers ``start .. start + spp - 1`` of the
+        pixel's sequence (adaptive sampling asks for more later without repeating any).
     seed : int
+    start : int
+        First sample number.
+    total : int, optional
+        Samples the pixel gets in all; when 1, the pixel centre is used.
 
     Returns
     -------
@@ -118,9 +123,9 @@ def pixel_samples(width: int, pixels, spp: int, seed: int):
     pix = np.repeat(pixels, spp)
     col = (pix % width).astype(np.float64)
     row = (pix // width).astype(np.float64)
-    if spp == 1:
+    if (total if total is not None else start + spp) == 1:
         return col + 0.5, row + 0.5, pix
-    s = np.tile(np.arange(spp, dtype=np.float64), pixels.size)
+    s = np.tile(np.arange(start, start + spp, dtype=np.float64), pixels.size)
     rot_u = hash_uniform(seed, pix, stream=1)
     rot_v = hash_uniform(seed, pix, stream=2)
     ju = np.mod(rot_u + (s + 0.5) * R2_ALPHA[0], 1.0)

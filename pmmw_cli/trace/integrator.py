@@ -26,6 +26,7 @@ isothermal enclosure reads its temperature exactly (PHYSICS.md, "Energy bookkeep
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,6 +60,10 @@ class TileResult:
         Medium index hit by the pixel's first sample (-1: sky).
     rays : int
         Ray segments intersected.
+    samples : ndarray, shape (h, w), int32
+        Samples taken per pixel (fewer than ``spp`` where adaptive sampling stopped early).
+    t_isect : float
+        Seconds spent in the intersector (the bare Embree cost of exactly these rays).
     """
 
     index: int
@@ -68,6 +73,8 @@ class TileResult:
     depth: np.ndarray
     material: np.ndarray
     rays: int
+    samples: np.ndarray
+    t_isect: float = 0.0
 
 
 class _Wave:
@@ -91,6 +98,13 @@ class _Wave:
 
     def __len__(self):
         return self.o.shape[0]
+
+
+def _stderr(s1, s2, count):
+    """Standard error of the mean from shifted sums of values and squares; 0 for one sample."""
+    c = count[:, None].astype(float)
+    var = np.maximum(s2 - s1 * s1 / c, 0.0) / np.maximum(c - 1.0, 1.0)
+    return np.where(c > 1, np.sqrt(var / c), 0.0)
 
 
 def _normalize(v):
@@ -171,51 +185,82 @@ class Integrator:
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:
+        """Render one tile: all its pixels, in sampling passes.
+
+        Without ``target_error`` one pass takes every sample. With it, a first pass of
+        ``min_spp`` samples estimates each pixel's Monte Carlo standard error; pixels still above
+        the target get passes of doubling size until they reach it or ``spp`` samples.
+        """
         index, x0, y0, x1, y1 = tile
-        job, st, cam = self.job, self.job.settings, self.job.camera
+        st, cam = self.job.settings, self.job.camera
         w, h = x1 - x0, y1 - y0
         cols, rows = np.meshgrid(np.arange(x0, x1), np.arange(y0, y1))
         pixels = (rows * cam.width + cols).ravel().astype(np.int64)
-        u, v, _ = pixel_samples(cam.width, pixels, st.spp, st.seed)
+        npx = pixels.size
+        self.rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([st.seed, index])))
+        self.rays = 0
+        self.t_isect = 0.0
+        adaptive = st.target_error is not None and st.spp > st.min_spp
+        ref = np.zeros((npx, 4))  # per-pixel shift of the running sums (first pass mean)
+        s1, s2 = np.zeros((npx, 4)), np.zeros((npx, 4))
+        count = np.zeros(npx, np.int64)
+        depth = np.full(npx, np.inf)
+        material = np.full(npx, -1.0)
+        active = np.arange(npx)
+        done = 0
+        batch = st.min_spp if adaptive else st.spp
+        while active.size and done < st.spp:
+            nb = min(batch, st.spp - done)
+            vals, first_t, first_m = self._trace(pixels[active], done, nb)
+            v = vals.reshape(active.size, nb, 4)
+            if done == 0:
+                ref[active] = v.mean(axis=1)
+                with np.errstate(invalid="ignore"):
+                    depth[active] = first_t.reshape(active.size, nb).mean(axis=1)
+                material[active] = first_m.reshape(active.size, nb)[:, 0]
+            dv = v - ref[active][:, None, :]
+            s1[active] += dv.sum(axis=1)
+            s2[active] += (dv * dv).sum(axis=1)
+            count[active] += nb
+            done += nb
+            if not adaptive:
+                break
+            err = _stderr(s1[active], s2[active], count[active])
+            active = active[np.max(err[:, :2], axis=1) > st.target_error]
+            batch = done  # double the samples of the pixels that still need them
+        mean = ref + s1 / count[:, None]
+        stderr = _stderr(s1, s2, count)
+        return TileResult(
+            index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
+            depth.reshape(h, w), material.reshape(h, w), self.rays,
+            count.reshape(h, w).astype(np.int32), self.t_isect,
+        )
+
+    def _trace(self, pixels, start, nb):
+        """Trace samples ``start .. start+nb-1`` of each pixel; per-sample (Ex2, Ey2, U, V)."""
+        st, cam = self.job.settings, self.job.camera
+        u, v, _ = pixel_samples(cam.width, pixels, nb, st.seed, start=start, total=st.spp)
         n = u.shape[0]
         self.acc = np.zeros((n, 4))
         self.first_t = np.full(n, np.inf)
         self.first_m = np.full(n, -1.0)
-        self.rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([st.seed, index])))
-        self.rays = 0
-
         d = cam.directions(u, v)
-        k = -d
         s = _normalize(cam.x[None, :] - np.einsum("ij,j->i", d, cam.x)[:, None] * d)
-        p = np.cross(k, s)
+        p = np.cross(-d, s)
         # The pixel's polarization basis is (s, p): the imager's x projected perpendicular to
         # the ray and y completing it (jones.py), so M starts as the identity (eq. 2.11b).
         m = np.zeros((n, 2, 2), complex)
         m[:, 0, 0] = m[:, 1, 1] = 1.0
-        stack = np.zeros((n, st.stack_size), np.int16)
         wave = _Wave(
             o=np.repeat(cam.position[None, :], n, axis=0), d=d, s=s, p=p, m=m,
-            sid=np.arange(n), depth=np.zeros(n, np.int32), stack=stack,
+            sid=np.arange(n), depth=np.zeros(n, np.int32), stack=np.zeros((n, st.stack_size), np.int16),
             top=np.zeros(n, np.int32), last_t=np.full(n, np.nan),
         )
         first = True
         while wave is not None and len(wave) > 0:
             wave = self._bounce(wave, first)
             first = False
-
-        per_sample = self.acc.reshape(h * w, st.spp, 4)
-        mean = per_sample.mean(axis=1)
-        if st.spp > 1:
-            stderr = per_sample.std(axis=1, ddof=1) / np.sqrt(st.spp)
-        else:
-            stderr = np.zeros_like(mean)
-        with np.errstate(invalid="ignore"):
-            depth = self.first_t.reshape(h * w, st.spp).mean(axis=1)
-        material = self.first_m.reshape(h * w, st.spp)[:, 0]
-        return TileResult(
-            index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
-            depth.reshape(h, w), material.reshape(h, w), self.rays,
-        )
+        return self.acc, self.first_t, self.first_m
 
     # -- one bounce -----------------------------------------------------------------------
     def _emit(self, sid, m, ta, tb=None):
@@ -231,7 +276,9 @@ class Integrator:
         job = self.job
         media = job.media
         n = len(wave)
+        t0 = time.perf_counter()
         t, prim = self.isect.intersect(wave.o, wave.d)
+        self.t_isect += time.perf_counter() - t0
         self.rays += n
         miss = prim < 0
         if first:
@@ -353,27 +400,33 @@ class Integrator:
             self._emit(wv.sid[a], _scale_columns(ml[a], np.sqrt(coeff["Ts"][a]), np.sqrt(coeff["Tp"][a])), t_body[a])
 
         children = []
+        trans = ((kind == DIELECTRIC) | (kind == THIN)) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
+        keep_r, keep_t, gain_r, gain_t = self._choose_branches(wv, coeff, trans)
+
         # Reflected child (eq. 2.21, 2.39).
-        cosd = np.einsum("ij,ij->i", wv.d, n_in)
-        d_r = wv.d - 2.0 * cosd[:, None] * n_in
-        m_r = _scale_columns(ml, _amplitude(coeff["rs"], coeff["Rs"]), _amplitude(coeff["rp"], coeff["Rp"]))
-        refl = _Wave(
-            o=offset_origins(pos, n_in, d_r, scale=scale), d=d_r, s=s, p=np.cross(-d_r, s), m=m_r,
-            sid=wv.sid, depth=wv.depth + 1, stack=wv.stack.copy(), top=wv.top.copy(), last_t=t_body,
-        )
-        children.append(refl)
+        if keep_r.any():
+            i = np.nonzero(keep_r)[0]
+            cosd = np.einsum("ij,ij->i", wv.d[i], n_in[i])
+            d_r = wv.d[i] - 2.0 * cosd[:, None] * n_in[i]
+            m_r = _scale_columns(ml[i], gain_r[i] * _amplitude(coeff["rs"][i], coeff["Rs"][i]),
+                                 gain_r[i] * _amplitude(coeff["rp"][i], coeff["Rp"][i]))
+            children.append(_Wave(
+                o=offset_origins(pos[i], n_in[i], d_r, scale=scale[i]), d=d_r, s=s[i], p=np.cross(-d_r, s[i]),
+                m=m_r, sid=wv.sid[i], depth=wv.depth[i] + 1, stack=wv.stack[i].copy(), top=wv.top[i].copy(),
+                last_t=t_body[i],
+            ))
 
         # Transmitted child (eq. 2.19, 2.40): dielectrics refract into the other medium, thin
         # sheets pass straight through.
-        trans = ((kind == DIELECTRIC) | (kind == THIN)) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
-        if trans.any():
-            i = np.nonzero(trans)[0]
+        if keep_t.any():
+            i = np.nonzero(keep_t)[0]
             d_t = wv.d[i].copy()
             diel = kind[i] == DIELECTRIC
             if diel.any():
                 j = i[diel]
                 d_t[diel] = _refract(wv.d[j], n_in[j], media.eps[cur[j]], media.eps[other[j]])
-            m_t = _scale_columns(ml[i], _amplitude(coeff["ts"][i], coeff["Ts"][i]), _amplitude(coeff["tp"][i], coeff["Tp"][i]))
+            m_t = _scale_columns(ml[i], gain_t[i] * _amplitude(coeff["ts"][i], coeff["Ts"][i]),
+                                 gain_t[i] * _amplitude(coeff["tp"][i], coeff["Tp"][i]))
             stack, top = wv.stack[i].copy(), wv.top[i].copy()
             enter = diel & ~leaving[i]
             top[enter] += 1
@@ -387,6 +440,33 @@ class Integrator:
 
         nxt = _Wave.concat(children)
         return [self._terminate(nxt)] if nxt is not None else []
+
+    def _choose_branches(self, wv: _Wave, coeff, trans):
+        """Which children to follow (``render.strategy``) and their amplitude gains.
+
+        ``split`` follows both (the seed's deterministic splitting). ``stochastic`` follows one,
+        reflected with probability P = (Rs + Rp) / (Rs + Rp + Ts + Tp), and divides its power by
+        the probability of the choice (unbiased). ``hybrid`` splits for the first
+        ``split_depth`` interactions of a path and chooses after that.
+        """
+        st = self.job.settings
+        n = len(wv)
+        keep_r, keep_t = np.ones(n, bool), trans.copy()
+        gain_r, gain_t = np.ones(n), np.ones(n)
+        if st.strategy == "split":
+            return keep_r, keep_t, gain_r, gain_t
+        choose = trans & ((wv.depth >= st.split_depth) if st.strategy == "hybrid" else True)
+        if choose.any():
+            r = coeff["Rs"][choose] + coeff["Rp"][choose]
+            t = coeff["Ts"][choose] + coeff["Tp"][choose]
+            p_r = r / np.maximum(r + t, _TINY)
+            take_r = self.rng.random(p_r.shape[0]) < p_r
+            idx = np.nonzero(choose)[0]
+            keep_r[idx[~take_r]] = False
+            keep_t[idx[take_r]] = False
+            gain_r[idx[take_r]] = 1.0 / np.sqrt(p_r[take_r])
+            gain_t[idx[~take_r]] = 1.0 / np.sqrt(1.0 - p_r[~take_r])
+        return keep_r, keep_t, gain_r, gain_t
 
     def _terminate(self, wv: _Wave):
         """Depth cut-off and weight threshold (seed 000 sec. 2.2.5, 2.2.9)."""

@@ -82,6 +82,10 @@ class RenderSettings:
     threshold: float = 1e-3
     seed: int = 1
     termination: str = "roulette"  # or "temperature" (seed 000 sec. 2.2.9)
+    strategy: str = "split"  # "split" (seed), "stochastic", or "hybrid"
+    split_depth: int = 2  # hybrid: interactions split deterministically before choosing
+    target_error: float | None = None  # [K] adaptive sampling goal per pixel
+    min_spp: int = 4  # adaptive sampling: first pass
     tile: int = 32
     stack_size: int = 8
     aux: tuple = ()

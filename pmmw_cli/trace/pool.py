@@ -14,6 +14,7 @@ import multiprocessing as mp
 import os
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +43,8 @@ def _tile_path(tile_dir: Path, index: int) -> Path:
 def _save_tile(tile_dir: Path, r: TileResult):
     save_npz_atomic(
         _tile_path(tile_dir, r.index), index=r.index, box=np.array(r.box), mean=r.mean,
-        stderr=r.stderr, depth=r.depth, material=r.material, rays=r.rays,
+        stderr=r.stderr, depth=r.depth, material=r.material, rays=r.rays, samples=r.samples,
+        t_isect=r.t_isect,
     )
 
 
@@ -51,7 +53,7 @@ def _load_tile(path: Path) -> TileResult | None:
         with np.load(path) as z:
             return TileResult(
                 int(z["index"]), tuple(int(v) for v in z["box"]), z["mean"], z["stderr"],
-                z["depth"], z["material"], int(z["rays"]),
+                z["depth"], z["material"], int(z["rays"]), z["samples"], float(z["t_isect"]),
             )
     except Exception:  # a damaged tile file is simply rendered again
         return None
@@ -121,19 +123,33 @@ def assemble(job: TraceJob, results: list[TileResult]):
 
     Returns
     -------
-    mean, stderr : ndarray, shape (H, W, 4), float64
-    depth, material : ndarray, shape (H, W), float64
-    rays : int
+    Image
+        ``mean``, ``stderr`` (H, W, 4); ``depth``, ``material``, ``samples`` (H, W); ``rays``;
+        ``t_isect`` [s] summed over tiles.
     """
     w, h = job.camera.width, job.camera.height
-    mean = np.zeros((h, w, 4))
-    stderr = np.zeros((h, w, 4))
-    depth = np.zeros((h, w))
-    material = np.zeros((h, w))
+    img = Image(np.zeros((h, w, 4)), np.zeros((h, w, 4)), np.zeros((h, w)), np.zeros((h, w)),
+                np.zeros((h, w), np.int32), 0, 0.0)
     for r in results:
         x0, y0, x1, y1 = r.box
-        mean[y0:y1, x0:x1] = r.mean
-        stderr[y0:y1, x0:x1] = r.stderr
-        depth[y0:y1, x0:x1] = r.depth
-        material[y0:y1, x0:x1] = r.material
-    return mean, stderr, depth, material, sum(r.rays for r in results)
+        img.mean[y0:y1, x0:x1] = r.mean
+        img.stderr[y0:y1, x0:x1] = r.stderr
+        img.depth[y0:y1, x0:x1] = r.depth
+        img.material[y0:y1, x0:x1] = r.material
+        img.samples[y0:y1, x0:x1] = r.samples
+        img.rays += r.rays
+        img.t_isect += r.t_isect
+    return img
+
+
+@dataclass
+class Image:
+    """A whole image assembled from tiles (see `assemble`)."""
+
+    mean: np.ndarray
+    stderr: np.ndarray
+    depth: np.ndarray
+    material: np.ndarray
+    samples: np.ndarray
+    rays: int
+    t_isect: float
