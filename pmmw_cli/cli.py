@@ -108,6 +108,34 @@ def materials_show(
 
 
 @app.command()
+@_user_errors
+def bench(
+    scenarios: List[Path] = typer.Argument(..., help="Scenario YAML files."),
+    spp: str = typer.Option("1,2,4,8,16,32", "--spp", help="Comma-separated samples per pixel to try."),
+    strategies: str = typer.Option("split,stochastic,hybrid", "--strategies", help="Sampling strategies to compare."),
+    reference_spp: int = typer.Option(256, "--reference-spp", min=1, help="Samples of the cached reference render."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1),
+    set_: Optional[List[str]] = SetOpt,
+    out: Path = typer.Option(Path("docs/benchmarks.md"), "--out", help="Markdown table (plots and JSON beside it)."),
+    cache: Path = typer.Option(Path(".pmmw-cache"), "--cache", help="Where reference renders are cached."),
+):
+    """Run time against error for each scenario and sampling strategy (docs/benchmarks.md)."""
+    from pmmw_cli.bench import STRATEGIES, bench as run
+
+    try:
+        spp_list = tuple(int(v) for v in spp.split(","))
+    except ValueError:
+        raise UserError(f"expected integers like 1,2,4, got {spp!r}", file="--spp") from None
+    strats = tuple(v.strip() for v in strategies.split(","))
+    bad = [v for v in strats if v not in STRATEGIES]
+    if bad:
+        raise UserError(f"unknown strategy {bad[0]!r}; known: {', '.join(STRATEGIES)}", file="--strategies")
+    command = "pmmw bench " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "pmmw bench"
+    run(scenarios, spp_list=spp_list, strategies=strats, ref_spp=reference_spp, workers=workers,
+        overrides=set_ or [], out_md=out, cache_dir=cache, command=command)
+
+
+@app.command()
 def version():
     """Print the pmmw version."""
     typer.echo(f"pmmw {__version__}")
