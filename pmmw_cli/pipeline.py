@@ -131,7 +131,8 @@ def parse_shard(text: str | None):
 def make_job(res: Resolved, f: float) -> TraceJob:
     scn, geom = res.scenario, res.geometry
     im = scn.imager
-    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution,
+                         aperture_radius=im.aperture_diameter / 2.0, focus_distance=im.focus_distance)
     r = scn.render
     settings = RenderSettings(
         spp=r.spp, max_depth=r.max_depth, threshold=r.threshold, seed=r.seed,
@@ -164,6 +165,26 @@ class _Progress:
         sys.stderr.flush()
 
 
+def band_frequencies(f: float, bandwidth: float, n: int) -> list[float]:
+    """Midpoints of n equal sub-bands of [f - B/2, f + B/2] (a flat spectral response); [f] if B = 0."""
+    if bandwidth <= 0.0 or n <= 1:
+        return [f]
+    return [f - bandwidth / 2.0 + (k + 0.5) * bandwidth / n for k in range(n)]
+
+
+def average_images(imgs):
+    """Mean of images rendered at the sub-band frequencies (independent samples)."""
+    from pmmw_cli.trace.pool import Image
+
+    n = len(imgs)
+    return Image(
+        sum(i.mean for i in imgs) / n,
+        np.sqrt(sum(i.stderr**2 for i in imgs)) / n,
+        imgs[len(imgs) // 2].depth, imgs[len(imgs) // 2].material,
+        sum(i.samples for i in imgs).astype(np.int32), sum(i.rays for i in imgs), sum(i.t_isect for i in imgs),
+    )
+
+
 def _stem(scn, f: float) -> str:
     return scn.name if len(scn.frequencies) == 1 else f"{scn.name}_{f / 1e9:g}GHz"
 
@@ -185,23 +206,31 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     out_dir.mkdir(parents=True, exist_ok=True)
     n_workers = scn.render.workers or default_workers()
     t_resolve = time.perf_counter() - t0
-    written, renders = [], []
+    written, renders, tile_dirs = [], [], []
     shash = scenario_hash(scn)
     for f in scn.frequencies:
         t1 = time.perf_counter()
-        job = make_job(res, f)
         stem = _stem(scn, f)
-        tile_dir = out_dir / ".pmmw-tiles" / f"{stem}-{shash}"
+        imgs = []
+        for fk in band_frequencies(f, scn.imager.bandwidth, scn.imager.band_samples):
+            job = make_job(res, fk)
+            label = stem if fk == f else f"{stem}@{fk / 1e9:.6g}GHz"
+            tile_dir = out_dir / ".pmmw-tiles" / f"{label}-{shash}"
+            tile_dirs.append(tile_dir)
+            if shard is not None:
+                mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0]]
+                done = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=True,
+                                    progress=_Progress(label, quiet), tiles=mine)
+                print(f"{label}: shard {shard[0]}/{shard[1]}: {len(done)} tiles in {tile_dir}; "
+                      "assemble with `pmmw render ... --resume` once every shard is done")
+                continue
+            results = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=resume,
+                                   progress=_Progress(label, quiet))
+            imgs.append(assemble(job, results))
         if shard is not None:
-            mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0]]
-            done = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=True,
-                                progress=_Progress(stem, quiet), tiles=mine)
-            print(f"{stem}: shard {shard[0]}/{shard[1]}: {len(done)} tiles in {tile_dir}; "
-                  "assemble with `pmmw render ... --resume` once every shard is done")
             continue
-        results = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=resume,
-                               progress=_Progress(stem, quiet))
-        img = assemble(job, results)
+        img = imgs[0] if len(imgs) == 1 else average_images(imgs)
+        job = make_job(res, f) if len(imgs) > 1 else job
         mean, stderr, depth, material, rays = img.mean, img.stderr, img.depth, img.material, img.rays
         t_trace = time.perf_counter() - t1
         ideal = stokes_images(mean)
@@ -257,7 +286,8 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
             "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
         })
         if not keep_tiles:
-            shutil.rmtree(tile_dir, ignore_errors=True)
+            for d in tile_dirs:
+                shutil.rmtree(d, ignore_errors=True)
     tiles_root = out_dir / ".pmmw-tiles"
     if not keep_tiles and tiles_root.is_dir() and not any(tiles_root.iterdir()):
         tiles_root.rmdir()

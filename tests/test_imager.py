@@ -66,3 +66,58 @@ def test_noise_has_the_stated_sigma_and_is_seeded():
     np.testing.assert_allclose(a["I"], a["Ex2"] + a["Ey2"])
     clean = apply_imager(ideal, pixel_angle=1e-3, k0=700.0, aperture_diameter=0.0, noise=0.0, seed=3)
     np.testing.assert_array_equal(clean["Ex2"], ideal["Ex2"])
+
+
+def _edge_scene(focus, aperture_radius, z_obj=10.0):
+    """A hot/cold edge (two blackbody half-planes) facing a camera at distance z_obj."""
+    from pmmw_cli.scene.camera import Camera
+    from tests.scenes import UniformSky, box, make_job, material
+    from pmmw_cli.trace.job import RenderSettings
+
+    hot = (box([-20, z_obj, -20], [0, z_obj + 1, 20]), material(kind="blackbody", temperature=300.0))
+    cold = (box([0, z_obj, -20], [20, z_obj + 1, 20]), material(kind="blackbody", temperature=100.0))
+    cam = Camera.look_at([0, 0, 0], [0, 1, 0], [0, 0, 1], np.radians(4.0), (64, 4),
+                         aperture_radius=aperture_radius, focus_distance=focus)
+    return make_job([hot, cold], cam, UniformSky(0.0, 0.0), 35e9,
+                    RenderSettings(spp=256, max_depth=2, threshold=1e-6, tile=64))
+
+
+def _transition_width(row, lo=100.0, hi=300.0):
+    """Angular extent (in pixels) over which the edge profile goes from 10 % to 90 %."""
+    frac = (hi - row) / (hi - lo)  # 0 on the hot side, 1 on the cold side
+    return np.interp(0.9, frac, np.arange(row.size)) - np.interp(0.1, frac, np.arange(row.size))
+
+
+def test_depth_of_field_blurs_as_the_thin_lens_predicts():
+    """Focused on the edge it is as sharp as a pinhole; focused at 7.3 m the edge is blurred over
+    the circle of confusion, an angular diameter 2a |1/z - 1/z_f| (geometric optics). The 10-90 %
+    width of a uniform disk's edge response is 0.62 of its diameter (chord of a disk); 15 %
+    tolerance covers the 256-sample Monte Carlo and pixel quantization."""
+    from tests.scenes import render
+
+    a, z = 0.3, 10.0
+    sharp = render(_edge_scene(z, a, z))["Ex2"][1]
+    pinhole = render(_edge_scene(None, 0.0, z))["Ex2"][1]
+    assert _transition_width(sharp) < 1.2 and _transition_width(pinhole) < 1.2
+    blurred = render(_edge_scene(7.3, a, z))["Ex2"][1]
+    pix = np.radians(4.0) / 64
+    coc = 2 * a * abs(1 / z - 1 / 7.3) / pix  # circle of confusion diameter in pixels (~20)
+    np.testing.assert_allclose(_transition_width(blurred), 0.62 * coc, rtol=0.15)
+
+
+def test_band_is_the_mean_over_sub_band_frequencies(tmp_path):
+    """imager.bandwidth: the image is the average of renders at the sub-band midpoints."""
+    from pmmw_cli.io.exr import read_exr
+    from pmmw_cli.pipeline import band_frequencies, render as run
+    from tests.test_cli import _scene
+
+    assert band_frequencies(95e9, 10e9, 5) == [91e9, 93e9, 95e9, 97e9, 99e9]
+    scn = _scene(tmp_path)
+    run(scn, ["imager.bandwidth=20 GHz", "imager.band_samples=2"], out=tmp_path / "band", workers=1)
+    parts = []
+    for f in (30, 40):
+        run(scn, [f"frequency={f} GHz"], out=tmp_path / f"f{f}", workers=1)
+        parts.append(read_exr(tmp_path / f"f{f}" / "tiny.exr")[0]["ideal.Ex2"])
+    band = read_exr(tmp_path / "band" / "tiny.exr")[0]["ideal.Ex2"]
+    np.testing.assert_allclose(band, (parts[0] + parts[1]) / 2, rtol=1e-6)
+    assert np.abs(parts[0] - parts[1]).max() > 0.01  # the two frequencies really differ

@@ -77,7 +77,28 @@ class Imager(_Model):
     resolution: tuple[int, int]
     aperture_diameter: float = 0.0
     noise: float = 0.0
+    focus_distance: Optional[float] = None
+    bandwidth: float = 0.0
+    band_samples: int = Field(5, ge=1, le=64)
     frequency: Optional[Any] = Field(default=None, exclude=True)  # alias of the top-level key
+
+    @field_validator("focus_distance", mode="before")
+    @classmethod
+    def _focus(cls, v):
+        if v is None:
+            return None
+        d = _q(v, "length")
+        if d <= 0:
+            raise ConfigValueError(f"focus distance must be > 0, got {v!r}")
+        return d
+
+    @field_validator("bandwidth", mode="before")
+    @classmethod
+    def _bw(cls, v):
+        b = _q(v, "frequency")
+        if b < 0:
+            raise ConfigValueError(f"bandwidth must be >= 0, got {v!r}")
+        return b
 
     @field_validator("position", "look_at", "up", mode="before")
     @classmethod
@@ -118,6 +139,8 @@ class Imager(_Model):
 
     @model_validator(mode="after")
     def _pose(self):
+        if self.focus_distance is not None and self.aperture_diameter <= 0:
+            raise ConfigValueError("focus_distance needs an aperture_diameter > 0 (depth of field comes from the aperture)")
         k = [b - a for a, b in zip(self.position, self.look_at)]
         nk = math.sqrt(sum(c * c for c in k))
         if nk == 0.0:

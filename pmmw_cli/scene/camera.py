@@ -42,16 +42,50 @@ class Camera:
     fov: float
     width: int
     height: int
+    aperture_radius: float = 0.0
+    focus_distance: float | None = None
 
     @classmethod
-    def look_at(cls, position, look_at, up, fov, resolution):
+    def look_at(cls, position, look_at, up, fov, resolution, aperture_radius=0.0, focus_distance=None):
         position = np.asarray(position, float)
         k = np.asarray(look_at, float) - position
         k /= np.linalg.norm(k)
         x = np.cross(k, np.asarray(up, float))
         x /= np.linalg.norm(x)
         y = np.cross(x, k)
-        return cls(position, x, y, k, float(fov), int(resolution[0]), int(resolution[1]))
+        return cls(position, x, y, k, float(fov), int(resolution[0]), int(resolution[1]),
+                   float(aperture_radius), focus_distance)
+
+    def rays(self, u, v, keys, seed: int):
+        """Primary rays through image-plane positions, with depth of field when focused.
+
+        Without ``focus_distance`` every ray starts at the pinhole. With it (thin lens), a ray
+        starts at a point of the aperture disk, drawn from the hash of (seed, key), and passes
+        through the point that the pinhole ray meets on the plane of focus: objects at the focus
+        distance are sharp, others are blurred by the geometric defocus of the aperture.
+
+        Parameters
+        ----------
+        u, v : ndarray, shape (n,)
+            Continuous pixel coordinates.
+        keys : ndarray, shape (n,), int64
+            A unique number per (pixel, sample), for the aperture position.
+        seed : int
+
+        Returns
+        -------
+        origins, directions : ndarray, shape (n, 3), float64
+        """
+        d = self.directions(u, v)
+        o = np.repeat(self.position[None, :], d.shape[0], axis=0)
+        if self.focus_distance is None or self.aperture_radius <= 0.0:
+            return o, d
+        focus = o + d * (self.focus_distance / (d @ self.k))[:, None]
+        r = self.aperture_radius * np.sqrt(hash_uniform(seed, keys, stream=3))
+        phi = 2.0 * np.pi * hash_uniform(seed, keys, stream=4)
+        o = o + (r * np.cos(phi))[:, None] * self.x + (r * np.sin(phi))[:, None] * self.y
+        d = focus - o
+        return o, d / np.linalg.norm(d, axis=1, keepdims=True)
 
     @property
     def pixel_angle(self) -> float:

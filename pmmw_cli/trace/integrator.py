@@ -239,12 +239,13 @@ class Integrator:
     def _trace(self, pixels, start, nb):
         """Trace samples ``start .. start+nb-1`` of each pixel; per-sample (Ex2, Ey2, U, V)."""
         st, cam = self.job.settings, self.job.camera
-        u, v, _ = pixel_samples(cam.width, pixels, nb, st.seed, start=start, total=st.spp)
+        u, v, pix = pixel_samples(cam.width, pixels, nb, st.seed, start=start, total=st.spp)
         n = u.shape[0]
         self.acc = np.zeros((n, 4))
         self.first_t = np.full(n, np.inf)
         self.first_m = np.full(n, -1.0)
-        d = cam.directions(u, v)
+        sample_no = np.tile(np.arange(start, start + nb, dtype=np.int64), pixels.size)
+        origins, d = cam.rays(u, v, pix * st.spp + sample_no, st.seed)
         s = _normalize(cam.x[None, :] - np.einsum("ij,j->i", d, cam.x)[:, None] * d)
         p = np.cross(-d, s)
         # The pixel's polarization basis is (s, p): the imager's x projected perpendicular to
@@ -252,7 +253,7 @@ class Integrator:
         m = np.zeros((n, 2, 2), complex)
         m[:, 0, 0] = m[:, 1, 1] = 1.0
         wave = _Wave(
-            o=np.repeat(cam.position[None, :], n, axis=0), d=d, s=s, p=p, m=m,
+            o=origins, d=d, s=s, p=p, m=m,
             sid=np.arange(n), depth=np.zeros(n, np.int32), stack=np.zeros((n, st.stack_size), np.int16),
             top=np.zeros(n, np.int32), last_t=np.full(n, np.nan),
         )
