@@ -34,7 +34,7 @@ import numpy as np
 from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.physics.jones import basis_change, row_power, stokes_terms
 from pmmw_cli.scene.camera import pixel_samples
-from pmmw_cli.trace.intersect import offset_origins
+from pmmw_cli.trace.intersect import offset_along
 from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
 
 _Z = np.array([0.0, 0.0, 1.0])
@@ -348,7 +348,7 @@ class Integrator:
 
     def _pass_through(self, wv: _Wave, pos, face_med, prim):
         """Cross a face without interacting; drop its medium from the stack if it is there."""
-        wv.o = offset_origins(pos, self.job.face_normals[prim], wv.d, scale=self.isect.face_scale[prim])
+        wv.o = offset_along(pos, self.job.face_normals[prim], wv.d, self.isect.face_offset[prim])
         depth_idx = np.arange(wv.stack.shape[1])[None, :]
         in_stack = (wv.stack == face_med[:, None]) & (depth_idx <= wv.top[:, None]) & (depth_idx > 0)
         has = in_stack.any(axis=1)
@@ -363,7 +363,7 @@ class Integrator:
 
     def _interact(self, wv: _Wave, pos, n_in, cur, face_med, other, leaving, prim):
         job = self.job
-        scale = self.isect.face_scale[prim]
+        step = self.isect.face_offset[prim]
         media = job.media
         nr = len(wv)
         cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_in), 0.0, 1.0)
@@ -412,7 +412,7 @@ class Integrator:
             m_r = _scale_columns(ml[i], gain_r[i] * _amplitude(coeff["rs"][i], coeff["Rs"][i]),
                                  gain_r[i] * _amplitude(coeff["rp"][i], coeff["Rp"][i]))
             children.append(_Wave(
-                o=offset_origins(pos[i], n_in[i], d_r, scale=scale[i]), d=d_r, s=s[i], p=np.cross(-d_r, s[i]),
+                o=offset_along(pos[i], n_in[i], d_r, step[i]), d=d_r, s=s[i], p=np.cross(-d_r, s[i]),
                 m=m_r, sid=wv.sid[i], depth=wv.depth[i] + 1, stack=wv.stack[i].copy(), top=wv.top[i].copy(),
                 last_t=t_body[i],
             ))
@@ -435,7 +435,7 @@ class Integrator:
             leave = diel & leaving[i]
             top[leave] -= 1
             children.append(_Wave(
-                o=offset_origins(pos[i], n_in[i], d_t, scale=scale[i]), d=d_t, s=s[i], p=np.cross(-d_t, s[i]), m=m_t,
+                o=offset_along(pos[i], n_in[i], d_t, step[i]), d=d_t, s=s[i], p=np.cross(-d_t, s[i]), m=m_t,
                 sid=wv.sid[i], depth=wv.depth[i] + 1, stack=stack, top=top, last_t=t_body[i],
             ))
 

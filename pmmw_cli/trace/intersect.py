@@ -77,6 +77,10 @@ class _TriangleSoup:
         aspect = np.ones(len(f))
         aspect[self._valid] = np.maximum(longest2[self._valid] / area2[self._valid], 1.0)
         self.face_scale = (np.abs(tri).max(axis=(1, 2)) if len(f) else np.zeros(0)) * aspect
+        #: ndarray, shape (F,), float64 [m]: the `offset_origins` step for rays leaving each face
+        #: (every point of a face has coordinates no larger than its vertices'), precomputed so
+        #: the bounce loop need not recompute float32 spacings per ray.
+        self.face_offset = _offset_length(np.maximum(self.face_scale, 1.0))
 
     @property
     def n_faces(self) -> int:
@@ -256,5 +260,22 @@ def offset_origins(points, normals, directions, scale=None) -> np.ndarray:
     mag = np.maximum(np.abs(p).max(axis=1, initial=0.0), 1.0)
     if scale is not None:
         mag = np.maximum(mag, np.asarray(scale, dtype=np.float64))
-    eps = RAY_EPS_ULPS * np.spacing(mag.astype(EMBREE_DTYPE)).astype(np.float64) + RAY_EPS_FLOOR
+    eps = _offset_length(mag)
     return p + (side * eps)[:, None] * nrm
+
+
+def _offset_length(mag):
+    """``RAY_EPS_ULPS`` float32 spacings at coordinate magnitude ``mag`` [m], plus the floor."""
+    return RAY_EPS_ULPS * np.spacing(np.asarray(mag).astype(EMBREE_DTYPE)).astype(np.float64) + RAY_EPS_FLOOR
+
+
+def offset_along(points, normals, directions, step):
+    """`offset_origins` with a known step length per ray (e.g. ``face_offset[prim]``).
+
+    Parameters
+    ----------
+    points, normals, directions : ndarray, shape (N, 3), float64
+    step : ndarray, shape (N,), float64 [m]
+    """
+    side = np.where(np.einsum("ij,ij->i", directions, normals) < 0.0, -step, step)
+    return points + side[:, None] * normals
