@@ -110,7 +110,7 @@ def materials_show(
 @app.command()
 @_user_errors
 def bench(
-    scenarios: List[Path] = typer.Argument(..., help="Scenario YAML files."),
+    scenarios: Optional[List[Path]] = typer.Argument(None, help="Scenario YAML files."),
     spp: str = typer.Option("1,2,4,8,16,32", "--spp", help="Comma-separated samples per pixel to try."),
     strategies: str = typer.Option("split,stochastic,hybrid", "--strategies", help="Sampling strategies to compare."),
     reference_spp: int = typer.Option(256, "--reference-spp", min=1, help="Samples of the cached reference render."),
@@ -118,6 +118,7 @@ def bench(
     set_: Optional[List[str]] = SetOpt,
     out: Path = typer.Option(Path("docs/benchmarks.md"), "--out", help="Markdown table (plots and JSON beside it)."),
     cache: Path = typer.Option(Path(".pmmw-cache"), "--cache", help="Where reference renders are cached."),
+    with_scaling: bool = typer.Option(False, "--scaling", help="Also measure cost against triangle count (1e3-1e6)."),
 ):
     """Run time against error for each scenario and sampling strategy (docs/benchmarks.md)."""
     from pmmw_cli.bench import STRATEGIES, bench as run
@@ -131,8 +132,8 @@ def bench(
     if bad:
         raise UserError(f"unknown strategy {bad[0]!r}; known: {', '.join(STRATEGIES)}", file="--strategies")
     command = "pmmw bench " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "pmmw bench"
-    run(scenarios, spp_list=spp_list, strategies=strats, ref_spp=reference_spp, workers=workers,
-        overrides=set_ or [], out_md=out, cache_dir=cache, command=command)
+    run(scenarios or [], spp_list=spp_list, strategies=strats, ref_spp=reference_spp, workers=workers,
+        overrides=set_ or [], out_md=out, cache_dir=cache, command=command, with_scaling=with_scaling)
 
 
 @app.command()
