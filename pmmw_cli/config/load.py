@@ -89,7 +89,7 @@ def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = No
     items = []
     for item in overrides:
         if "=" not in item:
-            raise UserError(f"expected KEY.PATH=VALUE, got {item!r}", file="--set")
+            raise UserError(f"expected KEY.PATH=VALUE, got {item!r}", file="--set", key=item.strip() or None)
         key, text = item.split("=", 1)
         key = key.strip()
         try:
@@ -106,6 +106,8 @@ def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = No
         node = out
         for i, part in enumerate(parts):
             last = i == len(parts) - 1
+            if isinstance(part, int) and isinstance(node, dict):
+                part = part if part in node else str(part)  # a mapping key that happens to be digits
             if isinstance(part, int):
                 if not isinstance(node, list):
                     raise UserError(f"{_fmt(parts[:i]) or 'the top level'} is not a list", file="--set", key=key)
@@ -134,6 +136,13 @@ def _fmt(loc) -> str:
 
 def _validate(raw: dict, path: Path) -> Scenario:
     data = dict(raw)
+    errors: list[UserError] = []
+    # keys the loader sets itself are not user keys
+    for internal in ("source_file", "frequencies"):
+        if internal in data:
+            data.pop(internal)
+            hint = "did you mean 'frequency'?" if internal == "frequencies" else "it is set by pmmw"
+            errors.append(UserError(f"unknown key {internal!r}; {hint}", path, internal))
     imager = data.get("imager")
     freq_key = "frequency"
     if isinstance(imager, dict) and "frequency" in imager:
@@ -144,18 +153,28 @@ def _validate(raw: dict, path: Path) -> Scenario:
         freq_key = "imager.frequency"
     elif "frequency" in data:
         data["frequencies"] = data.pop("frequency")
-    if "frequencies" in raw:  # the internal name is not a user key
-        data.pop("frequencies", None)
-        return _raise([UserError("unknown key 'frequencies'; did you mean 'frequency'?", path, "frequencies")])
     data.setdefault("name", path.stem)
     data["source_file"] = str(path)
     if isinstance(data.get("scene"), list):
-        data["scene"] = [dict(e, key=f"scene[{i}]") if isinstance(e, dict) else e for i, e in enumerate(data["scene"])]
+        entries = []
+        for i, e in enumerate(data["scene"]):
+            if isinstance(e, dict):
+                if "key" in e:
+                    extra = {"type": "extra_forbidden", "loc": ("scene", i, "key")}
+                    errors.append(_user_error(extra, path, freq_key, raw))
+                e = dict(e, key=f"scene[{i}]")
+            entries.append(e)
+        data["scene"] = entries
     try:
-        return Scenario.model_validate(data, context={"base_dir": path.parent})
+        scn = Scenario.model_validate(data, context={"base_dir": path.parent})
     except ValidationError as exc:
-        errors = [_user_error(err, path, freq_key) for err in exc.errors()]
-        return _raise(errors)
+        errors += [_user_error(err, path, freq_key, raw) for err in exc.errors()]
+    except UserError as e:  # raised unwrapped by a validator: still name the file
+        e.file = e.file or str(path)
+        errors.append(e)
+    if errors:
+        _raise(errors)
+    return scn
 
 
 def _raise(errors):
@@ -167,11 +186,14 @@ def _raise(errors):
     raise UserErrors(unique) if len(unique) > 1 else unique[0]
 
 
-def _user_error(err: dict, path: Path, freq_key: str) -> UserError:
+def _user_error(err: dict, path: Path, freq_key: str, raw: dict) -> UserError:
+    """One pydantic error entry -> a UserError with the key path as the user wrote it."""
     loc = list(err["loc"])
     if loc and loc[0] == "frequencies":
         loc = freq_key.split(".") + loc[1:]
-        loc = [p for p in loc if not isinstance(p, int)] if len(loc) > 1 else loc
+    sky = raw.get("sky")
+    if loc[:2] == ["sky", "file"] and isinstance(sky, dict) and "texture" in sky:
+        loc[1] = "texture"  # the loader's shorthand: report the key the user wrote
     typ = err["type"]
     if typ == "extra_forbidden":
         allowed = _allowed_keys(loc[:-1])
@@ -201,6 +223,8 @@ def _allowed_keys(loc) -> list[str]:
         names = [n for n in tp.model_fields if n not in hidden]
         if tp is Scenario:
             names.insert(1, "frequency")
+        if tp.__name__ == "Sky":
+            names.insert(names.index("file"), "texture")
         return names
     return []
 
@@ -223,54 +247,75 @@ def _unwrap(tp):
     return tp
 
 
-def _fmt_quantity(value: float, unit: str, scale: float = 1.0) -> str:
-    return f"{value / scale:.6g} {unit}"
+def _qty(value: float, unit: str, scale: float = 1.0) -> str:
+    """An SI float as a unit string that `parse_quantity` reads back to (nearly) the same float."""
+    return f"{value / scale:.12g} {unit}"
 
 
 def scenario_to_display(scn: Scenario) -> dict:
-    """The resolved scenario as plain YAML-able data, with units re-attached."""
+    """The resolved scenario as plain YAML-able data, with units re-attached as strings.
+
+    Without ``source_file`` (set by the loader), the result is itself a valid scenario that
+    loads back to the same values; `pipeline.scenario_hash` hashes it, so every field that
+    changes the traced image must appear here.
+    """
     im = scn.imager
-    freqs = [_fmt_quantity(f, "GHz", 1e9) for f in scn.frequencies]
-    out = {
+    freqs = [_qty(f, "GHz", 1e9) for f in scn.frequencies]
+    imager = {
+        "position": [_qty(v, "m") for v in im.position],
+        "look_at": [_qty(v, "m") for v in im.look_at],
+        "up": list(im.up),
+        "fov": _qty(math.degrees(im.fov), "deg"),
+        "resolution": list(im.resolution),
+        "aperture_diameter": _qty(im.aperture_diameter, "m"),
+        "noise": _qty(im.noise, "K"),
+        **({"focus_distance": _qty(im.focus_distance, "m")} if im.focus_distance is not None else {}),
+        "bandwidth": _qty(im.bandwidth, "GHz", 1e9),
+        "band_samples": im.band_samples,
+    }
+    scene = []
+    for e in scn.scene:
+        t = e.transform
+        scene.append({
+            "mesh": str(e.mesh),
+            **({"material": e.material} if e.material is not None else {"materials": dict(e.materials)}),
+            "transform": {
+                "translate": [_qty(v, "m") for v in t.translate],
+                "rotate_deg": list(t.rotate_deg),
+                "scale": t.scale if isinstance(t.scale, float) else list(t.scale),
+            },
+            **({"up_axis": e.up_axis} if e.up_axis else {}),
+            **({"name": e.name} if e.name else {}),
+        })
+    atm = scn.atmosphere
+    sky = scn.sky
+    render = scn.render.model_dump()
+    render.update(
+        workers=scn.render.workers or "auto",
+        default_temperature=_qty(scn.render.default_temperature, "K"),
+        target_error=None if scn.render.target_error is None else _qty(scn.render.target_error, "K"),
+    )
+    return {
         "name": scn.name,
         "source_file": str(scn.source_file),
         "frequency": freqs[0] if len(freqs) == 1 else freqs,
-        "imager": {
-            "position_m": list(im.position), "look_at_m": list(im.look_at), "up": list(im.up),
-            "fov": _fmt_quantity(math.degrees(im.fov), "deg"), "resolution": list(im.resolution),
-            "aperture_diameter": _fmt_quantity(im.aperture_diameter, "m"), "noise": _fmt_quantity(im.noise, "K"),
-        },
-        "scene": [
-            {
-                "mesh": str(e.mesh),
-                **({"material": e.material} if e.material is not None else {"materials": dict(e.materials)}),
-                "transform": {"translate_m": list(e.transform.translate), "rotate_deg": list(e.transform.rotate_deg),
-                              "scale": e.transform.scale if isinstance(e.transform.scale, float) else list(e.transform.scale)},
-                **({"up_axis": e.up_axis} if e.up_axis else {}),
-                **({"name": e.name} if e.name else {}),
-            }
-            for e in scn.scene
-        ],
+        "imager": imager,
+        "scene": scene,
         "materials": copy.deepcopy(scn.materials),
-        "atmosphere": "none" if scn.atmosphere is None else {
-            "loss": _fmt_quantity(scn.atmosphere.loss * 1e3 * 10 / math.log(10), "dB/km"),
-            "temperature": _fmt_quantity(scn.atmosphere.temperature, "K"),
+        "atmosphere": "none" if atm is None else {
+            "loss": _qty(atm.loss * 1e3 * 10 / math.log(10), "dB/km"),  # [Np/m] of power -> dB/km
+            "temperature": _qty(atm.temperature, "K"),
         },
         "sky": {
-            "model": scn.sky.model,
-            **({"temperature": _fmt_quantity(scn.sky.temperature, "K")} if scn.sky.temperature is not None else {}),
-            **({"file": str(scn.sky.file)} if scn.sky.file is not None else {}),
-            **({"zenith_opacity_Np": scn.sky.zenith_opacity} if scn.sky.zenith_opacity is not None else {}),
-            "ground_temperature": _fmt_quantity(scn.sky.ground_temperature, "K"),
+            "model": sky.model,
+            **({"temperature": _qty(sky.temperature, "K")} if sky.temperature is not None else {}),
+            **({"file": str(sky.file)} if sky.file is not None else {}),
+            **({"zenith_opacity": sky.zenith_opacity} if sky.zenith_opacity is not None else {}),  # [Np]
+            "ground_temperature": _qty(sky.ground_temperature, "K"),
         },
-        "render": {
-            **scn.render.model_dump(),
-            "workers": scn.render.workers or "auto",
-            "default_temperature": _fmt_quantity(scn.render.default_temperature, "K"),
-        },
+        "render": render,
         "output": {
             "dir": str(scn.output.dir) if scn.output.dir is not None else None,
             "channels": list(scn.output.channels), "previews": scn.output.previews, "aux": list(scn.output.aux),
         },
     }
-    return out

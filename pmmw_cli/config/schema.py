@@ -39,17 +39,28 @@ def _vec3(value, kind="length"):
     return tuple(_q(v, kind) for v in value)
 
 
+def _a(what: str) -> str:
+    return ("an " if what[:1] in "aeiou" else "a ") + what
+
+
 def _finite_number(value, what="number"):
     if isinstance(value, bool):
-        raise ConfigValueError(f"expected a {what}, got {value!r}")
+        raise ConfigValueError(f"expected {_a(what)}, got {value!r}")
     if isinstance(value, str):
         try:
             value = float(value)
         except ValueError:
-            raise ConfigValueError(f"expected a {what}, got {value!r}") from None
+            raise ConfigValueError(f"expected {_a(what)}, got {value!r}") from None
     if not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ConfigValueError(f"expected a finite {what}, got {value!r}")
     return float(value)
+
+
+def _integer(value):
+    """Integers as YAML gives them (``16``, ``16.0``, ``'16'``); booleans are not integers."""
+    if isinstance(value, bool):
+        raise ConfigValueError(f"expected an integer, got {value!r}")
+    return value
 
 
 def _input_path(value, info: ValidationInfo) -> Path:
@@ -63,6 +74,9 @@ def _input_path(value, info: ValidationInfo) -> Path:
     if not p.is_file():
         raise ConfigValueError(f"file not found: {p}")
     return p
+
+
+_NAME_FORBIDDEN = set("/\\\0")
 
 
 class _Model(BaseModel):
@@ -81,6 +95,11 @@ class Imager(_Model):
     bandwidth: float = 0.0
     band_samples: int = Field(5, ge=1, le=64)
     frequency: Optional[Any] = Field(default=None, exclude=True)  # alias of the top-level key
+
+    @field_validator("band_samples", mode="before")
+    @classmethod
+    def _ints(cls, v):
+        return _integer(v)
 
     @field_validator("focus_distance", mode="before")
     @classmethod
@@ -168,7 +187,9 @@ class Transform(_Model):
     def _r(cls, v):
         if not isinstance(v, (list, tuple)) or len(v) != 3:
             raise ConfigValueError(f"expected 3 angles in degrees, got {v!r}")
-        return tuple(_finite_number(a, "angle in degrees") for a in v)
+        # bare numbers are degrees as they stand (no round trip through radians)
+        return tuple(math.degrees(_q(a, "angle")) if isinstance(a, str) else _finite_number(a, "angle in degrees")
+                     for a in v)
 
     @field_validator("scale", mode="before")
     @classmethod
@@ -281,7 +302,7 @@ class Render(_Model):
     spp: int = Field(16, ge=1)
     max_depth: int = Field(6, ge=1, le=64)
     threshold: float = 1e-3
-    seed: int = 1
+    seed: int = Field(1, ge=0)
     workers: Optional[int] = Field(None, ge=1)
     tile: int = Field(32, ge=8, le=512)
     termination: Literal["roulette", "temperature"] = "roulette"
@@ -290,6 +311,11 @@ class Render(_Model):
     target_error: Optional[float] = None
     min_spp: int = Field(4, ge=2)
     default_temperature: float = 290.0
+
+    @field_validator("spp", "max_depth", "seed", "tile", "split_depth", "min_spp", mode="before")
+    @classmethod
+    def _ints(cls, v):
+        return _integer(v)
 
     @field_validator("target_error", mode="before")
     @classmethod
@@ -312,7 +338,7 @@ class Render(_Model):
     @field_validator("workers", mode="before")
     @classmethod
     def _workers(cls, v):
-        return None if v in (None, "auto") else v
+        return None if v is None or v == "auto" else _integer(v)
 
     @field_validator("default_temperature", mode="before")
     @classmethod
@@ -329,7 +355,11 @@ class Output(_Model):
     @field_validator("dir", mode="before")
     @classmethod
     def _dir(cls, v):
-        return None if v is None else Path(v).expanduser().resolve()
+        if v is None:
+            return None
+        if not isinstance(v, (str, Path)) or not str(v).strip():
+            raise ConfigValueError(f"expected a folder path, got {v!r}")
+        return Path(v).expanduser().resolve()
 
     @field_validator("channels", mode="before")
     @classmethod
@@ -360,12 +390,28 @@ class Scenario(_Model):
     source_file: Path
     frequencies: tuple[float, ...]
     imager: Imager
-    scene: tuple[SceneEntry, ...] = Field(min_length=1)
+    scene: tuple[SceneEntry, ...]
     materials: dict[str, dict] = {}
     atmosphere: Optional[Atmosphere] = None
     sky: Sky = Sky()
     render: Render = Render()
     output: Output = Output()
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v):
+        # the name becomes output file names: keep it one plain path component
+        if not v.strip() or v.strip() in (".", "..") or _NAME_FORBIDDEN & set(v) or not v.isprintable():
+            raise ConfigValueError(f"name {v!r} must be a plain file name: not empty, no / or \\")
+        return v
+
+    @field_validator("scene")
+    @classmethod
+    def _scene(cls, v):
+        # after item validation, so a bad entry is not also reported as an empty scene
+        if not v:
+            raise ConfigValueError("the scene needs at least one entry (- mesh: ..., material: ...)")
+        return v
 
     @field_validator("frequencies", mode="before")
     @classmethod
