@@ -109,6 +109,42 @@ def materials_show(
 
 @app.command()
 @_user_errors
+def sky(
+    frequency: str = typer.Option(..., "--frequency", "-f", help="e.g. '95 GHz'."),
+    atmosphere: Optional[Path] = typer.Option(None, "--atmosphere", help="YAML: an atmosphere mapping or a scenario."),
+    profile: Optional[str] = typer.Option(None, "--profile", help="ITU-R P.835 profile, e.g. standard, mid_latitude_winter."),
+    layer: Optional[List[str]] = typer.Option(None, "--layer", metavar="KIND,BASE,TOP,AMOUNT",
+                                              help="Weather slab, e.g. 'fog,0 m,600 m,0.3 g/m3' or 'rain,0,3 km,10 mm/h'."),
+    ground_temperature: Optional[str] = typer.Option(None, "--ground-temperature"),
+    humidity: Optional[str] = typer.Option(None, "--humidity", help="Water-vapour density at the ground, e.g. '7.5 g/m3'."),
+    elevations: str = typer.Option("5,10,15,20,30,45,60,90", "--elevations", help="Elevations [deg]."),
+    fmt: str = typer.Option("table", "--format", help="table or csv."),
+    exr: Optional[Path] = typer.Option(None, "--exr", help="Write an equirectangular Tv/Th map (a sky texture)."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Write a PNG of T against elevation for several weathers."),
+):
+    """Sky brightness temperature against elevation and polarization, from the layered atmosphere."""
+    from pmmw_cli import skycmd
+    from pmmw_cli.units import parse_quantity
+
+    f = parse_quantity(frequency, "frequency", file="--frequency")
+    if fmt not in ("table", "csv"):
+        raise UserError(f"expected table or csv, got {fmt!r}", file="--format")
+    try:
+        els = [float(v) for v in elevations.split(",")]
+    except ValueError:
+        raise UserError(f"expected degrees like 5,10,90, got {elevations!r}", file="--elevations") from None
+    if any(not 0 <= e <= 90 for e in els):
+        raise UserError("elevations must be within 0..90 deg", file="--elevations")
+    atm = skycmd.load_atmosphere(atmosphere, profile, layer or [], ground_temperature, humidity)
+    typer.echo(skycmd.format_table(skycmd.sky_table(atm, f, els), fmt))
+    if exr is not None:
+        skycmd.write_map(exr, atm, f)
+    if plot is not None:
+        skycmd.write_plot(plot, atm, f)
+
+
+@app.command()
+@_user_errors
 def bench(
     scenarios: Optional[List[Path]] = typer.Argument(None, help="Scenario YAML files."),
     spp: str = typer.Option("1,2,4,8,16,32", "--spp", help="Comma-separated samples per pixel to try."),

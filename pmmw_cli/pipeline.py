@@ -83,8 +83,9 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
     t_default = scn.render.default_temperature
     atm = scn.atmosphere
     ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
-    temp.append(atm.temperature if atm is not None else t_default)
-    alpha.append(atm.loss if atm is not None else 0.0)
+    uniform = atm is not None and atm.model == "uniform"  # the layered model lives on the job
+    temp.append(atm.temperature if uniform else t_default)
+    alpha.append(atm.loss if uniform else 0.0)
     for mid in material_ids:
         m = db.get(mid)
         code = KIND_CODES[m.kind]
@@ -139,12 +140,52 @@ def make_job(res: Resolved, f: float) -> TraceJob:
         termination=r.termination, strategy=r.strategy, split_depth=r.split_depth,
         target_error=r.target_error, min_spp=min(r.min_spp, r.spp), tile=r.tile, aux=tuple(scn.output.aux),
     )
+    atm = atmosphere_model(scn, f)
     return TraceJob(
         vertices=geom.vertices, faces=geom.faces, face_normals=geom.face_normals,
         face_medium=(geom.face_material + 1).astype(np.int32),
-        media=build_media(res.db, geom.material_ids, f, scn), camera=cam, sky=make_sky(scn.sky, f),
-        frequency=f, settings=settings,
+        media=build_media(res.db, geom.material_ids, f, scn), camera=cam,
+        sky=make_sky(scn.sky, f, atmosphere_model=atm), frequency=f, settings=settings, atmosphere=atm,
     )
+
+
+def atmosphere_summary(job) -> dict:
+    """What the layered atmosphere does to this scene (seed 000 reports path losses so)."""
+    atm, cam = job.atmosphere, job.camera
+    target = np.asarray(cam.position) + cam.k * _target_distance(job)
+    dist = float(np.linalg.norm(target - cam.position))
+    return {
+        "specific_attenuation_at_ground_dB_per_km": round(float(atm.specific_attenuation_db_km(0.0)), 4),
+        "zenith_opacity_Np": round(float(atm.zenith_opacity()), 5),
+        "zenith_sky_K": round(float(atm.sky_temperature(np.pi / 2)), 3),
+        "target_distance_m": round(dist, 2),
+        "path_loss_imager_to_target_dB": round(float(atm.path_loss_db(cam.position[2], target[2], dist)), 4),
+    }
+
+
+def _target_distance(job) -> float:
+    """Distance along the optical axis to the scene (first hit of the central ray), or 1 km."""
+    from pmmw_cli.trace.intersect import make_intersector
+
+    isect = make_intersector(job.vertices, job.faces)
+    t, _ = isect.intersect(job.camera.position[None, :], job.camera.k[None, :])
+    return float(t[0]) if np.isfinite(t[0]) else 1000.0
+
+
+def atmosphere_model(scn, f: float):
+    """The layered atmosphere at frequency f [Hz], or None (vacuum / uniform ambient medium)."""
+    a = scn.atmosphere
+    if a is None or a.model != "layered":
+        return None
+    from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+
+    layers = tuple(Layer(l.kind, l.base, l.top, l.liquid_water, l.rain_rate) for l in a.layers)
+    try:
+        atm = Atmosphere(profile=a.profile, ground_temperature=a.ground_temperature, humidity=a.humidity,
+                         layers=layers, ground_altitude=a.ground_altitude)
+    except ValueError as e:
+        raise UserError(str(e), file=scn.source_file, key="atmosphere") from None
+    return AtmosphereModel(atm, f)
 
 
 class _Progress:
@@ -279,6 +320,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
                 stats[c].update(display_low=lo, display_high=hi)
                 previews[c] = rel
         renders.append({
+            **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
             "frequency_hz": f, "output_exr": str(exr_path), "channels": stats, "previews": previews,
             "rays": rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),
                                      "frequency_total_s": round(t_total, 3)},

@@ -203,3 +203,27 @@ def test_shards_then_resume_assemble_the_same_image(tmp_path):
     for c in a:
         np.testing.assert_array_equal(a[c], b[c])
     assert _run("render", scn, "--shard", "2/2").exit_code == 2
+
+
+def test_sky_command_table_csv_map_and_plot(tmp_path):
+    """`pmmw sky`: CSV header and rows, colder at zenith than near the horizon, fog warms the sky,
+    the EXR map loads as a sky texture and reproduces the table, the plot is written."""
+    from pmmw_cli.scene.sky_texture import SkyTexture
+
+    res = _run("sky", "--frequency", "95 GHz", "--format", "csv", "--elevations", "5,30,90")
+    assert res.exit_code == 0, res.output
+    lines = res.output.strip().splitlines()
+    assert lines[0] == "elevation_deg,Tv_K,Th_K" and len(lines) == 4
+    t = {float(r.split(",")[0]): float(r.split(",")[1]) for r in lines[1:]}
+    assert t[90.0] < t[30.0] < t[5.0] < 300.0
+    fog = _run("sky", "-f", "95 GHz", "--format", "csv", "--elevations", "90", "--layer", "fog,0 m,600 m,1 g/m3",
+               "--exr", tmp_path / "sky.exr", "--plot", tmp_path / "sky.png")
+    assert fog.exit_code == 0, fog.output
+    t_fog = float(fog.output.strip().splitlines()[1].split(",")[1])
+    assert t_fog > t[90.0] + 5.0
+    tex = SkyTexture.load(tmp_path / "sky.exr")
+    tv, th = tex.sample(np.array([[0.0, 0.0, 1.0]]))
+    np.testing.assert_allclose(tv, t_fog, atol=0.5)  # the map's top row is within half a row of zenith
+    assert (tmp_path / "sky.png").stat().st_size > 1000
+    bad = _run("sky", "-f", "95 GHz", "--layer", "smog,0,1,2")
+    assert bad.exit_code == 2 and "--layer" in bad.output

@@ -117,7 +117,9 @@ def test_display_has_units_and_loads_back(tmp_path):
 
 def test_defaults(tmp_path):
     s = load_scenario(write(tmp_path))
-    assert s.atmosphere is None and s.sky.model == "slab" and s.sky.ground_temperature == 290.0
+    # default: the ITU-R standard atmosphere along paths and its own sky
+    assert s.atmosphere.model == "layered" and s.atmosphere.profile == "standard" and not s.atmosphere.layers
+    assert s.sky.model == "atmosphere" and s.sky.ground_temperature == 290.0
     assert (s.render.spp, s.render.max_depth, s.render.threshold, s.render.seed) == (16, 6, 1e-3, 1)
     assert s.render.workers is None and s.render.termination == "roulette"
     assert s.output.channels == ("I", "Q", "U", "V", "Ex2", "Ey2") and s.output.aux == ()
@@ -135,7 +137,37 @@ def test_atmosphere_none_is_vacuum(tmp_path, text):
 
 def test_atmosphere_defaults(tmp_path):
     atm = load_scenario(write(tmp_path, BASE + "atmosphere: {}\n")).atmosphere
-    assert (atm.loss, atm.temperature) == (0.0, 288.0)
+    assert atm.model == "layered" and atm.profile == "standard" and atm.loss is None
+    atm = load_scenario(write(tmp_path, BASE + "atmosphere: {loss: 0.2 dB/km}\n")).atmosphere
+    assert atm.model == "uniform" and atm.temperature == 288.0
+
+
+def test_layered_atmosphere_with_weather(tmp_path):
+    text = BASE + """atmosphere:
+  profile: mid_latitude_winter
+  ground_temperature: 280 K
+  humidity: 5 g/m3
+  layers:
+    - {kind: fog, base: 0 m, top: 600 m, liquid_water: 0.3 g/m3}
+    - {kind: rain, base: 0 m, top: 2 km, rain_rate: 10 mm/h}
+sky: {model: atmosphere}
+"""
+    s = load_scenario(write(tmp_path, text))
+    a = s.atmosphere
+    assert a.profile == "mid_latitude_winter" and a.ground_temperature == 280.0
+    assert math.isclose(a.humidity, 5e-3) and math.isclose(a.layers[0].liquid_water, 3e-4)
+    assert math.isclose(a.layers[1].rain_rate, 10.0) and a.layers[1].top == 2000.0
+    for bad, key, words in (
+        ("liquid_water: 0.3 g/m3}", "atmosphere.layers[0]", "top must be above base"),
+    ):
+        path = write(tmp_path, text.replace("top: 600 m, " + bad, "top: 0 m, " + bad))
+        with pytest.raises(UserError, match=words) as e:
+            load_scenario(path)
+        assert key in str(e.value)
+    with pytest.raises(UserError, match="needs a layered atmosphere"):
+        load_scenario(write(tmp_path, BASE + "atmosphere: none\nsky: {model: atmosphere}\n"))
+    with pytest.raises(UserError, match="takes rain_rate"):
+        load_scenario(write(tmp_path, BASE + "atmosphere: {layers: [{kind: rain, base: 0, top: 9, liquid_water: 1 g/m3}]}\n"))
 
 
 def test_sky_forms(tmp_path):
@@ -235,7 +267,7 @@ def test_cli_values_apply_after_overrides(tmp_path):
         (("name: t", "name: t\noutput: {channels: [I, I]}"), "output.channels", "twice"),
         (("name: t", "name: t\noutput: {aux: [normals]}"), "output.aux", "unknown auxiliary channel"),
         (("name: t", "name: t\natmosphere: {loss: 0.9 dB/parsec}"), "atmosphere.loss", "dB/km"),
-        (("name: t", "name: t\natmosphere: {temprature: 3 K}"), "atmosphere.temprature", "allowed: loss, temperature"),
+        (("name: t", "name: t\natmosphere: {temprature: 3 K}"), "atmosphere.temprature", "allowed: model, profile"),
         (("name: t", "name: t\nmaterials: [asphalt]"), "materials", "mapping"),
         (("name: t", "name: t\nfrequencies: 95 GHz"), "frequencies", "did you mean 'frequency'"),
         (("frequency: 95 GHz\n", ""), "frequency", "required key missing"),

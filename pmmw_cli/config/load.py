@@ -302,10 +302,22 @@ def scenario_to_display(scn: Scenario) -> dict:
         "imager": imager,
         "scene": scene,
         "materials": copy.deepcopy(scn.materials),
-        "atmosphere": "none" if atm is None else {
+        "atmosphere": "none" if atm is None else ({
+            "model": "uniform",
             "loss": _qty(atm.loss * 1e3 * 10 / math.log(10), "dB/km"),  # [Np/m] of power -> dB/km
             "temperature": _qty(atm.temperature, "K"),
-        },
+        } if atm.model == "uniform" else {
+            "model": "layered", "profile": atm.profile,
+            **({"ground_temperature": _qty(atm.ground_temperature, "K")} if atm.ground_temperature is not None else {}),
+            **({"humidity": _qty(atm.humidity * 1e3, "g/m3")} if atm.humidity is not None else {}),
+            "ground_altitude": _qty(atm.ground_altitude, "m"),
+            "layers": [
+                {"kind": l.kind, "base": _qty(l.base, "m"), "top": _qty(l.top, "m"),
+                 **({"liquid_water": _qty(l.liquid_water * 1e3, "g/m3")} if l.kind != "rain" else
+                    {"rain_rate": _qty(l.rain_rate, "mm/h")})}
+                for l in atm.layers
+            ],
+        }),
         "sky": {
             "model": sky.model,
             **({"temperature": _qty(sky.temperature, "K")} if sky.temperature is not None else {}),

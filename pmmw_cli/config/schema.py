@@ -227,19 +227,114 @@ class SceneEntry(_Model):
         return self
 
 
+PROFILES = ("standard", "low_latitude", "mid_latitude_summer", "mid_latitude_winter",
+            "high_latitude_summer", "high_latitude_winter")
+MM_PER_H = 1e3 * 3600.0  # [mm/h] per [m/s]
+
+
+class WeatherLayer(_Model):
+    """A fog, cloud or rain slab between two heights above the ground."""
+
+    kind: Literal["fog", "cloud", "rain"]
+    base: float
+    top: float
+    liquid_water: float = 0.0  # [kg/m^3]
+    rain_rate: float = 0.0  # [mm/h]
+
+    @field_validator("base", "top", mode="before")
+    @classmethod
+    def _h(cls, v):
+        z = _q(v, "length")
+        if z < 0:
+            raise ConfigValueError(f"heights are above the ground: must be >= 0, got {v!r}")
+        return z
+
+    @field_validator("liquid_water", mode="before")
+    @classmethod
+    def _lw(cls, v):
+        w = _q(v, "density")
+        if w < 0:
+            raise ConfigValueError(f"liquid water content must be >= 0, got {v!r}")
+        return w
+
+    @field_validator("rain_rate", mode="before")
+    @classmethod
+    def _rr(cls, v):
+        r = _q(v, "rate") * MM_PER_H
+        if r < 0:
+            raise ConfigValueError(f"rain rate must be >= 0, got {v!r}")
+        return r
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.top <= self.base:
+            raise ConfigValueError("top must be above base")
+        if self.kind == "rain" and self.liquid_water:
+            raise ConfigValueError("a rain layer takes rain_rate (e.g. '10 mm/h'), not liquid_water")
+        if self.kind != "rain" and self.rain_rate:
+            raise ConfigValueError(f"a {self.kind} layer takes liquid_water (e.g. '0.3 g/m3'), not rain_rate")
+        return self
+
+
 class Atmosphere(_Model):
-    loss: float = 0.0
-    temperature: float = 288.0
+    """``model: layered`` (default): an ITU-R P.835 profile with gases (P.676), weather layers of
+    fog/cloud (P.840) and rain (P.838); ``model: uniform``: one absorbing medium of ``loss`` at
+    ``temperature`` along every path (the seed's Blender setting, sec. 2.2.9)."""
+
+    model: Literal["layered", "uniform"] = "layered"
+    profile: Literal[PROFILES] = "standard"
+    ground_temperature: Optional[float] = None
+    humidity: Optional[float] = None  # water-vapour density at the ground [kg/m^3]
+    ground_altitude: float = 0.0
+    layers: tuple[WeatherLayer, ...] = ()
+    loss: Optional[float] = None  # uniform: [Np/m] of power
+    temperature: Optional[float] = None  # uniform: [K]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _infer_model(cls, data):
+        if isinstance(data, dict) and "model" not in data and ("loss" in data or "temperature" in data):
+            data = dict(data, model="uniform")
+        return data
 
     @field_validator("loss", mode="before")
     @classmethod
     def _loss(cls, v):
-        return _q(v, "attenuation")
+        return None if v is None else _q(v, "attenuation")
 
-    @field_validator("temperature", mode="before")
+    @field_validator("temperature", "ground_temperature", mode="before")
     @classmethod
     def _t(cls, v):
-        return _positive_temperature(v)
+        return None if v is None else _positive_temperature(v)
+
+    @field_validator("humidity", mode="before")
+    @classmethod
+    def _hum(cls, v):
+        if v is None:
+            return None
+        h = _q(v, "density")
+        if h < 0:
+            raise ConfigValueError(f"humidity (water-vapour density) must be >= 0, got {v!r}")
+        return h
+
+    @field_validator("ground_altitude", mode="before")
+    @classmethod
+    def _alt(cls, v):
+        return _q(v, "length")
+
+    @model_validator(mode="after")
+    def _fields_of_model(self):
+        if self.model == "uniform":
+            extra = [k for k in ("ground_temperature", "humidity") if getattr(self, k) is not None]
+            extra += ["layers"] if self.layers else []
+            if extra:
+                raise ConfigValueError(f"{', '.join(extra)} belong to the layered atmosphere, not model: uniform")
+            object.__setattr__(self, "loss", self.loss if self.loss is not None else 0.0)
+            object.__setattr__(self, "temperature", self.temperature if self.temperature is not None else 288.0)
+        elif self.loss is not None or self.temperature is not None:
+            raise ConfigValueError("loss/temperature set a uniform atmosphere (model: uniform); the layered "
+                                   "model takes profile, ground_temperature, humidity and layers")
+        return self
 
 
 def _positive_temperature(v):
@@ -250,7 +345,7 @@ def _positive_temperature(v):
 
 
 class Sky(_Model):
-    model: Literal["slab", "uniform", "texture"] = "slab"
+    model: Optional[Literal["atmosphere", "slab", "uniform", "texture"]] = None  # None: see Scenario
     temperature: Optional[float] = None
     file: Optional[Path] = None
     zenith_opacity: Optional[float] = None
@@ -392,7 +487,7 @@ class Scenario(_Model):
     imager: Imager
     scene: tuple[SceneEntry, ...]
     materials: dict[str, dict] = {}
-    atmosphere: Optional[Atmosphere] = None
+    atmosphere: Optional[Atmosphere] = Atmosphere()
     sky: Sky = Sky()
     render: Render = Render()
     output: Output = Output()
@@ -441,3 +536,14 @@ class Scenario(_Model):
         if v is None or (isinstance(v, str) and v.strip().lower() == "none"):
             return None
         return v
+
+    @model_validator(mode="after")
+    def _sky_model(self):
+        """Default sky: the layered atmosphere's own sky when there is one, else the slab."""
+        layered = self.atmosphere is not None and self.atmosphere.model == "layered"
+        if self.sky.model is None:
+            object.__setattr__(self, "sky", self.sky.model_copy(update={"model": "atmosphere" if layered else "slab"}))
+        elif self.sky.model == "atmosphere" and not layered:
+            raise ConfigValueError("sky model 'atmosphere' needs a layered atmosphere (atmosphere: {profile: ...}), "
+                                   "not 'none' or model: uniform")
+        return self

@@ -8,6 +8,8 @@ Models are chosen by ``sky.model`` through `SKY_MODELS`:
   ``T(el) = T_atm (1 - exp(-tau / sin el)) + T_cmb exp(-tau / sin el)``, unpolarized. The default
   until the layered atmosphere lands. Without a given opacity, tau comes from a clear-sky table
   (US standard atmosphere zenith temperatures of about 18.5 K at 35 GHz and 46 K at 95 GHz).
+* ``atmosphere``: the layered atmosphere's radiative transfer (default when the scenario has a
+  layered atmosphere), see `AtmosphereSky`.
 * ``texture``: a user's equirectangular EXR with ``Tv``, ``Th`` channels [K]
   (`pmmw_cli.scene.sky_texture`), polarized in the sky basis of `pmmw_cli.physics.jones`.
 
@@ -51,8 +53,9 @@ class UniformSky:
         self.temperature = float(temperature)
         self.ground_temperature = float(ground_temperature)
 
-    def brightness(self, directions):
-        """(Tv, Th) [K], each shape (n,), for unit directions (n, 3) leaving the scene."""
+    def brightness(self, directions, heights=None):
+        """(Tv, Th) [K], each shape (n,), for unit directions (n, 3) leaving the scene from
+        heights (n,) [m] above the ground (used by the atmosphere model only)."""
         t = np.where(directions[:, 2] >= 0.0, self.temperature, self.ground_temperature)
         return t, t
 
@@ -74,7 +77,7 @@ class SlabSky:
             trans = np.exp(-self.tau / np.maximum(sin_el, 0.0))
         return self.temperature * (1.0 - trans) + T_CMB * trans
 
-    def brightness(self, directions):
+    def brightness(self, directions, heights=None):
         sin_el = np.clip(directions[:, 2], -1.0, 1.0)
         with np.errstate(divide="ignore", over="ignore"):
             trans = np.where(sin_el > 0.0, np.exp(-self.tau / np.where(sin_el > 0.0, sin_el, 1.0)), 0.0)
@@ -91,30 +94,68 @@ class TextureSky:
     def __init__(self, texture):
         self.texture = texture
 
-    def brightness(self, directions):
+    def brightness(self, directions, heights=None):
         return self.texture.sample(directions)
 
 
-def _make_uniform(cfg, f):
+class AtmosphereSky:
+    """The layered atmosphere's own sky (`pmmw_cli.atmosphere.model.AtmosphereModel`).
+
+    Unpolarized (a horizontally stratified, non-scattering atmosphere), with earth curvature.
+    Rays leave the scene from various heights; the sky above a ray is taken from a table for the
+    nearest of `HEIGHT_STEP`-spaced observer heights below it (cached per height), so an aircraft
+    sees only the air above it. Below the horizon: ``ground_temperature``.
+    """
+
+    unpolarized = True
+    HEIGHT_STEP = 250.0  # [m]
+
+    def __init__(self, model, ground_temperature: float):
+        self.model = model
+        self.ground_temperature = float(ground_temperature)
+
+    def zenith_angle_temperature(self, elevation, height: float = 0.0):
+        return self.model.sky_temperature(elevation, height=height)
+
+    def brightness(self, directions, heights=None):
+        el = np.arcsin(np.clip(directions[:, 2], -1.0, 1.0))
+        t = np.full(el.shape, self.ground_temperature)
+        up = el >= 0.0
+        if heights is None:
+            heights = np.zeros(el.shape)
+        level = np.floor(np.clip(heights, 0.0, self.model.top - 1.0) / self.HEIGHT_STEP) * self.HEIGHT_STEP
+        for h in np.unique(level[up]):
+            sel = up & (level == h)
+            t[sel] = self.model.sky_temperature(el[sel], height=float(h))
+        return t, t
+
+
+def _make_uniform(cfg, f, atmosphere_model=None):
     return UniformSky(cfg.temperature, cfg.ground_temperature)
 
 
-def _make_slab(cfg, f):
+def _make_slab(cfg, f, atmosphere_model=None):
     tau = cfg.zenith_opacity if cfg.zenith_opacity is not None else default_zenith_opacity(f)
     temp = cfg.temperature if cfg.temperature is not None else T_SLAB_DEFAULT
     return SlabSky(temp, tau, cfg.ground_temperature)
 
 
-def _make_texture(cfg, f):
+def _make_atmosphere(cfg, f, atmosphere_model=None):
+    if atmosphere_model is None:
+        raise ValueError("the atmosphere sky needs the scene's atmosphere model")
+    return AtmosphereSky(atmosphere_model, cfg.ground_temperature)
+
+
+def _make_texture(cfg, f, atmosphere_model=None):
     from pmmw_cli.scene.sky_texture import SkyTexture
 
     return TextureSky(SkyTexture.load(cfg.file, key="sky.file"))
 
 
 #: sky.model -> factory(sky config, frequency [Hz]) -> sky object with ``brightness(dirs)``.
-SKY_MODELS = {"uniform": _make_uniform, "slab": _make_slab, "texture": _make_texture}
+SKY_MODELS = {"atmosphere": _make_atmosphere, "uniform": _make_uniform, "slab": _make_slab, "texture": _make_texture}
 
 
-def make_sky(cfg, f: float):
+def make_sky(cfg, f: float, atmosphere_model=None):
     """Build the sky for one frequency [Hz] from the scenario's ``sky`` record."""
-    return SKY_MODELS[cfg.model](cfg, f)
+    return SKY_MODELS[cfg.model](cfg, f, atmosphere_model=atmosphere_model)

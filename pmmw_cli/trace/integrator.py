@@ -295,6 +295,15 @@ class Integrator:
         rows = np.arange(len(wv))
         cur = wv.stack[rows, wv.top].astype(np.int64)
 
+        # The layered atmosphere along ambient segments: transmittance and own emission of the
+        # layers crossed, seen from the segment's near end (issue 3; exact for straight segments).
+        if job.atmosphere is not None:
+            amb = cur == 0
+            if amb.any():
+                trans, emission = job.atmosphere.path(wv.o[amb, 2], wv.o[amb, 2] + t[amb] * wv.d[amb, 2], t[amb])
+                self._emit(wv.sid[amb], wv.m[amb], emission)
+                wv.m[amb] *= np.sqrt(trans)[:, None, None]
+
         # Absorption and emission along the segment just travelled (eq. 2.37, 2.38).
         alpha = media.alpha[cur]
         lossy = alpha > 0.0
@@ -334,7 +343,7 @@ class Integrator:
 
     def _sky(self, wv: _Wave):
         sky = self.job.sky
-        ta, tb = sky.brightness(wv.d)
+        ta, tb = sky.brightness(wv.d, heights=wv.o[:, 2])
         if sky.unpolarized:
             self._emit(wv.sid, wv.m, np.asarray(ta, float))
             return

@@ -108,6 +108,9 @@ class TraceJob:
     sky : object with ``brightness(directions) -> (Tv, Th)`` and ``unpolarized``
     frequency : float [Hz]
     settings : RenderSettings
+    atmosphere : AtmosphereModel or None
+        The layered atmosphere along paths in the ambient medium (``path(z0, z1, length)``);
+        None for vacuum or the uniform ambient medium of `Media`.
     """
 
     vertices: np.ndarray
@@ -119,6 +122,7 @@ class TraceJob:
     sky: object
     frequency: float
     settings: RenderSettings = field(default_factory=RenderSettings)
+    atmosphere: object = None  # AtmosphereModel: attenuation and emission along ambient paths
 
     @property
     def k0(self) -> float:

@@ -1,0 +1,1 @@
+"""Coefficient tables of the atmosphere models, as Python constants (no package-data files)."""

@@ -1,0 +1,137 @@
+"""``pmmw sky``: sky brightness temperature against elevation for an atmosphere and weather.
+
+Prints a table or CSV (``elevation_deg,Tv_K,Th_K``), and can write an equirectangular EXR map
+(channels Tv, Th: usable directly as ``sky: {texture: ...}``) and a PNG plot comparing the given
+atmosphere with the weathers of seed 000 chapter 3 at the same frequency.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import yaml
+from pydantic import ValidationError
+
+from pmmw_cli.errors import UserError
+from pmmw_cli.units import parse_quantity
+
+# Weathers of seed 000 ch. 3 (Tables 3.2, 3.5): fog 0-600 m, cloud 1-2 km, rain 0-3 km.
+PRESETS = {
+    "clear": (),
+    "cloud 1-2 km, 0.5 g/m3": (("cloud", 1000.0, 2000.0, 0.5e-3, 0.0),),
+    "heavy fog 0.3 g/m3": (("fog", 0.0, 600.0, 0.3e-3, 0.0),),
+    "extreme fog 1 g/m3": (("fog", 0.0, 600.0, 1.0e-3, 0.0),),
+    "rain 10 mm/h": (("rain", 0.0, 3000.0, 0.0, 10.0),),
+}
+
+
+def parse_layer(text: str):
+    """``KIND,BASE,TOP,AMOUNT`` (e.g. ``fog,0 m,600 m,0.3 g/m3`` or ``rain,0,3 km,10 mm/h``)."""
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) != 4 or parts[0] not in ("fog", "cloud", "rain"):
+        raise UserError(f"expected KIND,BASE,TOP,AMOUNT with KIND fog|cloud|rain, got {text!r}", file="--layer")
+    kind = parts[0]
+    base = parse_quantity(parts[1], "length", file="--layer", key=kind)
+    top = parse_quantity(parts[2], "length", file="--layer", key=kind)
+    if kind == "rain":
+        return {"kind": kind, "base": base, "top": top, "rain_rate": f"{parse_quantity(parts[3], 'rate', file='--layer', key=kind) * 3.6e6} mm/h"}
+    return {"kind": kind, "base": base, "top": top, "liquid_water": parts[3]}
+
+
+def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], ground_temperature, humidity):
+    """An `Atmosphere` record from a YAML file and/or command-line options (options win)."""
+    from pmmw_cli.config.schema import Atmosphere
+
+    raw: dict = {}
+    if file is not None:
+        if not Path(file).is_file():
+            raise UserError("file not found", file=file)
+        try:
+            data = yaml.safe_load(Path(file).read_text())
+        except yaml.YAMLError as e:
+            raise UserError(f"malformed YAML: {e}", file=file) from None
+        data = data.get("atmosphere", data) if isinstance(data, dict) else data
+        if not isinstance(data, dict):
+            raise UserError("expected an atmosphere mapping (or a scenario with an `atmosphere:` key)", file=file)
+        raw = dict(data)
+    if profile:
+        raw["profile"] = profile
+    if layers:
+        raw["layers"] = [parse_layer(t) for t in layers]
+    if ground_temperature:
+        raw["ground_temperature"] = ground_temperature
+    if humidity:
+        raw["humidity"] = humidity
+    try:
+        atm = Atmosphere.model_validate(raw)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        key = ".".join(str(p) for p in ("atmosphere", *err["loc"]))
+        msg = str(err.get("ctx", {}).get("error", err["msg"]))
+        raise UserError(msg, file=file or "command line", key=key) from None
+    if atm.model != "layered":
+        raise UserError("pmmw sky needs a layered atmosphere (profile, layers), not model: uniform", file=file)
+    return atm
+
+
+def _model(atm, f, layers=None):
+    from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+
+    lay = tuple(Layer(l.kind, l.base, l.top, l.liquid_water, l.rain_rate) for l in atm.layers) if layers is None else \
+        tuple(Layer(*l) for l in layers)
+    return AtmosphereModel(Atmosphere(profile=atm.profile, ground_temperature=atm.ground_temperature,
+                                      humidity=atm.humidity, layers=lay, ground_altitude=atm.ground_altitude), f)
+
+
+def sky_table(atm, f: float, elevations_deg) -> np.ndarray:
+    """(n, 3) rows of elevation [deg], Tv [K], Th [K]."""
+    model = _model(atm, f)
+    t = model.sky_temperature(np.radians(np.asarray(elevations_deg, float)))
+    return np.column_stack([elevations_deg, t, t])
+
+
+def format_table(rows, fmt: str) -> str:
+    if fmt == "csv":
+        return "elevation_deg,Tv_K,Th_K\n" + "\n".join(f"{e:g},{tv:.3f},{th:.3f}" for e, tv, th in rows)
+    lines = [f"{'elevation [deg]':>16} {'Tv [K]':>9} {'Th [K]':>9}"]
+    lines += [f"{e:16g} {tv:9.2f} {th:9.2f}" for e, tv, th in rows]
+    return "\n".join(lines)
+
+
+def write_map(path: Path, atm, f: float, width: int = 720, ground_temperature: float = 290.0):
+    """Equirectangular Tv/Th map (`pmmw_cli.scene.sky_texture` convention); ground below horizon."""
+    from pmmw_cli.scene.sky_texture import write_sky_texture
+
+    h = width // 2
+    el = np.pi / 2 - np.pi * (np.arange(h) + 0.5) / h
+    model = _model(atm, f)
+    col = np.where(el >= 0, model.sky_temperature(np.clip(el, 0, None)), ground_temperature)
+    tv = np.repeat(col[:, None], width, axis=1)
+    write_sky_texture(path, tv, tv.copy())
+
+
+def write_plot(path: Path, atm, f: float):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    el = np.linspace(0.0, 90.0, 361)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=110)
+    ax.plot(el, _model(atm, f).sky_temperature(np.radians(el)), "k-", lw=2, label="this atmosphere")
+    for name, layers in PRESETS.items():
+        ax.plot(el, _model(atm, f, layers=layers).sky_temperature(np.radians(el)), lw=1, label=f"{atm.profile}, {name}")
+    ax.set_xlabel("elevation [deg]")
+    ax.set_ylabel("sky brightness temperature [K] (Rayleigh-Jeans)")
+    ax.set_title(f"Sky at {f / 1e9:g} GHz")
+    ax.set_xlim(0, 90)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}.png")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(tmp)
+    plt.close(fig)
+    os.replace(tmp, path)
