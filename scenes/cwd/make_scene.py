@@ -33,12 +33,14 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from scipy import ndimage
 from trimesh.visual import TextureVisuals
 from trimesh.visual.material import PBRMaterial
 
 from pmmw_cli.scene.geometry import Y_UP_TO_Z_UP, load_entry_mesh
 
 VARIANTS = ("outdoor", "indoor")
+CLOTHINGS = ("shell", "coating")
 
 # Seed 000 sec. 3.2.1: imager 1.5 m up, 1.0 m aperture, 740 x 440 pixels, 4 K noise; 30 deg field
 # at 4 m and 6 deg at 20 m. A standing person needs the long side vertical, so the image is taken
@@ -51,6 +53,7 @@ LOOK_AT_HEIGHT = 0.9  # [m], the middle of the person
 # The body: round cones (a, b, r_a, r_b) [m], person at the origin facing -y, left = +x.
 # Each group is blended internally with its own smoothing radius, groups with BLEND.
 BLEND = 0.035  # [m], between groups (torso-arms, torso-legs, ...)
+CULL = 0.25  # [m], see group_field: well above every blending radius
 
 
 def _mirror(cones):
@@ -99,7 +102,7 @@ NECK_CUT = ((0.0, 0.0, 1.485), (0.0, 0.0, 1.0))
 ANKLE_CUT_Z = 0.165  # trousers end above the shoes
 SHOE_TOP_Z = 0.125
 WRIST_CUT_BACK = 0.03  # [m] short of the wrist, along the forearm
-DRAPE_ROUNDING = 0.02  # [m], edge radius of the shirt over the holster
+DRAPE_ROUNDING = 0.03  # [m], edge radius of the shirt over the holster
 DRAPE_BLEND = 0.08  # [m], how far the shirt blends from the holster into the chest
 
 
@@ -143,15 +146,26 @@ def box_sdf(p, centre, rotation, half):
 
 def group_field(p, groups, offset=0.0, side=None):
     """Smooth union of body groups, each grown by ``offset`` [m]; ``side`` +1 or -1 keeps the
-    round cones of the left (+x) or right side only."""
+    round cones of the left (+x) or right side only.
+
+    A round cone is evaluated only within CULL [m] of its bounding box; beyond, its distance is
+    taken as CULL (a lower bound), which leaves the field exact wherever it is within CULL minus
+    the blending radii of zero, and positive elsewhere.
+    """
     d = None
+    cols = [np.ascontiguousarray(p[:, i]) for i in range(3)]
     for name in groups:
         k, cones = BODY[name]
         g = None
         for a, b, ra, rb in cones:
             if side is not None and np.sign(a[0]) != side:
                 continue
-            c = round_cone(p, a, b, ra + offset, rb + offset)
+            r = max(ra, rb) + offset + CULL
+            lo, hi = np.minimum(a, b) - r, np.maximum(a, b) + r
+            near = (cols[0] >= lo[0]) & (cols[0] <= hi[0]) & (cols[1] >= lo[1]) & (cols[1] <= hi[1])
+            near &= (cols[2] >= lo[2]) & (cols[2] <= hi[2])
+            c = np.full(len(p), CULL)
+            c[near] = round_cone(p[near], a, b, ra + offset, rb + offset)
             g = c if g is None else smin(g, c, k)
         d = g if d is None else smin(d, g, BLEND)
     return d
@@ -182,6 +196,18 @@ def surface_nets(field, lo, hi, h: float) -> trimesh.Trimesh:
             or (f[:, :, 0] <= 0).any() or (f[:, :, -1] <= 0).any():
         raise ValueError("the surface reaches the grid boundary")
     inside = f < 0.0
+    # One solid without cavities: fill air pockets enclosed by the solid, drop loose specks.
+    air, _ = ndimage.label(~inside)
+    pockets = ~inside & (air != air[0, 0, 0])
+    solid, n_solid = ndimage.label(inside | pockets)
+    if n_solid > 1:
+        sizes = np.bincount(solid.ravel())
+        sizes[0] = 0
+        specks = (solid != np.argmax(sizes)) & (solid > 0)
+    else:
+        specks = np.zeros_like(inside)
+    f = np.where(pockets, -1e-9, np.where(specks, 1e-9, f))
+    inside = (f < 0.0)
     cells = n - 1
     acc = np.zeros((*cells, 3))
     cnt = np.zeros(cells)
@@ -240,6 +266,20 @@ def surface_nets(field, lo, hi, h: float) -> trimesh.Trimesh:
         np.where(split02[:, None], q[:, [0, 2, 3]], q[:, [1, 2, 3]]),
     ])
     return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def closed_surface(field, lo, hi, h: float, tries: int = 8) -> trimesh.Trimesh:
+    """`surface_nets` on a grid shifted by fractions of h until the mesh is closed.
+
+    Naive surface nets give one vertex per cell, so two sheets of surface closer than a cell
+    (a thin crease) can meet at a non-manifold edge; another grid offset samples them apart.
+    """
+    for k in range(tries):
+        shift = h * np.array([0.37, 0.23, 0.11]) * k
+        mesh = surface_nets(field, np.asarray(lo, float) - shift, hi, h)
+        if mesh.is_watertight:
+            return mesh
+    raise SystemExit(f"no closed surface after {tries} grid offsets; try another --voxel")
 
 
 def _gradient(field, p, eps=1e-5):
@@ -441,19 +481,17 @@ def surface_samples(mesh: trimesh.Trimesh, n: int = 6) -> np.ndarray:
 
 def person(args):
     """Node name -> (material name, mesh) of the body, clothing, shoes, holster and gun."""
-    h = args.voxel
     skin_field = lambda p: group_field(p, BODY)  # noqa: E731
-    body = surface_nets(skin_field, (-0.45, -0.25, -0.02), (0.45, 0.2, 1.85), h)
-
+    body = closed_surface(skin_field, (-0.45, -0.25, -0.02), (0.45, 0.2, 1.85), args.voxel)
     gun, holster = place_gun(args, args.holster_gap)
-    nodes = {"body": ("skin", body)}
-    if args.clothing == "shell":
-        nodes["clothing"] = ("clothing", clothing(args, np.vstack([holster.vertices, gun.vertices])))
-    nodes["shoe_left"] = ("shoes", shoe(args, +1))
-    nodes["shoe_right"] = ("shoes", shoe(args, -1))
-    nodes["holster"] = ("holster", holster)
-    nodes["gun"] = ("gun", gun)
-    return nodes
+    return {
+        "body": ("skin", body),
+        "clothing": ("clothing", clothing(args, np.vstack([holster.vertices, gun.vertices]))),
+        "shoe_left": ("shoes", shoe(args, +1)),
+        "shoe_right": ("shoes", shoe(args, -1)),
+        "holster": ("holster", holster),
+        "gun": ("gun", gun),
+    }
 
 
 def clothing(args, under) -> trimesh.Trimesh:
@@ -465,14 +503,16 @@ def clothing(args, under) -> trimesh.Trimesh:
     centre = rot @ ((local.min(axis=0) + local.max(axis=0)) / 2)
     half = (local.max(axis=0) - local.min(axis=0)) / 2
 
-    rounding = np.minimum(DRAPE_ROUNDING, 0.9 * half)
+    # A rounded box that still holds every corner of the box: inner half sizes shrunk by
+    # R / sqrt(3), so that each corner lies within R of the inner box.
+    inner = np.maximum(half - DRAPE_ROUNDING / np.sqrt(3.0), 0.0)
 
-    def field(p):
-        body = group_field(p, COVERED, gap + t)
-        bump = box_sdf(p, centre, rot, half - rounding) - rounding.min() - (gap + t)
-        return smin(body, bump, DRAPE_BLEND)
+    def field(p):  # the bump blends into the trunk, then the sleeves join as the body's arms do
+        trunk = group_field(p, [g for g in COVERED if g != "arms"], gap + t)
+        bump = box_sdf(p, centre, rot, inner) - DRAPE_ROUNDING - (gap + t)
+        return smin(smin(trunk, bump, DRAPE_BLEND), group_field(p, ("arms",), gap + t), BLEND)
 
-    outer = surface_nets(field, (-0.48, -0.27, 0.0), (0.48, 0.22, 1.75), args.voxel)
+    outer = closed_surface(field, (-0.48, -0.27, 0.0), (0.48, 0.22, 1.75), args.voxel)
     wrists = []
     for elbow, wrist, _, _ in BODY["arms"][1][2:]:  # the two forearms
         elbow, wrist = np.asarray(elbow), np.asarray(wrist)
@@ -496,7 +536,7 @@ def shoe(args, side: float) -> trimesh.Trimesh:
         return np.maximum(group_field(p, ("legs", "feet"), gap + t, side), p[:, 2] - (SHOE_TOP_Z + 0.05))
 
     x0 = side * 0.11
-    outer = surface_nets(field, (x0 - 0.09, -0.25, -0.01), (x0 + 0.09, 0.12, 0.22), args.shoe_voxel)
+    outer = closed_surface(field, (x0 - 0.09, -0.25, -0.01), (x0 + 0.09, 0.12, 0.22), args.shoe_voxel)
     return solidify(cut(outer, lambda v: v[:, 2] < SHOE_TOP_Z), t)
 
 
@@ -518,63 +558,66 @@ def surroundings(variant: str, args):
 # -- export and checks ------------------------------------------------------------------------------
 
 def export_glb(nodes, out: Path) -> None:
+    """Write the nodes Y-up. Each node's vertices are stored (float32) about the whole metre
+    nearest its centre and the node translation (float64 in the glTF JSON) adds it back, so
+    small parts far from the origin keep their shape to float32 precision at their own size."""
     z_up_to_y_up = Y_UP_TO_Z_UP.T
     scene = trimesh.Scene()
     for name, (material, mesh) in nodes.items():
-        m = trimesh.Trimesh(mesh.vertices @ z_up_to_y_up.T, mesh.faces, process=False)
+        offset = np.round(mesh.bounds.mean(axis=0))
+        m = trimesh.Trimesh((mesh.vertices - offset) @ z_up_to_y_up.T, mesh.faces, process=False)
         m.visual = TextureVisuals(material=PBRMaterial(name=material))
-        scene.add_geometry(m, geom_name=name, node_name=name)
+        transform = np.eye(4)
+        transform[:3, 3] = z_up_to_y_up @ offset
+        scene.add_geometry(m, geom_name=name, node_name=name, transform=transform)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(".tmp.glb")
     scene.export(tmp, file_type="glb")
     tmp.replace(out)
 
 
-def check_clearance(nodes, args) -> dict[str, float]:
-    """Smallest distance [m] (from the implicit fields) between parts that must not touch."""
+def check_clearance(nodes) -> dict[str, float]:
+    """Smallest distances [m] between parts that must not touch: to the skin from the body's
+    implicit field (a lower bound on the distance to its zero level), between meshes by brute
+    force near the holster, and by height between trousers and shoes, and shoes and ground."""
     skin = lambda p: group_field(p, BODY)  # noqa: E731
     out = {}
-
-    def samples(m):
-        return np.vstack([m.vertices, m.triangles_center])
-
     for name, (material, mesh) in nodes.items():
-        if material in ("clothing", "holster", "gun", "shoes"):
-            out[f"skin-{name}"] = float(skin(samples(mesh)).min())
+        if material in ("clothing", "shoes"):
+            out[f"skin-{name}"] = float(skin(np.vstack([mesh.vertices, mesh.triangles_center])).min())
+        elif material in ("holster", "gun"):
+            out[f"skin-{name}"] = float(skin(surface_samples(mesh)).min())
+    holster, gun = nodes["holster"][1], nodes["gun"][1]
+    out["gun-holster"] = _distance_to_mesh(surface_samples(gun), holster)
+    shoes = [m for material, m in nodes.values() if material == "shoes"]
+    out["shoes-ground"] = float(min(m.vertices[:, 2].min() for m in shoes))
     if "clothing" in nodes:
-        hol = nodes["holster"][1]
-        # Distance of the clothing from the holster: signed distance to the holster's box.
-        lo, hi = hol.bounds
-        out["clothing-shoes"] = float(min(nodes["clothing"][1].vertices[:, 2]) - max(
-            nodes[n][1].vertices[:, 2].max() for n in ("shoe_left", "shoe_right")))
-        cloth = samples(nodes["clothing"][1])
-        near = cloth[(cloth >= lo - 0.05).all(1) & (cloth <= hi + 0.05).all(1)]
-        if len(near):
-            out["clothing-holster"] = float(_distance_to_mesh(near, hol))
-            out["clothing-gun"] = float(_distance_to_mesh(near, nodes["gun"][1]))
-    out["shoes-ground"] = float(min(nodes[n][1].vertices[:, 2].min() for n in ("shoe_left", "shoe_right")))
+        cloth = nodes["clothing"][1]
+        out["clothing-shoes"] = float(cloth.vertices[:, 2].min() - max(m.vertices[:, 2].max() for m in shoes))
+        pts = np.vstack([cloth.vertices, cloth.triangles_center])
+        lo, hi = holster.bounds[0] - 0.03, holster.bounds[1] + 0.03
+        near = pts[(pts >= lo).all(axis=1) & (pts <= hi).all(axis=1)]
+        out["clothing-holster"] = _distance_to_mesh(near, holster)
+        out["clothing-gun"] = _distance_to_mesh(near, gun)
     return out
 
 
-def _distance_to_mesh(points, mesh):
-    """Smallest distance [m] from points to a mesh's surface (brute force; small meshes)."""
+def _distance_to_mesh(points, mesh) -> float:
+    """Smallest distance [m] from points (N, 3) to a small mesh's surface, by brute force."""
     tri = mesh.triangles
     best = np.inf
-    for chunk in np.array_split(points, max(1, len(points) // 2000)):
-        d = trimesh.triangles.closest_point(np.repeat(tri[None], len(chunk), 0).reshape(-1, 3, 3),
-                                            np.repeat(chunk, len(tri), 0))
-        best = min(best, float(np.linalg.norm(d - np.repeat(chunk, len(tri), 0), axis=1).min()))
+    for chunk in np.array_split(points, max(1, len(points) * len(tri) // 200_000)):
+        q = np.repeat(chunk, len(tri), axis=0)
+        c = trimesh.triangles.closest_point(np.tile(tri, (len(chunk), 1, 1)), q)
+        best = min(best, float(np.linalg.norm(c - q, axis=1).min()))
     return best
 
 
-def check(nodes, out: Path, args) -> None:
-    """Every mesh closed and outward, parts apart, names and bounds survive the GLB round trip."""
+def check(nodes, out: Path) -> None:
+    """Every mesh closed and outward; names and bounds survive the GLB round trip."""
     for name, (_, mesh) in nodes.items():
         if not (mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0.0):
             raise SystemExit(f"{name}: not a closed outward mesh")
-    for pair, d in check_clearance(nodes, args).items():
-        if d < args.min_clearance:
-            raise SystemExit(f"{pair}: {d * 1e3:.2f} mm apart, less than {args.min_clearance * 1e3:.1f} mm")
     parts = load_entry_mesh(out)
     names = {n for n, _ in parts}
     expected = {m for m, _ in nodes.values()}
@@ -591,10 +634,11 @@ def main(argv=None) -> None:
     here = Path(__file__).resolve().parent
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--variant", choices=(*VARIANTS, "all"), default="all", help="surroundings to write")
-    p.add_argument("--out-dir", type=Path, default=here, help="writes cwd_<variant>.glb there")
-    p.add_argument("--out", type=Path, help="output file (only with a single --variant)")
-    p.add_argument("--clothing", choices=("shell", "coating"), default="shell",
-                   help="shell: a denim shell mesh ('clothing'); coating: none (map 'skin' to clothed_skin)")
+    p.add_argument("--clothing", choices=(*CLOTHINGS, "all"), default="all",
+                   help="shell: a denim shell mesh 'clothing' (cwd_<variant>.glb); coating: no clothing mesh, "
+                        "map 'skin' to clothed_skin (cwd_<variant>_coated.glb)")
+    p.add_argument("--out-dir", type=Path, default=here, help="where the files are written")
+    p.add_argument("--out", type=Path, help="output file (only with a single --variant and --clothing)")
     p.add_argument("--voxel", type=float, default=0.0125, help="surface-nets grid step of body and clothing [m]")
     p.add_argument("--shoe-voxel", type=float, default=0.008, help="surface-nets grid step of the shoes [m]")
     p.add_argument("--clothing-thickness", type=float, default=0.0008, help="denim [m] (seed: 0.8 mm)")
@@ -618,27 +662,34 @@ def main(argv=None) -> None:
     p.add_argument("--min-clearance", type=float, default=0.0015, help="smallest allowed gap between parts [m]")
     args = p.parse_args(argv)
     variants = VARIANTS if args.variant == "all" else (args.variant,)
-    if args.out is not None and len(variants) > 1:
-        p.error("--out needs a single --variant")
+    clothings = CLOTHINGS if args.clothing == "all" else (args.clothing,)
+    if args.out is not None and len(variants) * len(clothings) > 1:
+        p.error("--out needs a single --variant and --clothing")
 
     people = person(args)
+    clearance = check_clearance(people)
+    for pair, d in clearance.items():
+        if d < args.min_clearance:
+            raise SystemExit(f"{pair}: {d * 1e3:.2f} mm apart, less than {args.min_clearance * 1e3:.1f} mm")
     for variant in variants:
-        out = args.out or args.out_dir / f"cwd_{variant}.glb"
-        nodes = {**people, **surroundings(variant, args)}
-        export_glb(nodes, out)
-        check(nodes, out, args)
-        n_tri = sum(len(m.faces) for _, m in nodes.values())
-        print(f"wrote {out} ({n_tri} triangles)")
-        for name, (material, m) in nodes.items():
-            print(f"  {name} ({material}): {len(m.faces)} triangles, z {m.bounds[0][2]:.3f}..{m.bounds[1][2]:.3f} m")
-    for pair, d in check_clearance(people | surroundings("outdoor", args), args).items():
+        for dress in clothings:
+            out = args.out or args.out_dir / f"cwd_{variant}{'' if dress == 'shell' else '_coated'}.glb"
+            nodes = {k: v for k, v in people.items() if dress == "shell" or k != "clothing"}
+            nodes |= surroundings(variant, args)
+            export_glb(nodes, out)
+            check(nodes, out)
+            n_tri = sum(len(m.faces) for _, m in nodes.values())
+            print(f"wrote {out} ({n_tri} triangles)")
+    for name, (material, m) in {**people, **surroundings("indoor", args)}.items():
+        lo, hi = m.bounds
+        print(f"  {name} ({material}): {len(m.faces)} triangles, z {lo[2]:.3f}..{hi[2]:.3f} m")
+    for pair, d in clearance.items():
         print(f"  clearance {pair}: {d * 1e3:.1f} mm")
     for dist, vfov in IMAGER_VIEWS:
         hfov = 2 * np.degrees(np.arctan(np.tan(np.radians(vfov / 2)) * IMAGER_RESOLUTION[0] / IMAGER_RESOLUTION[1]))
         print(f"suggested imager ({dist:g} m, {vfov:g} deg vertical field): position [0, {-dist:g}, {IMAGER_HEIGHT}], "
               f"look_at [0, 0, {LOOK_AT_HEIGHT}], up [0, 0, 1], fov {hfov:.2f} deg (horizontal), "
               f"resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}]")
-
 
 if __name__ == "__main__":
     main()

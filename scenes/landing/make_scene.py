@@ -220,12 +220,18 @@ def build(style: str, args) -> dict[str, tuple[str, trimesh.Trimesh]]:
 # -- export and checks --------------------------------------------------------------------------
 
 def export_glb(nodes, out: Path) -> None:
+    """Write the nodes Y-up. Each node's vertices are stored (float32) about the whole metre
+    nearest its centre and the node translation (float64 in the glTF JSON) adds it back, so
+    small parts far from the origin keep their shape to float32 precision at their own size."""
     z_up_to_y_up = Y_UP_TO_Z_UP.T
     scene = trimesh.Scene()
     for name, (material, mesh) in nodes.items():
-        m = trimesh.Trimesh(mesh.vertices @ z_up_to_y_up.T, mesh.faces, process=False)
+        offset = np.round(mesh.bounds.mean(axis=0))
+        m = trimesh.Trimesh((mesh.vertices - offset) @ z_up_to_y_up.T, mesh.faces, process=False)
         m.visual = TextureVisuals(material=PBRMaterial(name=material))
-        scene.add_geometry(m, geom_name=name, node_name=name)
+        transform = np.eye(4)
+        transform[:3, 3] = z_up_to_y_up @ offset
+        scene.add_geometry(m, geom_name=name, node_name=name, transform=transform)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(".tmp.glb")
     scene.export(tmp, file_type="glb")
