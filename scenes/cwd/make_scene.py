@@ -1,4 +1,4 @@
-"""Write scenes/cwd/cwd_{outdoor,indoor}.glb: a man with a concealed handgun (seed 000 sec. 3.2).
+"""Write scenes/cwd/cwd_{outdoor,indoor}[_coated].glb: a man with a concealed gun (seed 000 sec. 3.2).
 
 A bald man in street clothing (denim) carries a metal handgun in a leather shoulder holster under
 his left arm; he wears leather shoes and stands on asphalt, outdoors or in a closed room. The
@@ -18,12 +18,13 @@ Outdoors: a 400 m square asphalt slab (top z = 0). Indoors: the slab plus a clos
 floor and ceiling as one hollow box whose inner surface faces the cavity) large enough for the
 20 m view. Every mesh is closed and outward-oriented; solids that would touch are kept apart by
 a gap. Mesh material names: ``skin``, ``clothing``, ``holster``, ``gun``, ``shoes``, ``ground``,
-and ``walls`` indoors. With ``--clothing coating`` the clothing shell is left out: map ``skin`` to
-``clothed_skin`` (dry skin under a 0.8 mm denim coating) instead.
+and ``walls`` indoors. The ``_coated`` files (``--clothing coating``) leave the clothing shell
+out: map ``skin`` to ``clothed_skin`` (dry skin under a 0.8 mm denim coating) there, and to
+``dry_skin`` where the shell is present.
 
 The scene is built Z-up and rotated into glTF's Y-up on export; pmmw turns it back on load.
 
-    python scenes/cwd/make_scene.py [--variant outdoor|indoor|all] [--out-dir DIR] [--voxel 0.0125] ...
+    python scenes/cwd/make_scene.py [--variant outdoor|indoor|all] [--clothing shell|coating|all] ...
 """
 
 from __future__ import annotations
@@ -97,8 +98,8 @@ BODY = {
     ])),
 }
 COVERED = ("neck", "torso", "arms", "legs")  # the clothing follows these
-# Open ends of the clothing (faces beyond a plane are cut away): (point, outward direction).
-NECK_CUT = ((0.0, 0.0, 1.485), (0.0, 0.0, 1.0))
+# Open ends of the garments (faces beyond these planes are cut away) [m].
+NECK_CUT_Z = 1.485  # collar, below the jaw
 ANKLE_CUT_Z = 0.165  # trousers end above the shoes
 SHOE_TOP_Z = 0.125
 WRIST_CUT_BACK = 0.03  # [m] short of the wrist, along the forearm
@@ -121,13 +122,19 @@ def round_cone(p, a, b, ra, rb):
     pa = p - a
     y = pa @ ba
     z = y - l2
-    x2 = np.einsum("ij,ij->i", pa * l2 - y[:, None] * ba, pa * l2 - y[:, None] * ba)
+    w = pa * l2 - y[:, None] * ba
+    x2 = np.einsum("ij,ij->i", w, w)
     y2, z2 = y * y * l2, z * z * l2
     k = np.sign(rr) * rr * rr * x2
     end_b = np.sign(z) * a2 * z2 > k
     end_a = np.sign(y) * a2 * y2 < k
     side = (np.sqrt(np.maximum(x2 * a2 / l2, 0.0)) + y * rr) / l2 - ra
     return np.where(end_b, np.sqrt(x2 + z2) / l2 - rb, np.where(end_a, np.sqrt(x2 + y2) / l2 - ra, side))
+
+
+def skin_field(p):
+    """The body's implicit field [m] at points p (N, 3): negative inside, 1-Lipschitz."""
+    return group_field(p, BODY)
 
 
 def smin(a, b, k):
@@ -406,10 +413,9 @@ HOLSTER_MOUTH_X = 0.07  # the holster covers the gun from here to the muzzle; th
 def gun_local() -> trimesh.Trimesh:
     occ = np.array([[c == "X" for c in row] for row in GUN_CELLS]).T  # (x, z)
     m = cell_block(GUN_XS, (-GUN_WIDTH / 2, GUN_WIDTH / 2), GUN_ZS, occ[:, None, :])
-    v = m.vertices
-    z_frame = GUN_ZS[3]
-    v[:, 0] -= np.maximum(z_frame - v[:, 2], 0.0) * np.tan(np.radians(GRIP_RAKE_DEG))  # rake the grip
-    return m
+    v = np.array(m.vertices)
+    v[:, 0] -= np.maximum(GUN_ZS[3] - v[:, 2], 0.0) * np.tan(np.radians(GRIP_RAKE_DEG))  # rake below the frame
+    return trimesh.Trimesh(v, m.faces, process=False)
 
 
 def holster_local(thickness: float, clearance: float) -> trimesh.Trimesh:
@@ -450,12 +456,11 @@ def place_gun(args, gap: float):
     centre_local = np.array([(GUN_XS[0] + GUN_XS[-1]) / 2, 0.0, (GUN_ZS[0] + GUN_ZS[-1]) / 2])
     # Walk out from inside the chest along n_out until the holster clears the skin by `gap`.
     anchor = np.array([0.0, 0.0, args.holster_height])
-    skin = lambda p: group_field(p, BODY)  # noqa: E731
     local_samples = [surface_samples(holster), surface_samples(gun)]
 
     def clearance(s):
         origin = anchor + s * n_out - rot @ centre_local
-        return min(skin(pts @ rot.T + origin).min() for pts in local_samples)
+        return min(skin_field(pts @ rot.T + origin).min() for pts in local_samples)
 
     inside, outside = 0.0, 0.4  # [m] along n_out; bisect to the smallest distance with clearance >= gap
     if clearance(inside) >= gap or clearance(outside) < gap:
@@ -481,7 +486,6 @@ def surface_samples(mesh: trimesh.Trimesh, n: int = 6) -> np.ndarray:
 
 def person(args):
     """Node name -> (material name, mesh) of the body, clothing, shoes, holster and gun."""
-    skin_field = lambda p: group_field(p, BODY)  # noqa: E731
     body = closed_surface(skin_field, (-0.45, -0.25, -0.02), (0.45, 0.2, 1.85), args.voxel)
     gun, holster = place_gun(args, args.holster_gap)
     return {
@@ -520,7 +524,7 @@ def clothing(args, under) -> trimesh.Trimesh:
         wrists.append((wrist - WRIST_CUT_BACK * axis, axis))
 
     def keep(v):
-        ok = (v[:, 2] < NECK_CUT[0][2]) & (v[:, 2] > ANKLE_CUT_Z)
+        ok = (v[:, 2] < NECK_CUT_Z) & (v[:, 2] > ANKLE_CUT_Z)
         for point, axis in wrists:  # the plane cuts the sleeve only, not the trousers beside it
             ok &= ((v - point) @ axis < 0.0) | (np.linalg.norm(v - point, axis=1) > 0.12)
         return ok
@@ -580,13 +584,12 @@ def check_clearance(nodes) -> dict[str, float]:
     """Smallest distances [m] between parts that must not touch: to the skin from the body's
     implicit field (a lower bound on the distance to its zero level), between meshes by brute
     force near the holster, and by height between trousers and shoes, and shoes and ground."""
-    skin = lambda p: group_field(p, BODY)  # noqa: E731
     out = {}
     for name, (material, mesh) in nodes.items():
         if material in ("clothing", "shoes"):
-            out[f"skin-{name}"] = float(skin(np.vstack([mesh.vertices, mesh.triangles_center])).min())
+            out[f"skin-{name}"] = float(skin_field(np.vstack([mesh.vertices, mesh.triangles_center])).min())
         elif material in ("holster", "gun"):
-            out[f"skin-{name}"] = float(skin(surface_samples(mesh)).min())
+            out[f"skin-{name}"] = float(skin_field(surface_samples(mesh)).min())
     holster, gun = nodes["holster"][1], nodes["gun"][1]
     out["gun-holster"] = _distance_to_mesh(surface_samples(gun), holster)
     shoes = [m for material, m in nodes.values() if material == "shoes"]

@@ -324,7 +324,7 @@ def main(argv=None) -> None:
             print(f"  {name}: {len(nodes[name][1].faces)} triangles")
         print(f"  beacon: {len(beacon)} closed meshes, {sum(len(m.faces) for m in beacon)} triangles")
     for r in args.ranges:
-        pos, look = imager_pose(r, args)
+        pos, _ = imager_pose(r, args)
         print(f"suggested imager ({r:.0f} m on the {args.glide_slope:g} deg glide slope): "
               f"position [{pos[0]:.1f}, {pos[1]:.1f}, {pos[2]:.2f}], look_at [0, 0, 0], up [0, 0, 1], "
               f"fov {IMAGER_FOV_DEG:g} deg, resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}]")

@@ -121,7 +121,7 @@ class Terrain:
 
     def __init__(self, args, rng):
         half = args.terrain_size / 2
-        n = int(round(args.terrain_size / args.cell))
+        n = round(args.terrain_size / args.cell)
         self.xs = self.ys = np.linspace(-half, half, n + 1)
         self.cell = args.terrain_size / n
         gx, gy = np.meshgrid(self.xs, self.ys, indexing="ij")

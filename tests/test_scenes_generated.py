@@ -1,0 +1,227 @@
+"""The generated scenes of seed 000 chapter 3 (scenes/{landing,cwd,sar}): shipped assets load with
+the expected material names, every part is closed and outward, the key dimensions match the
+seed, and each script regenerates its assets byte for byte."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from pmmw_cli.scene.geometry import load_entry_mesh
+
+REPO = Path(__file__).resolve().parents[1]
+SCENES = REPO / "scenes"
+
+# Vertices are float32 in a GLB: 6e-5 m spacing at 600 m, 1e-7 m at 1 m.
+GLB_REL = 2e-7  # relative position tolerance after the float32 round trip
+ANGLE_TOL_DEG = 1e-3  # [deg], float32 vertices about each beacon's own metre (see export_glb)
+
+LANDING = {"runway", "ground", "beacon"}
+CWD = {"skin", "clothing", "holster", "gun", "shoes", "ground"}
+SAR = {"dry_ground", "wet_ground", "rocks", "shrubs"}
+SHIPPED = {
+    "landing/landing_plate.glb": LANDING,
+    "landing/landing_brackets.glb": LANDING,
+    "cwd/cwd_outdoor.glb": CWD,
+    "cwd/cwd_indoor.glb": CWD | {"walls"},
+    "cwd/cwd_outdoor_coated.glb": CWD - {"clothing"},
+    "cwd/cwd_indoor_coated.glb": (CWD - {"clothing"}) | {"walls"},
+    "sar/sar_cessna.glb": SAR | {"aircraft"},
+    "sar/sar_blanket.glb": SAR | {"blanket"},
+    "sar/sar_beacon.glb": SAR | {"blanket"},
+}
+SCRIPTS = {  # script -> the files it writes with its default arguments
+    "landing": ["landing_plate.glb", "landing_brackets.glb"],
+    "cwd": ["cwd_outdoor.glb", "cwd_outdoor_coated.glb", "cwd_indoor.glb", "cwd_indoor_coated.glb"],
+    "sar": ["sar_cessna.glb", "sar_blanket.glb", "sar_beacon.glb"],
+}
+
+
+@cache
+def parts(rel: str) -> list[tuple[str, trimesh.Trimesh]]:
+    return load_entry_mesh(SCENES / rel)
+
+
+def merged(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    m = mesh.copy()
+    m.merge_vertices()
+    return m
+
+
+def of(rel: str, material: str) -> list[trimesh.Trimesh]:
+    return [m for n, m in parts(rel) if n == material]
+
+
+def section_loops(mesh: trimesh.Trimesh, z: float) -> int:
+    """Number of closed curves where the plane at height z cuts the mesh."""
+    seg = trimesh.intersections.mesh_plane(mesh, [0.0, 0.0, 1.0], [0.0, 0.0, z])
+    keys = np.round(seg.reshape(-1, 3) / 1e-7).astype(np.int64)
+    _, ids = np.unique(keys, axis=0, return_inverse=True)
+    ids = ids.reshape(-1, 2)
+    n = int(ids.max()) + 1
+    graph = coo_matrix((np.ones(len(ids)), (ids[:, 0], ids[:, 1])), shape=(n, n))
+    return connected_components(graph, directed=False)[0]
+
+
+def tilt_deg(mesh: trimesh.Trimesh) -> float:
+    """Tilt from horizontal of the mirror faces (facing -y and up), area-weighted."""
+    n, a = mesh.face_normals, mesh.area_faces
+    front = (n[:, 1] < -0.1) & (n[:, 2] > 0.1)
+    normal = (n[front] * a[front, None]).sum(axis=0)
+    normal /= np.linalg.norm(normal)
+    assert abs(normal[0]) < 1e-6
+    return float(np.degrees(np.arccos(normal[2])))
+
+
+# -- every shipped asset -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("rel", sorted(SHIPPED))
+def test_shipped_scene_loads_closed_and_named(rel):
+    loaded = parts(rel)
+    assert {name for name, _ in loaded} == SHIPPED[rel]
+    for name, mesh in loaded:
+        m = merged(mesh)
+        # Every part, metal included, is a closed outward mesh (dielectrics must be).
+        assert m.is_watertight and m.is_winding_consistent, name
+        assert m.volume > 0.0, name
+
+
+# -- landing (seed 000 sec. 3.1) -----------------------------------------------------------------
+
+@pytest.mark.parametrize("style", ["plate", "brackets"])
+def test_landing_runway_and_ground(style):
+    rel = f"landing/landing_{style}.glb"
+    (runway,) = of(rel, "runway")
+    lo, hi = runway.bounds
+    assert hi[:2] - lo[:2] == pytest.approx([20.0, 600.0], rel=GLB_REL)
+    assert lo[:2] == pytest.approx([-10.0, 0.0], abs=1e-4)
+    assert hi[2] == pytest.approx(0.02, abs=1e-6)
+    (ground,) = of(rel, "ground")
+    glo, ghi = ground.bounds
+    assert ghi[2] == pytest.approx(0.0, abs=1e-6)
+    # Ground under the whole 10 deg view from 1000 m on the glide slope, runway inside its notch.
+    assert glo[0] < -2000.0 and ghi[0] > 2000.0 and glo[1] < -1000.0 and ghi[1] > 5000.0
+    assert lo[2] < 0.0 < hi[2]
+
+
+def test_landing_plate_beacons():
+    rel = "landing/landing_plate.glb"
+    plates = of(rel, "beacon")
+    assert len(plates) == 2 * 13 + 2 * 5
+    for p in plates:
+        assert tilt_deg(p) == pytest.approx(45.0, abs=ANGLE_TOL_DEG)
+        front = (p.face_normals[:, 1] < -0.1) & (p.face_normals[:, 2] > 0.1)
+        assert p.area_faces[front].sum() == pytest.approx(1.0, rel=1e-4)  # 1 m x 1 m
+        assert p.bounds[0][2] > 0.0
+    centres = np.array([(p.bounds[0] + p.bounds[1]) / 2 for p in plates])
+    for side in (-1.0, 1.0):  # every 50 m along both sides
+        row = centres[np.sign(centres[:, 0]) == side]
+        row = row[np.abs(row[:, 0]) > 10.5]
+        assert np.diff(np.sort(row[:, 1])) == pytest.approx(np.full(12, 50.0), abs=1e-3)
+    for end in (centres[:, 1] < -1.0, centres[:, 1] > 601.0):  # every 5 m across both ends
+        assert np.diff(np.sort(centres[end, 0])) == pytest.approx(np.full(4, 5.0), abs=1e-3)
+
+
+def test_landing_bracket_beacons():
+    brackets = of("landing/landing_brackets.glb", "beacon")
+    assert len(brackets) == 36 * 10
+    leg = 0.10
+    for b in brackets[:20]:
+        assert tilt_deg(b) == pytest.approx(45.0, abs=ANGLE_TOL_DEG)
+        assert np.ptp(b.vertices[:, 0]) == pytest.approx(1.0, rel=1e-5)
+        assert np.ptp(b.vertices[:, 1]) == pytest.approx(2 * leg * np.cos(np.radians(45.0)), rel=1e-4)
+    # Ten brackets per beacon in a row along y, 1 m of ground between them.
+    centres = np.array([(b.bounds[0] + b.bounds[1]) / 2 for b in brackets])
+    row = centres[(np.abs(centres[:, 0] - 12.0) < 0.1) & (np.abs(centres[:, 1] - 300.0) < 6.0)]
+    assert len(row) == 10
+    assert np.diff(np.sort(row[:, 1])) == pytest.approx(np.full(9, 1.0 + 2 * leg * np.cos(np.radians(45.0))), abs=1e-3)
+
+
+# -- concealed weapon detection (seed 000 sec. 3.2) ----------------------------------------------
+
+def test_cwd_person():
+    rel = "cwd/cwd_outdoor.glb"
+    (body,) = of(rel, "skin")
+    lo, hi = body.bounds
+    assert hi[2] == pytest.approx(1.8, abs=0.03)  # height
+    assert lo[2] > 0.0
+    # Head, arms and legs separate from the trunk: one loop through the neck, three at the elbows
+    # (two arms, trunk), two through the thighs.
+    assert section_loops(body, 1.60) == 1
+    assert section_loops(body, 1.10) == 3
+    assert section_loops(body, 0.60) == 2
+    # Garments: denim 0.8 mm, holster leather 2 mm (volume / one side's area).
+    for material, thickness in (("clothing", 0.0008), ("holster", 0.002)):
+        (m,) = of(rel, material)
+        assert m.volume / (m.area / 2) == pytest.approx(thickness, rel=0.15), material
+    (gun,) = of(rel, "gun")
+    extents = np.sort(trimesh.bounds.oriented_bounds(gun)[1])
+    assert extents == pytest.approx([0.03, 0.13, 0.22], abs=0.01)
+    (holster,) = of(rel, "holster")
+    assert np.linalg.norm(gun.centroid - holster.centroid) < 0.1
+    assert gun.centroid[0] > 0.1  # under his left arm (+x; he faces -y)
+    for shoe in of(rel, "shoes"):
+        assert shoe.bounds[0][2] > 0.0
+
+
+def test_cwd_room_holds_both_views():
+    (walls,) = of("cwd/cwd_indoor.glb", "walls")
+    lo, hi = walls.bounds
+    assert lo[1] < -20.0 and hi[1] > 0.5 and hi[2] > 2.5
+    imager = np.array([[0.0, -20.0, 1.5], [0.0, -4.0, 1.5]])
+    assert not merged(walls).contains(imager).any()  # in the cavity, not in the wall
+
+
+# -- search and rescue (seed 000 sec. 3.3) -------------------------------------------------------
+
+def test_sar_terrain_and_clutter():
+    rel = "sar/sar_blanket.glb"
+    (terrain,) = of(rel, "dry_ground")
+    lo, hi = terrain.bounds
+    assert hi[:2] - lo[:2] == pytest.approx([600.0, 600.0], rel=GLB_REL)
+    assert np.ptp(terrain.vertices[:, 2]) < 12.0  # gentle relief
+    assert len(of(rel, "rocks")) >= 200 and len(of(rel, "shrubs")) >= 200
+    for name in ("rocks", "shrubs"):
+        centres = np.array([m.centroid for m in of(rel, name)])
+        assert np.hypot(centres[:, 0], centres[:, 1]).min() > 25.0  # clear of the target
+
+
+def test_sar_targets():
+    (blanket,) = of("sar/sar_blanket.glb", "blanket")
+    extents = np.sort(trimesh.bounds.oriented_bounds(blanket)[1])
+    assert extents[1:] == pytest.approx([1.5, 2.0], abs=1e-4)
+    beacon = of("sar/sar_beacon.glb", "blanket")
+    assert len(beacon) == 12
+    extents = np.sort(trimesh.bounds.oriented_bounds(trimesh.util.concatenate(beacon))[1])
+    assert extents[1:] == pytest.approx([6.0, 6.0], abs=0.05)
+    wreck = {n: m for n, m in parts("sar/sar_cessna.glb") if n == "aircraft"}
+    meshes = of("sar/sar_cessna.glb", "aircraft")
+    assert wreck and len(meshes) >= 5
+    lengths = [np.sort(trimesh.bounds.oriented_bounds(m)[1])[-1] for m in meshes]
+    assert max(lengths) == pytest.approx(8.1, abs=0.3)  # the fuselage
+    assert sorted(lengths)[-2] == pytest.approx(5.05, abs=0.2)  # a wing, root to tip
+    everything = np.vstack([m.vertices for m in meshes])
+    assert np.hypot(everything[:, 0], everything[:, 1]).max() < 10.0
+    assert everything[:, 2].min() > 0.0
+
+
+# -- regeneration --------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("scene", [
+    "landing",
+    pytest.param("cwd", marks=pytest.mark.slow),  # ~8 s: implicit body, clothing, shoes
+    pytest.param("sar", marks=pytest.mark.slow),  # ~4 s: terrain, 700 rocks and shrubs
+])
+def test_script_regenerates_shipped_files(scene, tmp_path):
+    script = SCENES / scene / "make_scene.py"
+    subprocess.run([sys.executable, str(script), "--out-dir", str(tmp_path)], check=True, capture_output=True, cwd=REPO)
+    for name in SCRIPTS[scene]:
+        assert (tmp_path / name).read_bytes() == (SCENES / scene / name).read_bytes(), name
