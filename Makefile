@@ -1,10 +1,10 @@
 # pmmw: two commands on a fresh machine.
-#   make render   create .venv, install pmmw, render the shipped cinderblocks scenario
+#   make render   create .venv, install pmmw, render the shipped landing scenario (seed 000 sec. 3.1)
 #   make test     create .venv, install pmmw with test extras, run the test suite
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
-SCENARIO ?= configs/cinderblocks_35ghz.yaml
+SCENARIO ?= configs/landing_95ghz.yaml
 PYTEST_ARGS ?=
 
 .PHONY: render test install install-test clean

@@ -106,7 +106,7 @@ def machine() -> str:
 
 def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, ref_spp=256, workers=None,
           overrides=(), out_md=Path("docs/benchmarks.md"), cache_dir=Path(".pmmw-cache"), command=None,
-          with_scaling=False):
+          with_scaling=False, render_times=()):
     """Run the benchmark and write ``out_md`` and one plot per scenario beside it."""
     workers = workers or default_workers()
     sections, all_rows = [], {}
@@ -147,6 +147,8 @@ def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, re
         "inside Embree for exactly the rays traced: the cost of everything that is not intersection, "
         "relative to the physical limit of this approach on this machine (1 would be pure Embree).\n"
     )
+    if render_times:
+        sections.append(_render_times_section(render_times, workers))
     if with_scaling:
         res_px, spp = (128, 128), 4
         sections.append(_scaling_section(scaling(resolution=res_px, spp=spp, workers=workers), res_px, spp))
@@ -262,4 +264,26 @@ def _scaling_section(rows, resolution, spp):
     for r in rows:
         lines.append(f"| {r['triangles']:,} | {r['build_s']:.2f} | {r['wall_s']:.2f} | {r['isect_s']:.2f} | "
                      f"{r['rays'] / 1e6:.2f} | {r['wall_s'] * w / r['rays'] * 1e6:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
+def _render_times_section(configs, workers):
+    """Wall time of each shipped scenario rendered as shipped (full resolution, its defaults)."""
+    import tempfile
+
+    from pmmw_cli.pipeline import render
+
+    lines = ["\n## Shipped scenarios at full resolution\n",
+             f"`pmmw render CONFIG` with the config's own settings, {workers} workers; wall time of the whole "
+             "command including scene loading, Embree builds, the imager model and writing the files.\n",
+             "| config | pixels | spp | wall [s] |", "| --- | ---: | ---: | ---: |"]
+    for path in configs:
+        res = resolve(path)
+        scn = res.scenario
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            render(path, out=Path(tmp), workers=workers, quiet=True)
+            wall = time.perf_counter() - t0
+        w, h = scn.imager.resolution
+        lines.append(f"| `{path}` | {w} x {h} | {scn.render.spp} | {wall:.1f} |")
     return "\n".join(lines) + "\n"

@@ -155,6 +155,7 @@ def bench(
     out: Path = typer.Option(Path("docs/benchmarks.md"), "--out", help="Markdown table (plots and JSON beside it)."),
     cache: Path = typer.Option(Path(".pmmw-cache"), "--cache", help="Where reference renders are cached."),
     with_scaling: bool = typer.Option(False, "--scaling", help="Also measure cost against triangle count (1e3-1e6)."),
+    render_times: Optional[List[Path]] = typer.Option(None, "--render-times", help="Also time these configs as shipped (repeatable)."),
 ):
     """Run time against error for each scenario and sampling strategy (docs/benchmarks.md)."""
     from pmmw_cli.bench import STRATEGIES, bench as run
@@ -169,7 +170,8 @@ def bench(
         raise UserError(f"unknown strategy {bad[0]!r}; known: {', '.join(STRATEGIES)}", file="--strategies")
     command = "pmmw bench " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "pmmw bench"
     run(scenarios or [], spp_list=spp_list, strategies=strats, ref_spp=reference_spp, workers=workers,
-        overrides=set_ or [], out_md=out, cache_dir=cache, command=command, with_scaling=with_scaling)
+        overrides=set_ or [], out_md=out, cache_dir=cache, command=command, with_scaling=with_scaling,
+        render_times=tuple(render_times or ()))
 
 
 @app.command()

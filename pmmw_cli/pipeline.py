@@ -206,6 +206,53 @@ class _Progress:
         sys.stderr.flush()
 
 
+def region_masks(regions, cam) -> dict:
+    """Boolean (H, W) masks of the named regions (`output.regions`) on the image."""
+    h, w = cam.height, cam.width
+    yy, xx = np.mgrid[0:h, 0:w]
+    half = np.tan(cam.fov / 2.0)
+    masks = {}
+    for name, r in regions.items():
+        if r.box is not None:
+            x0, y0, x1, y1 = r.box
+            masks[name] = (xx >= x0) & (xx < x1) & (yy >= y0) & (yy < y1)
+            continue
+        d = np.asarray(r.center) - cam.position
+        depth = d @ cam.k
+        if depth <= 0:
+            masks[name] = np.zeros((h, w), bool)
+            continue
+        u = ((d @ cam.x) / depth / half + 1.0) * w / 2.0  # inverse of Camera.directions
+        v = (h - (d @ cam.y) / depth * w / half) / 2.0
+        masks[name] = (xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= r.radius**2
+    return masks
+
+
+def region_stats(scn, cam, sensor) -> dict:
+    """Mean sensor temperature per region and the contrast of every pair, in K and noise sigmas."""
+    masks = region_masks(scn.output.regions, cam)
+    chans = [c for c in ("Ex2", "Ey2", "I") if c in sensor]
+    means, pixels = {}, {}
+    for name, m in masks.items():
+        pixels[name] = int(m.sum())
+        means[name] = {c: (float(sensor[c][m].mean()) if m.any() else float("nan")) for c in chans}
+        if not m.any():
+            warn(f"output.regions.{name} falls outside the image")
+    sigma = scn.imager.noise
+    names = list(masks)
+    contrasts = {}
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            contrasts[f"{a} - {b}"] = {
+                c: {"K": means[a][c] - means[b][c],
+                    # I = Ex2 + Ey2 carries sqrt(2) sigma of per-channel noise
+                    "sigma": (means[a][c] - means[b][c]) / (sigma * (np.sqrt(2.0) if c == "I" else 1.0))
+                    if sigma > 0 else float("nan")}
+                for c in chans
+            }
+    return {"means": means, "pixels": pixels, "contrasts": contrasts, "noise_K": sigma}
+
+
 def band_frequencies(f: float, bandwidth: float, n: int) -> list[float]:
     """Midpoints of n equal sub-bands of [f - B/2, f + B/2] (a flat spectral response); [f] if B = 0."""
     if bandwidth <= 0.0 or n <= 1:
@@ -319,7 +366,16 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
                 lo, hi = write_preview(out_dir / rel, chan)
                 stats[c].update(display_low=lo, display_high=hi)
                 previews[c] = rel
+        side = {}
+        if scn.output.previews:
+            for c in ("Ex2", "Ey2") if "Ex2" in scn.output.channels else scn.output.channels[:1]:
+                rel = f"previews/{stem}_{c}_ideal_sensor.png"
+                write_preview(out_dir / rel, np.concatenate([ideal[c], sensor[c]], axis=1))
+                side[c] = rel
+        regions = region_stats(scn, job.camera, sensor) if scn.output.regions else None
         renders.append({
+            **({"side_by_side": side} if side else {}),
+            **({"regions": regions} if regions else {}),
             **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
             "frequency_hz": f, "output_exr": str(exr_path), "channels": stats, "previews": previews,
             "rays": rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),

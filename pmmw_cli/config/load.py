@@ -329,5 +329,8 @@ def scenario_to_display(scn: Scenario) -> dict:
         "output": {
             "dir": str(scn.output.dir) if scn.output.dir is not None else None,
             "channels": list(scn.output.channels), "previews": scn.output.previews, "aux": list(scn.output.aux),
+            **({"regions": {n: ({"center": [_qty(v, "m") for v in r.center], "radius": r.radius}
+                                if r.center is not None else {"box": list(r.box)})
+                            for n, r in scn.output.regions.items()}} if scn.output.regions else {}),
         },
     }

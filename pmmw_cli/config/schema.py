@@ -441,8 +441,30 @@ class Render(_Model):
         return _positive_temperature(v)
 
 
+class Region(_Model):
+    """A named region of interest: a world point with a radius in pixels, or a pixel box."""
+
+    center: Optional[tuple[float, float, float]] = None
+    radius: float = Field(2.0, gt=0)  # [pixels] around the projected center
+    box: Optional[tuple[int, int, int, int]] = None  # [x0, y0, x1, y1] pixels, x1/y1 exclusive
+
+    @field_validator("center", mode="before")
+    @classmethod
+    def _c(cls, v):
+        return None if v is None else _vec3(v)
+
+    @model_validator(mode="after")
+    def _one(self):
+        if (self.center is None) == (self.box is None):
+            raise ConfigValueError("give exactly one of 'center' (world point [m]) or 'box' ([x0, y0, x1, y1] pixels)")
+        if self.box is not None and not (self.box[0] < self.box[2] and self.box[1] < self.box[3]):
+            raise ConfigValueError(f"box must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got {list(self.box)}")
+        return self
+
+
 class Output(_Model):
     dir: Optional[Path] = None
+    regions: dict[str, Region] = {}
     channels: tuple[str, ...] = CHANNELS
     previews: bool = True
     aux: tuple[str, ...] = ()

@@ -115,6 +115,31 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
                 lines += [f"black {_num(stats.get('display_low'))} K, "
                           f"white {_num(stats.get('display_high'))} K", ""]
 
+    if report.get("side_by_side"):
+        lines += ["## Ideal and sensor", "",
+                  "Left: the ideal image; right: after the imager's PSF and noise (same display scale).", ""]
+        for name, rel in report["side_by_side"].items():
+            lines += [f"### {name}", "", f"![{name}: ideal | sensor]({_md_link(str(rel))})", ""]
+
+    regions = report.get("regions") or {}
+    if regions.get("means"):
+        chans = list(next(iter(regions["means"].values())).keys())
+        lines += ["## Regions of interest", "",
+                  "Mean sensor temperatures [K] over each region declared in `output.regions`.", "",
+                  "| region | pixels | " + " | ".join(chans) + " |",
+                  "| --- | ---: | " + " | ".join("---:" for _ in chans) + " |"]
+        for name, m in regions["means"].items():
+            lines.append(f"| {_cell(name)} | {regions['pixels'][name]} | " + " | ".join(_num(m[c]) for c in chans) + " |")
+        lines.append("")
+        if regions.get("contrasts"):
+            lines += ["Contrast between regions (first minus second), in kelvin and in units of the "
+                      f"imager noise sigma ({_num(regions.get('noise_K'))} K per pixel):", "",
+                      "| regions | " + " | ".join(f"{c} [K] | {c} [sigma]" for c in chans) + " |",
+                      "| --- | " + " | ".join("---: | ---:" for _ in chans) + " |"]
+            for pair, cs in regions["contrasts"].items():
+                lines.append(f"| {_cell(pair)} | " + " | ".join(f"{_num(cs[c]['K'])} | {_num(cs[c]['sigma'])}" for c in chans) + " |")
+            lines.append("")
+
     timing = report.get("timing") or {}
     if timing:
         lines += ["## Timing", "", "| step | seconds |", "| --- | ---: |"]
