@@ -112,8 +112,10 @@ def scenario_hash(scn) -> str:
     d = scenario_to_display(scn)
     d.pop("output", None)
     d["render"].pop("workers", None)
-    text = json.dumps(d, sort_keys=True, default=str)
-    return hashlib.sha256((text + __version__).encode()).hexdigest()[:16]
+    h = hashlib.sha256((json.dumps(d, sort_keys=True, default=str) + __version__).encode())
+    for path in sorted({str(e.mesh) for e in scn.scene} | ({str(scn.sky.file)} if scn.sky.file else set())):
+        h.update(Path(path).read_bytes())  # assets too: a regenerated mesh must not reuse old tiles
+    return h.hexdigest()[:16]
 
 
 def parse_shard(text: str | None):

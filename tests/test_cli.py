@@ -227,3 +227,18 @@ def test_sky_command_table_csv_map_and_plot(tmp_path):
     assert (tmp_path / "sky.png").stat().st_size > 1000
     bad = _run("sky", "-f", "95 GHz", "--layer", "smog,0,1,2")
     assert bad.exit_code == 2 and "--layer" in bad.output
+
+
+def test_resume_does_not_reuse_tiles_of_a_changed_mesh(tmp_path):
+    """Tiles are keyed by the scenario and the content of its assets: editing a mesh in place
+    invalidates them, so --resume renders the new geometry."""
+    scn = _scene(tmp_path)
+    out = tmp_path / "out"
+    assert _run("render", scn, "--out", out, "--workers", "1", "--keep-tiles").exit_code == 0
+    before, _ = read_exr(out / "tiny.exr")
+    block = trimesh.creation.box(extents=[2.0, 0.2, 1.0])
+    block.apply_translation([0, 4, 0.5])
+    block.export(tmp_path / "block.obj")
+    assert _run("render", scn, "--out", out, "--workers", "1", "--resume").exit_code == 0
+    after, _ = read_exr(out / "tiny.exr")
+    assert np.abs(after["ideal.Ex2"] - before["ideal.Ex2"]).max() > 1.0

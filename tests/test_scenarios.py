@@ -76,7 +76,9 @@ def test_sar_targets_are_the_coldest_objects_and_visible_through_cloud():
     path = Path(__file__).resolve().parents[1] / "configs/sar_cessna_95ghz.yaml"
     zoom = ["imager.fov=1 deg", "imager.resolution=[60, 60]", "render.spp=2"]
     for target, mesh, r in (("cessna", "sar_cessna.glb", 4), ("blanket", "sar_beacon.glb", 3)):
-        base = zoom + [f"scene[0].mesh=../scenes/sar/{mesh}"]
+        target_map = "aircraft: metal" if target == "cessna" else "blanket: metal"
+        base = zoom + [f"scene[0].mesh=../scenes/sar/{mesh}", "scene[0].materials={dry_ground: sar_dry_ground, "
+                       f"wet_ground: sar_wet_ground, rocks: sar_rocks, shrubs: oak_leaves, {target_map}}}"]
         job, img = _render(path, base)
         regions = {"target": {"center": [0, 0, 0.5], "radius": r}, "ground": {"center": [20, 20, 0], "radius": 3}}
         m = _means(job, img, regions)

@@ -24,10 +24,8 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
-from trimesh.visual import TextureVisuals
-from trimesh.visual.material import PBRMaterial
 
-from pmmw_cli.scene.geometry import Y_UP_TO_Z_UP, load_entry_mesh
+from pmmw_cli.scene.export import check_glb, export_glb
 
 # Concrete masonry unit (nominal 400 x 200 x 200 mm with 10 mm joints) [m].
 BLOCK_LENGTH, BLOCK_WIDTH, BLOCK_HEIGHT = 0.390, 0.190, 0.190
@@ -148,34 +146,6 @@ def build(args) -> dict[str, tuple[str, trimesh.Trimesh]]:
     return nodes
 
 
-def export_glb(nodes, out: Path) -> None:
-    z_up_to_y_up = Y_UP_TO_Z_UP.T
-    scene = trimesh.Scene()
-    for name, (material, mesh) in nodes.items():
-        m = trimesh.Trimesh(mesh.vertices @ z_up_to_y_up.T, mesh.faces, process=False)
-        m.visual = TextureVisuals(material=PBRMaterial(name=material))
-        scene.add_geometry(m, geom_name=name, node_name=name)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(".tmp.glb")
-    scene.export(tmp, file_type="glb")
-    tmp.replace(out)
-
-
-def check(nodes, out: Path) -> None:
-    """Every mesh closed and outward; the names and coordinates survive the GLB round trip."""
-    for name, (_, mesh) in nodes.items():
-        if not (mesh.is_watertight and mesh.volume > 0.0):
-            raise SystemExit(f"{name}: not a closed outward mesh")
-    parts = load_entry_mesh(out)
-    names = {n for n, _ in parts}
-    if names != {"ground", "cinderblock"}:
-        raise SystemExit(f"material names after the round trip: {sorted(names)}")
-    loaded = np.concatenate([m.vertices for _, m in parts])
-    built = np.concatenate([m.vertices for _, m in nodes.values()])
-    if not np.allclose(loaded.min(0), built.min(0), atol=1e-6) or not np.allclose(loaded.max(0), built.max(0), atol=1e-6):
-        raise SystemExit("bounds changed in the round trip")
-
-
 def main(argv=None) -> None:
     here = Path(__file__).resolve().parent
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -190,7 +160,7 @@ def main(argv=None) -> None:
 
     nodes = build(args)
     export_glb(nodes, args.out)
-    check(nodes, args.out)
+    check_glb(nodes, args.out)
 
     n_tri = sum(len(m.faces) for _, m in nodes.values())
     print(f"wrote {args.out} ({n_tri} triangles)")

@@ -31,10 +31,8 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
-from trimesh.visual import TextureVisuals
-from trimesh.visual.material import PBRMaterial
 
-from pmmw_cli.scene.geometry import Y_UP_TO_Z_UP, load_entry_mesh
+from pmmw_cli.scene.export import check_glb, export_glb
 
 TARGETS = ("cessna", "blanket", "beacon")
 TARGET_MATERIAL = {"cessna": "aircraft", "blanket": "blanket", "beacon": "blanket"}
@@ -396,41 +394,6 @@ def target_nodes(target: str, args) -> dict[str, tuple[str, trimesh.Trimesh]]:
 
 # -- export and checks ------------------------------------------------------------------------------
 
-def export_glb(nodes, out: Path) -> None:
-    """Write the nodes Y-up. Each node's vertices are stored (float32) about the whole metre
-    nearest its centre and the node translation (float64 in the glTF JSON) adds it back, so
-    small parts far from the origin keep their shape to float32 precision at their own size."""
-    z_up_to_y_up = Y_UP_TO_Z_UP.T
-    scene = trimesh.Scene()
-    for name, (material, mesh) in nodes.items():
-        offset = np.round(mesh.bounds.mean(axis=0))
-        m = trimesh.Trimesh((mesh.vertices - offset) @ z_up_to_y_up.T, mesh.faces, process=False)
-        m.visual = TextureVisuals(material=PBRMaterial(name=material))
-        transform = np.eye(4)
-        transform[:3, 3] = z_up_to_y_up @ offset
-        scene.add_geometry(m, geom_name=name, node_name=name, transform=transform)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(".tmp.glb")
-    scene.export(tmp, file_type="glb")
-    tmp.replace(out)
-
-
-def check(nodes, out: Path, expected: set) -> None:
-    """Every mesh closed and outward; names and bounds survive the GLB round trip."""
-    for name, (_, mesh) in nodes.items():
-        if not (mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0.0):
-            raise SystemExit(f"{name}: not a closed outward mesh")
-    parts = load_entry_mesh(out)
-    names = {n for n, _ in parts}
-    if names != expected:
-        raise SystemExit(f"material names after the round trip: {sorted(names)}")
-    loaded = np.concatenate([m.vertices for _, m in parts])
-    built = np.concatenate([m.vertices for _, m in nodes.values()])
-    tol = 1e-6 * max(1.0, float(np.abs(built).max()))
-    if not (np.allclose(loaded.min(0), built.min(0), atol=tol) and np.allclose(loaded.max(0), built.max(0), atol=tol)):
-        raise SystemExit("bounds changed in the round trip")
-
-
 def main(argv=None) -> None:
     here = Path(__file__).resolve().parent
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -475,7 +438,7 @@ def main(argv=None) -> None:
         out = args.out or args.out_dir / f"sar_{target}.glb"
         nodes = {**clutter, **target_nodes(target, args)}
         export_glb(nodes, out)
-        check(nodes, out, CLUTTER_MATERIALS | {TARGET_MATERIAL[target]})
+        check_glb(nodes, out, CLUTTER_MATERIALS | {TARGET_MATERIAL[target]})
         n_tri = sum(len(m.faces) for _, m in nodes.values())
         tgt = np.vstack([m.vertices for mat, m in nodes.values() if mat == TARGET_MATERIAL[target]])
         tgt = tgt @ rotation([0, 0, 1], args.heading)[:3, :3]  # in the target's own axes
