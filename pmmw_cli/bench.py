@@ -218,7 +218,7 @@ def scaling(levels=(2, 3, 4, 5, 6, 7, 8), resolution=(128, 128), spp=4, workers=
     from pmmw_cli.scene.camera import Camera
     from pmmw_cli.scene.sky import UniformSky
     from pmmw_cli.trace.intersect import make_intersector
-    from pmmw_cli.trace.job import DIELECTRIC, Coating, Media, RenderSettings, TraceJob  # noqa: F401
+    from pmmw_cli.trace.job import Media, RenderSettings, TraceJob
 
     workers = workers or default_workers()
     rows = []

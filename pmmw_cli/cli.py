@@ -179,6 +179,3 @@ def version():
     """Print the pmmw version."""
     typer.echo(f"pmmw {__version__}")
 
-
-def main():  # pragma: no cover - console entry point alias
-    sys.exit(app())

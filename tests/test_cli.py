@@ -1,6 +1,5 @@
 """End to end, as a user runs it: `pmmw render`, `pmmw validate`, `pmmw materials`, and errors."""
 
-import os
 import subprocess
 import sys
 from pathlib import Path

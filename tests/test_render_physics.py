@@ -282,7 +282,6 @@ def test_branch_choice_strategies_are_unbiased(strategy):
 def test_adaptive_sampling_reaches_the_target_error():
     """render.target_error: pixels stop at min_spp where they converge (smooth ground) and get
     more samples only where needed; every pixel that stopped early meets the target."""
-    from pmmw_cli.scene.camera import Camera
 
     settings = RenderSettings(spp=64, max_depth=6, threshold=0.05, termination="roulette",
                               target_error=0.5, min_spp=4, tile=16)

@@ -6,7 +6,6 @@ Ex2 and Ey2 lie within [min T, max T]; |U|, |V| <= I; nothing self-intersects at
 """
 
 import numpy as np
-import pytest
 import trimesh
 from hypothesis import HealthCheck, given, settings, strategies as st
 

@@ -47,10 +47,6 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Order of the accumulated channels in every accumulator array.
-ACC_CHANNELS = ("Ex2", "Ey2", "U", "V")
-
-
 def basis_change(s_old, p_old, s_new, p_new):
     """Matrix taking components in (s_new, p_new) to components in (s_old, p_old).
 
