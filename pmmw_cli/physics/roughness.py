@@ -18,8 +18,11 @@ the seed 003 eq. 7 ensemble average: ``P(k) = <n.h> (n.k) / <h.k>+``).
     rotated by ``orientation_deg`` about n. ``A`` is exact for ``ex == ey`` (closed form below);
     for ``ex != ey`` it is the isotropic form at the exponent ``e*`` with
     ``1/(e*+2) = cos^2 phi/(ex+2) + sin^2 phi/(ey+2)``, times a correction tabulated once per
-    model from the exact one-dimensional integral (`_ASProjectedArea`): interpolation error below
-    1e-4 of A.
+    pair (ex, ey) from the exact one-dimensional integral (`_ASProjectedArea`, 0.2 s): the
+    interpolation error is below 1e-5 of A for ex/ey = 2; it grows with the anisotropy, within
+    a few degrees of grazing only: 4e-4 for ex/ey = 100, 1.5e-3 for ex = 0, ey = 50, several
+    percent for ex/ey = 1e5. (Masking errors change the shape of the multiple-scattering part,
+    never the energy balance: see "How the renderer uses this".)
 ``blinn_phong`` (``m`` >= 0)
     Seed 003 eq. 3, ``rho(h) = (m+1)/(2 pi) cos^m`` per solid angle, i.e. ``D = (m+2)/(2 pi)
     cos^m`` per projected area: the isotropic Ashikhmin-Shirley surface ``ex = ey = m``.
@@ -58,9 +61,10 @@ roughness. In slope space the ratio of the two distributions is bounded (the GGX
 heavier), so accepting a GGX visible normal with probability ``D(m) / (K D_GGX(m))`` gives the
 target exactly (the factor ``(wo.m)+`` cancels). Acceptance is 0.68-1.0 at normal incidence
 (``K`` minimized over the GGX width once per model) and stays above about 0.2 at grazing angles.
-A ray still rejected after 64 rounds (only a masked ray re-hitting a very smooth surface from
-below its horizon, where hardly any facet faces it) takes one more proposal with the importance
-weight ``D_wo(m) / D_wo^GGX(m)`` instead of 1: unbiased, and so rare that it never shows. The
+A ray whose acceptance probability ``A(wo) / (K A_GGX(wo))`` is below 1e-4, or that is still
+rejected after 65536 candidates (only a masked ray re-hitting a smooth surface from well below
+its horizon, where hardly any facet faces it), takes one proposal with the importance weight
+``D_wo(m) / D_wo^GGX(m)`` instead of 1: unbiased, and rare (none in 1e6 copper paths here). The
 extra uniforms for rejection rounds are a hash of the bits of ``(u1, u2)`` (splitmix64), so ``m``
 is a deterministic function of ``(u1, u2)``: runs stay reproducible tile by tile. The
 seed 001 sampling formula (normals from ``D cos``, no visibility) is `sample_dcos`, used for
@@ -76,7 +80,9 @@ allowed, see step 4) and the material's tangent ``t`` (orientation of anisotropy
    Jones matrix by ``sqrt(w)``). ``w`` is the importance weight ``D_wo(m) / p(m)`` of the draw:
    1.0 for the built-in models (exact visible-normal sampling) except in the rare rejection
    fallback above; its expectation is 1 for every model, so power is conserved on average and,
-   with weight 1, exactly per ray. The returned ``m`` has ``wo.m > 0``.
+   with weight 1, exactly per ray. Where ``w > 0``, ``wo.m > 0``. ``w == 0`` means no facet
+   faces ``wo`` (degenerate input): end the ray there as absorbed, i.e. emit its power at the
+   surface temperature, so that energy is still accounted for.
 2. Do with ``m`` exactly what the smooth code does with ``n``: ``cos1 = wo.m``; the local basis
    ``s = unit(m x k)``, ``p = k x s`` (`pmmw_cli.physics.jones`); ``fresnel.interface(eps1, eps2,
    cos1)`` or ``multilayer.stack(..., cos1, ...)`` for a coated facet; the reflected direction
@@ -115,6 +121,7 @@ Dupuy and Benyoub, HPG 2023 (spherical caps).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from typing import Callable, Protocol, runtime_checkable
@@ -135,9 +142,12 @@ __all__ = [
 #: reached by fewer than 1e-12 of the children of the roughest surfaces here.
 MAX_REHITS = 64
 
-# Rejection rounds after which a ray takes one weighted proposal (`_Microfacet._rejection_vndf`).
-# Expected rounds are 1 to 5 for rays arriving from above the macro surface.
-_MAX_ROUNDS = 64
+# Rejection sampling (`_Microfacet._rejection_vndf`): rays whose acceptance probability is below
+# _MIN_ACCEPT, or still rejected after _MAX_ROUNDS, take one weighted proposal instead. Expected
+# rounds are 1 to 5 for rays arriving from above the macro surface.
+_MIN_ACCEPT = 1e-4
+_MAX_ROUNDS = 1 << 16
+_BATCH = 8192  # candidates per numpy call once few rays remain
 _TINY = 1e-300
 _SQRT_PI = math.sqrt(math.pi)
 
@@ -210,11 +220,15 @@ def local_frame(n_macro, tangent, orientation=0.0):
 
 def _to_local(v, frame):
     x, y, z = frame
+    if x.ndim == 1:
+        return v @ np.stack([x, y, z], axis=1)
     return np.stack([_dot(v, x), _dot(v, y), _dot(v, z)], axis=1)
 
 
 def _to_world(v, frame):
     x, y, z = frame
+    if x.ndim == 1:
+        return v @ np.stack([x, y, z], axis=0)
     return v[:, 0:1] * x + v[:, 1:2] * y + v[:, 2:3] * z
 
 
@@ -236,10 +250,11 @@ def _splitmix64(x):
 
 
 def _hash_uniforms(u1, u2, round_no, count):
-    """``count`` uniforms in [0, 1) per ray, a deterministic function of (u1, u2, round_no)."""
+    """``count`` uniforms in [0, 1) per ray, a deterministic function of (u1, u2, round_no);
+    ``round_no`` is an int or an int array of the rays' shape."""
     a = np.ascontiguousarray(u1, dtype=np.float64).view(np.uint64)
     b = np.ascontiguousarray(u2, dtype=np.float64).view(np.uint64)
-    salt = np.full(a.shape, round_no, dtype=np.uint64) * _MIX2  # array product: wraps silently
+    salt = np.broadcast_to(np.asarray(round_no, dtype=np.uint64), a.shape) * _MIX2  # array product: wraps
     state = a ^ ((b << np.uint64(29)) | (b >> np.uint64(35))) ^ salt
     state, _ = _splitmix64(state)
     out = []
@@ -369,6 +384,10 @@ class _Microfacet:
             if self.anisotropic:
                 raise ValueError(f"{self.name}: an anisotropic model needs the tangent")
             tangent = np.array([1.0, 0.0, 0.0])
+        if n_macro.ndim == 1:  # one macro frame for all rays: build it once
+            x, y, z = local_frame(n_macro[None, :], np.asarray(tangent, dtype=np.float64).reshape(1, 3),
+                                  self.orientation)
+            return x[0], y[0], z[0]
         return local_frame(n_macro, tangent, self.orientation)
 
     # -- public API (world frame) --------------------------------------------------------------
@@ -377,8 +396,10 @@ class _Microfacet:
 
         Parameters
         ----------
-        n_macro, tangent, m : ndarray, shape (N, 3), float64
-            Unit macro normal, anisotropy tangent, unit microfacet normal.
+        n_macro, tangent : ndarray, shape (N, 3) or (3,), float64
+            Unit macro normal and anisotropy tangent (one pair for all rays when (3,)).
+        m : ndarray, shape (N, 3), float64
+            Unit microfacet normals.
 
         Returns
         -------
@@ -430,8 +451,8 @@ class _Microfacet:
 
         Parameters
         ----------
-        n_macro : ndarray, shape (N, 3), float64
-            Unit macro normal on the side of the ray.
+        n_macro : ndarray, shape (N, 3) or (3,), float64
+            Unit macro normal on the side of the ray (one for all rays when (3,)).
         tangent : ndarray, shape (N, 3) or (3,), float64
             Anisotropy direction (perpendicular to n_macro; the orientation parameter rotates it).
         wo : ndarray, shape (N, 3), float64
@@ -443,17 +464,20 @@ class _Microfacet:
         Returns
         -------
         m : ndarray, shape (N, 3), float64
-            Unit microfacet normals with ``wo.m > 0``, distributed as ``D_wo(m)`` (`pdf`).
+            Unit microfacet normals distributed as ``D_wo(m)`` (`pdf`), with ``wo.m > 0``
+            wherever the weight is > 0.
         weight : ndarray, shape (N,), float64
-            Importance weight ``D_wo(m) / p(m)`` >= 0, finite, mean 1: 1.0 except for rays left
-            after 64 rejection rounds (module docstring, "Sampling").
+            Importance weight ``D_wo(m) / p(m)`` >= 0, finite, mean 1: 1.0 except for the rare
+            weighted fallback of rejection sampling (module docstring, "Sampling"), 0.0 where no facet
+            faces ``wo`` at all (``wo`` pointing straight into the surface from below, which
+            the masking rule never produces).
         """
         frame = self._frame(n_macro, tangent)
         wl = _to_local(np.asarray(wo, dtype=np.float64), frame)
         u1 = np.asarray(u1, dtype=np.float64)
         u2 = np.asarray(u2, dtype=np.float64)
         ml, weight = self._vndf_local(wl, u1, u2)
-        return _to_world(ml, frame), weight
+        return _to_world(ml, frame), np.where(_dot(ml, wl) > 0.0, weight, 0.0)
 
     def sample_dcos(self, n_macro, tangent, u1, u2):
         """Normals drawn from ``D(m) (m.n)`` (seed 001's sampling formula generalized), with
@@ -463,39 +487,68 @@ class _Microfacet:
         return _to_world(ml, frame), self._d_local(ml) * ml[:, 2]
 
     # -- rejection from GGX visible normals ----------------------------------------------------
-    def _rejection_vndf(self, wo, u1, u2, ax, ay, log_accept):
+    def _rejection_vndf(self, wo, u1, u2, ax, ay, log_accept, bound):
         """Exact visible normals by rejection from GGX(ax, ay) visible normals; weights.
 
-        Rays not accepted within `_MAX_ROUNDS` (a masked ray re-hitting a very smooth surface
-        from below its horizon, where almost no facet is visible: the masking that sends rays
-        there has the same tiny probability) take one fresh proposal with the importance weight
+        ``bound`` is K, the sup of D / D_GGX: a ray from ``wo`` is accepted with probability
+        ``A(wo) / (K A_GGX(wo))``. Rays whose acceptance is below `_MIN_ACCEPT` (a masked ray
+        re-hitting a smooth surface from well below its horizon, where hardly any facet faces
+        it: the masking that sends rays there has a comparably tiny probability), or that are
+        still rejected after `_MAX_ROUNDS`, take one fresh proposal with the importance weight
         ``D_wo(m) / D_wo^GGX(m)``, which keeps the estimator unbiased.
         """
-        m = _ggx_vndf_local(wo, ax, ay, u1, u2)
-        weight = np.ones(m.shape[0])
-        (v,) = _hash_uniforms(u1, u2, 0, 1)
-        pending = ~(np.log(np.maximum(v, _TINY)) < log_accept(m))
+        n = wo.shape[0]
+        m = np.empty((n, 3))
+        weight = np.ones(n)
+
+        def area_ggx(w):
+            return _area_any(lambda v: _ggx_a_up(v[:, 2], v[:, 0] ** 2 + v[:, 1] ** 2,
+                                                  _directional_alpha2(v, ax, ay)), w)
+
+        def weighted(idx, v1, v2):
+            cand = _ggx_vndf_local(wo[idx], ax, ay, v1, v2)
+            a_t = _area_any(self._a_up_local, wo[idx])
+            d_g = _ggx_d(cand, ax, ay)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                w = self._d_local(cand) * area_ggx(wo[idx]) / (d_g * a_t)
+            m[idx] = cand
+            weight[idx] = np.where(np.isfinite(w) & (a_t > 0.0) & (d_g > 0.0), w, 0.0)
+
+        pending = np.ones(n, dtype=bool)
+        below = np.nonzero(wo[:, 2] < 0.0)[0]
+        if below.size:
+            p_acc = _area_any(self._a_up_local, wo[below]) / (bound * area_ggx(wo[below]))
+            hopeless = below[~(p_acc >= _MIN_ACCEPT)]
+            if hopeless.size:
+                weighted(hopeless, u1[hopeless], u2[hopeless])
+                pending[hopeless] = False
+        idx = np.nonzero(pending)[0]
+        cand = _ggx_vndf_local(wo[idx], ax, ay, u1[idx], u2[idx])
+        (v,) = _hash_uniforms(u1[idx], u2[idx], 0, 1)
+        ok = np.log(np.maximum(v, _TINY)) < log_accept(cand)
+        m[idx[ok]] = cand[ok]
+        pending[idx[ok]] = False
+        # Candidate r >= 1 of a ray uses the uniforms hashed with salt r. When few rays remain,
+        # several candidates per ray are tried at once and the first accepted one (lowest r) is
+        # kept: the same sample as trying them one by one, in far fewer numpy calls.
         rnd = 1
         while rnd < _MAX_ROUNDS and np.any(pending):
             idx = np.nonzero(pending)[0]
-            v1, v2, v3 = _hash_uniforms(u1[idx], u2[idx], rnd, 3)
-            cand = _ggx_vndf_local(wo[idx], ax, ay, v1, v2)
-            ok = np.log(np.maximum(v3, _TINY)) < log_accept(cand)
-            m[idx[ok]] = cand[ok]
-            pending[idx[ok]] = False
-            rnd += 1
+            batch = int(min(_MAX_ROUNDS - rnd, max(1, _BATCH // idx.size)))
+            rep = np.repeat(idx, batch)
+            salt = rnd + np.tile(np.arange(batch, dtype=np.int64), idx.size)
+            v1, v2, v3 = _hash_uniforms(u1[rep], u2[rep], salt, 3)
+            cand = _ggx_vndf_local(wo[rep], ax, ay, v1, v2)
+            ok = (np.log(np.maximum(v3, _TINY)) < log_accept(cand)).reshape(idx.size, batch)
+            hit = ok.any(axis=1)
+            first = np.argmax(ok, axis=1)
+            m[idx[hit]] = cand.reshape(idx.size, batch, 3)[hit, first[hit]]
+            pending[idx[hit]] = False
+            rnd += batch
         if np.any(pending):
             idx = np.nonzero(pending)[0]
             v1, v2 = _hash_uniforms(u1[idx], u2[idx], _MAX_ROUNDS, 2)
-            cand = _ggx_vndf_local(wo[idx], ax, ay, v1, v2)
-            m[idx] = cand
-            a_t = _area_any(self._a_up_local, wo[idx])
-            a_g = _area_any(lambda w: _ggx_a_up(w[:, 2], w[:, 0] ** 2 + w[:, 1] ** 2,
-                                                _directional_alpha2(w, ax, ay)), wo[idx])
-            d_g = _ggx_d(cand, ax, ay)
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                w = self._d_local(cand) * a_g / (d_g * a_t)
-            weight[idx] = np.where(np.isfinite(w) & (a_t > 0.0) & (d_g > 0.0), w, 0.0)
+            weighted(idx, v1, v2)
         return m, weight
 
     def __repr__(self):
@@ -512,12 +565,12 @@ class _ASProjectedArea:
 
     ``A(w) = N int_0^2pi J(e(phi), cos th_w, sin th_w cos(phi - phi_w)) dphi`` with the inner
     integral ``J(e, a, b) = int_0^pi/2 cos^e t (a cos t + b sin t)+ sin t dt`` in closed form
-    (incomplete beta) and Gauss-Legendre in phi on the pieces where ``b`` has one sign.
+    (incomplete beta) and Gauss-Legendre in azimuth on the pieces where ``b`` has one sign.
     """
 
-    _N_COS = 97
-    _N_PHI = 25
-    _N_QUAD = 96
+    _N_COS = 129
+    _N_PHI = 49
+    _N_QUAD = 48
 
     def __init__(self, ex, ey):
         self.ex, self.ey = float(ex), float(ey)
@@ -536,17 +589,28 @@ class _ASProjectedArea:
         return 1.0 / (cos2 / (self.ex + 2.0) + sin2 / (self.ey + 2.0)) - 2.0
 
     def exact(self, c, phi_w):
-        """Exact A for cos(theta_w) = c >= 0 and azimuth phi_w, arrays of one shape (slow)."""
+        """Exact A for cos(theta_w) = c >= 0 and azimuth phi_w, arrays of one shape (slow).
+
+        The azimuth integral runs over ``psi`` with ``tan(phi) = k tan(psi)``,
+        ``k = sqrt((ex+2)/(ey+2))`` (the sampling map of seed 001 with +2): then
+        ``dphi = (e(phi)+2)/sqrt((ex+2)(ey+2)) dpsi`` cancels the ``1/(e+2)`` peak of J where
+        the exponent is small, and Gauss-Legendre converges to 1e-6 with 48 nodes per piece
+        even for ex/ey = 1e5.
+        """
         x, wq = np.polynomial.legendre.leggauss(self._N_QUAD)
         s = np.sqrt(np.clip(1.0 - c * c, 0.0, 1.0))
-        norm = math.sqrt((self.ex + 2.0) * (self.ey + 2.0)) / (2.0 * math.pi)
+        root = math.sqrt((self.ex + 2.0) * (self.ey + 2.0))
+        k = math.sqrt((self.ex + 2.0) / (self.ey + 2.0))
         total = np.zeros_like(c)
         for lo in (-0.5 * np.pi, 0.5 * np.pi):  # b >= 0 on the first piece, b <= 0 on the second
-            delta = lo + 0.5 * np.pi * (x + 1.0)  # phi - phi_w
-            phi = phi_w[:, None] + delta[None, :]
+            p0 = phi_w + lo
+            q0 = np.arctan2(np.sin(p0) / k, np.cos(p0))
+            q0 = q0 + 2.0 * np.pi * np.round((p0 - q0) / (2.0 * np.pi))  # the branch of p0
+            psi = q0[:, None] + 0.5 * np.pi * (x[None, :] + 1.0)
+            phi = np.arctan2(k * np.sin(psi), np.cos(psi))
             e = self.ex * np.cos(phi) ** 2 + self.ey * np.sin(phi) ** 2
             a = c[:, None]
-            b = s[:, None] * np.cos(delta)[None, :]
+            b = s[:, None] * np.cos(phi - phi_w[:, None])
             half_b = 0.5 * np.exp(special.betaln(1.5, 0.5 * (e + 1.0)))
             if lo < 0.0:
                 j = a / (e + 2.0) + np.maximum(b, 0.0) * half_b
@@ -560,8 +624,9 @@ class _ASProjectedArea:
                     pow_c = np.exp(0.5 * (e + 2.0) * np.log(cos2c))
                 j = a * (1.0 - pow_c) / (e + 2.0) - bb * half_b * special.betainc(1.5, 0.5 * (e + 1.0), sin2c)
                 j = np.maximum(j, 0.0)
-            total += (j * (0.5 * np.pi) * wq[None, :]).sum(axis=1)
-        return norm * total
+            dphi = (e + 2.0) / root
+            total += (j * dphi * (0.5 * np.pi) * wq[None, :]).sum(axis=1)
+        return root / (2.0 * math.pi) * total
 
     def __call__(self, w):
         """A for local directions with w.z >= 0, shape (N, 3)."""
@@ -585,6 +650,11 @@ class _ASProjectedArea:
         return approx * corr
 
 
+@functools.lru_cache(maxsize=64)
+def _area_table(ex, ey):
+    return _ASProjectedArea(ex, ey)
+
+
 class AshikhminShirley(_Microfacet):
     """Anisotropic Ashikhmin-Shirley distribution (seed 001 eq. 9), exponents ``ex``, ``ey`` >= 0."""
 
@@ -597,7 +667,7 @@ class AshikhminShirley(_Microfacet):
             raise ValueError(f"exponents must be finite and >= 0, got ex={ex!r}, ey={ey!r}")
         self.anisotropic = self.ex != self.ey
         self._log_norm = 0.5 * (math.log(self.ex + 2.0) + math.log(self.ey + 2.0)) - math.log(2.0 * math.pi)
-        self._area_table = _ASProjectedArea(self.ex, self.ey) if self.anisotropic else None
+        self._area_table = _area_table(self.ex, self.ey) if self.anisotropic else None
         self._setup_proposal()
 
     def params(self):
@@ -626,7 +696,7 @@ class AshikhminShirley(_Microfacet):
     def _log_hstar(e, gamma):
         if gamma >= 4.0:
             return 0.0
-        if e == 0.0:
+        if e < 1e-9:  # the e -> 0 limit; h* decreases with e, so this only raises the bound
             return 2.0 * math.log(4.0 / gamma)
         return (2.0 * math.log1p((4.0 - gamma) * (e + 4.0) / (gamma * e))
                 - 0.5 * (e + 4.0) * math.log1p((4.0 - gamma) / e))
@@ -670,7 +740,7 @@ class AshikhminShirley(_Microfacet):
     def _vndf_local(self, wo, u1, u2):
         if self.ex == 0.0 and self.ey == 0.0:  # D = 1/pi is GGX with alpha = 1
             return _ggx_vndf_local(wo, 1.0, 1.0, u1, u2), np.ones(wo.shape[0])
-        return self._rejection_vndf(wo, u1, u2, self._ax, self._ay, self._log_accept)
+        return self._rejection_vndf(wo, u1, u2, self._ax, self._ay, self._log_accept, self.proposal_bound)
 
     def _dcos_local(self, u1, u2):
         # azimuth density 1/(e(phi)+2): tan phi = sqrt((ex+2)/(ey+2)) tan(pi u/2) per quadrant
@@ -794,7 +864,7 @@ class Beckmann(GGX):
         return np.where(big, -np.inf, 1.0 - ss + 2.0 * np.log1p(ss) - math.log(4.0))
 
     def _vndf_local(self, wo, u1, u2):
-        return self._rejection_vndf(wo, u1, u2, self.ax, self.ay, self._log_accept)
+        return self._rejection_vndf(wo, u1, u2, self.ax, self.ay, self._log_accept, 4.0 / math.e)
 
     def _dcos_local(self, u1, u2):
         phi = np.arctan2(self.ay * np.sin(2.0 * np.pi * u1), self.ax * np.cos(2.0 * np.pi * u1))
@@ -864,14 +934,17 @@ class BlenderGloss(_Microfacet):
         frame = self._frame(n_macro, tangent)
         wl = _to_local(np.asarray(wo, dtype=np.float64), frame)
         ml = self._sample(wl, np.asarray(u1, dtype=np.float64), np.asarray(u2, dtype=np.float64))
-        return _to_world(ml, frame), np.ones(ml.shape[0])
+        return _to_world(ml, frame), (_dot(ml, wl) > 0.0).astype(np.float64)
 
     def masking(self, n_macro, tangent, w):
         """No masking in the seed's recipe: 1 above the macro surface, 0 on the wrong side."""
-        return (_dot(np.asarray(w, dtype=np.float64), np.asarray(n_macro, dtype=np.float64)) > 0.0).astype(np.float64)
+        w = np.asarray(w, dtype=np.float64)
+        n = np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)
+        return (_dot(w, n) > 0.0).astype(np.float64)
 
     def projected_area(self, n_macro, tangent, w):
-        return np.maximum(_dot(np.asarray(w, dtype=np.float64), np.asarray(n_macro, dtype=np.float64)), 0.0)
+        w = np.asarray(w, dtype=np.float64)
+        return np.maximum(_dot(w, np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)), 0.0)
 
     def pdf(self, n_macro, tangent, wo, m):
         """Density of the literal recipe with the mirror replacement of back-facing draws."""
