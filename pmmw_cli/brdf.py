@@ -27,11 +27,16 @@ Two methods share one surface description (`Stack`) and one output grid:
     hemisphere, ``A`` the projected area and ``M_F2`` the Mueller matrix of the product of the
     two facets' Jones matrices (seed 003 eq. 15-16: coherent within a path). The masking
     probability and the second facet's visible-normal density combine into ``1/A(w12+)``
-    exactly, which is what makes the term reciprocal. The expectation over h1 is a scrambled
-    Sobol quadrature with a fixed seed (deterministic). ``--shadowing`` picks G in the single
-    term: ``smith`` (``G1 G1``, the first order of ``mc``), ``ashikhmin`` (seed 003 eq. 6),
-    ``torrance_sparrow`` (SCATMECH's ``Shadowed_Facet_BRDF_Model``) or ``none`` (SCATMECH's
-    ``Facet_BRDF_Model``).
+    exactly, which is what makes the term reciprocal. The integral over w12 is a scrambled Sobol
+    quadrature with a fixed seed (deterministic), sampled from both ends and combined by the
+    balance heuristic (`_double_term`); the broad double lobe is evaluated every 2 degrees and
+    interpolated onto the grid. ``--shadowing`` picks G in the single term: ``smith`` (``G1
+    G1``, the first order of ``mc``), ``ashikhmin`` (seed 003 eq. 6), ``torrance_sparrow``
+    (SCATMECH's ``Shadowed_Facet_BRDF_Model``) or ``none`` (SCATMECH's ``Facet_BRDF_Model``).
+    Its hemispherical totals are integrated over facet normals (`analytic_totals`), not over the
+    grid, so they stay right for lobes narrower than a cell. Seed 003's own double-bounce
+    probability (its eq. 17) is garbled in the extraction; this is the Smith form of the same
+    idea, and it equals the Monte Carlo's second order.
 
 Grid and bases
 --------------
@@ -73,9 +78,26 @@ from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.physics import roughness as rough
 
 __all__ = [
-    "Layer", "Stack", "MethodResult", "BrdfResult", "run_brdf", "load_stack", "parse_complex",
-    "monte_carlo", "analytic", "mueller_from_jones", "grid_directions", "projected_solid_angle",
-    "flat_reflectance", "N_THETA", "N_PHI", "METHODS", "SHADOWING",
+    "METHODS",
+    "N_PHI",
+    "N_THETA",
+    "SHADOWING",
+    "BrdfResult",
+    "Layer",
+    "MethodResult",
+    "Stack",
+    "analytic",
+    "analytic_mueller",
+    "analytic_totals",
+    "flat_reflectance",
+    "grid_directions",
+    "load_stack",
+    "monte_carlo",
+    "mueller_from_jones",
+    "parse_complex",
+    "projected_solid_angle",
+    "roughness_spec_from_options",
+    "run_brdf",
 ]
 
 #: Seed 001's collection grid: zenith rows 0..90 degrees, azimuth columns 0..359 degrees.
@@ -641,7 +663,6 @@ def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, thres
         Sums over paths (divide by ``samples`` for fractions of the incident power).
     """
     interfaces = [_Interface(stack, i) for i in range(len(stack.layers))]
-    media = stack.media()
     tally = _Tally(by_order=np.zeros((3, N_THETA, N_PHI, 4, 4)))
     phi_i = math.atan2(wi[1], wi[0])
     k_in = -np.asarray(wi, dtype=np.float64)
@@ -660,31 +681,32 @@ def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, thres
                 for from_above in (True, False):
                     sel = np.nonzero((paths.itf == i) & (paths.above == from_above))[0]
                     if sel.size:
-                        nxt.append(_mc_event(paths.take(sel), itf, i, from_above, media, stack, rng, tally,
-                                             stokes_in, threshold))
+                        nxt.append(_mc_event(paths.take(sel), itf, i, from_above, stack, rng, tally, stokes_in,
+                                             threshold))
             paths = _Paths.concat(nxt)
     return tally
 
 
-def _mc_event(pt: _Paths, itf: _Interface, i: int, from_above: bool, media, stack, rng, tally: _Tally,
-              stokes_in, threshold):
+def _mc_event(pt: _Paths, itf: _Interface, i: int, from_above: bool, stack, rng, tally: _Tally, stokes_in,
+              threshold):
     """One facet interaction for paths meeting interface i from one side; returns survivors."""
     n = pt.d.shape[0]
     tally.events += n
-    nz = np.array([0.0, 0.0, 1.0 if from_above else -1.0])
-    n_x = np.tile(nz, (n, 1))
-    tangent = np.tile([1.0, 0.0, 0.0], (n, 1))
+    n_x = np.array([0.0, 0.0, 1.0 if from_above else -1.0])  # macro normal on the rays' side
+    tangent = np.array([1.0, 0.0, 0.0])
     wo = -pt.d
-    u = rng.random((n, 5))
+    u = rng.random((n, 4))
     # 1. facet normal (roughness module, "How the renderer uses this")
     if itf.model is not None:
         m, w = itf.model.sample_normals(n_x, tangent, wo, u[:, 0], u[:, 1])
         fb = w != 1.0
         if np.any(fb):
             tally.fallback_weights += int(fb.sum())
+            # weight 0: no facet faces the ray; it ends absorbed at the surface
+            tally.absorbed += 0.5 * float(np.sum(np.abs(pt.j[w == 0.0]) ** 2))
             pt.j = pt.j * np.sqrt(w)[:, None, None]
     else:
-        m = n_x
+        m = np.tile(n_x, (n, 1))
     # 2. Fresnel about the facet, in the facet's (s, p) basis
     cos1 = np.clip(_dot(wo, m), 0.0, 1.0)
     co = itf.fresnel(cos1, from_above)
@@ -1423,13 +1445,15 @@ def _plot_maps(path: Path, res: MethodResult, title: str):
     ph_edges = np.radians(np.arange(N_PHI + 1) - 0.5)
     fig, axes = plt.subplots(2, 3, figsize=(12, 8), subplot_kw={"projection": "polar"})
     for ax, (name, data, cmap) in zip(axes.ravel(), maps):
+        # colour limits from the 99.5th percentile: Monte Carlo cells near the pole and the
+        # horizon have tiny projected solid angles and carry the largest noise
+        lim = float(np.nanpercentile(np.abs(data[1:90]), 99.5)) or 1.0
         if cmap == "RdBu_r":
-            lim = float(np.nanmax(np.abs(data))) or 1.0
             kw = {"vmin": -lim, "vmax": lim}
         elif name.startswith("AoP"):
             kw = {"vmin": -90.0, "vmax": 90.0}
         else:
-            kw = {}
+            kw = {"vmin": 0.0, "vmax": lim}
         pc = ax.pcolormesh(ph_edges, th_edges, data, cmap=cmap, shading="flat", **kw)
         ax.set_title(name)
         ax.set_ylim(0, 90)
@@ -1451,15 +1475,29 @@ def _plot_inplane(path: Path, results, wi):
 
     from pmmw_cli.io.atomic import atomic_path
 
-    phi_s = int(round(math.degrees(math.atan2(-wi[1], -wi[0])))) % 360
+    phi_s = round(math.degrees(math.atan2(-wi[1], -wi[0]))) % 360
     phi_b = (phi_s + 180) % 360
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    theta = np.arange(N_THETA)
+    proj = projected_solid_angle()
+    theta = np.arange(N_THETA - 1)  # the horizon row holds the singular cos -> 0 cells
+
+    def profile(i_map, col, smooth):
+        """Zenith profile at azimuth ``col``; Monte Carlo maps are averaged (projected solid
+        angle weights) over +-2 degrees of azimuth, +-20 near the pole, all of row 0."""
+        out = np.empty(theta.size)
+        for r in theta:
+            half = 0 if not smooth else (180 if r == 0 else max(2, 20 // r))
+            cols = np.arange(col - half, col + half + 1) % N_PHI
+            w = proj[r, cols]
+            out[r] = np.sum(i_map[r, cols] * w) / np.sum(w)
+        return out
+
     x = np.concatenate([-theta[::-1], theta[1:]])
     for meth, res in results.items():
         i_map = res.stokes[0]
-        y = np.concatenate([i_map[::-1, phi_b], i_map[1:, phi_s]])
-        ax.plot(x, y, label=f"{meth} I", lw=1.2)
+        smooth = meth == "mc"
+        y = np.concatenate([profile(i_map, phi_b, smooth)[::-1], profile(i_map, phi_s, smooth)[1:]])
+        ax.plot(x, y, label=f"{meth} I" + (" (azimuth-averaged cells)" if smooth else " (cell centres)"), lw=1.2)
     ax.set_xlabel(f"zenith angle in the plane of incidence [deg] (positive: azimuth {phi_s} deg, specular side)")
     ax.set_ylabel("BRDF I [1/sr]")
     ax.set_yscale("log")
