@@ -1178,7 +1178,31 @@ def _stack_from_options(n, eps, material, roughness_spec, frequency, wavelength)
     entry = {"n": n} if n is not None else {"eps": eps} if eps is not None else {"material": material}
     eps_val, metal = _medium_eps(entry, frequency=f, file="command line", key=given[0])
     model = rough.make_model(roughness_spec, file="command line", key="roughness") if roughness_spec else None
+    if material is not None:
+        return _material_stack(material, eps_val, metal, model, f)
     return Stack(layers=(Layer(eps=eps_val, roughness=model, metal=metal, name=given[0].lstrip("-")),), frequency=f)
+
+
+def _material_stack(mid, eps_val, metal, model, f):
+    """A database material as a stack: its ``roughness:`` (unless the options give one) and its
+    coating, as the renderer sees it. Coating layers without roughness are coherent films on the
+    interface below them; a layer with its own ``roughness:`` is a rough layer of its own."""
+    from pmmw_cli.scene.materials import MaterialDB
+
+    db = MaterialDB.load()
+    mat = db.get(mid, file="command line", key="--material")
+    layers, films = [], []
+    for layer in mat.coating:
+        lm = db.get(layer.material)
+        if layer.roughness is None:
+            films.append((complex(lm.eps_at(f)), float(layer.thickness)))
+            continue
+        layers.append(Layer(eps=complex(lm.eps_at(f)), roughness=layer.roughness, thickness=float(layer.thickness),
+                            coating=tuple(films), name=layer.material))
+        films = []
+    layers.append(Layer(eps=eps_val, roughness=model if model is not None else mat.roughness, metal=metal,
+                        coating=tuple(films), name=mid))
+    return Stack(layers=tuple(layers), frequency=f)
 
 
 def roughness_spec_from_options(model=None, ex=None, ey=None, m=None, alpha=None, alpha_y=None, gloss=None,

@@ -7,6 +7,8 @@ exit with status 2, never with a traceback.
 from __future__ import annotations
 
 import functools
+import json
+import math
 import sys
 from pathlib import Path
 from typing import List, Optional
@@ -15,7 +17,7 @@ import typer
 import yaml
 
 from pmmw_cli import __version__
-from pmmw_cli.errors import UserError
+from pmmw_cli.errors import UserError, UserErrors
 
 app = typer.Typer(
     add_completion=False, no_args_is_help=True,
@@ -117,7 +119,7 @@ def sky(
                                               help="Weather slab, e.g. 'fog,0 m,600 m,0.3 g/m3' or 'rain,0,3 km,10 mm/h'."),
     ground_temperature: Optional[str] = typer.Option(None, "--ground-temperature"),
     humidity: Optional[str] = typer.Option(None, "--humidity", help="Water-vapour density at the ground, e.g. '7.5 g/m3'."),
-    elevations: str = typer.Option("5,10,15,20,30,45,60,90", "--elevations", help="Elevations [deg]."),
+    elevations: str = typer.Option("5,10,15,20,30,45,60,90", "--elevations", help="Elevations in degrees."),
     fmt: str = typer.Option("table", "--format", help="table or csv."),
     exr: Optional[Path] = typer.Option(None, "--exr", help="Write an equirectangular Tv/Th map (a sky texture)."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a PNG of T against elevation for several weathers."),
@@ -141,6 +143,129 @@ def sky(
         skycmd.write_map(exr, atm, f)
     if plot is not None:
         skycmd.write_plot(plot, atm, f)
+
+
+# `run_brdf` locates substrate and roughness problems as in a stack file ("command line" and a key:
+# `--n.n`, `roughness.ex`); on the command line the user typed an option, so name that alone.
+_ROUGHNESS_OPTIONS = {
+    "roughness.model": "--model", "roughness.ex": "--ex", "roughness.ey": "--ey", "roughness.m": "--m",
+    "roughness.alpha": "--alpha", "roughness.alpha_x": "--alpha", "roughness.alpha_y": "--alpha-y",
+    "roughness.gloss": "--gloss", "roughness.orientation_deg": "--orientation",
+}
+
+
+def _name_options(err: UserError) -> UserError:
+    if isinstance(err, UserErrors):
+        return UserErrors([_name_options(e) for e in err.errors])
+    if err.file != "command line" or not err.key:
+        return err
+    option = _ROUGHNESS_OPTIONS.get(err.key, err.key.split(".")[0])
+    return UserError(err.message, option)
+
+
+def _count(text: str, option: str) -> int:
+    """``1000000``, ``1e6`` or ``1_000_000`` -> int (a whole number; the range is checked later)."""
+    try:
+        value = float(text.replace("_", ""))
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value == int(value)):
+        raise UserError(f"expected a whole number like 1000000 or 1e6, got {text!r}", option)
+    return int(value)
+
+
+def _numbers(text: str, option: str, count: int, example: str) -> tuple:
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != count:
+        raise UserError(f"expected {count} comma-separated numbers like {example}, got {text!r}", option)
+    return values
+
+
+def _brdf_report(summary: dict, files: list) -> str:
+    """The short human summary of `pmmw brdf` (the JSON has everything)."""
+    stokes_in = ", ".join(f"{v:g}" for v in summary["stokes_in"])
+    lines = [(f"incidence {summary['incidence_deg']:g} deg, azimuth {summary['azimuth_deg']:g} deg, "
+              f"incident Stokes ({stokes_in})")]
+    for meth, s in summary["methods"].items():
+        if meth == "mc":
+            orders = " / ".join(f"{v:.5f}" for v in s["reflectance_by_order"])
+            lines.append(f"total reflectance, mc:       {s['total_reflectance']:.5f} +- "
+                         f"{s['total_reflectance_stderr']:.5f} (standard error; {s['samples']} rays, "
+                         f"{s['seconds']:.1f} s)")
+            lines.append(f"  by facet interactions 1 / 2 / >= 3: {orders}")
+        else:
+            lines.append(f"total reflectance, analytic: {s['total_reflectance']:.5f} = single "
+                         f"{s['single_reflectance']:.5f} + double {s['double_reflectance']:.5f} "
+                         f"(shadowing {s['shadowing']}, {s['seconds']:.1f} s)")
+    lines.append(f"flat reflectance:            {summary['flat_reflectance']:.5f} (the same stack, smooth)")
+    if files:
+        lines.append("wrote " + ", ".join(str(f) for f in files))
+    return "\n".join(lines)
+
+
+@app.command()
+@_user_errors
+def brdf(
+    n: Optional[str] = typer.Option(None, "--n", metavar="N", help="Substrate complex index n + ik, e.g. 0.23+3.46j."),
+    eps: Optional[str] = typer.Option(None, "--eps", metavar="EPS",
+                                      help="Substrate permittivity eps' + i eps'', e.g. 5.5+0.5j (eps'' >= 0: lossy)."),
+    material: Optional[str] = typer.Option(None, "--material", metavar="ID",
+                                           help="Substrate from the material database (needs --frequency)."),
+    stack: Optional[Path] = typer.Option(None, "--stack", metavar="FILE",
+                                         help="Layered surface (YAML, docs/brdf.md) instead of --n/--eps/--material "
+                                              "and the roughness options."),
+    frequency: Optional[str] = typer.Option(None, "--frequency", "-f", help="e.g. '95 GHz' (or --wavelength)."),
+    wavelength: Optional[str] = typer.Option(None, "--wavelength", help="e.g. '635 nm' (or --frequency)."),
+    incidence: float = typer.Option(0.0, "--incidence", help="Zenith angle of the source in degrees, in [0, 90)."),
+    azimuth: float = typer.Option(0.0, "--azimuth",
+                                  help="Azimuth of the source in degrees; the specular direction is at azimuth + 180."),
+    stokes: str = typer.Option("1,0,0,0", "--stokes", metavar="I,Q,U,V",
+                               help="Incident Stokes vector in the incident wave's (h, v) basis; 1,0,0,0 is "
+                                    "unpolarized."),
+    model: Optional[str] = typer.Option(None, "--model",
+                                        help="Roughness model: ashikhmin_shirley, blinn_phong, ggx, beckmann, "
+                                             "blender_gloss (default: implied by the parameters given)."),
+    ex: Optional[float] = typer.Option(None, "--ex", help="Ashikhmin-Shirley exponent along x (larger is smoother)."),
+    ey: Optional[float] = typer.Option(None, "--ey", help="Ashikhmin-Shirley exponent along y (default --ex)."),
+    m: Optional[float] = typer.Option(None, "--m", help="Blinn-Phong exponent (larger is smoother)."),
+    alpha: Optional[float] = typer.Option(None, "--alpha", help="GGX / Beckmann roughness (alpha_x with --alpha-y)."),
+    alpha_y: Optional[float] = typer.Option(None, "--alpha-y", help="GGX / Beckmann roughness along y (anisotropic)."),
+    gloss: Optional[float] = typer.Option(None, "--gloss", help="Blender gloss in [0, 1] (1 = mirror)."),
+    orientation: Optional[float] = typer.Option(None, "--orientation",
+                                                help="Orientation of an anisotropic model's x axis in degrees."),
+    method: str = typer.Option("mc", "--method", help="mc (Monte Carlo, seed 001), analytic (seed 003) or both."),
+    samples: str = typer.Option("1000000", "--samples", metavar="N", help="Monte Carlo rays, e.g. 1000000 or 1e6."),
+    seed: int = typer.Option(0, "--seed", help="Random seed (same seed, same result)."),
+    shadowing: str = typer.Option("smith", "--shadowing",
+                                  help="G of the analytic single term: smith, ashikhmin, torrance_sparrow, none."),
+    double: bool = typer.Option(True, "--double/--no-double", help="Analytic double-reflection term."),
+    double_samples: int = typer.Option(256, "--double-samples", help="Quadrature points of the analytic double term."),
+    mueller: bool = typer.Option(False, "--mueller", help="Also write the 16 Mueller elements M00..M33 to the EXR."),
+    threshold: float = typer.Option(1e-3, "--threshold",
+                                    help="Russian roulette below this path power (unbiased), in [0, 1)."),
+    out: Path = typer.Option(Path("out/brdf"), "--out", help="Output folder: brdf_<method>.exr, PNGs, brdf.json."),
+    plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the PNG maps and the in-plane plot."),
+    as_json: bool = typer.Option(False, "--json", help="Print the JSON summary (brdf.json) instead of the text one."),
+):
+    """Polarized BRDF of a rough (layered) surface on seed 001's 1-degree hemispherical grid."""
+    from pmmw_cli.brdf import run_brdf
+
+    try:
+        res = run_brdf(n=n, eps=eps, material=material, stack=stack, frequency=frequency, wavelength=wavelength,
+                       incidence=incidence, azimuth=azimuth, stokes=_numbers(stokes, "--stokes", 4, "1,0,0,0"),
+                       model=model, ex=ex, ey=ey, m=m, alpha=alpha, alpha_y=alpha_y, gloss=gloss,
+                       orientation=orientation, method=method, samples=_count(samples, "--samples"), seed=seed,
+                       shadowing=shadowing, double=double, double_samples=double_samples, mueller=mueller,
+                       threshold=threshold, out=out, plots=plots)
+    except UserError as e:
+        raise _name_options(e) from None
+    if as_json:
+        typer.echo(json.dumps(res.summary, indent=2))
+    else:
+        typer.echo(_brdf_report(res.summary, [*res.files, out / "brdf.json"]))
 
 
 @app.command()

@@ -83,6 +83,7 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
     t_default = scn.render.default_temperature
     atm = scn.atmosphere
     ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
+    rough, bump = [None], [None]
     uniform = atm is not None and atm.model == "uniform"  # the layered model lives on the job
     temp.append(atm.temperature if uniform else t_default)
     alpha.append(atm.loss if uniform else 0.0)
@@ -96,23 +97,36 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
         eps.append(complex(e))
         temp.append(t_m)
         alpha.append(2.0 * k0 * np.sqrt(complex(e)).imag if code == DIELECTRIC else 0.0)
+        rough.append(m.roughness)
+        bump.append(m.bump)
         layers = []
-        for layer in m.coating:
+        for i, layer in enumerate(m.coating):
+            if layer.roughness is not None:
+                raise UserError(
+                    "a rough coating layer (its own `roughness:`) is a separate incoherent layer; scenes do "
+                    "not trace those yet (`pmmw brdf --stack` does): remove the layer's roughness to make it "
+                    "a coherent film that follows the material's `roughness:`", m.origin,
+                    f"{db.key_of(mid)}.coating[{i}].roughness")
             lm = db.get(layer.material)
             t_l = layer.temperature if layer.temperature is not None else (lm.temperature if lm.temperature is not None else t_m)
             layers.append((lm.eps_at(f), layer.thickness, t_l))
         if code == THIN:
             layers.append((e, m.thickness or 0.0, t_m))
         coat.append(Coating.from_layers(*zip(*layers)) if layers else None)
-    return Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp, float), np.array(alpha, float), tuple(coat))
+    return Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp, float), np.array(alpha, float),
+                 tuple(coat), tuple(rough), tuple(bump))
 
 
-def scenario_hash(scn) -> str:
-    """Hash of everything that changes the traced tiles (not workers, not output settings)."""
+def scenario_hash(scn, db: MaterialDB | None = None) -> str:
+    """Hash of everything that changes the traced tiles (not workers, not output settings): the
+    scenario, its mesh and sky files and, given the resolved database, every material in it
+    (an edited ``materials/*.yaml`` or bump texture must not reuse old tiles either)."""
     d = scenario_to_display(scn)
     d.pop("output", None)
     d["render"].pop("workers", None)
     h = hashlib.sha256((json.dumps(d, sort_keys=True, default=str) + __version__).encode())
+    if db is not None:
+        h.update("".join(repr(db.get(m)) for m in db.ids()).encode())
     for path in sorted({str(e.mesh) for e in scn.scene} | ({str(scn.sky.file)} if scn.sky.file else set())):
         h.update(Path(path).read_bytes())  # assets too: a regenerated mesh must not reuse old tiles
     return h.hexdigest()[:16]
@@ -297,7 +311,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     n_workers = scn.render.workers or default_workers()
     t_resolve = time.perf_counter() - t0
     written, renders, tile_dirs = [], [], []
-    shash = scenario_hash(scn)
+    shash = scenario_hash(scn, res.db)
     for f in scn.frequencies:
         t1 = time.perf_counter()
         stem = _stem(scn, f)

@@ -9,6 +9,7 @@ from pmmw_cli.scene.camera import Camera
 from pmmw_cli.scene.sky import UniformSky
 from pmmw_cli.trace.integrator import Integrator
 from pmmw_cli.trace.intersect import make_intersector
+from pmmw_cli.physics.roughness import make_model
 from pmmw_cli.trace.job import C0, DIELECTRIC, KIND_CODES, Coating, Media, RenderSettings, TraceJob
 from pmmw_cli.trace.pool import assemble
 from pmmw_cli.physics.jones import stokes_images
@@ -36,9 +37,13 @@ def sphere(center, radius, subdivisions=3):
     return m
 
 
-def material(kind="dielectric", eps=1 + 0j, temperature=300.0, coating=(), thickness=None):
-    """A material spec: coating is a list of (eps, thickness [m], temperature [K]), outermost first."""
-    return dict(kind=kind, eps=complex(eps), temperature=float(temperature), coating=list(coating), thickness=thickness)
+def material(kind="dielectric", eps=1 + 0j, temperature=300.0, coating=(), thickness=None, roughness=None, bump=None):
+    """A material spec: coating is a list of (eps, thickness [m], temperature [K]), outermost first;
+    roughness a MicrofacetModel (or a record for `roughness.make_model`), bump a BumpMap."""
+    if isinstance(roughness, dict):
+        roughness = make_model(roughness)
+    return dict(kind=kind, eps=complex(eps), temperature=float(temperature), coating=list(coating), thickness=thickness,
+                roughness=roughness, bump=bump)
 
 
 def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
@@ -46,6 +51,7 @@ def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
     k0 = 2 * np.pi * frequency / C0
     verts, faces, normals, fmed = [], [], [], []
     ids, eps, kind, temp, alpha, coat = ["ambient"], [1 + 0j], [DIELECTRIC], [], [], [None]
+    rough, bumps = [None], [None]
     temp.append(ambient[1] if ambient else 290.0)
     alpha.append(ambient[0] if ambient else 0.0)
     off = 0
@@ -61,11 +67,14 @@ def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
         eps.append(spec["eps"])
         temp.append(spec["temperature"])
         alpha.append(2 * k0 * np.sqrt(spec["eps"]).imag if code == DIELECTRIC else 0.0)
+        rough.append(spec.get("roughness"))
+        bumps.append(spec.get("bump"))
         layers = list(spec["coating"])
         if spec["kind"] == "thin":
             layers.append((spec["eps"], spec["thickness"], spec["temperature"]))
         coat.append(Coating.from_layers(*zip(*layers)) if layers else None)
-    media = Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp), np.array(alpha), tuple(coat))
+    media = Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp), np.array(alpha), tuple(coat),
+                  tuple(rough), tuple(bumps))
     return TraceJob(
         vertices=np.concatenate(verts), faces=np.concatenate(faces), face_normals=np.concatenate(normals),
         face_medium=np.concatenate(fmed), media=media, camera=camera, sky=sky, frequency=frequency,

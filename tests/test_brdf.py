@@ -476,3 +476,27 @@ def test_grid_and_mueller_helpers():
 
     out = np.einsum("nij,nj->ni", j, e)
     assert np.allclose(np.einsum("nij,nj->ni", B.mueller_from_jones(j), stokes(e)), stokes(out))
+
+
+def test_material_option_uses_the_coating_and_roughness_of_the_database_entry():
+    """`--material clothed_skin` is skin under 0.8 mm of denim (a coherent film): its flat
+    reflectance equals the `tmm` package's (independent transfer matrices) to 1e-9, and the
+    entry's roughness (none: smooth) is used unless roughness options are given."""
+    import tmm
+
+    from pmmw_cli.scene.materials import MaterialDB
+
+    db = MaterialDB.load()
+    f = 95e9
+    skin, denim = db.get("clothed_skin"), db.get("denim_clothing")
+    res = B.run_brdf(material="clothed_skin", frequency="95 GHz", incidence=30.0, samples=2000, plots=False)
+    lam = 299_792_458.0 / f
+    n_list = [1.0, np.sqrt(denim.eps_at(f)), np.sqrt(skin.eps_at(f))]
+    d_list = [np.inf, skin.coating[0].thickness, np.inf]
+    th = math.radians(30.0)
+    r = [tmm.coh_tmm(pol, n_list, d_list, th, lam)["R"] for pol in ("s", "p")]
+    assert res.summary["flat_reflectance"] == pytest.approx(sum(r) / 2, abs=1e-9)
+    assert res.summary["total_reflectance"] == pytest.approx(sum(r) / 2, abs=1e-9)  # smooth entry
+    rough = B.run_brdf(material="clothed_skin", frequency="95 GHz", incidence=30.0, samples=2000, alpha=0.3,
+                       plots=False)
+    assert rough.summary["total_reflectance"] != pytest.approx(sum(r) / 2, abs=1e-3)

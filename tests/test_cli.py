@@ -108,6 +108,11 @@ def test_materials_list_and_show():
         ("", ["--set", "imager.noise=-3 K"], "imager.noise"),
         ("", ["--set", "frequency=95 m"], "frequency"),
         ("materials: {concrete: {eps: {35 GHz: [5.5, -0.5]}}}", [], "materials.concrete"),
+        ("materials: {concrete: {roughness: {model: ggx, alpha: -1}}}", [], "materials.concrete.roughness.alpha"),
+        ("materials: {concrete: {bump: {model: gaussian, rms: 1 cm, size: 1 m}}}", [],
+         "materials.concrete.bump.correlation"),
+        ("materials: {concrete: {coating: [{material: denim, thickness: 1 mm, roughness: {model: ggx, alpha: 0.2}}]}}",
+         [], "materials.concrete.coating[0].roughness"),
     ],
 )
 def test_user_errors_name_file_and_key_without_traceback(tmp_path, extra, override, key):

@@ -407,3 +407,61 @@ def test_materials_are_immutable(db):
     with pytest.raises(Exception):
         m.temperature = 3.0  # type: ignore[misc]
     assert math.isclose(m.eps_at(35 * GHZ).real, 5.5)
+
+
+# ---------------------------------------------------------------------------------------------
+# roughness: and bump: (issue 4)
+# ---------------------------------------------------------------------------------------------
+
+
+def test_roughness_and_bump_entries(db):
+    from pmmw_cli.physics.roughness import GGX, AshikhminShirley
+    from pmmw_cli.scene.bump import BumpMap
+
+    new = db.with_overrides({
+        "rough_sand": {"eps": [3.9, 0.56], "roughness": {"model": "ggx", "alpha": 0.3},
+                       "bump": {"model": "gaussian", "rms": "3 mm", "correlation": "3 cm", "size": "2 m"}},
+        "sand": {"roughness": {"model": "ashikhmin_shirley", "ex": 5, "ey": 50, "orientation_deg": 20}},
+    }, file=SCN)
+    r = new.get("rough_sand")
+    assert isinstance(r.roughness, GGX) and isinstance(r.bump, BumpMap)
+    # RMS slope of a Gaussian surface: sqrt(2) rms / correlation = 0.141 per direction; one
+    # realization holds ~(2 m / 3 cm)^2 = 4400 correlation areas (variance estimate +-2 %) and
+    # central differences at correlation / 8 lose ~1 %: 5 %
+    assert r.bump.rms_slope == pytest.approx(math.sqrt(2) * 3e-3 / 3e-2, rel=0.05)
+    assert isinstance(new.get("sand").roughness, AshikhminShirley)
+    assert new.get("sand").eps == db.get("sand").eps  # the rest of the entry is kept
+    assert db.get("sand").roughness is None  # smooth by default
+    assert "roughness" in format_material(new, "rough_sand") and "bump" in format_material(new, "rough_sand")
+    # null switches roughness off again
+    assert new.with_overrides({"sand": {"roughness": None}}, file=SCN).get("sand").roughness is None
+
+
+def test_coating_layer_roughness_is_parsed(db):
+    new = db.with_overrides({"painted": {"kind": "metal", "coating": [
+        {"material": "polypropylene", "thickness": "0.1 mm", "roughness": {"model": "blinn_phong", "m": 100}}]}}, file=SCN)
+    assert new.get("painted").coating[0].roughness is not None
+
+
+@pytest.mark.parametrize("raw, key, words", [
+    ({"roughness": {"model": "fuzzy"}}, "materials.sand.roughness.model", "known"),
+    ({"roughness": {"model": "ggx"}}, "materials.sand.roughness.alpha", "missing"),
+    ({"roughness": {"model": "ggx", "alpha": -1}}, "materials.sand.roughness.alpha", "must be"),
+    ({"roughness": {"model": "ashikhmin_shirley", "ex": 3, "ey": 3, "m": 2}}, "materials.sand.roughness.m",
+     "unknown parameter"),
+    ({"roughness": 0.3}, "materials.sand.roughness", "mapping"),
+    ({"bump": {"model": "gaussian", "rms": "3 mm", "size": "1 m"}}, "materials.sand.bump.correlation", "missing"),
+    ({"bump": {"model": "gaussian", "rms": "3 mm", "correlation": "0.1 mm", "size": "10 m"}},
+     "materials.sand.bump.size", "too large"),
+    ({"bump": {"texture": "nope.png", "height": "1 mm", "size": "1 m"}}, "materials.sand.bump.texture", "not found"),
+    ({"bump": {"model": "perlin"}}, "materials.sand.bump.model", "unknown bump model"),
+    ({"coating": [{"material": "polypropylene", "thickness": "1 mm", "roughness": {"model": "ggx"}}]},
+     "materials.sand.coating[0].roughness.alpha", "missing"),
+])
+def test_roughness_and_bump_errors_name_file_and_key(db, raw, key, words):
+    with pytest.raises(UserError) as ei:
+        db.with_overrides({"sand": raw}, file=SCN)
+    errs = _errors(ei.value)
+    assert key in [e.key for e in errs], [e.key for e in errs]
+    assert any(words in str(e) for e in errs)
+    assert all(e.file is not None for e in errs)

@@ -224,4 +224,20 @@ def test_script_regenerates_shipped_files(scene, tmp_path):
     script = SCENES / scene / "make_scene.py"
     subprocess.run([sys.executable, str(script), "--out-dir", str(tmp_path)], check=True, capture_output=True, cwd=REPO)
     for name in SCRIPTS[scene]:
-        assert (tmp_path / name).read_bytes() == (SCENES / scene / name).read_bytes(), name
+        new, shipped = tmp_path / name, SCENES / scene / name
+        if new.read_bytes() == shipped.read_bytes():
+            continue
+        # Not byte-identical: library versions may break ties differently (seen: trimesh 5.2 splits
+        # 16 of 34000 quads of the voxel body along the other diagonal). The same scene means the
+        # same objects and vertices, and surfaces that differ only in such splits: equal area and
+        # enclosed volume (to rounding), and at most 0.1 % of the faces changed.
+        a, b = trimesh.load(new, force="scene"), trimesh.load(shipped, force="scene")
+        assert sorted(a.geometry) == sorted(b.geometry), name
+        for key in a.geometry:
+            ga, gb = a.geometry[key], b.geometry[key]
+            assert ga.vertices.shape == gb.vertices.shape and ga.faces.shape == gb.faces.shape, (name, key)
+            assert np.allclose(ga.vertices, gb.vertices, rtol=0, atol=1e-9), (name, key)
+            assert np.mean(np.any(ga.faces != gb.faces, axis=1)) <= 1e-3, (name, key)
+            assert ga.area == pytest.approx(gb.area, rel=1e-9), (name, key)
+            if gb.is_watertight:
+                assert ga.is_watertight and ga.volume == pytest.approx(gb.volume, rel=1e-9), (name, key)

@@ -11,12 +11,20 @@ An entry (the same schema in the database files and in a scenario's ``materials:
       coating:                    # optional, outermost layer first
         - {material: denim, thickness: 0.8 mm, temperature: 300 K}
       thickness: 1 mm             # only for kind thin (the sheet's own thickness)
+      roughness: {model: ggx, alpha: 0.3}   # optional microfacet roughness of the surface
+      bump: {model: gaussian, rms: 3 mm, correlation: 3 cm, size: 1 m}   # optional bump map
 
 ``eps: [eps', eps'']`` (no frequencies) is one value for every frequency. eps = eps' + i eps'',
 eps'' >= 0 lossy (``docs/ARCHITECTURE.md``). ``metal`` and ``blackbody`` have no ``eps``
 (seed 000 sec. 2.2.9); every other kind needs one. Between tabulated frequencies eps' and eps''
 are interpolated linearly in frequency; outside the table the nearest tabulated value is used and
 a warning names the material and its range.
+
+``roughness:`` is a microfacet model of the surface (`pmmw_cli.physics.roughness.make_model`:
+``ashikhmin_shirley``, ``blinn_phong``, ``ggx``, ``beckmann``, ``blender_gloss``); without it the
+surface is smooth. Coating layers without their own ``roughness:`` follow the facets of the
+surface they lie on (coherent, conformal films). ``bump:`` perturbs the macro normal with a height
+map (`pmmw_cli.scene.bump`): an image file or a Gaussian random surface.
 
 Everything is validated at load time and every problem is reported with its file and dotted key
 path (``materials.runway.eps."95 GHz"``); problems are collected across entries and raised
@@ -39,13 +47,15 @@ import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, StrictStr, ValidationError
 
 from pmmw_cli.errors import UserError, UserErrors, warn
+from pmmw_cli.physics.roughness import make_model
+from pmmw_cli.scene.bump import make_bump
 from pmmw_cli.units import parse_quantity
 
 KINDS = ("dielectric", "metal", "blackbody", "opaque", "thin")
 _NO_EPS_KINDS = ("metal", "blackbody")
 _ID_RE = re.compile(r"^[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
-_ENTRY_KEYS = ("name", "eps", "temperature", "kind", "source", "coating", "thickness")
-_LAYER_KEYS = ("material", "thickness", "temperature")
+_ENTRY_KEYS = ("name", "eps", "temperature", "kind", "source", "coating", "thickness", "roughness", "bump")
+_LAYER_KEYS = ("material", "thickness", "temperature", "roughness")
 _EPS_EXAMPLE = "[eps', eps''] or {35 GHz: [eps', eps''], 95 GHz: [eps', eps'']}"
 _LAYER_EXAMPLE = "{material: ID, thickness: '0.8 mm', temperature: '300 K'}"
 _REL_TOL = 1e-9  # frequencies closer than this (relative) are the same frequency
@@ -69,11 +79,15 @@ class CoatingLayer:
     temperature : float or None
         [K]; None -> the layer material's temperature (and if that is None too, the caller's
         default, e.g. the coated material's temperature).
+    roughness : MicrofacetModel or None
+        Roughness of the layer's own top surface; None: the layer is a coherent film following
+        the facets of the surface below it.
     """
 
     material: str
     thickness: float
     temperature: float | None
+    roughness: object = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +110,10 @@ class Material:
         Outermost layer first.
     thickness : float or None
         The sheet's own thickness [m] (kind ``thin`` only).
+    roughness : MicrofacetModel or None
+        Microfacet roughness of the surface (`pmmw_cli.physics.roughness`); None: smooth.
+    bump : BumpMap or None
+        Height map perturbing the surface's macro normal (`pmmw_cli.scene.bump`).
     source : str
         Where the numbers come from.
     origin : str
@@ -110,6 +128,8 @@ class Material:
     temperature: float | None
     coating: tuple[CoatingLayer, ...] = ()
     thickness: float | None = None
+    roughness: object = None
+    bump: object = None
     source: str = ""
     origin: str = ""
 
@@ -308,6 +328,7 @@ class _LayerIn(BaseModel):
     material: StrictStr
     thickness: _Length
     temperature: _Temperature = None
+    roughness: Any = None  # checked by roughness.make_model (key paths of its own)
 
 
 class _EntryIn(BaseModel):
@@ -319,6 +340,8 @@ class _EntryIn(BaseModel):
     source: Optional[StrictStr] = None
     coating: Optional[list[_LayerIn]] = None
     thickness: _Length = None
+    roughness: Any = None  # checked by roughness.make_model
+    bump: Any = None  # checked by bump.make_bump
 
 
 def _suggest(word: str, choices: Iterable[str], n: int = 5) -> str:
@@ -374,11 +397,30 @@ def _parse_entry(mid, raw, file, base_key: str) -> tuple[dict | None, list[UserE
     except ValidationError as ex:
         return None, _pydantic_errors(ex, file, base_key)
     fields = {k: getattr(m, k) for k in m.model_fields_set}
+    errors: list[UserError] = []
+
+    def checked(make, spec, key):
+        if spec is None:
+            return None
+        try:
+            return make(spec, file=file, key=key)
+        except UserErrors as ex:
+            errors.extend(ex.errors)
+        except UserError as ex:
+            errors.append(ex)
+        return None
+
+    if "roughness" in fields:
+        fields["roughness"] = checked(make_model, m.roughness, _join(base_key, "roughness"))
+    if "bump" in fields:
+        fields["bump"] = checked(make_bump, m.bump, _join(base_key, "bump"))
     if "coating" in fields:
         fields["coating"] = tuple(
-            CoatingLayer(layer.material, float(layer.thickness), layer.temperature) for layer in (m.coating or [])
+            CoatingLayer(layer.material, float(layer.thickness), layer.temperature,
+                         checked(make_model, layer.roughness, _join(base_key, "coating", i, "roughness")))
+            for i, layer in enumerate(m.coating or [])
         )
-    return fields, []
+    return (None, errors) if errors else (fields, [])
 
 
 def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material | None, list[UserError]]:
@@ -415,6 +457,8 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
         temperature=fields.get("temperature"),
         coating=tuple(fields.get("coating") or ()),
         thickness=thickness,
+        roughness=fields.get("roughness"),
+        bump=fields.get("bump"),
         source=fields.get("source") or "",
         origin=str(origin),
     )
@@ -663,6 +707,10 @@ class MaterialDB:
             f"unknown material {mid!r}{hint} (`pmmw materials list` shows every id; a scenario's "
             "`materials:` map can define new ones)", file, key)
 
+    def key_of(self, mid: str) -> str:
+        """Key path of entry `mid` in the file it came from (``materials.ID`` for an override)."""
+        return self._keys.get(mid, mid)
+
     def ids(self) -> list[str]:
         """Every id, in load order (files by name, entries in file order; new overrides last)."""
         return list(self._materials)
@@ -801,11 +849,15 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
         + ("" if mat.temperature is not None else " (the scenario's temperature applies)"))
     if mat.thickness is not None:
         row("thickness", f"{_fmt_len(mat.thickness)} (the sheet's own)")
+    row("roughness", repr(mat.roughness) if mat.roughness is not None else "smooth")
+    if mat.bump is not None:
+        row("bump", repr(mat.bump))
     if mat.coating:
         row("coating", "outermost layer first")
         for i, layer in enumerate(mat.coating, 1):
             t = _fmt_t(layer.temperature) if layer.temperature is not None else "the layer material's T"
-            row("", f"{i}. {layer.material}, {_fmt_len(layer.thickness)}, {t}")
+            rough = f", rough top: {layer.roughness!r}" if layer.roughness is not None else ""
+            row("", f"{i}. {layer.material}, {_fmt_len(layer.thickness)}, {t}{rough}")
     row("source", " ".join(mat.source.split()) or "-")
     row("file", mat.origin or "-")
     return "\n".join(lines)

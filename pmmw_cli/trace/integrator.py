@@ -33,9 +33,10 @@ import numpy as np
 
 from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.physics.jones import basis_change, row_power, stokes_terms
+from pmmw_cli.physics.roughness import MAX_REHITS
 from pmmw_cli.scene.camera import pixel_samples
 from pmmw_cli.trace.intersect import offset_along
-from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
+from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
 
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
@@ -335,11 +336,34 @@ class Integrator:
             idx = np.nonzero(interact)[0]
             other = np.where(kind[idx] != DIELECTRIC, face_med[idx], np.where(entering[idx], face_med[idx], below[idx]))
             n_in = np.where(cosf[idx, None] < 0.0, nf[idx], -nf[idx])  # normal facing the incident side
+            n_mac = self._bumped(pos[idx], wv.d[idx], n_in, face_med[idx]) if media.any_rough else n_in
             leaving = ~entering[idx] & dielectric[idx]
-            out.extend(
-                self._interact(wv.take(idx), pos[idx], n_in, cur[idx], face_med[idx], other, leaving, prim[idx])
+            children = _Wave.concat(
+                self._interact(wv.take(idx), pos[idx], n_in, n_mac, cur[idx], face_med[idx], other, leaving, prim[idx])
             )
+            if children is not None:
+                out.append(self._terminate(children))
         return _Wave.concat(out)
+
+    def _bumped(self, pos, d, n_in, face_med):
+        """Macro normals tilted by the bump maps of the faces' materials (the face normal elsewhere).
+
+        Where the tilt exceeds the incidence (the ray would meet the back of the bump: shading
+        normals cannot model that shadowing) the face normal is kept.
+        """
+        media = self.job.media
+        out = n_in
+        for k in np.unique(face_med):
+            bump = media.bump[k] if k < len(media.bump) else None
+            if bump is None:
+                continue
+            g = face_med == k
+            if out is n_in:
+                out = n_in.copy()
+            tilted = bump.perturb(pos[g], n_in[g])
+            seen = np.einsum("ij,ij->i", d[g], tilted) < 0.0
+            out[g] = np.where(seen[:, None], tilted, n_in[g])
+        return out
 
     def _sky(self, wv: _Wave):
         sky = self.job.sky
@@ -370,12 +394,26 @@ class Integrator:
                 wv.top[r] = top - 1
         return wv
 
-    def _interact(self, wv: _Wave, pos, n_in, cur, face_med, other, leaving, prim):
+    def _interact(self, wv: _Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit=0):
+        """Interaction of rays with one face: emission of what it absorbs, reflected and
+        transmitted children.
+
+        ``n_geo`` is the face's geometric normal and ``n_mac`` its macro (shading) normal, a
+        bump map's tilt of it, both facing the incident side. On a rough surface each ray
+        first draws a microfacet normal visible from it (`pmmw_cli.physics.roughness`, "How the
+        renderer uses this") and the smooth-surface code below runs about that facet; children
+        masked by the microsurface re-hit the same point at once (``rehit`` counts the chain).
+        """
         job = self.job
         step = self.isect.face_offset[prim]
         media = job.media
         nr = len(wv)
-        cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_in), 0.0, 1.0)
+        kind = media.kind[face_med]
+        t_body = media.temperature[face_med]
+        n_fac, tangent, rough = n_mac, None, None
+        if media.any_rough:
+            n_fac, tangent, rough = self._facets(wv, n_mac, face_med)
+        cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_fac), 0.0, 1.0)
 
         # Coefficients per group of equal (cur, face medium, other, leaving).
         coeff = {k: np.empty(nr, complex) for k in ("rs", "rp", "ts", "tp")}
@@ -390,16 +428,14 @@ class Integrator:
                 coeff[name][g] = getattr(c, name)
             t_coat[g] = tc
 
-        # Local (s, p) basis of the outgoing wave k = -d (eq. 2.23).
+        # Local (s, p) basis of the outgoing wave k = -d about the (facet) normal (eq. 2.23).
         k_out = -wv.d
-        s = np.cross(n_in, k_out)
+        s = np.cross(n_fac, k_out)
         norm = np.linalg.norm(s, axis=1, keepdims=True)
         s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), wv.s)
         p_out = np.cross(k_out, s)
         ml = wv.m @ basis_change(wv.s, wv.p, s, p_out)
 
-        kind = media.kind[face_med]
-        t_body = media.temperature[face_med]
         absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
         if absorb.any():
             a = absorb
@@ -409,22 +445,23 @@ class Integrator:
             a = sink
             self._emit(wv.sid[a], _scale_columns(ml[a], np.sqrt(coeff["Ts"][a]), np.sqrt(coeff["Tp"][a])), t_body[a])
 
-        children = []
         trans = ((kind == DIELECTRIC) | (kind == THIN)) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
         keep_r, keep_t, gain_r, gain_t = self._choose_branches(wv, coeff, trans)
+        out = []
 
-        # Reflected child (eq. 2.21, 2.39).
+        # Reflected child (eq. 2.21, 2.39): stays on the incident side.
         if keep_r.any():
             i = np.nonzero(keep_r)[0]
-            cosd = np.einsum("ij,ij->i", wv.d[i], n_in[i])
-            d_r = wv.d[i] - 2.0 * cosd[:, None] * n_in[i]
+            cosd = np.einsum("ij,ij->i", wv.d[i], n_fac[i])
+            d_r = wv.d[i] - 2.0 * cosd[:, None] * n_fac[i]
             m_r = _scale_columns(ml[i], gain_r[i] * _amplitude(coeff["rs"][i], coeff["Rs"][i]),
                                  gain_r[i] * _amplitude(coeff["rp"][i], coeff["Rp"][i]))
-            children.append(_Wave(
-                o=offset_along(pos[i], n_in[i], d_r, step[i]), d=d_r, s=s[i], p=np.cross(-d_r, s[i]),
-                m=m_r, sid=wv.sid[i], depth=wv.depth[i] + 1, stack=wv.stack[i].copy(), top=wv.top[i].copy(),
-                last_t=t_body[i],
-            ))
+            child = _Wave(
+                o=pos[i], d=d_r, s=s[i], p=np.cross(-d_r, s[i]), m=m_r, sid=wv.sid[i], depth=wv.depth[i] + 1,
+                stack=wv.stack[i].copy(), top=wv.top[i].copy(), last_t=t_body[i],
+            )
+            side = (cur[i], other[i], leaving[i])
+            out += self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, 1.0, rehit)
 
         # Transmitted child (eq. 2.19, 2.40): dielectrics refract into the other medium, thin
         # sheets pass straight through.
@@ -434,7 +471,7 @@ class Integrator:
             diel = kind[i] == DIELECTRIC
             if diel.any():
                 j = i[diel]
-                d_t[diel] = _refract(wv.d[j], n_in[j], media.eps[cur[j]], media.eps[other[j]])
+                d_t[diel] = _refract(wv.d[j], n_fac[j], media.eps[cur[j]], media.eps[other[j]])
             m_t = _scale_columns(ml[i], gain_t[i] * _amplitude(coeff["ts"][i], coeff["Ts"][i]),
                                  gain_t[i] * _amplitude(coeff["tp"][i], coeff["Tp"][i]))
             stack, top = wv.stack[i].copy(), wv.top[i].copy()
@@ -443,13 +480,113 @@ class Integrator:
             stack[np.nonzero(enter)[0], top[enter]] = face_med[i][enter]
             leave = diel & leaving[i]
             top[leave] -= 1
-            children.append(_Wave(
-                o=offset_along(pos[i], n_in[i], d_t, step[i]), d=d_t, s=s[i], p=np.cross(-d_t, s[i]), m=m_t,
-                sid=wv.sid[i], depth=wv.depth[i] + 1, stack=stack, top=top, last_t=t_body[i],
-            ))
+            child = _Wave(
+                o=pos[i], d=d_t, s=s[i], p=np.cross(-d_t, s[i]), m=m_t, sid=wv.sid[i], depth=wv.depth[i] + 1,
+                stack=stack, top=top, last_t=t_body[i],
+            )
+            # seen from the far side: a refracted child swaps the media, a thin sheet keeps them
+            side = (np.where(diel, other[i], cur[i]), np.where(diel, cur[i], other[i]), np.where(diel, ~leaving[i], leaving[i]))
+            out += self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, -1.0, rehit)
 
-        nxt = _Wave.concat(children)
-        return [self._terminate(nxt)] if nxt is not None else []
+        return out
+
+    def _facets(self, wv: _Wave, n_mac, face_med):
+        """Microfacet normals for the rays on rough faces (the macro normal elsewhere).
+
+        Returns
+        -------
+        n_fac : ndarray, shape (n, 3)
+            Facet (or macro) normals; rays whose draw found no visible facet (weight 0, only for
+            degenerate input) are emitted at the surface temperature and carry on with zero power.
+        tangent : ndarray, shape (n, 3) or None
+            Anisotropy tangent: world X projected onto the macro plane (Y where that degenerates).
+        rough : ndarray, shape (n,), bool or None
+        """
+        media = self.job.media
+        models = {k: media.rough(int(k)) for k in np.unique(face_med)}
+        models = {k: mdl for k, mdl in models.items() if mdl is not None}
+        if not models:
+            return n_mac, None, None
+        tangent = _tangents(n_mac)
+        n_fac = n_mac.copy()
+        rough = np.zeros(len(wv), bool)
+        for k, mdl in models.items():
+            g = np.nonzero(face_med == k)[0]
+            u = self.rng.random((2, g.size))
+            m, w = mdl.sample_normals(n_mac[g], tangent[g], -wv.d[g], u[0], u[1])
+            n_fac[g] = np.where(w[:, None] > 0.0, m, n_mac[g])
+            rough[g] = True
+            lost = w <= 0.0
+            if lost.any():
+                j = g[lost]
+                self._emit(wv.sid[j], wv.m[j], self.job.media.temperature[k])
+                wv.m[j] = 0.0
+            scaled = (w > 0.0) & (w != 1.0)
+            if scaled.any():
+                wv.m[g[scaled]] *= np.sqrt(w[scaled])[:, None, None]
+        return n_fac, tangent, rough
+
+    def _settle(self, child: _Wave, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, sign, rehit):
+        """Send children off the surface, or back onto it.
+
+        A child of a rough facet leaves with Smith's masking probability G1 about the macro
+        normal of its side (0 on the wrong side); the others hit the same point again at once
+        (`_interact` with ``rehit + 1``, no intersection), up to ``roughness.MAX_REHITS`` after
+        which the chain's power is emitted at the surface temperature. On its way to the next
+        facet a re-hitting child crosses one wavelength of its side's medium (the smallest facet
+        spacing for which geometrical optics holds), absorbing ``1 - exp(-alpha lambda)`` and
+        emitting it at that medium's temperature: a metal-like body swallows what it transmits
+        (as `pmmw_cli.brdf` does with a lossy substrate), a clear one lets it walk on. A child on the wrong side of the *geometric* face (a bump map's tilt) is
+        mirrored through the face's plane, keeping its power. ``sign`` is +1 for reflected
+        children (incident side), -1 for transmitted ones (far side).
+        """
+        n_g = sign * n_geo[i]
+        n_x = sign * n_mac[i]
+        stay = np.zeros(len(child), bool)
+        if rough is not None and rough[i].any():
+            r = np.nonzero(rough[i])[0]
+            fm = face_med[i][r]
+            p_leave = np.empty(r.size)
+            for k in np.unique(fm):
+                g = fm == k
+                p_leave[g] = self.job.media.rough(int(k)).masking(n_x[r[g]], tangent[i][r[g]], child.d[r[g]])
+            stay[r] = self.rng.random(r.size) >= p_leave
+        go = ~stay
+        wrong = go & (np.einsum("ij,ij->i", child.d, n_g) <= 0.0)
+        if wrong.any():  # mirror d and its basis vector s through the face (p follows: orthonormal)
+            g = n_g[wrong]
+            d_w, s_w = child.d[wrong], child.s[wrong]
+            d_w = d_w - 2.0 * np.einsum("ij,ij->i", d_w, g)[:, None] * g
+            s_w = s_w - 2.0 * np.einsum("ij,ij->i", s_w, g)[:, None] * g
+            child.d[wrong], child.s[wrong] = d_w, s_w
+            child.p[wrong] = np.cross(-d_w, s_w)
+        child.o = offset_along(child.o, n_g, child.d, step[i])
+        out = [child.take(go) if stay.any() else child]
+        if stay.any():
+            back = child.take(stay)
+            j = i[stay]
+            cur, other, leaving = (np.asarray(a)[stay] for a in side)
+            if rehit + 1 > MAX_REHITS:
+                self._emit(back.sid, back.m, self.job.media.temperature[face_med[j]])
+                return out
+            # the way to the next facet runs through the side's medium: at least a wavelength
+            # (geometrical optics needs facets larger than that), absorbed and emitted there
+            media = self.job.media
+            tau = np.exp(-media.alpha[cur] * (C0 / self.job.frequency))
+            lossy = tau < 1.0
+            if lossy.any():
+                self._emit(back.sid[lossy], back.m[lossy] * np.sqrt(1.0 - tau[lossy])[:, None, None],
+                           media.temperature[cur[lossy]])
+                back.m[lossy] *= np.sqrt(tau[lossy])[:, None, None]
+            alive = tau > _A_ROUNDING
+            if alive.any():
+                a = np.nonzero(alive)[0]
+                back = back.take(a) if not alive.all() else back
+                back.o = pos[j[a]]
+                back.depth -= 1  # the chain of facets at one point counts as one interaction
+                out += self._interact(back, pos[j[a]], n_g[stay][a], n_x[stay][a], cur[a], face_med[j[a]], other[a],
+                                      leaving[a], prim[j[a]], rehit + 1)
+        return out
 
     def _choose_branches(self, wv: _Wave, coeff, trans):
         """Which children to follow (``render.strategy``) and their amplitude gains.
@@ -499,6 +636,16 @@ class Integrator:
                 dead[idx[~survive]] = True
         keep = ~(dead | at_depth)
         return wv.take(keep) if not keep.all() else wv
+
+
+def _tangents(n):
+    """Unit tangents: world X projected onto the plane normal to n (world Y where n ~ X)."""
+    t = np.zeros_like(n)
+    t[:, 0] = 1.0
+    near_x = np.abs(n[:, 0]) > 0.9
+    t[near_x] = (0.0, 1.0, 0.0)
+    t -= np.einsum("ij,ij->i", t, n)[:, None] * n
+    return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 
 def _refract(d, n_in, eps1, eps2):

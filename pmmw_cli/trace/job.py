@@ -65,6 +65,11 @@ class Media:
         Power absorption coefficient [Np/m] (seed 000 eq. 2.37: alpha = 2 k0 Im n).
     coating : tuple of (Coating or None), length K
         For ``thin`` media the sheet itself is the last layer of the stack.
+    roughness : tuple of (MicrofacetModel or None), length K or empty
+        Microfacet roughness of each medium's surface (`pmmw_cli.physics.roughness`); empty or
+        None: smooth. A coating follows the facets (conformal coherent films).
+    bump : tuple of (BumpMap or None), length K or empty
+        Height map tilting each medium's macro surface normal (`pmmw_cli.scene.bump`).
     """
 
     ids: list
@@ -73,6 +78,17 @@ class Media:
     temperature: np.ndarray
     alpha: np.ndarray
     coating: tuple
+    roughness: tuple = ()
+    bump: tuple = ()
+
+    def rough(self, k: int):
+        """The roughness model of medium k, or None."""
+        return self.roughness[k] if k < len(self.roughness) else None
+
+    @property
+    def any_rough(self) -> bool:
+        """Whether any surface is rough or bumped (smooth scenes skip all of that work)."""
+        return any(r is not None for r in self.roughness) or any(b is not None for b in self.bump)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,179 @@
+"""Rough and bumped surfaces in the renderer (issue 4).
+
+References: energy conservation (isothermal enclosures read their temperature; a rough lossless
+dielectric reflects plus transmits 1), `pmmw_cli.brdf.monte_carlo` (the same estimator written a
+second time, path by path over an infinite plane, independent of the renderer's wavefront,
+media stack, geometry and intersector), the seed 001 copper number, and the flat-surface
+Fresnel closed form as the exponent grows.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pmmw_cli import brdf as B
+from pmmw_cli.physics import roughness as R
+from pmmw_cli.scene.bump import BumpMap, gaussian_surface
+from pmmw_cli.trace.job import RenderSettings
+from tests.scenes import UniformSky, box, hollow_box, looking_down_at, make_job, material, render, sphere
+
+F95 = 95e9
+COPPER_EPS = (0.23 + 3.46j) ** 2
+MODELS = {
+    "ggx": R.GGX(0.4),
+    "ashikhmin_shirley": R.AshikhminShirley(5.0, 40.0, orientation_deg=30.0),
+    "blinn_phong": R.BlinnPhong(10.0),
+    "beckmann": R.Beckmann(alpha_x=0.2, alpha_y=0.5),
+    "blender_gloss": R.BlenderGloss(0.6),
+}
+
+
+def _room(t, model, bump=None):
+    """An isothermal closed room with rough walls, a rough metal sphere, a rough coated sphere, a
+    rough lossless-ish plastic box and a rough opaque box."""
+    return [
+        (hollow_box([-5, -5, -3], [5, 5, 3], 0.3), material(eps=5.5 + 0.5j, temperature=t, roughness=model, bump=bump)),
+        (sphere([1.0, 2.0, 0.0], 0.8), material(kind="metal", temperature=t, roughness=model)),
+        (sphere([-1.2, 2.5, 0.3], 0.7),
+         material(eps=5.9 + 9.4j, temperature=t, coating=[(1.61 + 0.121j, 0.8e-3, t)], roughness=model)),
+        (box([-0.6, 1.0, -1.5], [0.6, 1.8, -0.5]), material(eps=2.26 + 0.0013j, temperature=t, roughness=model)),
+        (box([1.5, 0.5, -2.0], [2.5, 1.5, -1.0]), material(kind="opaque", eps=3.0 + 0.2j, temperature=t,
+                                                           roughness=model)),
+    ]
+
+
+def _room_camera():
+    from pmmw_cli.scene.camera import Camera
+
+    return Camera.look_at([0.0, -4.0, 0.5], [0.0, 2.0, 0.0], [0, 0, 1], np.radians(70), (24, 18))
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_isothermal_room_with_rough_surfaces_reads_its_temperature(name):
+    """Every facet event keeps or splits the power by R + T + A = 1 about the facet, masked
+    children re-hit, nothing is discarded: every pixel reads T exactly (rounding, 1e-6 K) with
+    random facets, for every model (deterministic splitting: with stochastic branches a path's
+    s and p weights are 1 only on average, smooth or rough)."""
+    t = 300.0
+    settings = RenderSettings(spp=2, max_depth=6, threshold=1e-3, termination="temperature", tile=12)
+    img = render(make_job(_room(t, MODELS[name]), _room_camera(), UniformSky(0.0, 0.0), F95, settings))
+    for ch in ("Ex2", "Ey2"):
+        assert np.max(np.abs(img[ch] - t)) < 1e-6, ch
+    for ch in ("Q", "U", "V"):
+        assert np.max(np.abs(img[ch])) < 1e-6, ch
+
+
+def test_isothermal_room_with_bumps_reads_its_temperature():
+    bump = BumpMap(gaussian_surface(0.02, 0.1, 2.0, seed=3), 2.0)
+    assert bump.rms_slope > 0.2  # slopes steep enough that some rays meet the back of a bump
+    settings = RenderSettings(spp=2, max_depth=6, threshold=1e-3, termination="temperature", tile=12)
+    img = render(make_job(_room(300.0, MODELS["ggx"], bump), _room_camera(), UniformSky(0.0, 0.0), F95, settings))
+    assert np.max(np.abs(img["I"] - 600.0)) < 1e-6  # I = Ex2 + Ey2
+
+
+def _plane(theta_deg, mat, spp, seed=1, sky=1.0):
+    """One pixel looking at a wide flat top face at incidence theta; sky at `sky` K."""
+    settings = RenderSettings(spp=spp, max_depth=30, threshold=1e-4, termination="roulette", seed=seed, tile=1)
+    job = make_job([(box([-500, -500, -50], [500, 500, 0]), mat)], looking_down_at(theta_deg, height=2.0),
+                   UniformSky(sky, sky), F95, settings)
+    return render(job)
+
+
+@pytest.mark.parametrize("theta", [20.0, 60.0])
+def test_rough_copper_reflectance_matches_the_brdf_monte_carlo(theta):
+    """Sky 1 K, copper 0 K: each polarization of the pixel reads the directional-hemispherical
+    reflectance (reciprocity) that `pmmw brdf` integrates over the hemisphere for that incident
+    polarization (h = s = image x here). 20000 samples: a binomial-like standard error
+    sqrt(R(1-R)/N) <= 0.002 for the render and 0.001 for 1e5 brdf paths; tolerance 0.008 (3.5
+    sigma combined)."""
+    model = R.AshikhminShirley(15.0, 15.0)
+    img = _plane(theta, material(eps=COPPER_EPS, temperature=0.0, roughness=model), spp=20_000)
+    res = {}
+    for name, stokes in (("Ex2", (1, 1, 0, 0)), ("Ey2", (1, -1, 0, 0))):
+        stack = B.Stack(layers=(B.Layer(eps=COPPER_EPS, roughness=model),))
+        s = B.run_brdf(stack=stack, incidence=theta, stokes=stokes, samples=100_000, seed=7, plots=False)
+        res[name] = s.summary["methods"]["mc"]["total_reflectance"]
+        assert float(img[name][0, 0]) == pytest.approx(res[name], abs=8e-3), name
+    if theta == 60.0:  # s and p differ by far more than the tolerance there: polarization is carried
+        assert res["Ex2"] - res["Ey2"] > 0.03
+
+
+def test_seed_001_copper_in_a_scene():
+    """Seed 001's copper (ex = ey = 15, 40 degrees): the scene's unpolarized reflectance is our
+    0.9266 (docs/brdf.md; the seed reports 0.8692, see there why), within 0.006 (20000 samples,
+    standard error ~0.002 per polarization)."""
+    img = _plane(40.0, material(eps=COPPER_EPS, temperature=0.0, roughness=R.AshikhminShirley(15, 15)), spp=20_000)
+    assert float(img["I"][0, 0]) / 2 == pytest.approx(0.9266, abs=6e-3)  # I = Ex2 + Ey2
+
+
+@pytest.mark.parametrize("theta", [0.0, 50.0, 80.0])
+def test_rough_lossless_dielectric_reflects_plus_transmits_one(theta):
+    """Sky 1 K over a lossless rough dielectric whose inside ends on a 0 K blackbody floor: the
+    pixel reads R; with the floor at 1 K it reads R + T = 1; R agrees with the brdf
+    Monte Carlo's total reflectance (same tolerance reasoning as for copper)."""
+    model = R.GGX(0.5)
+    eps = 2.25 + 0j
+
+    def scene(t_floor):
+        slab = (box([-500, -500, -5], [500, 500, 0]), material(eps=eps, temperature=0.0, roughness=model))
+        floor = (box([-499, -499, -6], [499, 499, -4]), material(kind="blackbody", temperature=t_floor))
+        settings = RenderSettings(spp=4000, max_depth=40, threshold=1e-4, seed=3, tile=1)
+        return render(make_job([slab, floor], looking_down_at(theta, height=2.0), UniformSky(1.0, 1.0), F95,
+                               settings))
+
+    both = scene(1.0)
+    # Russian roulette below the 1e-4 weight threshold is unbiased, not exact path by path: the
+    # residue is ~ threshold x (fraction of paths reaching it) / sqrt(spp) << 1e-5
+    assert abs(float(both["I"][0, 0]) - 2.0) < 1e-5  # I = Ex2 + Ey2
+    refl = float(scene(0.0)["I"][0, 0]) / 2
+    s = B.run_brdf(stack=B.Stack(layers=(B.Layer(eps=eps, roughness=model),)), incidence=theta, samples=100_000,
+                   seed=2, plots=False).summary["methods"]["mc"]
+    assert refl == pytest.approx(s["total_reflectance"], abs=0.012)
+
+
+def test_rough_converges_to_smooth():
+    """Blinn-Phong m = 1e6 (facets within ~0.1 degree): the pixel equals the flat Fresnel pixel to
+    1e-3 K-per-K (one sample is enough: the lobe is a mirror)."""
+    smooth = _plane(50.0, material(eps=COPPER_EPS, temperature=0.0), spp=1)
+    rough = _plane(50.0, material(eps=COPPER_EPS, temperature=0.0, roughness=R.BlinnPhong(1e6)), spp=64)
+    for ch in ("Ex2", "Ey2"):
+        assert float(rough[ch][0, 0]) == pytest.approx(float(smooth[ch][0, 0]), abs=1e-3)
+
+
+def test_smooth_scenes_never_touch_the_roughness_code(monkeypatch):
+    """'Smooth costs nothing': with no rough or bumped material the facet code is never called."""
+    from pmmw_cli.trace import integrator
+
+    def boom(*a, **k):
+        raise AssertionError("roughness code called for a smooth scene")
+
+    monkeypatch.setattr(integrator.Integrator, "_facets", boom)
+    monkeypatch.setattr(integrator.Integrator, "_bumped", boom)
+    img = _plane(30.0, material(eps=3.0 + 0.1j, temperature=300.0), spp=4)
+    assert np.isfinite(img["I"]).all()
+
+
+def test_bump_tilts_the_normal_like_a_tilted_plane():
+    """A constant-slope bump (h = a x, periodic saw cut out of the sampled region) equals the
+    geometric plane tilted by atan(a): the Fresnel angle changes accordingly (closed form)."""
+    a = 0.2
+    n = 64
+    size = 4.0
+    x = (np.arange(n) + 0.0) * size / n
+    h = np.tile(a * ((x + size / 2) % size), (n, 1))  # ramp along u = x, wrap-around jump at x = 2 m
+    bump = BumpMap(h, size)
+    th = 40.0
+    eps = 3.0 + 0.1j  # lossy: what enters the 50 m deep box never comes back (exp(-115/m x 50 m))
+    img = _plane(th, material(eps=eps, temperature=0.0, bump=bump), spp=1)
+    # the camera looks along +y (looking_down_at), so a slope along x tilts the normal sideways
+    n_t = np.array([-a, 0.0, 1.0]) / math.hypot(a, 1.0)
+    d = np.array([0.0, math.sin(math.radians(th)), -math.cos(math.radians(th))])
+    cos_i = -float(d @ n_t)
+    root = np.sqrt(eps - (1 - cos_i**2))
+    rs = (cos_i - root) / (cos_i + root)
+    rp = (eps * cos_i - root) / (eps * cos_i + root)
+    unpol = (abs(rs) ** 2 + abs(rp) ** 2) / 2
+    assert float(img["I"][0, 0]) / 2 == pytest.approx(unpol, abs=1e-6)
