@@ -135,7 +135,9 @@ class Layer:
         Model of the interface on top of this layer; None is smooth.
     thickness : float or None
         [m]; a lossy layer with a thickness attenuates each path by ``exp(-2 k0 Im(n) L)`` over
-        its length L; without one, absorption inside the layer is ignored (seed 001 assumption 3).
+        its length L (and a ray masked inside it by one wavelength on its way back to the same
+        interface, as in the renderer); without one, absorption inside the layer is ignored (seed
+        001 assumption 3).
         Ignored for the substrate (the last layer, a half-space).
     coating : tuple of (complex, float)
         Coherent films ``(eps, thickness [m])``, outermost first, conformal to the facets of the
@@ -757,10 +759,23 @@ def _mc_event(pt: _Paths, itf: _Interface, i: int, from_above: bool, stack, rng,
         tally.absorbed += 0.5 * float(np.sum(np.abs(j_new[chain_end]) ** 2))
     keep = alive & ~chain_end
     out = []
-    # re-hits: same interface, from the child's side
+    # re-hits: same interface, from the child's side, after one wavelength of the medium there
+    # (the shortest way to another facet for which geometrical optics holds; the renderer's rule)
     rh = keep & ~leave
     if np.any(rh):
-        out.append(new.take(np.nonzero(rh)[0]))
+        back = new.take(np.nonzero(rh)[0])
+        # only where absorption is modelled: a layer with a thickness (seed 001 assumption 3)
+        lay_above = stack.layers[i - 1] if i > 0 else None
+        lossy_above = lay_above is not None and lay_above.thickness is not None
+        lossy_below = stack.layers[i].thickness is not None and not itf.last
+        if stack.k0 is not None and (lossy_above or lossy_below):
+            eps_side = np.where(back.above, itf.above if lossy_above else 1.0, itf.below if lossy_below else 1.0)
+            tau = np.exp(-4.0 * math.pi * np.sqrt(eps_side + 0j).imag)  # exp(-alpha lambda), alpha = 2 k0 Im n
+            if np.any(tau < 1.0):
+                before = 0.5 * np.sum(np.abs(back.j) ** 2, axis=(1, 2))
+                back.j = back.j * np.sqrt(tau)[:, None, None]
+                tally.absorbed += float(np.sum(before * (1.0 - tau)))
+        out.append(back)
     lv = keep & leave
     if np.any(lv):
         go = new.take(np.nonzero(lv)[0])

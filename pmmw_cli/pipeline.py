@@ -31,7 +31,7 @@ from pmmw_cli.scene.geometry import build_geometry
 from pmmw_cli.scene.materials import MaterialDB
 from pmmw_cli.scene.sky import make_sky
 from pmmw_cli.trace.job import (
-    BLACKBODY, C0, DIELECTRIC, KIND_CODES, METAL, THIN, Coating, Media, RenderSettings, TraceJob,
+    BLACKBODY, C0, DIELECTRIC, KIND_CODES, METAL, THIN, Coating, Media, RenderSettings, TraceJob, split_coating,
 )
 from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
 
@@ -83,7 +83,7 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
     t_default = scn.render.default_temperature
     atm = scn.atmosphere
     ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
-    rough, bump = [None], [None]
+    rough, bump, stacks = [None], [None], [()]
     uniform = atm is not None and atm.model == "uniform"  # the layered model lives on the job
     temp.append(atm.temperature if uniform else t_default)
     alpha.append(atm.loss if uniform else 0.0)
@@ -101,20 +101,19 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
         bump.append(m.bump)
         layers = []
         for i, layer in enumerate(m.coating):
-            if layer.roughness is not None:
-                raise UserError(
-                    "a rough coating layer (its own `roughness:`) is a separate incoherent layer; scenes do "
-                    "not trace those yet (`pmmw brdf --stack` does): remove the layer's roughness to make it "
-                    "a coherent film that follows the material's `roughness:`", m.origin,
-                    f"{db.key_of(mid)}.coating[{i}].roughness")
             lm = db.get(layer.material)
             t_l = layer.temperature if layer.temperature is not None else (lm.temperature if lm.temperature is not None else t_m)
-            layers.append((lm.eps_at(f), layer.thickness, t_l))
+            layers.append((lm.eps_at(f), layer.thickness, t_l, layer.roughness))
+            if layer.roughness is not None and code == THIN:
+                raise UserError("a thin sheet's coating layers cannot be rough (the sheet is traced as one coherent "
+                                "stack): remove the layer's roughness", m.origin, f"{db.key_of(mid)}.coating[{i}].roughness")
         if code == THIN:
-            layers.append((e, m.thickness or 0.0, t_m))
-        coat.append(Coating.from_layers(*zip(*layers)) if layers else None)
+            layers.append((e, m.thickness or 0.0, t_m, None))
+        rough_layers, films = split_coating(layers, k0)
+        coat.append(films)
+        stacks.append(rough_layers)
     return Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp, float), np.array(alpha, float),
-                 tuple(coat), tuple(rough), tuple(bump))
+                 tuple(coat), tuple(rough), tuple(bump), tuple(stacks))
 
 
 def scenario_hash(scn, db: MaterialDB | None = None) -> str:

@@ -10,7 +10,7 @@ from pmmw_cli.scene.sky import UniformSky
 from pmmw_cli.trace.integrator import Integrator
 from pmmw_cli.trace.intersect import make_intersector
 from pmmw_cli.physics.roughness import make_model
-from pmmw_cli.trace.job import C0, DIELECTRIC, KIND_CODES, Coating, Media, RenderSettings, TraceJob
+from pmmw_cli.trace.job import C0, DIELECTRIC, KIND_CODES, Media, RenderSettings, TraceJob, split_coating
 from pmmw_cli.trace.pool import assemble
 from pmmw_cli.physics.jones import stokes_images
 
@@ -38,7 +38,8 @@ def sphere(center, radius, subdivisions=3):
 
 
 def material(kind="dielectric", eps=1 + 0j, temperature=300.0, coating=(), thickness=None, roughness=None, bump=None):
-    """A material spec: coating is a list of (eps, thickness [m], temperature [K]), outermost first;
+    """A material spec: coating is a list of (eps, thickness [m], temperature [K][, roughness]),
+    outermost first (a layer with a roughness model or record is a rough layer of its own);
     roughness a MicrofacetModel (or a record for `roughness.make_model`), bump a BumpMap."""
     if isinstance(roughness, dict):
         roughness = make_model(roughness)
@@ -51,7 +52,7 @@ def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
     k0 = 2 * np.pi * frequency / C0
     verts, faces, normals, fmed = [], [], [], []
     ids, eps, kind, temp, alpha, coat = ["ambient"], [1 + 0j], [DIELECTRIC], [], [], [None]
-    rough, bumps = [None], [None]
+    rough, bumps, stacks = [None], [None], [()]
     temp.append(ambient[1] if ambient else 290.0)
     alpha.append(ambient[0] if ambient else 0.0)
     off = 0
@@ -69,12 +70,17 @@ def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
         alpha.append(2 * k0 * np.sqrt(spec["eps"]).imag if code == DIELECTRIC else 0.0)
         rough.append(spec.get("roughness"))
         bumps.append(spec.get("bump"))
-        layers = list(spec["coating"])
+        layers = []
+        for layer in spec["coating"]:  # (eps, thickness, temperature[, roughness])
+            r = layer[3] if len(layer) > 3 else None
+            layers.append((layer[0], layer[1], layer[2], make_model(r) if isinstance(r, dict) else r))
         if spec["kind"] == "thin":
-            layers.append((spec["eps"], spec["thickness"], spec["temperature"]))
-        coat.append(Coating.from_layers(*zip(*layers)) if layers else None)
+            layers.append((spec["eps"], spec["thickness"], spec["temperature"], None))
+        rough_layers, films = split_coating(layers, k0)
+        coat.append(films)
+        stacks.append(rough_layers)
     media = Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp), np.array(alpha), tuple(coat),
-                  tuple(rough), tuple(bumps))
+                  tuple(rough), tuple(bumps), tuple(stacks))
     return TraceJob(
         vertices=np.concatenate(verts), faces=np.concatenate(faces), face_normals=np.concatenate(normals),
         face_medium=np.concatenate(fmed), media=media, camera=camera, sky=sky, frequency=frequency,

@@ -111,8 +111,8 @@ def test_materials_list_and_show():
         ("materials: {concrete: {roughness: {model: ggx, alpha: -1}}}", [], "materials.concrete.roughness.alpha"),
         ("materials: {concrete: {bump: {model: gaussian, rms: 1 cm, size: 1 m}}}", [],
          "materials.concrete.bump.correlation"),
-        ("materials: {concrete: {coating: [{material: denim, thickness: 1 mm, roughness: {model: ggx, alpha: 0.2}}]}}",
-         [], "materials.concrete.coating[0].roughness"),
+        ("materials: {concrete: {kind: thin, thickness: 1 mm, coating: [{material: denim, thickness: 1 mm, "
+         "roughness: {model: ggx, alpha: 0.2}}]}}", [], "materials.concrete.coating[0].roughness"),
     ],
 )
 def test_user_errors_name_file_and_key_without_traceback(tmp_path, extra, override, key):

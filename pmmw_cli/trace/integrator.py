@@ -26,6 +26,7 @@ isothermal enclosure reads its temperature exactly (PHYSICS.md, "Energy bookkeep
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -41,6 +42,7 @@ from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, THIN, T
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
 _A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
+_MAX_WALK = 1000  # facet events of one walk through rough coating layers (never reached in tests)
 
 
 @dataclass
@@ -338,9 +340,17 @@ class Integrator:
             n_in = np.where(cosf[idx, None] < 0.0, nf[idx], -nf[idx])  # normal facing the incident side
             n_mac = self._bumped(pos[idx], wv.d[idx], n_in, face_med[idx]) if media.any_rough else n_in
             leaving = ~entering[idx] & dielectric[idx]
-            children = _Wave.concat(
-                self._interact(wv.take(idx), pos[idx], n_in, n_mac, cur[idx], face_med[idx], other, leaving, prim[idx])
-            )
+            layered = np.array([bool(media.rough_layers(int(k))) for k in face_med[idx]]) if media.any_rough else None
+            if layered is None or not layered.any():
+                kids = self._interact(wv.take(idx), pos[idx], n_in, n_mac, cur[idx], face_med[idx], other, leaving,
+                                      prim[idx])
+            else:
+                a, b = np.nonzero(~layered)[0], np.nonzero(layered)[0]
+                kids = self._interact(wv.take(idx[a]), pos[idx[a]], n_in[a], n_mac[a], cur[idx[a]], face_med[idx[a]],
+                                      other[a], leaving[a], prim[idx[a]]) if a.size else []
+                kids += self._walk_layers(wv.take(idx[b]), pos[idx[b]], n_in[b], n_mac[b], cur[idx[b]],
+                                          face_med[idx[b]], other[b], leaving[b], prim[idx[b]])
+            children = _Wave.concat(kids)
             if children is not None:
                 out.append(self._terminate(children))
         return _Wave.concat(out)
@@ -552,14 +562,7 @@ class Integrator:
                 p_leave[g] = self.job.media.rough(int(k)).masking(n_x[r[g]], tangent[i][r[g]], child.d[r[g]])
             stay[r] = self.rng.random(r.size) >= p_leave
         go = ~stay
-        wrong = go & (np.einsum("ij,ij->i", child.d, n_g) <= 0.0)
-        if wrong.any():  # mirror d and its basis vector s through the face (p follows: orthonormal)
-            g = n_g[wrong]
-            d_w, s_w = child.d[wrong], child.s[wrong]
-            d_w = d_w - 2.0 * np.einsum("ij,ij->i", d_w, g)[:, None] * g
-            s_w = s_w - 2.0 * np.einsum("ij,ij->i", s_w, g)[:, None] * g
-            child.d[wrong], child.s[wrong] = d_w, s_w
-            child.p[wrong] = np.cross(-d_w, s_w)
+        _mirror_wrong_side(child, n_g, go)
         child.o = offset_along(child.o, n_g, child.d, step[i])
         out = [child.take(go) if stay.any() else child]
         if stay.any():
@@ -587,6 +590,257 @@ class Integrator:
                 out += self._interact(back, pos[j[a]], n_g[stay][a], n_x[stay][a], cur[a], face_med[j[a]], other[a],
                                       leaving[a], prim[j[a]], rehit + 1)
         return out
+
+    # -- rough coating layers (seed 001) ----------------------------------------------------------
+    def _walk_layers(self, wv: _Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim):
+        """Rays meeting a surface with rough coating layers: the seed 001 walk through them.
+
+        The surface is a pile of interfaces at one point: interface j < L is the rough top of
+        rough layer j (`RoughLayer`, with its coherent films), interface L the substrate's own
+        surface (its ``coating`` films and ``roughness``). A ray on it is at an interface j, on its
+        upper or lower side. Each step: draw a facet (the interface's model, or its macro normal),
+        split by Fresnel / the films' multilayer about it (absorption emitted at the films'
+        temperature), mask each child (masked ones stay at interface j on their side after one
+        wavelength of that side's medium), and send the others across the layer they are in,
+        attenuated by exp(-alpha t / cos) and emitting at the layer's temperature, to the next
+        interface. A child leaving the top interface upward or the substrate's interface downward
+        is a real child of the scene: reflected or transmitted as for a smooth surface. Russian
+        roulette below ``render.threshold`` ends walks unbiasedly; a walk longer than
+        ``_MAX_WALK`` steps is emitted at the layer's temperature. Every step keeps or splits the
+        power, so an isothermal scene still reads its temperature exactly.
+        """
+        job, media, st = self.job, self.job.media, self.job.settings
+        lam = C0 / job.frequency
+        out = []
+        key = ((face_med * 4096 + cur) * 4096 + other) * 2 + leaving
+        for kv in np.unique(key):
+            g = np.nonzero(key == kv)[0]
+            k, c0, o0, lv = int(face_med[g[0]]), int(cur[g[0]]), int(other[g[0]]), bool(leaving[g[0]])
+            layers = media.rough_layers(k)
+            n_l = len(layers)
+            kind = int(media.kind[k])
+            outside = o0 if lv else c0
+            eps_out = complex(media.eps[outside])
+            sub_eps = complex(media.eps[k])
+            up = -1.0 if lv else 1.0  # the side normals face: +1 the outside
+            w = wv.take(g)
+            n_up, g_up = up * n_mac[g], up * n_geo[g]
+            p_, pr_ = pos[g], prim[g]
+            step = self.isect.face_offset[pr_]
+            nr = len(w)
+            lvl = np.full(nr, n_l if lv else 0)
+            above = np.full(nr, not lv)
+            rehits = np.zeros(nr, np.int64)
+            rows = np.arange(nr)  # index into the group's per-ray constants
+            tangent = _tangents(n_up)
+            t_body = float(media.temperature[k])
+
+            def eps_of(j, side_above):  # medium on one side of interface j
+                if side_above:
+                    return eps_out if j == 0 else layers[j - 1].eps
+                return sub_eps if j == n_l else layers[j].eps
+
+            def side_medium(j, side_above):  # (alpha, temperature) of that medium
+                if side_above:
+                    if j == 0:
+                        return float(media.alpha[outside]), float(media.temperature[outside])
+                    return layers[j - 1].alpha, layers[j - 1].temperature
+                if j == n_l:
+                    return float(media.alpha[k]), t_body
+                return layers[j].alpha, layers[j].temperature
+
+            def end_temperature(j, side_above):  # where a walk ends early (the seed's "last object")
+                if (side_above and j == 0) or (not side_above and j == n_l):
+                    return t_body
+                return side_medium(j, side_above)[1]
+
+            steps = 0
+            while len(w):
+                steps += 1
+                if steps > _MAX_WALK:
+                    for j in np.unique(lvl):
+                        for a in (True, False):
+                            sel = (lvl == j) & (above == a)
+                            if sel.any():
+                                self._emit(w.sid[sel], w.m[sel], end_temperature(int(j), a))
+                    break
+                n_in = np.where(above[:, None], n_up[rows], -n_up[rows])
+                n_fac = n_in.copy()
+                nxt_parts = []
+                for j in np.unique(lvl):
+                    j = int(j)
+                    model = layers[j].roughness if j < n_l else media.rough(k)
+                    for a in (True, False):
+                        sel = np.nonzero((lvl == j) & (above == a))[0]
+                        if not sel.size:
+                            continue
+                        if model is not None:
+                            u = self.rng.random((2, sel.size))
+                            m, wt = model.sample_normals(n_in[sel], tangent[rows[sel]], -w.d[sel], u[0], u[1])
+                            n_fac[sel] = np.where(wt[:, None] > 0.0, m, n_in[sel])
+                            lost = wt <= 0.0
+                            if lost.any():
+                                self._emit(w.sid[sel[lost]], w.m[sel[lost]], end_temperature(j, a))
+                                w.m[sel[lost]] = 0.0
+                            sc = (wt > 0.0) & (wt != 1.0)
+                            if sc.any():
+                                w.m[sel[sc]] *= np.sqrt(wt[sc])[:, None, None]
+                        nxt_parts.append(self._layer_step(
+                            w.take(sel), sel, j, a, model, n_in[sel], n_fac[sel], tangent[rows[sel]],
+                            eps_of(j, a), eps_of(j, not a), layers, k, kind, t_body, side_medium, end_temperature,
+                            lam, n_l, rehits[sel], rows[sel]))
+                # real children and the walk's survivors
+                walk = []
+                for part in nxt_parts:
+                    for exit_up, child, r in part["exits"]:
+                        out.append(self._layer_exit(child, r, exit_up, lv, k, c0, o0, p_, g_up, step, t_body))
+                    if part["walk"] is not None:
+                        walk.append(part["walk"])
+                if not walk:
+                    break
+                w = _Wave.concat([x[0] for x in walk])
+                lvl = np.concatenate([x[1] for x in walk])
+                above = np.concatenate([x[2] for x in walk])
+                rehits = np.concatenate([x[3] for x in walk])
+                rows = np.concatenate([x[4] for x in walk])
+                # below the threshold: Russian roulette (unbiased), or with ``termination:
+                # temperature`` the medium the ray is in emits the rest (the seed's rule)
+                weight = row_power(w.m)
+                low = weight < st.threshold
+                keep = weight > 0.0
+                if low.any() and st.termination == "temperature":
+                    for j in np.unique(lvl[low]):
+                        for a in (True, False):
+                            sel = low & (lvl == j) & (above == a)
+                            if sel.any():
+                                self._emit(w.sid[sel], w.m[sel], end_temperature(int(j), a))
+                    keep &= ~low
+                elif low.any():
+                    q = weight[low] / st.threshold
+                    survive = self.rng.random(q.shape[0]) < q
+                    idx = np.nonzero(low)[0]
+                    w.m[idx[survive]] /= np.sqrt(q[survive])[:, None, None]
+                    keep[idx[~survive]] = False
+                if not keep.all():
+                    w, lvl, above, rehits, rows = w.take(keep), lvl[keep], above[keep], rehits[keep], rows[keep]
+        return out
+
+    def _layer_step(self, w, sel, j, a, model, n_in, n_fac, tangent, eps1, eps2, layers, k, kind, t_body,
+                    side_medium, end_temperature, lam, n_l, rehits, rows):
+        """One facet event at interface j for rays on side ``a`` (True: above). Returns the real
+        exits ``[(exit_up, wave, rows)]`` and the rays still walking ``(wave, lvl, above, rehits,
+        rows)`` or None."""
+        media, job = self.job.media, self.job
+        nr = len(w)
+        cos1 = np.clip(-np.einsum("ij,ij->i", w.d, n_fac), 0.0, 1.0)
+        films = layers[j].films if j < n_l else media.coating[k]
+        metal = j == n_l and kind == METAL
+        sink = j == n_l and a and kind in (BLACKBODY, OPAQUE)
+        if j == n_l and kind == BLACKBODY:
+            eps2 = films.eps[-1] if (films is not None and a) else eps1
+        if metal and films is None:
+            one, zero = np.ones(nr), np.zeros(nr)
+            c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
+            t_films = t_body
+        elif films is None:
+            c = fresnel.interface(np.full(nr, eps1), np.full(nr, eps2), cos1)
+            t_films = side_medium(j, a)[1]  # homogeneous-wave remainder of a lossy incident medium
+        else:
+            f_eps, f_d = (films.eps, films.thickness) if a else (films.eps[::-1], films.thickness[::-1])
+            eps = np.concatenate([[eps1], f_eps, [eps2]])
+            c = multilayer.stack(eps[None, :], f_d[None, :], cos1, job.k0, substrate="metal" if metal else "dielectric")
+            t_films = films.temperature
+        coeff = {name: getattr(c, name) for name in ("rs", "rp", "ts", "tp", "Rs", "Rp", "Ts", "Tp", "As", "Ap")}
+        k_out = -w.d
+        s = np.cross(n_fac, k_out)
+        norm = np.linalg.norm(s, axis=1, keepdims=True)
+        s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), w.s)
+        ml = w.m @ basis_change(w.s, w.p, s, np.cross(k_out, s))
+        absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
+        if absorb.any():
+            self._emit(w.sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]),
+                                                     np.sqrt(coeff["Ap"][absorb])), t_films)
+        if sink:
+            self._emit(w.sid, _scale_columns(ml, np.sqrt(coeff["Ts"]), np.sqrt(coeff["Tp"])), t_body)
+        trans = (not sink and not metal) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
+        keep_r, keep_t, gain_r, gain_t = self._choose_branches(w, coeff, trans)
+        exits, walk = [], []
+        for refl, keep, gain in ((True, keep_r, gain_r), (False, keep_t, gain_t)):
+            if not keep.any():
+                continue
+            i = np.nonzero(keep)[0]
+            if refl:
+                d_c = w.d[i] - 2.0 * np.einsum("ij,ij->i", w.d[i], n_fac[i])[:, None] * n_fac[i]
+                amp_s, amp_p = _amplitude(coeff["rs"][i], coeff["Rs"][i]), _amplitude(coeff["rp"][i], coeff["Rp"][i])
+            else:
+                d_c = _refract(w.d[i], n_fac[i], np.full(i.size, eps1), np.full(i.size, eps2))
+                amp_s, amp_p = _amplitude(coeff["ts"][i], coeff["Ts"][i]), _amplitude(coeff["tp"][i], coeff["Tp"][i])
+            side = a if refl else not a
+            child = _Wave(o=w.o[i], d=d_c, s=s[i], p=np.cross(-d_c, s[i]),
+                          m=_scale_columns(ml[i], gain[i] * amp_s, gain[i] * amp_p), sid=w.sid[i], depth=w.depth[i],
+                          stack=w.stack[i], top=w.top[i], last_t=w.last_t[i])
+            n_x = n_in[i] if refl else -n_in[i]
+            if model is not None:
+                p_leave = model.masking(n_x, tangent[i], d_c)
+            else:
+                p_leave = (np.einsum("ij,ij->i", d_c, n_x) > 0.0).astype(float)
+            stay = self.rng.random(i.size) >= p_leave
+            alpha_x, temp_x = side_medium(j, side)
+            # masked: back to interface j on the same side, through one wavelength of that medium
+            if stay.any():
+                back = child.take(stay)
+                rh = rehits[i][stay] + 1
+                over = rh > MAX_REHITS
+                tau = math.exp(-alpha_x * lam)
+                if tau < 1.0:
+                    self._emit(back.sid, back.m * math.sqrt(1.0 - tau), temp_x)
+                    back.m *= math.sqrt(tau)
+                if over.any():
+                    self._emit(back.sid[over], back.m[over], end_temperature(j, side))
+                ok = ~over
+                if ok.any() and tau > _A_ROUNDING:
+                    walk.append((back.take(ok), np.full(int(ok.sum()), j), np.full(int(ok.sum()), side), rh[ok],
+                                 rows[i][stay][ok]))
+            go = ~stay
+            if not go.any():
+                continue
+            fwd = child.take(go) if stay.any() else child
+            r_go = rows[i][go]
+            if side and j == 0:
+                exits.append((True, fwd, r_go))
+            elif not side and j == n_l:
+                exits.append((False, fwd, r_go))
+            else:
+                # across the layer it is in to the neighbouring interface
+                lay = layers[j - 1] if side else layers[j]
+                cos_t = np.maximum(np.abs(np.einsum("ij,ij->i", fwd.d, n_in[i][go])), 1e-6)
+                tau = np.exp(-lay.alpha * lay.thickness / cos_t)
+                em = tau < 1.0
+                if em.any():
+                    self._emit(fwd.sid[em], fwd.m[em] * np.sqrt(1.0 - tau[em])[:, None, None], lay.temperature)
+                    fwd.m *= np.sqrt(tau)[:, None, None]
+                nj = j - 1 if side else j + 1
+                walk.append((fwd, np.full(len(fwd), nj), np.full(len(fwd), not side), np.zeros(len(fwd), np.int64),
+                             r_go))
+        return {"exits": exits, "walk": _merge_walk(walk)}
+
+    def _layer_exit(self, child, r, exit_up, leaving, k, c0, o0, pos, g_up, step, t_body):
+        """A child leaving the layered surface: on the outside (``exit_up``) or into the body,
+        with the media stack of a reflected or transmitted child and the smooth code's offset."""
+        g = g_up[r] if exit_up else -g_up[r]
+        _mirror_wrong_side(child, g)
+        child.o = offset_along(pos[r], g, child.d, step[r])
+        child.depth = child.depth + 1
+        child.last_t = np.full(len(child), t_body)
+        stack, top = child.stack.copy(), child.top.copy()
+        crossed = exit_up == leaving  # left the body outward, or entered it from outside
+        if crossed and not leaving:
+            top += 1
+            stack[np.arange(len(child)), top] = k
+        elif crossed and leaving:
+            top -= 1
+        child.stack, child.top = stack, top
+        return child
 
     def _choose_branches(self, wv: _Wave, coeff, trans):
         """Which children to follow (``render.strategy``) and their amplitude gains.
@@ -636,6 +890,28 @@ class Integrator:
                 dead[idx[~survive]] = True
         keep = ~(dead | at_depth)
         return wv.take(keep) if not keep.all() else wv
+
+
+def _mirror_wrong_side(child: _Wave, g, rows=True):
+    """Mirror the children (of ``rows``) that point to the wrong side of the face (``d.g <= 0``,
+    a bump's tilt) through the face's plane: d and its basis vector s are reflected, p follows,
+    so the basis stays orthonormal and the power is kept."""
+    wrong = rows & (np.einsum("ij,ij->i", child.d, g) <= 0.0)
+    if wrong.any():
+        gw = g[wrong]
+        d_w, s_w = child.d[wrong], child.s[wrong]
+        d_w = d_w - 2.0 * np.einsum("ij,ij->i", d_w, gw)[:, None] * gw
+        s_w = s_w - 2.0 * np.einsum("ij,ij->i", s_w, gw)[:, None] * gw
+        child.d[wrong], child.s[wrong] = d_w, s_w
+        child.p[wrong] = np.cross(-d_w, s_w)
+
+
+def _merge_walk(parts):
+    """Concatenate ``(wave, lvl, above, rehits, rows)`` tuples (None when empty)."""
+    parts = [p for p in parts if len(p[0])]
+    if not parts:
+        return None
+    return (_Wave.concat([p[0] for p in parts]),) + tuple(np.concatenate([p[i] for p in parts]) for i in range(1, 5))
 
 
 def _tangents(n):

@@ -49,6 +49,61 @@ class Coating:
 
 
 @dataclass(frozen=True)
+class RoughLayer:
+    """A coating layer with a rough top surface of its own: an incoherent layer (seed 001).
+
+    Attributes
+    ----------
+    eps : complex
+    alpha : float
+        Power attenuation [Np/m] (2 k0 Im n).
+    thickness : float [m]
+    temperature : float [K]
+    roughness : MicrofacetModel
+        The model of its top surface.
+    films : Coating or None
+        Coherent films on its top surface (following its facets), outermost first.
+    """
+
+    eps: complex
+    alpha: float
+    thickness: float
+    temperature: float
+    roughness: object
+    films: object = None
+
+
+def split_coating(layers, k0):
+    """A coating as the renderer traces it.
+
+    Parameters
+    ----------
+    layers : sequence of (eps, thickness [m], temperature [K], roughness or None)
+        Outermost first.
+    k0 : float
+        Free-space wavenumber [1/m].
+
+    Returns
+    -------
+    rough : tuple of RoughLayer
+        The layers with a rough top of their own, outermost first, each with the smooth films
+        above it (down to the previous rough layer) as its coherent films.
+    films : Coating or None
+        The smooth films below the last rough layer: coherent, on the substrate's surface.
+    """
+    rough, films = [], []
+    for eps, d, t, model in layers:
+        if model is None:
+            films.append((eps, d, t))
+            continue
+        eps = complex(eps)
+        coat = Coating.from_layers(*zip(*films)) if films else None
+        rough.append(RoughLayer(eps, 2.0 * k0 * np.sqrt(eps).imag, float(d), float(t), model, coat))
+        films = []
+    return tuple(rough), (Coating.from_layers(*zip(*films)) if films else None)
+
+
+@dataclass(frozen=True)
 class Media:
     """Optical properties of every medium at one frequency.
 
@@ -70,6 +125,9 @@ class Media:
         None: smooth. A coating follows the facets (conformal coherent films).
     bump : tuple of (BumpMap or None), length K or empty
         Height map tilting each medium's macro surface normal (`pmmw_cli.scene.bump`).
+    layers : tuple of (tuple of RoughLayer), length K or empty
+        Rough coating layers on each medium's surface, outermost first, above the coherent
+        films of `coating` and the surface's own `roughness` (`split_coating`).
     """
 
     ids: list
@@ -80,15 +138,21 @@ class Media:
     coating: tuple
     roughness: tuple = ()
     bump: tuple = ()
+    layers: tuple = ()
 
     def rough(self, k: int):
         """The roughness model of medium k, or None."""
         return self.roughness[k] if k < len(self.roughness) else None
 
+    def rough_layers(self, k: int) -> tuple:
+        """The rough coating layers of medium k (empty: none)."""
+        return self.layers[k] if k < len(self.layers) and self.layers[k] else ()
+
     @property
     def any_rough(self) -> bool:
         """Whether any surface is rough or bumped (smooth scenes skip all of that work)."""
-        return any(r is not None for r in self.roughness) or any(b is not None for b in self.bump)
+        return (any(r is not None for r in self.roughness) or any(b is not None for b in self.bump)
+                or any(self.layers))
 
 
 @dataclass(frozen=True)
