@@ -145,7 +145,10 @@ def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, re
         "Errors are over Ex2 and Ey2 [K] against the reference named per scenario; *sensor* is the "
         "image after the imager's PSF and before noise. *ratio* is (wall time x workers) / time spent "
         "inside Embree for exactly the rays traced: the cost of everything that is not intersection, "
-        "relative to the physical limit of this approach on this machine (1 would be pure Embree).\n"
+        "relative to the physical limit of this approach on this machine (1 would be pure Embree).\n\n"
+        "Wall times are single runs: on a machine shared with other jobs they carry a few tens of percent "
+        "of noise (compare the split and hybrid rows at 1 spp, which trace identical rays); the errors do "
+        "not depend on it.\n"
     )
     if skip_configs:
         all_rows["skips"] = skips(skip_configs, workers=workers, cache_dir=cache_dir, ref_spp=ref_spp)
