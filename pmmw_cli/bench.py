@@ -106,7 +106,7 @@ def machine() -> str:
 
 def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, ref_spp=256, workers=None,
           overrides=(), out_md=Path("docs/benchmarks.md"), cache_dir=Path(".pmmw-cache"), command=None,
-          with_scaling=False, render_times=()):
+          with_scaling=False, render_times=(), skip_configs=()):
     """Run the benchmark and write ``out_md`` and one plot per scenario beside it."""
     workers = workers or default_workers()
     sections, all_rows = [], {}
@@ -115,7 +115,7 @@ def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, re
         scn = res.scenario
         f = scn.frequencies[0]
         job = make_job(res, f)
-        shash = scenario_hash(scn)
+        shash = scenario_hash(scn, res.db)
         t0 = time.perf_counter()
         ref, ref_desc = reference(job, workers, Path(cache_dir), shash, ref_spp)
         t_ref = time.perf_counter() - t0
@@ -145,15 +145,21 @@ def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, re
         "Errors are over Ex2 and Ey2 [K] against the reference named per scenario; *sensor* is the "
         "image after the imager's PSF and before noise. *ratio* is (wall time x workers) / time spent "
         "inside Embree for exactly the rays traced: the cost of everything that is not intersection, "
-        "relative to the physical limit of this approach on this machine (1 would be pure Embree).\n"
+        "relative to the physical limit of this approach on this machine (1 would be pure Embree).\n\n"
+        "Wall times are single runs: on a machine shared with other jobs they carry a few tens of percent "
+        "of noise (compare the split and hybrid rows at 1 spp, which trace identical rays); the errors do "
+        "not depend on it.\n"
     )
+    if skip_configs:
+        all_rows["skips"] = skips(skip_configs, workers=workers, cache_dir=cache_dir, ref_spp=ref_spp)
+        sections.append(_skips_section(all_rows["skips"], workers))
     if render_times:
         sections.append(_render_times_section(render_times, workers))
     if with_scaling:
         res_px, spp = (128, 128), 4
         sections.append(_scaling_section(scaling(resolution=res_px, spp=spp, workers=workers), res_px, spp))
     write_text_atomic(out_md, header + "\n".join(sections))
-    write_text_atomic(out_md.with_suffix(".json"), json.dumps(all_rows, indent=2))
+    write_text_atomic(out_md.with_suffix(".json"), json.dumps(all_rows, indent=2, default=float))
     return all_rows
 
 
@@ -286,4 +292,291 @@ def _render_times_section(configs, workers):
             wall = time.perf_counter() - t0
         w, h = scn.imager.resolution
         lines.append(f"| `{path}` | {w} x {h} | {scn.render.spp} | {wall:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+# -- what each skip saves -----------------------------------------------------------------------
+SKIP_ADAPTIVE_SPP = 16  # cap of the adaptive renders compared in the skips section
+SKIP_ADAPTIVE_MIN_SPP = 2
+SKIP_REPEATS = 2  # paired timings take the fastest of this many alternating runs
+
+
+def _paired(workers, *jobs):
+    """Fastest render time [s] of each job over SKIP_REPEATS alternating runs."""
+    best = [np.inf] * len(jobs)
+    for _ in range(SKIP_REPEATS):
+        for i, j in enumerate(jobs):
+            best[i] = min(best[i], _render(j, workers)[1])
+    return best
+
+
+class _CountingIntersector:
+    """An intersector that records how many hits land on each medium (for the skips section)."""
+
+    def __init__(self, inner, face_medium, n_media):
+        self._inner = inner
+        self._face_medium = face_medium
+        self.hits = np.zeros(n_media, np.int64)
+
+    def intersect(self, origins, directions):
+        t, prim = self._inner.intersect(origins, directions)
+        self.hits += np.bincount(self._face_medium[prim[prim >= 0]], minlength=self.hits.size)
+        return t, prim
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
+class _RecordingSky:
+    """A sky that records the directions and heights of the rays it is asked about."""
+
+    def __init__(self, inner):
+        self._inner = inner
+        self.dirs, self.heights = [], []
+
+    def brightness(self, directions, heights=None):
+        self.dirs.append(np.array(directions))
+        self.heights.append(np.zeros(len(directions)) if heights is None else np.array(heights))
+        return self._inner.brightness(directions, heights=heights)
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
+def _instrumented(job):
+    """One in-process render that counts hits per medium, ambient segments sent to the layered
+    atmosphere, and records the rays that reach the sky."""
+    from pmmw_cli.trace.integrator import Integrator
+    from pmmw_cli.trace.intersect import make_intersector
+
+    sky = _RecordingSky(job.sky)
+    job = dataclasses.replace(job, sky=sky)
+    isect = _CountingIntersector(make_intersector(job.vertices, job.faces), job.face_medium, len(job.media.ids))
+    segs = [0, 0.0]  # segments sent to AtmosphereModel.path, seconds inside it
+    if job.atmosphere is not None:
+        model = job.atmosphere
+        orig = model.path
+
+        def path(z0, z1, length):
+            t0 = time.perf_counter()
+            out = orig(z0, z1, length)
+            segs[0] += len(z0)
+            segs[1] += time.perf_counter() - t0
+            return out
+
+        model.path = path
+    integ = Integrator(job, isect)
+    rays = 0
+    t0 = time.perf_counter()
+    try:
+        for tile in job.tiles():
+            rays += integ.render_tile(tile).rays
+    finally:
+        if job.atmosphere is not None:
+            del model.path
+    dirs = np.concatenate(sky.dirs) if sky.dirs else np.zeros((0, 3))
+    heights = np.concatenate(sky.heights) if sky.heights else np.zeros(0)
+    return {"hits": isect.hits, "rays": rays, "atm_segments": segs[0], "atm_path_s": segs[1],
+            "wall_s": time.perf_counter() - t0, "sky_dirs": dirs, "sky_heights": heights}
+
+
+def _sky_rt_cost(model, dirs, heights, chunk=20000):
+    """Seconds of per-ray radiative transfer (seed 000 sec. 2.2.7) for these rays, each from its
+    own height: the work the cached sky tables avoid."""
+    from pmmw_cli.atmosphere.model import layered_sky_temperature
+
+    el = np.arcsin(np.clip(dirs[:, 2], -1.0, 1.0))
+    up = el >= 0.0
+    el, h = el[up], heights[up]
+    t0 = time.perf_counter()
+    for start in range(0, el.size, chunk):
+        sl = slice(start, start + chunk)
+        # one observer height per call: rays of a chunk share the chunk's mean height, which
+        # costs the same as each ray's own (the work is per ray and per cell)
+        layered_sky_temperature(model.edges, model.alpha, model.source, el[sl],
+                                observer_height=float(np.mean(h[sl])), refractive_index=model.refractive_index)
+    return time.perf_counter() - t0, int(up.sum())
+
+
+def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
+    """Measure what each of the renderer's skips saves, per config (first frequency).
+
+    Returns
+    -------
+    dict
+        config path -> measurements (seconds, counts), as written to docs/benchmarks.json.
+    """
+    import tempfile
+
+    from pmmw_cli.imaging.imager import error_footprint
+    from pmmw_cli.scene.sky import AtmosphereSky
+    from pmmw_cli.trace.integrator import atmosphere_skip_length
+    from pmmw_cli.trace.intersect import make_intersector
+    from pmmw_cli.trace.job import BLACKBODY, METAL, OPAQUE
+
+    workers = workers or default_workers()
+    out = {}
+    for path in configs:
+        res = resolve(path)
+        scn = res.scenario
+        job = make_job(res, scn.frequencies[0])
+        row = {"pixels": job.camera.width * job.camera.height, "spp": job.settings.spp, "workers": workers}
+        _, row["render_s"] = _render(job, workers)
+        img, row["render_s"] = _render(job, workers)  # second run: caches and page faults warm
+        row["rays"] = img.rays
+        per_ray = row["render_s"] * workers / img.rays
+
+        # geometry and Embree scene once per worker, not per tile
+        builds = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            make_intersector(job.vertices, job.faces)
+            builds.append(time.perf_counter() - t0)
+        row["build_s"] = float(np.median(builds))
+        row["tiles"] = len(job.tiles())
+
+        # no transmitted branch into metal, blackbody, opaque: one child per such hit avoided
+        inst = _instrumented(job)
+        sinks = np.isin(job.media.kind, (METAL, BLACKBODY, OPAQUE))
+        row["sink_hits"] = int(inst["hits"][sinks].sum())
+        row["sink_child_s"] = row["sink_hits"] * per_ray / workers
+
+        # sky from cached tables, not per-ray radiative transfer
+        row["sky_rays"] = int(inst["sky_dirs"].shape[0])
+        if isinstance(job.sky, AtmosphereSky):
+            t0 = time.perf_counter()
+            job.sky.brightness(inst["sky_dirs"], heights=inst["sky_heights"])
+            row["sky_table_s"] = time.perf_counter() - t0
+            row["sky_rt_s"], row["sky_rt_rays"] = _sky_rt_cost(job.atmosphere, inst["sky_dirs"], inst["sky_heights"])
+
+        # the layered atmosphere: none vs layered, and the short-segment skip
+        variants = [("", job)]
+        if job.atmosphere is None:
+            res_atm = resolve(path, ["atmosphere={profile: standard}"])
+            variants.append((" (atmosphere: {profile: standard})", make_job(res_atm, scn.frequencies[0])))
+        for label, j in variants:
+            if j.atmosphere is None:
+                continue
+            a = {"label": label, "skip_length_m": atmosphere_skip_length(j)}
+            off = dataclasses.replace(j, settings=dataclasses.replace(j.settings, atmosphere_tolerance=0.0))
+            a["with_s"], a["none_s"] = _paired(workers, j, dataclasses.replace(j, atmosphere=None))
+            a["skip_on_s"], a["skip_off_s"] = _paired(workers, j, off)
+            i_on, i_off = _instrumented(j), _instrumented(off)
+            a["segments_on"], a["segments_off"] = i_on["atm_segments"], i_off["atm_segments"]
+            a["path_on_s"], a["path_off_s"], a["inproc_s"] = i_on["atm_path_s"], i_off["atm_path_s"], i_off["wall_s"]
+            # the bias of the skip alone: deterministic termination, so that no random stream shifts
+            det = {"termination": "temperature"}
+            img_on, _ = _render(dataclasses.replace(j, settings=dataclasses.replace(j.settings, **det)), workers)
+            img_off, _ = _render(dataclasses.replace(off, settings=dataclasses.replace(off.settings, **det)), workers)
+            a["skip_max_diff_K"] = float(np.max(np.abs(img_on.mean[..., :2] - img_off.mean[..., :2])))
+            row.setdefault("atmosphere", []).append(a)
+
+        # auxiliary channels: the whole command with and without all of them
+        # auxiliary channels: the tracer keeps its per-pixel sums either way; asking adds the
+        # channels to the EXR (the stderr images and writing them), timed here alone
+        from pmmw_cli.io.exr import write_exr
+        from pmmw_cli.physics.jones import stokes_images
+
+        ideal = stokes_images(img.mean)
+        chans = {c: ideal[c].astype(np.float32) for c in ("I", "Q", "U", "V", "Ex2", "Ey2")}
+        chans.update({f"ideal.{c}": v for c, v in chans.items()})
+        for _ in range(SKIP_REPEATS + 1):
+            for key, with_aux in (("aux_off_s", False), ("aux_on_s", True)):
+                with tempfile.TemporaryDirectory() as tmp:
+                    t0 = time.perf_counter()
+                    ch = dict(chans)
+                    if with_aux:
+                        err = stokes_images(img.stderr)
+                        ch["aux.stderr.I"] = np.sqrt(img.stderr[..., 0] ** 2 + img.stderr[..., 1] ** 2).astype(np.float32)
+                        ch.update({f"aux.stderr.{c}": err[c].astype(np.float32) for c in ("Ex2", "Ey2")})
+                        ch.update({"aux.depth": img.depth.astype(np.float32), "aux.material": img.material.astype(np.float32),
+                                   "aux.samples": img.samples.astype(np.float32)})
+                    write_exr(Path(tmp) / "x.exr", ch, {})
+                    row[key] = min(row.get(key, np.inf), time.perf_counter() - t0)
+
+        # adaptive sampling to the error after the blur vs per pixel, at 0.1 x the imager noise
+        if scn.imager.aperture_diameter > 0 and scn.imager.noise > 0:
+            ref, _ = reference(job, workers, Path(cache_dir), scenario_hash(scn, res.db), ref_spp)
+            kern = psf_kernel(job.camera.pixel_angle, job.k0, scn.imager.aperture_diameter)
+            target = 0.1 * scn.imager.noise
+            row["adaptive"] = {"target_K": target, "spp_cap": SKIP_ADAPTIVE_SPP, "min_spp": SKIP_ADAPTIVE_MIN_SPP,
+                               "footprint_factor": error_footprint(kern)}
+            for rule, f in (("fixed", None), ("pixel", 1.0), ("footprint", error_footprint(kern))):
+                st = job.settings if f is None else dataclasses.replace(
+                    job.settings, spp=SKIP_ADAPTIVE_SPP, min_spp=SKIP_ADAPTIVE_MIN_SPP, target_error=target,
+                    error_footprint=f)
+                img_a, wall = _render(dataclasses.replace(job, settings=st), workers)
+                row["adaptive"][rule] = {"wall_s": wall, "mean_spp": float(img_a.samples.mean()),
+                                         "at_min": float(np.mean(img_a.samples <= st.min_spp)),
+                                         **_errors(img_a.mean, ref, kern)}
+        out[str(path)] = row
+        print(f"skips {path}: done", file=sys.stderr)
+    return out
+
+
+def _skips_section(rows, workers):
+    lines = [
+        "\n## What each skip saves\n",
+        f"`pmmw bench --skips CONFIG`: each config as shipped (first frequency, {workers} workers), render "
+        "times of the tracer alone (no files) unless noted; on/off pairs are the fastest of "
+        f"{SKIP_REPEATS} alternating runs. Where a skip cannot be switched off without nonsense, the "
+        "cost of the work it avoids is measured instead. The cores are shared with another job: "
+        "differences below ~10 % are noise.\n",
+    ]
+    for path, r in rows.items():
+        t = r["render_s"]
+        lines += [f"\n### `{path}`\n",
+                  f"{r['pixels']} pixels x {r['spp']} spp: {t:.2f} s, {r['rays'] / 1e6:.2f} M ray segments.\n",
+                  "| skip | with it | without it (or the work it avoids) | saves |", "| --- | --- | --- | ---: |"]
+        lines.append(
+            f"| no transmitted branch into metal, blackbody, opaque | {r['sink_hits']:,} hits end there "
+            f"({100 * r['sink_hits'] / r['rays']:.2g} % of segments) | a child each: {r['sink_child_s']:.2f} s at "
+            f"{t * r['workers'] / r['rays'] * 1e6:.1f} us per segment (estimate) | {100 * r['sink_child_s'] / t:.0f} % |")
+        for a in r.get("atmosphere", []):
+            lines.append(
+                f"| no path-atmosphere work with `atmosphere: none`{a['label']} | none: {a['none_s']:.2f} s | "
+                f"layered: {a['with_s']:.2f} s, of which {a['path_off_s']:.2f} s of {a['inproc_s']:.2f} s inside "
+                f"`AtmosphereModel.path` (one process) | {100 * (a['with_s'] - a['none_s']) / a['with_s']:.0f} % "
+                f"({100 * a['path_off_s'] / a['inproc_s']:.0f} % in `path`) |")
+            lines.append(
+                f"| no path-atmosphere work on segments below the loss bound{a['label']} (skip length "
+                f"{a['skip_length_m'] * 100:.2g} cm, tolerance 0.01 K) | {a['skip_on_s']:.2f} s; "
+                f"{a['segments_on']:,} segments, {a['path_on_s']:.3f} s in `path` | {a['skip_off_s']:.2f} s; "
+                f"{a['segments_off']:,}, {a['path_off_s']:.3f} s (images differ by {a['skip_max_diff_K']:.1e} K "
+                f"at most, `termination: temperature`) | "
+                f"{100 * (1 - a['segments_on'] / max(a['segments_off'], 1)):.0f} % of segments, "
+                f"{a['path_off_s'] - a['path_on_s']:.3f} s |")
+        if "atmosphere" not in r:
+            lines.append("| no path-atmosphere work | `atmosphere: none`: nothing to skip | | |")
+        if "sky_rt_s" in r:
+            lines.append(
+                f"| sky from cached tables | {r['sky_rays']:,} sky rays: {r['sky_table_s'] * 1e3:.1f} ms | "
+                f"per-ray radiative transfer: {r['sky_rt_s']:.2f} s | {100 * r['sky_rt_s'] / t:.0f} % of the render |")
+        else:
+            lines.append(f"| sky from cached tables | the sky is not the layered atmosphere's: closed form per ray | | |")
+        lines.append("| no roughness sampling on smooth surfaces | measured after roughness lands | | |")
+        lines.append(
+            f"| no auxiliary channels unless asked (EXR channels made and written) | 12 channels: "
+            f"{r['aux_off_s'] * 1e3:.0f} ms | + stderr (3), depth, material, samples: {r['aux_on_s'] * 1e3:.0f} ms | "
+            f"{(r['aux_on_s'] - r['aux_off_s']) * 1e3:.0f} ms ({100 * (r['aux_on_s'] - r['aux_off_s']) / t:.0f} % of the render) |")
+        per_tile = r["build_s"] * r["tiles"]
+        lines.append(
+            f"| Embree scene built once per worker | {r['workers']} builds of {r['build_s'] * 1e3:.1f} ms | "
+            f"one per tile: {r['tiles']} x = {per_tile:.2f} s of CPU | {100 * per_tile / (t * r['workers']):.0f} % |")
+        if "adaptive" in r:
+            ad = r["adaptive"]
+            lines += [
+                "",
+                f"Adaptive sampling at `target_error` = {ad['target_K']:g} K (0.1 x the imager noise), "
+                f"`min_spp` {ad['min_spp']}, `spp` {ad['spp_cap']}: per pixel (stop at the target) and per PSF "
+                f"footprint (stop at target x {ad['footprint_factor']:.1f} = target / sqrt(sum psf^2)), against the "
+                "config's fixed spp. Errors against the reference of the scenario's section above.\n",
+                "| rule | wall [s] | mean spp | pixels at min_spp | ideal RMS [K] | sensor RMS [K] | sensor max [K] |",
+                "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
+            ]
+            for rule in ("fixed", "pixel", "footprint"):
+                a = ad[rule]
+                at_min = "-" if rule == "fixed" else f"{100 * a['at_min']:.0f} %"
+                lines.append(f"| {rule} | {a['wall_s']:.2f} | {a['mean_spp']:.2f} | {at_min} | "
+                             f"{a['ideal_rms']:.3f} | {a['sensor_rms']:.3f} | {a['sensor_max']:.2f} |")
     return "\n".join(lines) + "\n"

@@ -281,6 +281,7 @@ def bench(
     cache: Path = typer.Option(Path(".pmmw-cache"), "--cache", help="Where reference renders are cached."),
     with_scaling: bool = typer.Option(False, "--scaling", help="Also measure cost against triangle count (1e3-1e6)."),
     render_times: Optional[List[Path]] = typer.Option(None, "--render-times", help="Also time these configs as shipped (repeatable)."),
+    skip_configs: Optional[List[Path]] = typer.Option(None, "--skips", help="Also measure what each skip saves on these configs (repeatable)."),
 ):
     """Run time against error for each scenario and sampling strategy (docs/benchmarks.md)."""
     from pmmw_cli.bench import STRATEGIES, bench as run
@@ -296,7 +297,7 @@ def bench(
     command = "pmmw bench " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "pmmw bench"
     run(scenarios or [], spp_list=spp_list, strategies=strats, ref_spp=reference_spp, workers=workers,
         overrides=set_ or [], out_md=out, cache_dir=cache, command=command, with_scaling=with_scaling,
-        render_times=tuple(render_times or ()))
+        render_times=tuple(render_times or ()), skip_configs=tuple(skip_configs or ()))
 
 
 @app.command()

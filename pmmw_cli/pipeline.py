@@ -21,7 +21,7 @@ from pmmw_cli import __version__
 from pmmw_cli.config import load_scenario
 from pmmw_cli.config.load import scenario_to_display
 from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
-from pmmw_cli.imaging.imager import apply_imager
+from pmmw_cli.imaging.imager import apply_imager, error_footprint, psf_kernel
 from pmmw_cli.io.exr import write_exr
 from pmmw_cli.io.preview import write_preview
 from pmmw_cli.io.report import write_report
@@ -150,10 +150,15 @@ def make_job(res: Resolved, f: float) -> TraceJob:
     cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution,
                          aperture_radius=im.aperture_diameter / 2.0, focus_distance=im.focus_distance)
     r = scn.render
+    footprint = 1.0
+    if r.target_error is not None and im.aperture_diameter > 0.0:
+        # adaptive sampling to the error left after the imager's blur (Integrator.render_tile)
+        footprint = error_footprint(psf_kernel(cam.pixel_angle, 2.0 * np.pi * f / C0, im.aperture_diameter))
     settings = RenderSettings(
         spp=r.spp, max_depth=r.max_depth, threshold=r.threshold, seed=r.seed,
         termination=r.termination, strategy=r.strategy, split_depth=r.split_depth,
         target_error=r.target_error, min_spp=min(r.min_spp, r.spp), tile=r.tile, aux=tuple(scn.output.aux),
+        error_footprint=footprint, atmosphere_tolerance=r.atmosphere_tolerance,
     )
     atm = atmosphere_model(scn, f)
     return TraceJob(

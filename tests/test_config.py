@@ -263,6 +263,7 @@ def test_cli_values_apply_after_overrides(tmp_path):
         (("name: t", "name: t\nrender: {tile: 4}"), "render.tile", "greater than or equal to 8"),
         (("name: t", "name: t\nrender: {workers: 0}"), "render.workers", "greater than or equal to 1"),
         (("name: t", "name: t\nrender: {termination: never}"), "render.termination", "'roulette' or 'temperature'"),
+        (("name: t", "name: t\nrender: {atmosphere_tolerance: -1 K}"), "render.atmosphere_tolerance", ">= 0 K"),
         (("name: t", "name: t\noutput: {dir: 5}"), "output.dir", "folder path"),
         (("name: t", "name: t\noutput: {channels: [I, I]}"), "output.channels", "twice"),
         (("name: t", "name: t\noutput: {aux: [normals]}"), "output.aux", "unknown auxiliary channel"),

@@ -56,3 +56,80 @@ def test_fog_adds_the_liquid_water_attenuation_along_a_horizontal_path():
         np.testing.assert_allclose(img["Ex2"], emission[0] + trans[0] * 300.0, atol=0.02)
     extra_db = foggy.path_loss_db(2.0, 2.0, 300.0) - clear.path_loss_db(2.0, 2.0, 300.0)
     np.testing.assert_allclose(extra_db, 0.3 * 0.3 * 4.1, rtol=0.05)
+
+
+def _count_segments(model):
+    """Wrap model.path to count the segments it evaluates; returns the running count (a list)."""
+    count, orig = [0], model.path
+
+    def path(z0, z1, length):
+        count[0] += len(z0)
+        return orig(z0, z1, length)
+
+    model.path = path
+    return count
+
+
+def test_short_segments_skip_the_atmosphere_within_the_stated_bound():
+    """A 0.4 m closed room in 1 g/m3 fog (every segment shorter than its 0.69 m diagonal) with
+    walls at 250 K and 320 K, so that skipping the air changes the image. With
+    render.atmosphere_tolerance set so that the skip length is 1.1 x the diagonal, no segment is
+    evaluated, and every pixel's Ex2, Ey2 stays within the tolerance of the full render
+    (`atmosphere_skip_length`: the bound is exact with termination: temperature, which this
+    render uses, so the comparison is deterministic). The images must differ (the skip was taken).
+    Observed: 0.016 K against the 0.12 K bound (the bound takes the worst temperature contrast and
+    every segment at full weight)."""
+    from pmmw_cli.scene.sky import UniformSky
+    from pmmw_cli.trace.integrator import atmosphere_skip_length
+    from tests.scenes import hollow_box
+
+    model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=1e-3),)), F95)
+    room = hollow_box([-0.2, -0.2, 0.8], [0.2, 0.2, 1.2], 0.02)
+    block = box([-0.1, 0.05, 0.8], [0.1, 0.15, 0.95])
+    cam = Camera.look_at([0, -0.1, 1.1], [0, 0.18, 0.9], [0, 0, 1], np.radians(80), (12, 12))
+    objects = [(room, material(eps=3 + 0.5j, temperature=250.0)), (block, material(eps=5 + 2j, temperature=320.0))]
+    import dataclasses
+
+    base = make_job(objects, cam, UniformSky(290.0, 290.0), F95,
+                    RenderSettings(spp=2, max_depth=4, threshold=1e-4, termination="temperature"))
+    base = dataclasses.replace(base, atmosphere=model)
+    diagonal = np.sqrt(3) * 0.4
+    unit = atmosphere_skip_length(dataclasses.replace(base, settings=dataclasses.replace(base.settings, atmosphere_tolerance=1.0)))
+    tol = 1.1 * diagonal / unit
+    count = _count_segments(model)
+    images = {}
+    for t in (0.0, tol):
+        job = dataclasses.replace(base, settings=dataclasses.replace(base.settings, atmosphere_tolerance=t))
+        count[0] = 0
+        images[t] = render(job)
+        if t:
+            assert atmosphere_skip_length(job) > diagonal
+            assert count[0] == 0
+        else:
+            assert count[0] > 0
+    for c in ("Ex2", "Ey2"):
+        diff = np.abs(images[tol][c] - images[0.0][c])
+        assert diff.max() <= tol
+        assert diff.max() > 1e-6
+
+
+def test_long_segments_are_not_skipped():
+    """The 300 m fog path of the test above, with the default tolerance (0.01 K): the skip length
+    is centimetres, so every segment is evaluated and the image is identical, bit for bit, to the
+    one rendered with the skip switched off."""
+    import dataclasses
+
+    target = (box([-50, 300, -10], [50, 301, 50]), material(kind="blackbody", temperature=300.0))
+    ground = (box([-50, 0, -1], [50, 300, 0]), material(eps=3 + 0.3j, temperature=290.0))
+    cam = Camera.look_at([0, 0, 2.0], [0, 300, 1.0], [0, 0, 1], np.radians(2), (4, 4))
+    model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
+    job = _job([target, ground], cam, model)
+    assert job.settings.atmosphere_tolerance == 0.01
+    count = _count_segments(model)
+    on = render(job)
+    n_on = count[0]
+    count[0] = 0
+    off = render(dataclasses.replace(job, settings=dataclasses.replace(job.settings, atmosphere_tolerance=0.0)))
+    assert n_on == count[0] > 0
+    for c in on:
+        np.testing.assert_array_equal(on[c], off[c])

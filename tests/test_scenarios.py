@@ -89,3 +89,16 @@ def test_sar_targets_are_the_coldest_objects_and_visible_through_cloud():
         job, img = _render(path, cloud)
         m = _means(job, img, regions)
         assert m["ground"] - m["target"] > 4.0, (target, m)
+
+
+def test_target_error_applies_after_the_blur_only_when_the_imager_blurs():
+    """render.target_error: with an aperture the per-pixel goal is target / sqrt(sum psf^2) (the
+    landing PSF spans ~15 pixels: a factor > 5); without one it is the target itself (factor 1,
+    exactly)."""
+    from pmmw_cli.imaging.imager import error_footprint, psf_kernel
+
+    blurred = make_job(resolve(LANDING, ["render.target_error=0.4 K"]), 95e9)
+    kern = psf_kernel(blurred.camera.pixel_angle, blurred.k0, 0.6)
+    assert blurred.settings.error_footprint == error_footprint(kern) > 5.0
+    ideal = make_job(resolve(LANDING, ["render.target_error=0.4 K", "imager.aperture_diameter=0 m"]), 95e9)
+    assert ideal.settings.error_footprint == 1.0

@@ -480,6 +480,24 @@ class AtmosphereModel:
             j = j + step
         return trans.reshape(shape), emission.reshape(shape)
 
+    def extremes(self, z_lo: float, z_hi: float) -> tuple[float, float, float]:
+        """Largest extinction and range of source temperatures of the cells between two heights.
+
+        Every cell a straight segment between heights z_lo <= z <= z_hi [m] can cross is included
+        (one more below, for segments ending exactly on a cell edge), so the result bounds `path`.
+
+        Returns
+        -------
+        alpha_max : float
+            [Np/m].
+        source_min, source_max : float
+            [K].
+        """
+        i0 = max(int(self._cell(np.clip(z_lo, 0.0, self.top))) - 1, 0)
+        i1 = int(self._cell(np.clip(z_hi, 0.0, self.top)))
+        sl = slice(i0, max(i1, i0) + 1)
+        return float(self.alpha[sl].max()), float(self.source[sl].min()), float(self.source[sl].max())
+
     def path_loss_db(self, z0, z1, length) -> np.ndarray:
         """Attenuation of straight segments, 10 log10(1/transmittance) [dB]; arguments as `path`."""
         shape, z0, z1, L = self._segments(z0, z1, length)

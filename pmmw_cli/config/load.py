@@ -294,6 +294,7 @@ def scenario_to_display(scn: Scenario) -> dict:
         workers=scn.render.workers or "auto",
         default_temperature=_qty(scn.render.default_temperature, "K"),
         target_error=None if scn.render.target_error is None else _qty(scn.render.target_error, "K"),
+        atmosphere_tolerance=_qty(scn.render.atmosphere_tolerance, "K"),
     )
     return {
         "name": scn.name,

@@ -406,6 +406,7 @@ class Render(_Model):
     target_error: Optional[float] = None
     min_spp: int = Field(4, ge=2)
     default_temperature: float = 290.0
+    atmosphere_tolerance: float = 0.01  # [K] error allowed from skipping the atmosphere on short paths
 
     @field_validator("spp", "max_depth", "seed", "tile", "split_depth", "min_spp", mode="before")
     @classmethod
@@ -420,6 +421,14 @@ class Render(_Model):
         t = _q(v, "temperature")
         if t <= 0:
             raise ConfigValueError(f"target_error must be > 0 K, got {v!r}")
+        return t
+
+    @field_validator("atmosphere_tolerance", mode="before")
+    @classmethod
+    def _atm_tol(cls, v):
+        t = _q(v, "temperature")
+        if t < 0:
+            raise ConfigValueError(f"atmosphere_tolerance must be >= 0 K (0: never skip), got {v!r}")
         return t
 
     @field_validator("threshold", mode="before")

@@ -85,6 +85,17 @@ def psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radi
     return val / val.sum()
 
 
+def error_footprint(kernel) -> float:
+    """1 / sqrt(sum psf^2) of a unit-sum kernel: how much larger than the blurred error the
+    per-pixel errors may be (>= 1).
+
+    Blurring independent per-pixel errors sigma_k gives sqrt(sum_k psf_k^2 sigma_k^2), at most
+    max(sigma) sqrt(sum psf^2): pixels whose error is at most target / sqrt(sum psf^2) leave a
+    blurred error at most target. For a locally uniform sigma this is exact, not a bound.
+    """
+    return float(1.0 / np.sqrt(np.sum(np.square(kernel))))
+
+
 def blur(img, kernel):
     """Convolve an image (H, W) with a kernel, mirroring the borders. Returns (H, W) float64."""
     r = kernel.shape[0] // 2

@@ -59,6 +59,10 @@ class UniformSky:
         t = np.where(directions[:, 2] >= 0.0, self.temperature, self.ground_temperature)
         return t, t
 
+    def temperature_range(self) -> tuple[float, float]:
+        """Lowest and highest brightness [K] any direction can show."""
+        return min(self.temperature, self.ground_temperature), max(self.temperature, self.ground_temperature)
+
 
 class SlabSky:
     """Isothermal slab of zenith opacity ``tau`` [Np] at ``temperature`` [K] over the CMB."""
@@ -85,6 +89,11 @@ class SlabSky:
         t = np.where(sin_el >= 0.0, t, self.ground_temperature)
         return t, t
 
+    def temperature_range(self) -> tuple[float, float]:
+        """Lowest and highest brightness [K] any direction can show."""
+        ts = (self.temperature, T_CMB, self.ground_temperature)
+        return min(ts), max(ts)
+
 
 class TextureSky:
     """A user's polarized sky map (`pmmw_cli.scene.sky_texture.SkyTexture`)."""
@@ -96,6 +105,11 @@ class TextureSky:
 
     def brightness(self, directions, heights=None):
         return self.texture.sample(directions)
+
+    def temperature_range(self) -> tuple[float, float]:
+        """Lowest and highest brightness [K] of the map (interpolation stays within them)."""
+        tx = self.texture
+        return float(min(tx.tv.min(), tx.th.min())), float(max(tx.tv.max(), tx.th.max()))
 
 
 class AtmosphereSky:
@@ -128,6 +142,12 @@ class AtmosphereSky:
             sel = up & (level == h)
             t[sel] = self.model.sky_temperature(el[sel], height=float(h))
         return t, t
+
+    def temperature_range(self) -> tuple[float, float]:
+        """Lowest and highest brightness [K]: the sky is a mix of the cells' sources and the CMB."""
+        src = self.model.source
+        ts = (float(src.min()), float(src.max()), T_CMB, self.ground_temperature)
+        return min(ts), max(ts)
 
 
 def _make_uniform(cfg, f, atmosphere_model=None):

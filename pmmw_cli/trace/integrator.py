@@ -90,6 +90,8 @@ class _Wave:
             setattr(self, k, v)
 
     def take(self, idx):
+        if idx.dtype == bool:
+            idx = np.flatnonzero(idx)  # once, not once per array: half the cost of a take
         return _Wave(**{k: getattr(self, k)[idx] for k in self.__slots__})
 
     @staticmethod
@@ -179,12 +181,62 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
     return c, coat.temperature
 
 
+def brightness_bounds(job: TraceJob, source_range=()):
+    """(T_lo, T_hi) [K]: bounds of every temperature an event of a ray tree can add.
+
+    Media and coating temperatures (emission, the depth cut-off), the sky's range, and the given
+    atmospheric source temperatures. None when the sky cannot say its range.
+    """
+    sky_range = getattr(job.sky, "temperature_range", None)
+    if sky_range is None:
+        return None
+    ts = [*job.media.temperature, *sky_range(), *source_range]
+    ts += [c.temperature for c in job.media.coating if c is not None]
+    return float(min(ts)), float(max(ts))
+
+
+def atmosphere_skip_length(job: TraceJob) -> float:
+    """Ambient segments shorter than this [m] skip the layered atmosphere (0: none do).
+
+    Error budget (``render.atmosphere_tolerance`` = E [K]). A segment of length L through cells of
+    extinction at most alpha_max loses 1 - exp(-tau) <= alpha_max L of the brightness T_far that
+    reaches its far end and adds that fraction of a mean source temperature S of its cells
+    (`AtmosphereModel.path`); skipping it changes the ray's brightness by
+    (1 - exp(-tau)) (S - T_far), at most alpha_max L dT with dT = max(S_max - T_lo, T_hi - S_min)
+    (`brightness_bounds`; alpha_max, S_min, S_max over the cells between the lowest and highest
+    point of the scene and the imager). A path has at most ``max_depth`` segments, and at each depth
+    the powers of a split ray tree add to at most 1 per polarization, so skipping every segment
+    with alpha_max L dT <= E / max_depth moves any pixel's Ex2 and Ey2 by at most E (exactly with
+    ``termination: temperature``, in expectation with Russian roulette; a face crossed without
+    interacting, rare, cuts a segment in two and adds one more). The test is one comparison per
+    segment; `AtmosphereModel.path` walks the cells of each one.
+    """
+    st, atm = job.settings, job.atmosphere
+    if atm is None or st.atmosphere_tolerance <= 0.0:
+        return 0.0
+    cam = job.camera
+    r_ap = getattr(cam, "aperture_radius", 0.0)
+    z = job.vertices[:, 2]
+    z_lo = min(float(z.min()) if z.size else np.inf, cam.position[2] - r_ap)
+    z_hi = max(float(z.max()) if z.size else -np.inf, cam.position[2] + r_ap)
+    alpha_max, s_min, s_max = atm.extremes(z_lo, z_hi)
+    bounds = brightness_bounds(job, (s_min, s_max))
+    if bounds is None or alpha_max <= 0.0:
+        return 0.0 if bounds is None else np.inf
+    t_lo, t_hi = bounds
+    d_t = max(s_max - t_lo, t_hi - s_min)
+    if d_t <= 0.0:
+        return np.inf  # isothermal: the atmosphere changes nothing
+    return st.atmosphere_tolerance / (st.max_depth * alpha_max * d_t)
+
+
 class Integrator:
     """Renders tiles of one `TraceJob` with one intersector (built once per worker)."""
 
     def __init__(self, job: TraceJob, intersector):
         self.job = job
         self.isect = intersector
+        self.atm_skip_length = atmosphere_skip_length(job)
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:
@@ -192,7 +244,12 @@ class Integrator:
 
         Without ``target_error`` one pass takes every sample. With it, a first pass of
         ``min_spp`` samples estimates each pixel's Monte Carlo standard error; pixels still above
-        the target get passes of doubling size until they reach it or ``spp`` samples.
+        ``target_error * error_footprint`` get passes of doubling size until they reach it or
+        ``spp`` samples. With a blurring imager, error_footprint = 1 / sqrt(sum psf^2): the
+        pixels' errors are independent, so the blurred error sqrt(sum_k psf_k^2 sigma_k^2) is at
+        most that many times the largest sigma_k of the footprint, and stopping every pixel at
+        sigma <= target / sqrt(sum psf^2) keeps the sensor image's error at or below the target
+        (up to how well a few samples estimate sigma).
         """
         index, x0, y0, x1, y1 = tile
         st, cam = self.job.settings, self.job.camera
@@ -229,7 +286,7 @@ class Integrator:
             if not adaptive:
                 break
             err = _stderr(s1[active], s2[active], count[active])
-            active = active[np.max(err[:, :2], axis=1) > st.target_error]
+            active = active[np.max(err[:, :2], axis=1) > st.target_error * st.error_footprint]
             batch = done  # double the samples of the pixels that still need them
         mean = ref + s1 / count[:, None]
         stderr = _stderr(s1, s2, count)
@@ -301,7 +358,7 @@ class Integrator:
         # The layered atmosphere along ambient segments: transmittance and own emission of the
         # layers crossed, seen from the segment's near end (issue 3; exact for straight segments).
         if job.atmosphere is not None:
-            amb = cur == 0
+            amb = (cur == 0) & (t > self.atm_skip_length)  # shorter ones: below the error budget
             if amb.any():
                 trans, emission = job.atmosphere.path(wv.o[amb, 2], wv.o[amb, 2] + t[amb] * wv.d[amb, 2], t[amb])
                 self._emit(wv.sid[amb], wv.m[amb], emission)

@@ -164,8 +164,14 @@ class RenderSettings:
     termination: str = "roulette"  # or "temperature" (seed 000 sec. 2.2.9)
     strategy: str = "split"  # "split" (seed), "stochastic", or "hybrid"
     split_depth: int = 2  # hybrid: interactions split deterministically before choosing
-    target_error: float | None = None  # [K] adaptive sampling goal per pixel
+    target_error: float | None = None  # [K] adaptive sampling goal (per pixel, or after the PSF)
     min_spp: int = 4  # adaptive sampling: first pass
+    # target_error / this is the error a pixel must reach: 1 / sqrt(sum psf^2) when the imager
+    # blurs (`pmmw_cli.imaging.imager.error_footprint`), 1 for an ideal imager
+    error_footprint: float = 1.0
+    # [K] largest change of any pixel's Ex2, Ey2 allowed from skipping the layered atmosphere on
+    # short segments (`pmmw_cli.trace.integrator.atmosphere_skip_length`); 0: never skip
+    atmosphere_tolerance: float = 0.01
     tile: int = 32
     stack_size: int = 8
     aux: tuple = ()
