@@ -278,7 +278,7 @@ def _powers(r, t, y1, y2, opaque):
     return R, T, A
 
 
-def interface(eps1, eps2, cos1):
+def interface(eps1, eps2, cos1, with_q2=False):
     """Fresnel coefficients of a smooth interface from medium 1 into medium 2.
 
     Parameters
@@ -298,6 +298,9 @@ def interface(eps1, eps2, cos1):
         Ap`` float64. Total internal reflection gives ``R = 1, T = 0``; exactly grazing
         incidence (cos1 = 0) gives ``r = -1, R = 1, T = 0`` unless eps2 == eps1 (then
         ``r = 0, T = 1``); ``A > 0`` only for a lossy medium 1.
+    q2 : ndarray, complex128
+        Only with ``with_q2``: the exit medium's normal component (outgoing branch), which
+        refraction reuses.
     """
     eps1 = np.asarray(eps1, dtype=np.complex128)
     eps2 = np.asarray(eps2, dtype=np.complex128)
@@ -314,4 +317,5 @@ def interface(eps1, eps2, cos1):
     with np.errstate(divide="ignore", invalid="ignore"):
         y2p = (q2 / eps2).real
     # (B, C) of a bare half-space: Y_in = q2 (s), q2/eps2 (p); t = 1 + r (seed 000 eq. 2.25)
-    return _close(q1, eps1, one, q2, eps2, q2, one, eps2, q2.real, y2p, opaque=False)
+    coeffs = _close(q1, eps1, one, q2, eps2, q2, one, eps2, q2.real, y2p, opaque=False)
+    return (coeffs, q2) if with_q2 else coeffs

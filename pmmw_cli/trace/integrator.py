@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pmmw_cli.physics import fresnel, multilayer
-from pmmw_cli.physics.jones import basis_change, row_power, stokes_terms
+from pmmw_cli.physics.jones import rebase, row_power, stokes_terms
 from pmmw_cli.physics.roughness import MAX_REHITS
 from pmmw_cli.scene.camera import pixel_samples
 from pmmw_cli.trace.intersect import offset_along
@@ -152,6 +152,8 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
         Temperature at which the coating's absorption emits [K]. For a bare interface the
         absorbed remainder only exists when the incident medium is lossy (homogeneous-wave
         approximation, PHYSICS.md) and is emitted at the incident medium's temperature.
+    q2 : ndarray, shape (n,), complex128, or None
+        The exit medium's normal component for a bare interface (refraction reuses it).
     """
     media = job.media
     kind = media.kind[face_med]
@@ -161,7 +163,7 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
         n = cos1.shape[0]
         one, zero = np.ones(n), np.zeros(n)
         c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
-        return c, float(media.temperature[face_med])
+        return c, float(media.temperature[face_med]), None
     if kind == THIN:
         eps2 = eps1  # the sheet keeps the incident medium on both sides
     elif kind == BLACKBODY:
@@ -170,15 +172,15 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
     else:
         eps2 = media.eps[other]
     if coat is None:
-        c = fresnel.interface(np.full(cos1.shape, eps1), np.full(cos1.shape, eps2), cos1)
-        return c, float(media.temperature[cur])
+        c, q2 = fresnel.interface(np.full(cos1.shape, eps1), np.full(cos1.shape, eps2), cos1, with_q2=True)
+        return c, float(media.temperature[cur]), q2
     layers_eps, layers_d = coat.eps, coat.thickness
     if leaving:
         layers_eps, layers_d = layers_eps[::-1], layers_d[::-1]
     eps = np.concatenate([[eps1], layers_eps, [eps2]])
     substrate = "metal" if kind == METAL else "dielectric"
     c = multilayer.stack(eps[None, :], layers_d[None, :], cos1, job.k0, substrate=substrate)
-    return c, coat.temperature
+    return c, coat.temperature, None
 
 
 def brightness_bounds(job: TraceJob, source_range=()):
@@ -443,7 +445,7 @@ class Integrator:
         norm = np.linalg.norm(hvec, axis=1, keepdims=True)
         hvec = np.where(norm > _TINY, hvec / np.where(norm > _TINY, norm, 1.0), wv.s)
         vvec = np.cross(k, hvec)
-        m = wv.m @ basis_change(wv.s, wv.p, hvec, vvec)
+        m = rebase(wv.m, wv.s, wv.p, hvec, vvec)
         self._emit(wv.sid, m, np.asarray(tb, float), np.asarray(ta, float))  # columns (h, v) = (Th, Tv)
 
     def _pass_through(self, wv: _Wave, pos, face_med, prim):
@@ -486,14 +488,20 @@ class Integrator:
         coeff = {k: np.empty(nr, complex) for k in ("rs", "rp", "ts", "tp")}
         coeff.update({k: np.empty(nr) for k in ("Rs", "Rp", "Ts", "Tp", "As", "Ap")})
         t_coat = np.zeros(nr)
+        q2 = None  # the exit medium's normal component from Fresnel, reused by refraction
         key = ((cur * 4096 + face_med) * 4096 + other) * 2 + leaving
         for kv in np.unique(key):
             g = key == kv
             i0 = np.argmax(g)
-            c, tc = surface_response(job, int(cur[i0]), int(face_med[i0]), int(other[i0]), bool(leaving[i0]), cos1[g])
+            c, tc, q2g = surface_response(job, int(cur[i0]), int(face_med[i0]), int(other[i0]), bool(leaving[i0]),
+                                          cos1[g])
             for name in coeff:
                 coeff[name][g] = getattr(c, name)
             t_coat[g] = tc
+            if q2g is not None:
+                if q2 is None:
+                    q2 = np.full(nr, np.nan + 0j)
+                q2[g] = q2g
 
         # Local (s, p) basis of the outgoing wave k = -d about the (facet) normal (eq. 2.23).
         k_out = -wv.d
@@ -501,7 +509,7 @@ class Integrator:
         norm = np.linalg.norm(s, axis=1, keepdims=True)
         s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), wv.s)
         p_out = np.cross(k_out, s)
-        ml = wv.m @ basis_change(wv.s, wv.p, s, p_out)
+        ml = rebase(wv.m, wv.s, wv.p, s, p_out)
 
         absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
         if absorb.any():
@@ -538,7 +546,8 @@ class Integrator:
             diel = kind[i] == DIELECTRIC
             if diel.any():
                 j = i[diel]
-                d_t[diel] = _refract(wv.d[j], n_fac[j], media.eps[cur[j]], media.eps[other[j]])
+                d_t[diel] = _refract(wv.d[j], n_fac[j], media.eps[cur[j]], media.eps[other[j]],
+                                     None if q2 is None else q2[j])
             m_t = _scale_columns(ml[i], gain_t[i] * _amplitude(coeff["ts"][i], coeff["Ts"][i]),
                                  gain_t[i] * _amplitude(coeff["tp"][i], coeff["Tp"][i]))
             stack, top = wv.stack[i].copy(), wv.top[i].copy()
@@ -812,7 +821,7 @@ class Integrator:
         s = np.cross(n_fac, k_out)
         norm = np.linalg.norm(s, axis=1, keepdims=True)
         s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), w.s)
-        ml = w.m @ basis_change(w.s, w.p, s, np.cross(k_out, s))
+        ml = rebase(w.m, w.s, w.p, s, np.cross(k_out, s))
         absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
         if absorb.any():
             self._emit(w.sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]),
@@ -981,7 +990,7 @@ def _tangents(n):
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 
-def _refract(d, n_in, eps1, eps2):
+def _refract(d, n_in, eps1, eps2, q2=None):
     """Real transmitted direction under the homogeneous-wave assumption (seed 000 sec. 2.2.4).
 
     The tangential wave-vector component is conserved (eq. 2.18) and the normal component is
@@ -995,6 +1004,8 @@ def _refract(d, n_in, eps1, eps2):
     n_in : ndarray, shape (n, 3)
         Unit normal facing the incident side (d . n_in < 0).
     eps1, eps2 : ndarray, shape (n,), complex128
+    q2 : ndarray, shape (n,), complex128, optional
+        ``sqrt(eps2 - eps1 sin^2 th1)`` (outgoing branch) where already known, NaN elsewhere.
 
     Returns
     -------
@@ -1005,7 +1016,14 @@ def _refract(d, n_in, eps1, eps2):
     sin2 = np.clip(1.0 - cos1**2, 0.0, 1.0)
     n1 = np.sqrt(eps1 + 0j)
     # the wave runs away from the interface (eq. 2.20): the outgoing root, Re q2 >= 0, which is
-    # also the decaying one unless the incident medium is lossy
-    q2 = fresnel.normal_component(eps2, eps1 * sin2, branch="outgoing")
+    # also the decaying one unless the incident medium is lossy; `fresnel.interface` has it
+    # already (NaN where the coefficients came from a coating stack)
+    if q2 is None:
+        q2 = fresnel.normal_component(eps2, eps1 * sin2, branch="outgoing")
+    else:
+        missing = np.isnan(q2)
+        if missing.any():
+            q2 = q2.copy()
+            q2[missing] = fresnel.normal_component(eps2[missing], (eps1 * sin2)[missing], branch="outgoing")
     dt = n1.real[:, None] * tang - q2.real[:, None] * n_in
     return _normalize(dt)
