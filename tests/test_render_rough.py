@@ -231,3 +231,22 @@ def test_rough_layer_over_a_substrate_matches_the_brdf_monte_carlo(substrate):
         s = B.run_brdf(stack=stack, incidence=50.0, stokes=stokes, samples=20_000, seed=4, plots=False)
         ref = s.summary["methods"]["mc"]["total_reflectance"]
         assert float(img[name][0, 0]) == pytest.approx(ref, abs=0.012), name
+
+
+def test_bump_texture_file_gives_its_slopes(tmp_path):
+    """A height texture (here an EXR ramp written with pmmw's writer) tiled over `size`: the
+    central-difference slope equals height x (ramp step) / (pixel size) away from the wrap
+    (exact for a linear ramp, to float32 rounding of the stored values)."""
+    from pmmw_cli.io.exr import write_exr
+    from pmmw_cli.scene.bump import make_bump
+
+    n = 32
+    ramp = np.tile(np.arange(n, dtype=np.float32) / n, (n, 1))
+    write_exr(tmp_path / "ramp.exr", {"Y": ramp}, {})
+    bump = make_bump({"texture": "ramp.exr", "height": "4 mm", "size": "0.5 m"}, file=tmp_path / "scene.yaml",
+                     key="materials.sand.bump")
+    slope = 4e-3 * (1.0 / n) / (0.5 / n)  # height x value step per pixel / pixel size = 0.008
+    assert np.allclose(bump.gu[:, 2:-2], slope, rtol=1e-6)
+    assert np.allclose(bump.gv, 0.0, atol=1e-12)
+    n_up = bump.perturb(np.array([[0.2, 0.1, 0.0]]), np.array([[0.0, 0.0, 1.0]]))
+    assert n_up[0] == pytest.approx(np.array([-slope, 0.0, 1.0]) / math.hypot(slope, 1.0), abs=1e-9)
