@@ -445,6 +445,10 @@ def validate(path, overrides=()) -> dict:
                 "temperature_K": float(media.temperature[i]),
                 **({"loss_dB_per_km": float(media.alpha[i] * 1e3 * 10 / np.log(10))} if media.alpha[i] > 0 else {}),
                 **({"coating_layers": int(media.coating[i].eps.size)} if media.coating[i] is not None else {}),
+                **({"rough_coating_layers": [repr(layer.roughness) for layer in media.rough_layers(i)]}
+                   if media.rough_layers(i) else {}),
+                **({"roughness": repr(media.rough(i))} if media.rough(i) is not None else {}),
+                **({"bump": repr(media.bump[i])} if i < len(media.bump) and media.bump[i] is not None else {}),
             }
             for i, mid in enumerate(media.ids)
         }

@@ -250,3 +250,18 @@ def test_bump_texture_file_gives_its_slopes(tmp_path):
     assert np.allclose(bump.gv, 0.0, atol=1e-12)
     n_up = bump.perturb(np.array([[0.2, 0.1, 0.0]]), np.array([[0.0, 0.0, 1.0]]))
     assert n_up[0] == pytest.approx(np.array([-slope, 0.0, 1.0]) / math.hypot(slope, 1.0), abs=1e-9)
+
+
+def test_rough_cinderblocks_config_resolves_its_rough_bumpy_sand():
+    """The shipped rough variant of the seed's cinderblock scene: `pmmw validate` reports the
+    sand's GGX roughness and its Gaussian bump map (RMS slope sqrt(2) 2 cm / 25 cm = 0.113, one
+    realization over 16 x 16 correlation lengths: 10 %)."""
+    from pathlib import Path
+
+    from pmmw_cli.pipeline import resolve, validate
+
+    path = Path(__file__).resolve().parents[1] / "configs/cinderblocks_rough_35ghz.yaml"
+    sand = validate(path)["media"]["35 GHz"]["desert_sand"]
+    assert sand["roughness"].startswith("GGX(") and sand["bump"].startswith("BumpMap(gaussian")
+    bump = resolve(path).db.get("desert_sand").bump
+    assert bump.rms_slope == pytest.approx(math.sqrt(2) * 0.02 / 0.25, rel=0.1)
