@@ -36,3 +36,14 @@ def test_rebase_within_one_plane_keeps_the_emitted_power():
     t = np.full(n, 300.0)
     a, b = stokes_terms(m, t, t), stokes_terms(m2, t, t)
     assert np.allclose(a[:, 0] + a[:, 1], b[:, 0] + b[:, 1], rtol=1e-12)
+
+
+def test_cross_matches_numpy_cross_with_broadcasting():
+    from pmmw_cli.physics.vec import cross
+
+    rng = np.random.default_rng(5)
+    a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    assert np.array_equal(cross(a, b), np.cross(a, b))
+    z = np.array([0.0, 0.0, 1.0])
+    assert np.allclose(cross(z[None, :], b), np.cross(z[None, :], b), rtol=0, atol=1e-15)
+    assert np.allclose(cross(a, z), np.cross(a, z), rtol=0, atol=1e-15)

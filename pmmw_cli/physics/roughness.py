@@ -138,6 +138,7 @@ import numpy as np
 from scipy import special
 
 from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.physics.vec import cross
 
 __all__ = [
     "GGX",
@@ -230,7 +231,7 @@ def local_frame(n_macro, tangent, orientation=0.0):
         x[bad] = np.cross(axis, zb)
         norm = np.linalg.norm(x, axis=1)
     x = x / norm[:, None]
-    y = np.cross(z, x)
+    y = cross(z, x)
     if orientation:
         c, s = math.cos(orientation), math.sin(orientation)
         x, y = c * x + s * y, -s * x + c * y

@@ -35,6 +35,7 @@ import numpy as np
 from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.physics.jones import rebase, row_power, stokes_terms
 from pmmw_cli.physics.roughness import MAX_REHITS
+from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import pixel_samples
 from pmmw_cli.trace.intersect import offset_along
 from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
@@ -238,6 +239,10 @@ class Integrator:
     def __init__(self, job: TraceJob, intersector):
         self.job = job
         self.isect = intersector
+        media = job.media
+        # which media have rough coating layers (None: none, the common case)
+        layered = np.array([bool(media.rough_layers(k)) for k in range(len(media.ids))])
+        self.layered = layered if layered.any() else None
         self.atm_skip_length = atmosphere_skip_length(job)
 
     # -- public -----------------------------------------------------------------------------
@@ -309,7 +314,7 @@ class Integrator:
         sample_no = np.tile(np.arange(start, start + nb, dtype=np.int64), pixels.size)
         origins, d = cam.rays(u, v, pix * st.spp + sample_no, st.seed)
         s = _normalize(cam.x[None, :] - np.einsum("ij,j->i", d, cam.x)[:, None] * d)
-        p = np.cross(-d, s)
+        p = cross(-d, s)
         # The pixel's polarization basis is (s, p): the imager's x projected perpendicular to
         # the ray and y completing it (jones.py), so M starts as the identity (eq. 2.11b).
         m = np.zeros((n, 2, 2), complex)
@@ -399,7 +404,7 @@ class Integrator:
             n_in = np.where(cosf[idx, None] < 0.0, nf[idx], -nf[idx])  # normal facing the incident side
             n_mac = self._bumped(pos[idx], wv.d[idx], n_in, face_med[idx]) if media.any_rough else n_in
             leaving = ~entering[idx] & dielectric[idx]
-            layered = np.array([bool(media.rough_layers(int(k))) for k in face_med[idx]]) if media.any_rough else None
+            layered = self.layered[face_med[idx]] if self.layered is not None else None
             if layered is None or not layered.any():
                 kids = self._interact(wv.take(idx), pos[idx], n_in, n_mac, cur[idx], face_med[idx], other, leaving,
                                       prim[idx])
@@ -441,10 +446,10 @@ class Integrator:
             self._emit(wv.sid, wv.m, np.asarray(ta, float))
             return
         k = -wv.d
-        hvec = np.cross(_Z[None, :], k)
+        hvec = cross(_Z[None, :], k)
         norm = np.linalg.norm(hvec, axis=1, keepdims=True)
         hvec = np.where(norm > _TINY, hvec / np.where(norm > _TINY, norm, 1.0), wv.s)
-        vvec = np.cross(k, hvec)
+        vvec = cross(k, hvec)
         m = rebase(wv.m, wv.s, wv.p, hvec, vvec)
         self._emit(wv.sid, m, np.asarray(tb, float), np.asarray(ta, float))  # columns (h, v) = (Th, Tv)
 
@@ -505,10 +510,10 @@ class Integrator:
 
         # Local (s, p) basis of the outgoing wave k = -d about the (facet) normal (eq. 2.23).
         k_out = -wv.d
-        s = np.cross(n_fac, k_out)
+        s = cross(n_fac, k_out)
         norm = np.linalg.norm(s, axis=1, keepdims=True)
         s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), wv.s)
-        p_out = np.cross(k_out, s)
+        p_out = cross(k_out, s)
         ml = rebase(wv.m, wv.s, wv.p, s, p_out)
 
         absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
@@ -522,7 +527,7 @@ class Integrator:
 
         trans = ((kind == DIELECTRIC) | (kind == THIN)) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
         keep_r, keep_t, gain_r, gain_t = self._choose_branches(wv, coeff, trans)
-        out = []
+        out, rehits = [], []
 
         # Reflected child (eq. 2.21, 2.39): stays on the incident side.
         if keep_r.any():
@@ -532,11 +537,14 @@ class Integrator:
             m_r = _scale_columns(ml[i], gain_r[i] * _amplitude(coeff["rs"][i], coeff["Rs"][i]),
                                  gain_r[i] * _amplitude(coeff["rp"][i], coeff["Rp"][i]))
             child = _Wave(
-                o=pos[i], d=d_r, s=s[i], p=np.cross(-d_r, s[i]), m=m_r, sid=wv.sid[i], depth=wv.depth[i] + 1,
+                o=pos[i], d=d_r, s=s[i], p=cross(-d_r, s[i]), m=m_r, sid=wv.sid[i], depth=wv.depth[i] + 1,
                 stack=wv.stack[i].copy(), top=wv.top[i].copy(), last_t=t_body[i],
             )
             side = (cur[i], other[i], leaving[i])
-            out += self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, 1.0, rehit)
+            leave, back = self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, 1.0,
+                                       rehit)
+            out.append(leave)
+            rehits.append(back)
 
         # Transmitted child (eq. 2.19, 2.40): dielectrics refract into the other medium, thin
         # sheets pass straight through.
@@ -557,14 +565,23 @@ class Integrator:
             leave = diel & leaving[i]
             top[leave] -= 1
             child = _Wave(
-                o=pos[i], d=d_t, s=s[i], p=np.cross(-d_t, s[i]), m=m_t, sid=wv.sid[i], depth=wv.depth[i] + 1,
+                o=pos[i], d=d_t, s=s[i], p=cross(-d_t, s[i]), m=m_t, sid=wv.sid[i], depth=wv.depth[i] + 1,
                 stack=stack, top=top, last_t=t_body[i],
             )
             # seen from the far side: a refracted child swaps the media, a thin sheet keeps them
             side = (np.where(diel, other[i], cur[i]), np.where(diel, cur[i], other[i]), np.where(diel, ~leaving[i], leaving[i]))
-            out += self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, -1.0, rehit)
+            leave, back = self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, -1.0,
+                                       rehit)
+            out.append(leave)
+            rehits.append(back)
 
-        return out
+        # masked children of both branches hit the same points again, as one group
+        rehits = [b for b in rehits if b is not None]
+        if rehits:
+            back = _Wave.concat([b[0] for b in rehits])
+            args = [np.concatenate([b[k] for b in rehits]) for k in range(1, 9)]
+            out += self._interact(back, *args, rehit + 1)
+        return [w for w in out if w is not None and len(w)]
 
     def _facets(self, wv: _Wave, n_mac, face_med):
         """Microfacet normals for the rays on rough faces (the macro normal elsewhere).
@@ -605,6 +622,9 @@ class Integrator:
     def _settle(self, child: _Wave, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, sign, rehit):
         """Send children off the surface, or back onto it.
 
+        Returns the children that leave and, for those that do not, the arguments of their
+        re-hit (`_interact` merges those of both branches into one call), or None.
+
         A child of a rough facet leaves with Smith's masking probability G1 about the macro
         normal of its side (0 on the wrong side); the others hit the same point again at once
         (`_interact` with ``rehit + 1``, no intersection), up to ``roughness.MAX_REHITS`` after
@@ -630,32 +650,33 @@ class Integrator:
         go = ~stay
         _mirror_wrong_side(child, n_g, go)
         child.o = offset_along(child.o, n_g, child.d, step[i])
-        out = [child.take(go) if stay.any() else child]
-        if stay.any():
-            back = child.take(stay)
-            j = i[stay]
-            cur, other, leaving = (np.asarray(a)[stay] for a in side)
-            if rehit + 1 > MAX_REHITS:
-                self._emit(back.sid, back.m, self.job.media.temperature[face_med[j]])
-                return out
-            # the way to the next facet runs through the side's medium: at least a wavelength
-            # (geometrical optics needs facets larger than that), absorbed and emitted there
-            media = self.job.media
-            tau = np.exp(-media.alpha[cur] * (C0 / self.job.frequency))
-            lossy = tau < 1.0
-            if lossy.any():
-                self._emit(back.sid[lossy], back.m[lossy] * np.sqrt(1.0 - tau[lossy])[:, None, None],
-                           media.temperature[cur[lossy]])
-                back.m[lossy] *= np.sqrt(tau[lossy])[:, None, None]
-            alive = tau > _A_ROUNDING
-            if alive.any():
-                a = np.nonzero(alive)[0]
-                back = back.take(a) if not alive.all() else back
-                back.o = pos[j[a]]
-                back.depth -= 1  # the chain of facets at one point counts as one interaction
-                out += self._interact(back, pos[j[a]], n_g[stay][a], n_x[stay][a], cur[a], face_med[j[a]], other[a],
-                                      leaving[a], prim[j[a]], rehit + 1)
-        return out
+        if not stay.any():
+            return child, None
+        leave = child.take(go)
+        back = child.take(stay)
+        j = i[stay]
+        cur, other, leaving = (np.asarray(a)[stay] for a in side)
+        if rehit + 1 > MAX_REHITS:
+            self._emit(back.sid, back.m, self.job.media.temperature[face_med[j]])
+            return leave, None
+        # the way to the next facet runs through the side's medium: at least a wavelength
+        # (geometrical optics needs facets larger than that), absorbed and emitted there
+        media = self.job.media
+        tau = np.exp(-media.alpha[cur] * (C0 / self.job.frequency))
+        lossy = tau < 1.0
+        if lossy.any():
+            self._emit(back.sid[lossy], back.m[lossy] * np.sqrt(1.0 - tau[lossy])[:, None, None],
+                       media.temperature[cur[lossy]])
+            back.m[lossy] *= np.sqrt(tau[lossy])[:, None, None]
+        alive = tau > _A_ROUNDING
+        if not alive.any():
+            return leave, None
+        a = np.nonzero(alive)[0]
+        back = back.take(a) if not alive.all() else back
+        back.o = pos[j[a]]
+        back.depth -= 1  # the chain of facets at one point counts as one interaction
+        return leave, (back, pos[j[a]], n_g[stay][a], n_x[stay][a], cur[a], face_med[j[a]], other[a], leaving[a],
+                       prim[j[a]])
 
     # -- rough coating layers (seed 001) ----------------------------------------------------------
     def _walk_layers(self, wv: _Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim):
@@ -818,10 +839,10 @@ class Integrator:
             t_films = films.temperature
         coeff = {name: getattr(c, name) for name in ("rs", "rp", "ts", "tp", "Rs", "Rp", "Ts", "Tp", "As", "Ap")}
         k_out = -w.d
-        s = np.cross(n_fac, k_out)
+        s = cross(n_fac, k_out)
         norm = np.linalg.norm(s, axis=1, keepdims=True)
         s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), w.s)
-        ml = rebase(w.m, w.s, w.p, s, np.cross(k_out, s))
+        ml = rebase(w.m, w.s, w.p, s, cross(k_out, s))
         absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
         if absorb.any():
             self._emit(w.sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]),
@@ -842,7 +863,7 @@ class Integrator:
                 d_c = _refract(w.d[i], n_fac[i], np.full(i.size, eps1), np.full(i.size, eps2))
                 amp_s, amp_p = _amplitude(coeff["ts"][i], coeff["Ts"][i]), _amplitude(coeff["tp"][i], coeff["Tp"][i])
             side = a if refl else not a
-            child = _Wave(o=w.o[i], d=d_c, s=s[i], p=np.cross(-d_c, s[i]),
+            child = _Wave(o=w.o[i], d=d_c, s=s[i], p=cross(-d_c, s[i]),
                           m=_scale_columns(ml[i], gain[i] * amp_s, gain[i] * amp_p), sid=w.sid[i], depth=w.depth[i],
                           stack=w.stack[i], top=w.top[i], last_t=w.last_t[i])
             n_x = n_in[i] if refl else -n_in[i]
@@ -969,7 +990,7 @@ def _mirror_wrong_side(child: _Wave, g, rows=True):
         d_w = d_w - 2.0 * np.einsum("ij,ij->i", d_w, gw)[:, None] * gw
         s_w = s_w - 2.0 * np.einsum("ij,ij->i", s_w, gw)[:, None] * gw
         child.d[wrong], child.s[wrong] = d_w, s_w
-        child.p[wrong] = np.cross(-d_w, s_w)
+        child.p[wrong] = cross(-d_w, s_w)
 
 
 def _merge_walk(parts):
