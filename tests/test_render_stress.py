@@ -92,3 +92,46 @@ def test_random_scenes_render_within_the_range_of_their_temperatures(eps_a, eps_
     img = render(make_job([ground, inner, ball], cam, UniformSky(t[1] * 0.5, t[0]), F95, settings))
     temps = list(t) + [t[1] * 0.5]
     _check_range(img, min(temps), max(temps), slack=1e-6 * max(temps))
+
+
+_ROUGH = st.one_of(
+    st.none(),
+    st.builds(lambda a: {"model": "ggx", "alpha": a}, st.floats(1e-3, 3.0)),
+    st.builds(lambda e, f: {"model": "ashikhmin_shirley", "ex": e, "ey": f}, st.floats(0.0, 1e4), st.floats(0.0, 1e4)),
+    st.builds(lambda m: {"model": "blinn_phong", "m": m}, st.floats(0.0, 1e6)),
+    st.builds(lambda a: {"model": "beckmann", "alpha": a}, st.floats(1e-3, 2.0)),
+    st.builds(lambda g: {"model": "blender_gloss", "gloss": g}, st.floats(0.0, 1.0)),
+)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    eps_a=_EPS, eps_b=_EPS, eps_c=_EPS,
+    t=st.lists(st.floats(1.0, 400.0), min_size=4, max_size=4),
+    kind=st.sampled_from(["dielectric", "metal", "opaque", "blackbody"]),
+    rough_a=_ROUGH, rough_b=_ROUGH, rough_c=_ROUGH,
+    coat_d=st.one_of(st.just(0.0), st.floats(1e-6, 0.2)),
+    bump_slope=st.one_of(st.just(0.0), st.floats(0.01, 3.0)),
+    theta=st.floats(0.0, 89.9),
+)
+def test_random_rough_scenes_render_within_the_range_of_their_temperatures(
+        eps_a, eps_b, eps_c, t, kind, rough_a, rough_b, rough_c, coat_d, bump_slope, theta):
+    """Hypothesis: the same nested scenes with random roughness models and parameters (from
+    mirror-like to extreme), rough coating layers, and bump maps up to slope 3 (steeper than
+    the view): every pixel finite and within [min T, max T]."""
+    from pmmw_cli.scene.bump import BumpMap, gaussian_surface
+
+    bump = None
+    if bump_slope > 0:
+        bump = BumpMap(gaussian_surface(bump_slope * 0.05 / np.sqrt(2), 0.05, 1.0, seed=2), 1.0)
+    coat = [(eps_c, coat_d, t[1], rough_c)] if coat_d > 0 else []
+    ground = (box([-100, -100, -20], [100, 100, 0]),
+              material(eps=eps_a, temperature=t[0], coating=coat, roughness=rough_a, bump=bump))
+    inner = (box([-90, -90, -15], [90, 90, -1]), material(eps=eps_b, temperature=t[2], roughness=rough_b))
+    ball = (sphere([0, 0.3, 0.3], 0.25, subdivisions=2), material(kind=kind, eps=eps_b, temperature=t[3],
+                                                                  roughness=rough_a, coating=coat))
+    cam = looking_down_at(theta, width=6, height_px=4, fov_deg=40)
+    settings = RenderSettings(spp=2, max_depth=6, threshold=1e-4, termination="temperature", tile=8)
+    img = render(make_job([ground, inner, ball], cam, UniformSky(t[1] * 0.5, t[0]), F95, settings))
+    temps = list(t) + [t[1] * 0.5]
+    _check_range(img, min(temps), max(temps), slack=1e-6 * max(temps))

@@ -576,11 +576,17 @@ class Integrator:
             rehits.append(back)
 
         # masked children of both branches hit the same points again, as one group
+        # (with the weight threshold applied first: both children of a facet may be masked, so a
+        # chain could otherwise double its rays at every step)
         rehits = [b for b in rehits if b is not None]
         if rehits:
             back = _Wave.concat([b[0] for b in rehits])
             args = [np.concatenate([b[k] for b in rehits]) for k in range(1, 9)]
-            out += self._interact(back, *args, rehit + 1)
+            keep = self._survivors(back)
+            if not keep.all():
+                back, args = back.take(keep), [a[keep] for a in args]
+            if len(back):
+                out += self._interact(back, *args, rehit + 1)
         return [w for w in out if w is not None and len(w)]
 
     def _facets(self, wv: _Wave, n_mac, face_med):
@@ -958,6 +964,13 @@ class Integrator:
 
     def _terminate(self, wv: _Wave):
         """Depth cut-off and weight threshold (seed 000 sec. 2.2.5, 2.2.9)."""
+        keep = self._survivors(wv)
+        return wv.take(keep) if not keep.all() else wv
+
+    def _survivors(self, wv: _Wave):
+        """Which rays go on after the depth cut-off and the weight threshold; the others' power
+        is emitted (at the last object's temperature) or, by Russian roulette, dropped with the
+        survivors scaled up. Returns a boolean mask."""
         st = self.job.settings
         weight = row_power(wv.m)
         dead = weight <= 0.0
@@ -975,8 +988,7 @@ class Integrator:
                 idx = np.nonzero(low)[0]
                 wv.m[idx[survive]] /= np.sqrt(q[survive])[:, None, None]
                 dead[idx[~survive]] = True
-        keep = ~(dead | at_depth)
-        return wv.take(keep) if not keep.all() else wv
+        return ~(dead | at_depth)
 
 
 def _mirror_wrong_side(child: _Wave, g, rows=True):
