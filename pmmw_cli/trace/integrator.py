@@ -100,6 +100,8 @@ class _Wave:
         waves = [w for w in waves if w is not None and w.o.shape[0] > 0]
         if not waves:
             return None
+        if len(waves) == 1:
+            return waves[0]
         return _Wave(**{k: np.concatenate([getattr(w, k) for w in waves]) for k in _Wave.__slots__})
 
     def __len__(self):
@@ -357,8 +359,11 @@ class Integrator:
         hit = ~miss
         if not hit.any():
             return None
-        wv = wave.take(hit)
-        t, prim = t[hit], prim[hit]
+        if miss.any():
+            wv = wave.take(hit)
+            t, prim = t[hit], prim[hit]
+        else:
+            wv = wave
         rows = np.arange(len(wv))
         cur = wv.stack[rows, wv.top].astype(np.int64)
 
