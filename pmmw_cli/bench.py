@@ -568,7 +568,7 @@ def _skips_section(rows, workers):
                 f"| sky from cached tables | {r['sky_rays']:,} sky rays: {r['sky_table_s'] * 1e3:.1f} ms | "
                 f"per-ray radiative transfer: {r['sky_rt_s']:.2f} s | {100 * r['sky_rt_s'] / t:.0f} % of the render |")
         else:
-            lines.append(f"| sky from cached tables | the sky is not the layered atmosphere's: closed form per ray | | |")
+            lines.append("| sky from cached tables | the sky is not the layered atmosphere's: closed form per ray | | |")
         if "rough_on_s" in r:
             lines.append(
                 f"| no roughness sampling on smooth surfaces | smooth: {r['rough_off_s']:.2f} s | every surface "

@@ -31,7 +31,7 @@ from pmmw_cli.scene.geometry import build_geometry
 from pmmw_cli.scene.materials import MaterialDB
 from pmmw_cli.scene.sky import make_sky
 from pmmw_cli.trace.job import (
-    BLACKBODY, C0, DIELECTRIC, KIND_CODES, METAL, THIN, Coating, Media, RenderSettings, TraceJob, split_coating,
+    BLACKBODY, C0, DIELECTRIC, KIND_CODES, METAL, THIN, Media, RenderSettings, TraceJob, split_coating,
 )
 from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
 

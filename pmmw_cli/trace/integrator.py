@@ -26,7 +26,6 @@ isothermal enclosure reads its temperature exactly (PHYSICS.md, "Energy bookkeep
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 
@@ -162,11 +161,6 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
     kind = media.kind[face_med]
     eps1 = media.eps[cur]
     coat = media.coating[face_med]
-    if kind == METAL and coat is None:
-        n = cos1.shape[0]
-        one, zero = np.ones(n), np.zeros(n)
-        c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
-        return c, float(media.temperature[face_med]), None
     if kind == THIN:
         eps2 = eps1  # the sheet keeps the incident medium on both sides
     elif kind == BLACKBODY:
@@ -174,16 +168,50 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
         eps2 = coat.eps[-1] if coat is not None else eps1
     else:
         eps2 = media.eps[other]
-    if coat is None:
+    return interface_response(cos1, eps1, eps2, coat, leaving, kind == METAL, job.k0,
+                              float(media.temperature[cur]), float(media.temperature[face_med]))
+
+
+def interface_response(cos1, eps1, eps2, films, reverse, metal, k0, t_incident, t_body):
+    """Coefficients of one interface: bare (Fresnel), under coherent films (multilayer), or a
+    perfect conductor, for rays from medium ``eps1``.
+
+    Parameters
+    ----------
+    cos1 : ndarray, shape (n,), float64
+    eps1, eps2 : complex
+        Incident medium and far medium (ignored for a metal).
+    films : Coating or None
+        Coherent films between them, listed from the ``eps1`` side unless ``reverse``.
+    metal : bool
+        The far side is a perfect conductor.
+    k0 : float
+        Free-space wavenumber [1/m] (films only).
+    t_incident, t_body : float
+        Temperatures of the incident medium and of the body [K].
+
+    Returns
+    -------
+    coeffs : fresnel.Fresnel
+    t_emit : float
+        Where the absorbed part emits: the films' temperature, the body's for a bare metal, the
+        incident medium's for a bare interface (a lossy incident medium's homogeneous-wave
+        remainder, PHYSICS.md).
+    q2 : ndarray or None
+        The far medium's normal component for a bare interface (refraction reuses it).
+    """
+    if metal and films is None:
+        n = cos1.shape[0]
+        one, zero = np.ones(n), np.zeros(n)
+        c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
+        return c, t_body, None
+    if films is None:
         c, q2 = fresnel.interface(np.full(cos1.shape, eps1), np.full(cos1.shape, eps2), cos1, with_q2=True)
-        return c, float(media.temperature[cur]), q2
-    layers_eps, layers_d = coat.eps, coat.thickness
-    if leaving:
-        layers_eps, layers_d = layers_eps[::-1], layers_d[::-1]
-    eps = np.concatenate([[eps1], layers_eps, [eps2]])
-    substrate = "metal" if kind == METAL else "dielectric"
-    c = multilayer.stack(eps[None, :], layers_d[None, :], cos1, job.k0, substrate=substrate)
-    return c, coat.temperature, None
+        return c, t_incident, q2
+    f_eps, f_d = (films.eps[::-1], films.thickness[::-1]) if reverse else (films.eps, films.thickness)
+    eps = np.concatenate([[eps1], f_eps, [eps2]])
+    c = multilayer.stack(eps[None, :], f_d[None, :], cos1, k0, substrate="metal" if metal else "dielectric")
+    return c, films.temperature, None
 
 
 def brightness_bounds(job: TraceJob, source_range=()):
@@ -245,6 +273,7 @@ class Integrator:
         # which media have rough coating layers (None: none, the common case)
         layered = np.array([bool(media.rough_layers(k)) for k in range(len(media.ids))])
         self.layered = layered if layered.any() else None
+        self.rough_scene = media.any_rough  # smooth scenes skip every roughness and bump step
         self.atm_skip_length = atmosphere_skip_length(job)
 
     # -- public -----------------------------------------------------------------------------
@@ -407,7 +436,7 @@ class Integrator:
             idx = np.nonzero(interact)[0]
             other = np.where(kind[idx] != DIELECTRIC, face_med[idx], np.where(entering[idx], face_med[idx], below[idx]))
             n_in = np.where(cosf[idx, None] < 0.0, nf[idx], -nf[idx])  # normal facing the incident side
-            n_mac = self._bumped(pos[idx], wv.d[idx], n_in, face_med[idx]) if media.any_rough else n_in
+            n_mac = self._bumped(pos[idx], wv.d[idx], n_in, face_med[idx]) if self.rough_scene else n_in
             leaving = ~entering[idx] & dielectric[idx]
             layered = self.layered[face_med[idx]] if self.layered is not None else None
             if layered is None or not layered.any():
@@ -490,7 +519,7 @@ class Integrator:
         kind = media.kind[face_med]
         t_body = media.temperature[face_med]
         n_fac, tangent, rough = n_mac, None, None
-        if media.any_rough:
+        if self.rough_scene:
             n_fac, tangent, rough = self._facets(wv, n_mac, face_med)
         cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_fac), 0.0, 1.0)
 
@@ -513,22 +542,9 @@ class Integrator:
                     q2 = np.full(nr, np.nan + 0j)
                 q2[g] = q2g
 
-        # Local (s, p) basis of the outgoing wave k = -d about the (facet) normal (eq. 2.23).
-        k_out = -wv.d
-        s = cross(n_fac, k_out)
-        norm = np.linalg.norm(s, axis=1, keepdims=True)
-        s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), wv.s)
-        p_out = cross(k_out, s)
-        ml = rebase(wv.m, wv.s, wv.p, s, p_out)
+        s, ml = _local_basis(wv, n_fac)
 
-        absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
-        if absorb.any():
-            a = absorb
-            self._emit(wv.sid[a], _scale_columns(ml[a], np.sqrt(coeff["As"][a]), np.sqrt(coeff["Ap"][a])), t_coat[a])
-        sink = (kind == BLACKBODY) | (kind == OPAQUE)
-        if sink.any():
-            a = sink
-            self._emit(wv.sid[a], _scale_columns(ml[a], np.sqrt(coeff["Ts"][a]), np.sqrt(coeff["Tp"][a])), t_body[a])
+        self._emit_absorbed(wv.sid, ml, coeff, t_coat, (kind == BLACKBODY) | (kind == OPAQUE), t_body)
 
         trans = ((kind == DIELECTRIC) | (kind == THIN)) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
         keep_r, keep_t, gain_r, gain_t = self._choose_branches(wv, coeff, trans)
@@ -537,8 +553,7 @@ class Integrator:
         # Reflected child (eq. 2.21, 2.39): stays on the incident side.
         if keep_r.any():
             i = np.nonzero(keep_r)[0]
-            cosd = np.einsum("ij,ij->i", wv.d[i], n_fac[i])
-            d_r = wv.d[i] - 2.0 * cosd[:, None] * n_fac[i]
+            d_r = _reflect(wv.d[i], n_fac[i])
             m_r = _scale_columns(ml[i], gain_r[i] * _amplitude(coeff["rs"][i], coeff["Rs"][i]),
                                  gain_r[i] * _amplitude(coeff["rp"][i], coeff["Rp"][i]))
             child = _Wave(
@@ -616,19 +631,29 @@ class Integrator:
         rough = np.zeros(len(wv), bool)
         for k, mdl in models.items():
             g = np.nonzero(face_med == k)[0]
-            u = self.rng.random((2, g.size))
-            m, w = mdl.sample_normals(n_mac[g], tangent[g], -wv.d[g], u[0], u[1])
-            n_fac[g] = np.where(w[:, None] > 0.0, m, n_mac[g])
+            n_fac[g] = self._draw_facets(mdl, wv, g, n_mac[g], tangent[g], self.job.media.temperature[k])
             rough[g] = True
-            lost = w <= 0.0
-            if lost.any():
-                j = g[lost]
-                self._emit(wv.sid[j], wv.m[j], self.job.media.temperature[k])
-                wv.m[j] = 0.0
-            scaled = (w > 0.0) & (w != 1.0)
-            if scaled.any():
-                wv.m[g[scaled]] *= np.sqrt(w[scaled])[:, None, None]
         return n_fac, tangent, rough
+
+    def _draw_facets(self, model, wv: _Wave, rows, n, tangent, t_surface):
+        """Facet normals visible from rays ``rows`` of ``wv`` (macro normals n, facing them).
+
+        The draw's weight multiplies the power (Jones matrix by its square root; 1 for the
+        built-in models but in their rare fallback); a ray for which no facet is visible (weight
+        0, degenerate input only) emits its power at ``t_surface`` and goes on with none, keeping
+        the macro normal.
+        """
+        u = self.rng.random((2, rows.size))
+        m, w = model.sample_normals(n, tangent, -wv.d[rows], u[0], u[1])
+        lost = w <= 0.0
+        if lost.any():
+            j = rows[lost]
+            self._emit(wv.sid[j], wv.m[j], t_surface if np.ndim(t_surface) == 0 else t_surface[lost])
+            wv.m[j] = 0.0
+        scaled = (w > 0.0) & (w != 1.0)
+        if scaled.any():
+            wv.m[rows[scaled]] *= np.sqrt(w[scaled])[:, None, None]
+        return np.where(w[:, None] > 0.0, m, n)
 
     def _settle(self, child: _Wave, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, sign, rehit):
         """Send children off the surface, or back onto it.
@@ -670,16 +695,8 @@ class Integrator:
         if rehit + 1 > MAX_REHITS:
             self._emit(back.sid, back.m, self.job.media.temperature[face_med[j]])
             return leave, None
-        # the way to the next facet runs through the side's medium: at least a wavelength
-        # (geometrical optics needs facets larger than that), absorbed and emitted there
         media = self.job.media
-        tau = np.exp(-media.alpha[cur] * (C0 / self.job.frequency))
-        lossy = tau < 1.0
-        if lossy.any():
-            self._emit(back.sid[lossy], back.m[lossy] * np.sqrt(1.0 - tau[lossy])[:, None, None],
-                       media.temperature[cur[lossy]])
-            back.m[lossy] *= np.sqrt(tau[lossy])[:, None, None]
-        alive = tau > _A_ROUNDING
+        alive = self._cross_wavelength(back, media.alpha[cur], media.temperature[cur])
         if not alive.any():
             return leave, None
         a = np.nonzero(alive)[0]
@@ -707,159 +724,72 @@ class Integrator:
         ``_MAX_WALK`` steps is emitted at the layer's temperature. Every step keeps or splits the
         power, so an isothermal scene still reads its temperature exactly.
         """
-        job, media, st = self.job, self.job.media, self.job.settings
-        lam = C0 / job.frequency
+        media = self.job.media
         out = []
         key = ((face_med * 4096 + cur) * 4096 + other) * 2 + leaving
         for kv in np.unique(key):
             g = np.nonzero(key == kv)[0]
-            k, c0, o0, lv = int(face_med[g[0]]), int(cur[g[0]]), int(other[g[0]]), bool(leaving[g[0]])
-            layers = media.rough_layers(k)
-            n_l = len(layers)
-            kind = int(media.kind[k])
-            outside = o0 if lv else c0
-            eps_out = complex(media.eps[outside])
-            sub_eps = complex(media.eps[k])
-            up = -1.0 if lv else 1.0  # the side normals face: +1 the outside
+            k, lv = int(face_med[g[0]]), bool(leaving[g[0]])
+            pile = _Pile(media, k, int(other[g[0]]) if lv else int(cur[g[0]]))
+            up = -1.0 if lv else 1.0  # side normals facing the outside
             w = wv.take(g)
-            n_up, g_up = up * n_mac[g], up * n_geo[g]
-            p_, pr_ = pos[g], prim[g]
-            step = self.isect.face_offset[pr_]
+            n_up, g_up, p_g, step = up * n_mac[g], up * n_geo[g], pos[g], self.isect.face_offset[prim[g]]
+            tangent = _tangents(n_up)
             nr = len(w)
-            lvl = np.full(nr, n_l if lv else 0)
+            lvl = np.full(nr, pile.n if lv else 0)
             above = np.full(nr, not lv)
             rehits = np.zeros(nr, np.int64)
             rows = np.arange(nr)  # index into the group's per-ray constants
-            tangent = _tangents(n_up)
-            t_body = float(media.temperature[k])
-
-            def eps_of(j, side_above):  # medium on one side of interface j
-                if side_above:
-                    return eps_out if j == 0 else layers[j - 1].eps
-                return sub_eps if j == n_l else layers[j].eps
-
-            def side_medium(j, side_above):  # (alpha, temperature) of that medium
-                if side_above:
-                    if j == 0:
-                        return float(media.alpha[outside]), float(media.temperature[outside])
-                    return layers[j - 1].alpha, layers[j - 1].temperature
-                if j == n_l:
-                    return float(media.alpha[k]), t_body
-                return layers[j].alpha, layers[j].temperature
-
-            def end_temperature(j, side_above):  # where a walk ends early (the seed's "last object")
-                if (side_above and j == 0) or (not side_above and j == n_l):
-                    return t_body
-                return side_medium(j, side_above)[1]
-
-            steps = 0
-            while len(w):
-                steps += 1
-                if steps > _MAX_WALK:
-                    for j in np.unique(lvl):
-                        for a in (True, False):
-                            sel = (lvl == j) & (above == a)
-                            if sel.any():
-                                self._emit(w.sid[sel], w.m[sel], end_temperature(int(j), a))
-                    break
+            for _ in range(_MAX_WALK):
                 n_in = np.where(above[:, None], n_up[rows], -n_up[rows])
-                n_fac = n_in.copy()
-                nxt_parts = []
+                walk = []
                 for j in np.unique(lvl):
                     j = int(j)
-                    model = layers[j].roughness if j < n_l else media.rough(k)
+                    model = pile.roughness(j)
                     for a in (True, False):
                         sel = np.nonzero((lvl == j) & (above == a))[0]
                         if not sel.size:
                             continue
+                        n_fac = n_in[sel]
                         if model is not None:
-                            u = self.rng.random((2, sel.size))
-                            m, wt = model.sample_normals(n_in[sel], tangent[rows[sel]], -w.d[sel], u[0], u[1])
-                            n_fac[sel] = np.where(wt[:, None] > 0.0, m, n_in[sel])
-                            lost = wt <= 0.0
-                            if lost.any():
-                                self._emit(w.sid[sel[lost]], w.m[sel[lost]], end_temperature(j, a))
-                                w.m[sel[lost]] = 0.0
-                            sc = (wt > 0.0) & (wt != 1.0)
-                            if sc.any():
-                                w.m[sel[sc]] *= np.sqrt(wt[sc])[:, None, None]
-                        nxt_parts.append(self._layer_step(
-                            w.take(sel), sel, j, a, model, n_in[sel], n_fac[sel], tangent[rows[sel]],
-                            eps_of(j, a), eps_of(j, not a), layers, k, kind, t_body, side_medium, end_temperature,
-                            lam, n_l, rehits[sel], rows[sel]))
-                # real children and the walk's survivors
-                walk = []
-                for part in nxt_parts:
-                    for exit_up, child, r in part["exits"]:
-                        out.append(self._layer_exit(child, r, exit_up, lv, k, c0, o0, p_, g_up, step, t_body))
-                    if part["walk"] is not None:
-                        walk.append(part["walk"])
-                if not walk:
+                            n_fac = self._draw_facets(model, w, sel, n_fac, tangent[rows[sel]], pile.end_temperature(j, a))
+                        exits, more = self._layer_step(w.take(sel), pile, j, a, n_in[sel], n_fac, tangent[rows[sel]],
+                                                       rehits[sel], rows[sel])
+                        out += [self._layer_exit(child, r, exit_up, lv, k, p_g, g_up, step, pile.t_body)
+                                for exit_up, child, r in exits]
+                        walk += more
+                walk = _merge_walk(walk)
+                if walk is None:
                     break
-                w = _Wave.concat([x[0] for x in walk])
-                lvl = np.concatenate([x[1] for x in walk])
-                above = np.concatenate([x[2] for x in walk])
-                rehits = np.concatenate([x[3] for x in walk])
-                rows = np.concatenate([x[4] for x in walk])
-                # below the threshold: Russian roulette (unbiased), or with ``termination:
-                # temperature`` the medium the ray is in emits the rest (the seed's rule)
-                weight = row_power(w.m)
-                low = weight < st.threshold
-                keep = weight > 0.0
-                if low.any() and st.termination == "temperature":
-                    for j in np.unique(lvl[low]):
-                        for a in (True, False):
-                            sel = low & (lvl == j) & (above == a)
-                            if sel.any():
-                                self._emit(w.sid[sel], w.m[sel], end_temperature(int(j), a))
-                    keep &= ~low
-                elif low.any():
-                    q = weight[low] / st.threshold
-                    survive = self.rng.random(q.shape[0]) < q
-                    idx = np.nonzero(low)[0]
-                    w.m[idx[survive]] /= np.sqrt(q[survive])[:, None, None]
-                    keep[idx[~survive]] = False
+                w, lvl, above, rehits, rows = walk
+                # below the threshold the scene's termination rule; "the last object" is the
+                # medium the ray is in (the body itself on its outer and inner sides)
+                w.last_t = pile.end_temperatures(lvl, above)
+                keep = self._survivors(w)
                 if not keep.all():
                     w, lvl, above, rehits, rows = w.take(keep), lvl[keep], above[keep], rehits[keep], rows[keep]
+            else:  # _MAX_WALK facet events: what is left emits where it is
+                self._emit(w.sid, w.m, pile.end_temperatures(lvl, above))
         return out
 
-    def _layer_step(self, w, sel, j, a, model, n_in, n_fac, tangent, eps1, eps2, layers, k, kind, t_body,
-                    side_medium, end_temperature, lam, n_l, rehits, rows):
-        """One facet event at interface j for rays on side ``a`` (True: above). Returns the real
-        exits ``[(exit_up, wave, rows)]`` and the rays still walking ``(wave, lvl, above, rehits,
-        rows)`` or None."""
-        media, job = self.job.media, self.job
-        nr = len(w)
+    def _layer_step(self, w, pile, j, a, n_in, n_fac, tangent, rehits, rows):
+        """One facet event at interface j for rays on side ``a`` (True: above).
+
+        Returns the real exits ``[(exit_up, wave, rows)]`` and the parts of the walk that go on,
+        ``[(wave, lvl, above, rehits, rows)]``.
+        """
+        model = pile.roughness(j)
         cos1 = np.clip(-np.einsum("ij,ij->i", w.d, n_fac), 0.0, 1.0)
-        films = layers[j].films if j < n_l else media.coating[k]
-        metal = j == n_l and kind == METAL
-        sink = j == n_l and a and kind in (BLACKBODY, OPAQUE)
-        if j == n_l and kind == BLACKBODY:
+        films, metal = pile.films(j), j == pile.n and pile.kind == METAL
+        sink = j == pile.n and a and pile.kind in (BLACKBODY, OPAQUE)
+        eps1, eps2 = pile.eps(j, a), pile.eps(j, not a)
+        if j == pile.n and pile.kind == BLACKBODY:  # index-matched, as in `surface_response`
             eps2 = films.eps[-1] if (films is not None and a) else eps1
-        if metal and films is None:
-            one, zero = np.ones(nr), np.zeros(nr)
-            c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
-            t_films = t_body
-        elif films is None:
-            c = fresnel.interface(np.full(nr, eps1), np.full(nr, eps2), cos1)
-            t_films = side_medium(j, a)[1]  # homogeneous-wave remainder of a lossy incident medium
-        else:
-            f_eps, f_d = (films.eps, films.thickness) if a else (films.eps[::-1], films.thickness[::-1])
-            eps = np.concatenate([[eps1], f_eps, [eps2]])
-            c = multilayer.stack(eps[None, :], f_d[None, :], cos1, job.k0, substrate="metal" if metal else "dielectric")
-            t_films = films.temperature
-        coeff = {name: getattr(c, name) for name in ("rs", "rp", "ts", "tp", "Rs", "Rp", "Ts", "Tp", "As", "Ap")}
-        k_out = -w.d
-        s = cross(n_fac, k_out)
-        norm = np.linalg.norm(s, axis=1, keepdims=True)
-        s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), w.s)
-        ml = rebase(w.m, w.s, w.p, s, cross(k_out, s))
-        absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
-        if absorb.any():
-            self._emit(w.sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]),
-                                                     np.sqrt(coeff["Ap"][absorb])), t_films)
-        if sink:
-            self._emit(w.sid, _scale_columns(ml, np.sqrt(coeff["Ts"]), np.sqrt(coeff["Tp"])), t_body)
+        c, t_films, q2 = interface_response(cos1, eps1, eps2, films, not a, metal, self.job.k0, pile.medium(j, a)[1],
+                                            pile.t_body)
+        coeff = c._asdict()
+        s, ml = _local_basis(w, n_fac)
+        self._emit_absorbed(w.sid, ml, coeff, t_films, np.full(len(w), sink), pile.t_body)
         trans = (not sink and not metal) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
         keep_r, keep_t, gain_r, gain_t = self._choose_branches(w, coeff, trans)
         exits, walk = [], []
@@ -868,10 +798,11 @@ class Integrator:
                 continue
             i = np.nonzero(keep)[0]
             if refl:
-                d_c = w.d[i] - 2.0 * np.einsum("ij,ij->i", w.d[i], n_fac[i])[:, None] * n_fac[i]
+                d_c = _reflect(w.d[i], n_fac[i])
                 amp_s, amp_p = _amplitude(coeff["rs"][i], coeff["Rs"][i]), _amplitude(coeff["rp"][i], coeff["Rp"][i])
             else:
-                d_c = _refract(w.d[i], n_fac[i], np.full(i.size, eps1), np.full(i.size, eps2))
+                d_c = _refract(w.d[i], n_fac[i], np.full(i.size, eps1), np.full(i.size, eps2),
+                               None if q2 is None else q2[i])
                 amp_s, amp_p = _amplitude(coeff["ts"][i], coeff["Ts"][i]), _amplitude(coeff["tp"][i], coeff["Tp"][i])
             side = a if refl else not a
             child = _Wave(o=w.o[i], d=d_c, s=s[i], p=cross(-d_c, s[i]),
@@ -883,46 +814,38 @@ class Integrator:
             else:
                 p_leave = (np.einsum("ij,ij->i", d_c, n_x) > 0.0).astype(float)
             stay = self.rng.random(i.size) >= p_leave
-            alpha_x, temp_x = side_medium(j, side)
-            # masked: back to interface j on the same side, through one wavelength of that medium
-            if stay.any():
-                back = child.take(stay)
-                rh = rehits[i][stay] + 1
+            if stay.any():  # masked: back to interface j on the same side
+                back, rh, r_back = child.take(stay), rehits[i][stay] + 1, rows[i][stay]
                 over = rh > MAX_REHITS
-                tau = math.exp(-alpha_x * lam)
-                if tau < 1.0:
-                    self._emit(back.sid, back.m * math.sqrt(1.0 - tau), temp_x)
-                    back.m *= math.sqrt(tau)
                 if over.any():
-                    self._emit(back.sid[over], back.m[over], end_temperature(j, side))
-                ok = ~over
-                if ok.any() and tau > _A_ROUNDING:
-                    walk.append((back.take(ok), np.full(int(ok.sum()), j), np.full(int(ok.sum()), side), rh[ok],
-                                 rows[i][stay][ok]))
+                    self._emit(back.sid[over], back.m[over], pile.end_temperature(j, side))
+                    back, rh, r_back = back.take(~over), rh[~over], r_back[~over]
+                alpha_x, temp_x = pile.medium(j, side)
+                ok = self._cross_wavelength(back, np.full(len(back), alpha_x), temp_x)
+                if ok.any():
+                    n_ok = int(ok.sum())
+                    walk.append((back.take(ok), np.full(n_ok, j), np.full(n_ok, side), rh[ok], r_back[ok]))
             go = ~stay
             if not go.any():
                 continue
             fwd = child.take(go) if stay.any() else child
             r_go = rows[i][go]
-            if side and j == 0:
-                exits.append((True, fwd, r_go))
-            elif not side and j == n_l:
-                exits.append((False, fwd, r_go))
-            else:
-                # across the layer it is in to the neighbouring interface
-                lay = layers[j - 1] if side else layers[j]
-                cos_t = np.maximum(np.abs(np.einsum("ij,ij->i", fwd.d, n_in[i][go])), 1e-6)
-                tau = np.exp(-lay.alpha * lay.thickness / cos_t)
-                em = tau < 1.0
-                if em.any():
-                    self._emit(fwd.sid[em], fwd.m[em] * np.sqrt(1.0 - tau[em])[:, None, None], lay.temperature)
-                    fwd.m *= np.sqrt(tau)[:, None, None]
-                nj = j - 1 if side else j + 1
-                walk.append((fwd, np.full(len(fwd), nj), np.full(len(fwd), not side), np.zeros(len(fwd), np.int64),
-                             r_go))
-        return {"exits": exits, "walk": _merge_walk(walk)}
+            if (side and j == 0) or (not side and j == pile.n):
+                exits.append((side, fwd, r_go))
+                continue
+            # across the layer it is in to the neighbouring interface
+            lay = pile.layers[j - 1] if side else pile.layers[j]
+            cos_t = np.maximum(np.abs(np.einsum("ij,ij->i", fwd.d, n_in[i][go])), 1e-6)
+            tau = np.exp(-lay.alpha * lay.thickness / cos_t)
+            em = tau < 1.0
+            if em.any():
+                self._emit(fwd.sid[em], fwd.m[em] * np.sqrt(1.0 - tau[em])[:, None, None], lay.temperature)
+                fwd.m *= np.sqrt(tau)[:, None, None]
+            walk.append((fwd, np.full(len(fwd), j - 1 if side else j + 1), np.full(len(fwd), not side),
+                         np.zeros(len(fwd), np.int64), r_go))
+        return exits, walk
 
-    def _layer_exit(self, child, r, exit_up, leaving, k, c0, o0, pos, g_up, step, t_body):
+    def _layer_exit(self, child, r, exit_up, leaving, k, pos, g_up, step, t_body):
         """A child leaving the layered surface: on the outside (``exit_up``) or into the body,
         with the media stack of a reflected or transmitted child and the smooth code's offset."""
         g = g_up[r] if exit_up else -g_up[r]
@@ -939,6 +862,29 @@ class Integrator:
             top -= 1
         child.stack, child.top = stack, top
         return child
+
+    def _cross_wavelength(self, back: _Wave, alpha, temperature):
+        """A masked child's way back to the microsurface: one wavelength of its medium (the
+        shortest facet spacing for which geometrical optics holds), absorbing ``1 - exp(-alpha
+        lambda)`` and emitting it at ``temperature``. Returns the rays with power left."""
+        tau = np.exp(-alpha * (C0 / self.job.frequency))
+        lossy = tau < 1.0
+        if lossy.any():
+            t = temperature if np.ndim(temperature) == 0 else temperature[lossy]
+            self._emit(back.sid[lossy], back.m[lossy] * np.sqrt(1.0 - tau[lossy])[:, None, None], t)
+            back.m[lossy] *= np.sqrt(tau[lossy])[:, None, None]
+        return tau > _A_ROUNDING
+
+    def _emit_absorbed(self, sid, ml, coeff, t_absorb, sink, t_body):
+        """Emission of what an interaction absorbs: the interface's (or films') A at ``t_absorb``,
+        and, where ``sink`` (blackbody, opaque), the transmitted T at the body's ``t_body``."""
+        absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
+        if absorb.any():
+            t = t_absorb if np.ndim(t_absorb) == 0 else t_absorb[absorb]
+            self._emit(sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]), np.sqrt(coeff["Ap"][absorb])), t)
+        if sink.any():
+            t = t_body if np.ndim(t_body) == 0 else t_body[sink]
+            self._emit(sid[sink], _scale_columns(ml[sink], np.sqrt(coeff["Ts"][sink]), np.sqrt(coeff["Tp"][sink])), t)
 
     def _choose_branches(self, wv: _Wave, coeff, trans):
         """Which children to follow (``render.strategy``) and their amplitude gains.
@@ -994,6 +940,66 @@ class Integrator:
                 wv.m[idx[survive]] /= np.sqrt(q[survive])[:, None, None]
                 dead[idx[~survive]] = True
         return ~(dead | at_depth)
+
+
+class _Pile:
+    """The interfaces of one surface with rough coating layers, seen by one group of rays.
+
+    Interface j < n is the rough top of ``layers[j]`` (with that layer's coherent films);
+    interface n is the body's own surface (its ``coating`` films and ``roughness``). Above
+    interface 0 is the outside medium, below interface n the body (index k).
+    """
+
+    def __init__(self, media, k, outside):
+        self.layers = media.rough_layers(k)
+        self.n = len(self.layers)
+        self.kind = int(media.kind[k])
+        self.t_body = float(media.temperature[k])
+        self._media, self._k = media, k
+        lay = self.layers
+        # per interface j: (eps, alpha, temperature) of the medium above and below it
+        self._above = [(complex(media.eps[outside]), float(media.alpha[outside]), float(media.temperature[outside]))]
+        self._above += [(x.eps, x.alpha, x.temperature) for x in lay]
+        self._below = [(x.eps, x.alpha, x.temperature) for x in lay]
+        self._below += [(complex(media.eps[k]), float(media.alpha[k]), self.t_body)]
+        # where a walk that ends early emits: the layer it is in, the body on either outer side
+        self._end_above = np.array([self.t_body] + [x.temperature for x in lay])
+        self._end_below = np.array([x.temperature for x in lay] + [self.t_body])
+
+    def roughness(self, j):
+        return self.layers[j].roughness if j < self.n else self._media.rough(self._k)
+
+    def films(self, j):
+        return self.layers[j].films if j < self.n else self._media.coating[self._k]
+
+    def eps(self, j, above):
+        return (self._above if above else self._below)[j][0]
+
+    def medium(self, j, above):
+        """(alpha, temperature) of the medium on one side of interface j."""
+        return (self._above if above else self._below)[j][1:]
+
+    def end_temperature(self, j, above):
+        return float(self._end_above[j] if above else self._end_below[j])
+
+    def end_temperatures(self, lvl, above):
+        return np.where(above, self._end_above[lvl], self._end_below[lvl])
+
+
+def _local_basis(wv: _Wave, n):
+    """The (s, p) basis of the outgoing wave k = -d about the (facet) normal n (eq. 2.23), and the
+    rays' Jones matrices re-expressed in it. ``s = unit(n x k)``, or the ray's own s at normal
+    incidence (n parallel to k)."""
+    k_out = -wv.d
+    s = cross(n, k_out)
+    norm = np.sqrt(np.einsum("ij,ij->i", s, s))[:, None]
+    s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), wv.s)
+    return s, rebase(wv.m, wv.s, wv.p, s, cross(k_out, s))
+
+
+def _reflect(d, n):
+    """Mirror direction of d about the unit normal n (eq. 2.21)."""
+    return d - 2.0 * np.einsum("ij,ij->i", d, n)[:, None] * n
 
 
 def _mirror_wrong_side(child: _Wave, g, rows=True):
