@@ -1184,6 +1184,24 @@ class BrdfResult:
     files: list
 
 
+# The option each "command line" problem comes from: the substrate and roughness checks are
+# shared with stack files and locate problems by key (`--n.n`, `roughness.ex`); a user who typed
+# options is told the option alone.
+_ROUGHNESS_OPTIONS = {
+    "roughness.model": "--model", "roughness.ex": "--ex", "roughness.ey": "--ey", "roughness.m": "--m",
+    "roughness.alpha": "--alpha", "roughness.alpha_x": "--alpha", "roughness.alpha_y": "--alpha-y",
+    "roughness.gloss": "--gloss", "roughness.orientation_deg": "--orientation",
+}
+
+
+def _option_error(err: UserError) -> UserError:
+    if isinstance(err, UserErrors):
+        return UserErrors([_option_error(e) for e in err.errors])
+    if err.file != "command line" or not err.key:
+        return err
+    return UserError(err.message, _ROUGHNESS_OPTIONS.get(err.key, err.key.split(".")[0]))
+
+
 def _stack_from_options(n, eps, material, roughness_spec, frequency, wavelength):
     f = _frequency(frequency, wavelength, "command line", "--frequency", "--wavelength")
     given = [k for k, v in (("--n", n), ("--eps", eps), ("--material", material)) if v is not None]
@@ -1203,20 +1221,21 @@ def _material_stack(mid, eps_val, metal, model, f):
     coating, as the renderer sees it. Coating layers without roughness are coherent films on the
     interface below them; a layer with its own ``roughness:`` is a rough layer of its own."""
     from pmmw_cli.scene.materials import MaterialDB
+    from pmmw_cli.trace.job import split_coating
 
     db = MaterialDB.load()
     mat = db.get(mid, file="command line", key="--material")
-    layers, films = [], []
-    for layer in mat.coating:
-        lm = db.get(layer.material)
-        if layer.roughness is None:
-            films.append((complex(lm.eps_at(f)), float(layer.thickness)))
-            continue
-        layers.append(Layer(eps=complex(lm.eps_at(f)), roughness=layer.roughness, thickness=float(layer.thickness),
-                            coating=tuple(films), name=layer.material))
-        films = []
+    rough_layers, films = split_coating(  # the renderer's grouping (temperatures do not matter here)
+        [(db.get(x.material).eps_at(f), x.thickness, 0.0, x.roughness) for x in mat.coating], 2.0 * math.pi * f / _C0)
+
+    def pairs(coat):
+        return () if coat is None else tuple(zip(coat.eps.tolist(), coat.thickness.tolist()))
+
+    names = [x.material for x in mat.coating if x.roughness is not None]
+    layers = [Layer(eps=x.eps, roughness=x.roughness, thickness=x.thickness, coating=pairs(x.films), name=name)
+              for x, name in zip(rough_layers, names)]
     layers.append(Layer(eps=eps_val, roughness=model if model is not None else mat.roughness, metal=metal,
-                        coating=tuple(films), name=mid))
+                        coating=pairs(films), name=mid))
     return Stack(layers=tuple(layers), frequency=f)
 
 
@@ -1332,13 +1351,16 @@ def run_brdf(*, n=None, eps=None, material=None, stack=None, frequency=None, wav
     if int(double_samples) < 1:
         raise UserError(f"double-samples must be >= 1, got {double_samples!r}", "--double-samples")
     spec = roughness_spec_from_options(model, ex, ey, m, alpha, alpha_y, gloss, orientation)
-    if stack is not None:
-        if any(v is not None for v in (n, eps, material)) or spec is not None:
-            raise UserError("--stack describes the layers and their roughness: drop --n/--eps/--material and the "
-                            "roughness options", "--stack")
-        st = stack if isinstance(stack, Stack) else load_stack(stack, frequency=frequency, wavelength=wavelength)
-    else:
-        st = _stack_from_options(n, eps, material, spec, frequency, wavelength)
+    if stack is not None and (any(v is not None for v in (n, eps, material)) or spec is not None):
+        raise UserError("--stack describes the layers and their roughness: drop --n/--eps/--material and the "
+                        "roughness options", "--stack")
+    try:
+        if stack is not None:
+            st = stack if isinstance(stack, Stack) else load_stack(stack, frequency=frequency, wavelength=wavelength)
+        else:
+            st = _stack_from_options(n, eps, material, spec, frequency, wavelength)
+    except UserError as err:
+        raise _option_error(err) from None
     wi = _direction(float(incidence), float(azimuth))
     methods = ("mc", "analytic") if method == "both" else (method,)
     results: dict[str, MethodResult] = {}

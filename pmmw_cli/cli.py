@@ -17,7 +17,7 @@ import typer
 import yaml
 
 from pmmw_cli import __version__
-from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.errors import UserError
 
 app = typer.Typer(
     add_completion=False, no_args_is_help=True,
@@ -145,24 +145,6 @@ def sky(
         skycmd.write_plot(plot, atm, f)
 
 
-# `run_brdf` locates substrate and roughness problems as in a stack file ("command line" and a key:
-# `--n.n`, `roughness.ex`); on the command line the user typed an option, so name that alone.
-_ROUGHNESS_OPTIONS = {
-    "roughness.model": "--model", "roughness.ex": "--ex", "roughness.ey": "--ey", "roughness.m": "--m",
-    "roughness.alpha": "--alpha", "roughness.alpha_x": "--alpha", "roughness.alpha_y": "--alpha-y",
-    "roughness.gloss": "--gloss", "roughness.orientation_deg": "--orientation",
-}
-
-
-def _name_options(err: UserError) -> UserError:
-    if isinstance(err, UserErrors):
-        return UserErrors([_name_options(e) for e in err.errors])
-    if err.file != "command line" or not err.key:
-        return err
-    option = _ROUGHNESS_OPTIONS.get(err.key, err.key.split(".")[0])
-    return UserError(err.message, option)
-
-
 def _count(text: str, option: str) -> int:
     """``1000000``, ``1e6`` or ``1_000_000`` -> int (a whole number; the range is checked later)."""
     try:
@@ -253,15 +235,12 @@ def brdf(
     """Polarized BRDF of a rough (layered) surface on seed 001's 1-degree hemispherical grid."""
     from pmmw_cli.brdf import run_brdf
 
-    try:
-        res = run_brdf(n=n, eps=eps, material=material, stack=stack, frequency=frequency, wavelength=wavelength,
-                       incidence=incidence, azimuth=azimuth, stokes=_numbers(stokes, "--stokes", 4, "1,0,0,0"),
-                       model=model, ex=ex, ey=ey, m=m, alpha=alpha, alpha_y=alpha_y, gloss=gloss,
-                       orientation=orientation, method=method, samples=_count(samples, "--samples"), seed=seed,
-                       shadowing=shadowing, double=double, double_samples=double_samples, mueller=mueller,
-                       threshold=threshold, out=out, plots=plots)
-    except UserError as e:
-        raise _name_options(e) from None
+    res = run_brdf(n=n, eps=eps, material=material, stack=stack, frequency=frequency, wavelength=wavelength,
+                   incidence=incidence, azimuth=azimuth, stokes=_numbers(stokes, "--stokes", 4, "1,0,0,0"),
+                   model=model, ex=ex, ey=ey, m=m, alpha=alpha, alpha_y=alpha_y, gloss=gloss,
+                   orientation=orientation, method=method, samples=_count(samples, "--samples"), seed=seed,
+                   shadowing=shadowing, double=double, double_samples=double_samples, mueller=mueller,
+                   threshold=threshold, out=out, plots=plots)
     if as_json:
         typer.echo(json.dumps(res.summary, indent=2))
     else:

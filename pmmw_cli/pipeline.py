@@ -100,13 +100,10 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
         rough.append(m.roughness)
         bump.append(m.bump)
         layers = []
-        for i, layer in enumerate(m.coating):
+        for layer in m.coating:
             lm = db.get(layer.material)
             t_l = layer.temperature if layer.temperature is not None else (lm.temperature if lm.temperature is not None else t_m)
             layers.append((lm.eps_at(f), layer.thickness, t_l, layer.roughness))
-            if layer.roughness is not None and code == THIN:
-                raise UserError("a thin sheet's coating layers cannot be rough (the sheet is traced as one coherent "
-                                "stack): remove the layer's roughness", m.origin, f"{db.key_of(mid)}.coating[{i}].roughness")
         if code == THIN:
             layers.append((e, m.thickness or 0.0, t_m, None))
         rough_layers, films = split_coating(layers, k0)

@@ -444,8 +444,8 @@ def test_stack_file_errors_name_file_and_key(tmp_path, text, key):
     ({"n": "1.5", "stokes": (1, 2, 0, 0)}, "--stokes"),
     ({"n": "1.5", "method": "exact"}, "--method"),
     ({"n": "1.5", "shadowing": "v_groove"}, "--shadowing"),
-    ({"n": "1.5", "ex": -3}, "roughness.ex"),
-    ({"n": "1.5", "model": "ggx", "ex": 3}, "roughness.ex"),
+    ({"n": "1.5", "ex": -3}, "--ex"),  # run_brdf names the option, not the stack-file key
+    ({"n": "1.5", "model": "ggx", "ex": 3}, "--ex"),
     ({"n": "1.5", "gloss": 0.5, "method": "analytic"}, "--method"),
     ({"n": "1.5", "samples": 0}, "--samples"),
 ])

@@ -457,6 +457,9 @@ def test_coating_layer_roughness_is_parsed(db):
     ({"bump": {"model": "perlin"}}, "materials.sand.bump.model", "unknown bump model"),
     ({"coating": [{"material": "polypropylene", "thickness": "1 mm", "roughness": {"model": "ggx"}}]},
      "materials.sand.coating[0].roughness.alpha", "missing"),
+    ({"kind": "thin", "thickness": "1 mm",
+      "coating": [{"material": "polypropylene", "thickness": "1 mm", "roughness": {"model": "ggx", "alpha": 0.2}}]},
+     "materials.sand.coating[0].roughness", "thin sheet"),
 ])
 def test_roughness_and_bump_errors_name_file_and_key(db, raw, key, words):
     with pytest.raises(UserError) as ei:

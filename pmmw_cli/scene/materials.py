@@ -442,6 +442,10 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
         freqs, values = eps
     if kind == "thin" and thickness is None:
         errors.append(UserError("kind thin needs `thickness` (the sheet's own thickness, e.g. 0.1 mm)", origin, base_key))
+    if kind == "thin":
+        errors += [UserError("a thin sheet's coating layers cannot be rough (the sheet is traced as one coherent "
+                             "stack): remove the layer's roughness", origin, _join(base_key, "coating", i, "roughness"))
+                   for i, layer in enumerate(fields.get("coating") or ()) if layer.roughness is not None]
     if kind != "thin" and thickness is not None:
         errors.append(UserError(
             "`thickness` is only for kind thin (the sheet's own thickness); layers on a surface go in `coating`",
@@ -706,10 +710,6 @@ class MaterialDB:
         raise UserError(
             f"unknown material {mid!r}{hint} (`pmmw materials list` shows every id; a scenario's "
             "`materials:` map can define new ones)", file, key)
-
-    def key_of(self, mid: str) -> str:
-        """Key path of entry `mid` in the file it came from (``materials.ID`` for an override)."""
-        return self._keys.get(mid, mid)
 
     def ids(self) -> list[str]:
         """Every id, in load order (files by name, entries in file order; new overrides last)."""
