@@ -24,7 +24,7 @@ import numpy as np
 from pmmw_cli import __version__
 from pmmw_cli.imaging.imager import blur, psf_kernel
 from pmmw_cli.io.atomic import save_npz_atomic, write_text_atomic
-from pmmw_cli.pipeline import make_job, resolve, scenario_hash
+from pmmw_cli.pipeline import aux_channels, make_job, resolve, scenario_hash
 from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
 
 STRATEGIES = ("split", "stochastic", "hybrid")
@@ -501,11 +501,7 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
                     t0 = time.perf_counter()
                     ch = dict(chans)
                     if with_aux:
-                        err = stokes_images(img.stderr)
-                        ch["aux.stderr.I"] = np.sqrt(img.stderr[..., 0] ** 2 + img.stderr[..., 1] ** 2).astype(np.float32)
-                        ch.update({f"aux.stderr.{c}": err[c].astype(np.float32) for c in ("Ex2", "Ey2")})
-                        ch.update({"aux.depth": img.depth.astype(np.float32), "aux.material": img.material.astype(np.float32),
-                                   "aux.samples": img.samples.astype(np.float32)})
+                        ch.update(aux_channels(img, ("stderr", "depth", "material", "samples")))
                     write_exr(Path(tmp) / "x.exr", ch, {})
                     row[key] = min(row.get(key, np.inf), time.perf_counter() - t0)
 

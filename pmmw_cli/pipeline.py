@@ -113,6 +113,24 @@ def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
                  tuple(coat), tuple(rough), tuple(bump), tuple(stacks))
 
 
+def aux_channels(img, aux) -> dict:
+    """The auxiliary EXR channels asked for in ``output.aux`` (stderr, depth, material, samples)
+    of an assembled image, float32."""
+    channels = {}
+    if "stderr" in aux:
+        err = stokes_images(img.stderr)
+        channels["aux.stderr.I"] = np.sqrt(img.stderr[..., 0] ** 2 + img.stderr[..., 1] ** 2).astype(np.float32)
+        channels["aux.stderr.Ex2"] = err["Ex2"].astype(np.float32)
+        channels["aux.stderr.Ey2"] = err["Ey2"].astype(np.float32)
+    if "depth" in aux:
+        channels["aux.depth"] = img.depth.astype(np.float32)
+    if "material" in aux:
+        channels["aux.material"] = img.material.astype(np.float32)
+    if "samples" in aux:
+        channels["aux.samples"] = img.samples.astype(np.float32)
+    return channels
+
+
 def scenario_hash(scn, db: MaterialDB | None = None) -> str:
     """Hash of everything that changes the traced tiles (not workers, not output settings): the
     scenario, its mesh and sky files and, given the resolved database, every material in it
@@ -336,7 +354,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
             continue
         img = imgs[0] if len(imgs) == 1 else average_images(imgs)
         job = make_job(res, f) if len(imgs) > 1 else job
-        mean, stderr, depth, material, rays = img.mean, img.stderr, img.depth, img.material, img.rays
+        mean, rays = img.mean, img.rays
         t_trace = time.perf_counter() - t1
         ideal = stokes_images(mean)
         sensor = apply_imager(
@@ -345,17 +363,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
         )
         channels = {c: sensor[c].astype(np.float32) for c in scn.output.channels}
         channels.update({f"ideal.{c}": ideal[c].astype(np.float32) for c in scn.output.channels})
-        if "stderr" in scn.output.aux:
-            err = stokes_images(stderr)
-            channels["aux.stderr.I"] = np.sqrt(stderr[..., 0] ** 2 + stderr[..., 1] ** 2).astype(np.float32)
-            channels["aux.stderr.Ex2"] = err["Ex2"].astype(np.float32)
-            channels["aux.stderr.Ey2"] = err["Ey2"].astype(np.float32)
-        if "depth" in scn.output.aux:
-            channels["aux.depth"] = depth.astype(np.float32)
-        if "material" in scn.output.aux:
-            channels["aux.material"] = material.astype(np.float32)
-        if "samples" in scn.output.aux:
-            channels["aux.samples"] = img.samples.astype(np.float32)
+        channels.update(aux_channels(img, scn.output.aux))
         cam = job.camera
         attrs = {
             "pmmw:version": __version__, "pmmw:units": "K (Rayleigh-Jeans brightness temperature)",
