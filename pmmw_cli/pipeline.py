@@ -453,7 +453,7 @@ def validate(path, overrides=()) -> dict:
                 **({"rough_coating_layers": [repr(layer.roughness) for layer in media.rough_layers(i)]}
                    if media.rough_layers(i) else {}),
                 **({"roughness": repr(media.rough(i))} if media.rough(i) is not None else {}),
-                **({"bump": repr(media.bump[i])} if i < len(media.bump) and media.bump[i] is not None else {}),
+                **({"bump": repr(media.bump_map(i))} if media.bump_map(i) is not None else {}),
             }
             for i, mid in enumerate(media.ids)
         }

@@ -265,3 +265,32 @@ def test_rough_cinderblocks_config_resolves_its_rough_bumpy_sand():
     assert sand["roughness"].startswith("GGX(") and sand["bump"].startswith("BumpMap(gaussian")
     bump = resolve(path).db.get("desert_sand").bump
     assert bump.rms_slope == pytest.approx(math.sqrt(2) * 0.02 / 0.25, rel=0.1)
+
+
+def test_nearly_smooth_rough_layer_is_the_incoherent_slab_closed_form():
+    """A 2 mm lossless layer with a nearly smooth rough top (Blinn-Phong m = 1e6: facets within
+    ~0.1 degree) over a lossy half-space is an incoherent slab; per polarization the walk must sum
+    the multiple reflections to R = R01 + (1 - R01)^2 R12 / (1 - R01 R12) (textbook Fresnel here,
+    lossless layer: R10 = R01, T = 1 - R). Tolerance 1e-4: the facets' tilt changes the Fresnel
+    angles by ~1e-3 rad (second order in R: ~1e-6) and paths below 1e-7 of weight end at 0 K
+    (observed 2e-6)."""
+    eps_l, eps_s, th = 2.25 + 0j, 6.0 + 2.0j, 30.0
+    mat = material(eps=eps_s, temperature=0.0, coating=[(eps_l, 2e-3, 0.0, R.BlinnPhong(1e6))])
+    settings = RenderSettings(spp=64, max_depth=60, threshold=1e-7, termination="temperature", seed=1, tile=1)
+    img = render(make_job([(box([-500, -500, -50], [500, 500, 0]), mat)], looking_down_at(th, height=2.0),
+                          UniformSky(1.0, 1.0), F95, settings))
+
+    def fresnel(e1, e2, sin1):
+        c1 = np.sqrt(1 - sin1**2 + 0j)
+        c2 = np.sqrt(1 - (e1 / e2) * sin1**2 + 0j)
+        n1, n2 = np.sqrt(e1), np.sqrt(e2)
+        rs = (n1 * c1 - n2 * c2) / (n1 * c1 + n2 * c2)
+        rp = (n2 * c1 - n1 * c2) / (n2 * c1 + n1 * c2)
+        return abs(rs) ** 2, abs(rp) ** 2
+
+    sin0 = math.sin(math.radians(th))
+    r01 = fresnel(1.0, eps_l, sin0)
+    r12 = fresnel(eps_l, eps_s, sin0 / math.sqrt(eps_l.real))
+    for ch, a, b in (("Ex2", r01[0], r12[0]), ("Ey2", r01[1], r12[1])):
+        expected = a + (1 - a) ** 2 * b / (1 - a * b)
+        assert float(img[ch][0, 0]) == pytest.approx(expected, abs=1e-4), ch

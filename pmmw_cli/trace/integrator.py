@@ -462,7 +462,7 @@ class Integrator:
         media = self.job.media
         out = n_in
         for k in np.unique(face_med):
-            bump = media.bump[k] if k < len(media.bump) else None
+            bump = media.bump_map(int(k))
             if bump is None:
                 continue
             g = face_med == k

@@ -144,6 +144,10 @@ class Media:
         """The roughness model of medium k, or None."""
         return self.roughness[k] if k < len(self.roughness) else None
 
+    def bump_map(self, k: int):
+        """The bump map of medium k, or None."""
+        return self.bump[k] if k < len(self.bump) else None
+
     def rough_layers(self, k: int) -> tuple:
         """The rough coating layers of medium k (empty: none)."""
         return self.layers[k] if k < len(self.layers) and self.layers[k] else ()
