@@ -100,8 +100,9 @@ onto the face, Y where that degenerates; isotropic models ignore it):
 4. A child that does not leave hits the same interface again at the same point, from side X:
    process it at once as an interaction with the same face (no intersection test, no offset of
    the origin; the renderer lets it cross one wavelength of the side's medium first, absorbing
-   ``1 - exp(-alpha lambda)`` there: nothing inside copper, all of it inside clear plastic,
-   which is what `pmmw_cli.brdf` does with its absorbing and transparent half-spaces), with ``wo = -d_c`` and macro
+   ``1 - exp(-alpha lambda)`` there: all of it inside copper, nothing inside clear plastic,
+   which is what `pmmw_cli.brdf` does with its absorbing and transparent half-spaces), with
+   ``wo = -d_c`` and macro
    normal ``n_X``; its media are those of side X (a transmitted child re-hits from inside: the
    face's "leaving" case, with the medium stack it already has). For a masked child
    ``wo.n_X < 0``; `sample_normals` handles that (it draws a facet facing ``wo``). A chain of

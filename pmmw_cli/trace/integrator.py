@@ -589,7 +589,8 @@ class Integrator:
                 stack=stack, top=top, last_t=t_body[i],
             )
             # seen from the far side: a refracted child swaps the media, a thin sheet keeps them
-            side = (np.where(diel, other[i], cur[i]), np.where(diel, cur[i], other[i]), np.where(diel, ~leaving[i], leaving[i]))
+            side = (np.where(diel, other[i], cur[i]), np.where(diel, cur[i], other[i]),
+                    np.where(diel, ~leaving[i], leaving[i]))
             leave, back = self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, -1.0,
                                        rehit)
             out.append(leave)
@@ -665,12 +666,11 @@ class Integrator:
         normal of its side (0 on the wrong side); the others hit the same point again at once
         (`_interact` with ``rehit + 1``, no intersection), up to ``roughness.MAX_REHITS`` after
         which the chain's power is emitted at the surface temperature. On its way to the next
-        facet a re-hitting child crosses one wavelength of its side's medium (the smallest facet
-        spacing for which geometrical optics holds), absorbing ``1 - exp(-alpha lambda)`` and
-        emitting it at that medium's temperature: a metal-like body swallows what it transmits
-        (as `pmmw_cli.brdf` does with a lossy substrate), a clear one lets it walk on. A child on the wrong side of the *geometric* face (a bump map's tilt) is
-        mirrored through the face's plane, keeping its power. ``sign`` is +1 for reflected
-        children (incident side), -1 for transmitted ones (far side).
+        facet a re-hitting child crosses one wavelength of its side's medium (`_cross_wavelength`):
+        a metal-like body swallows what it transmits (as `pmmw_cli.brdf` does with a lossy
+        substrate), a clear one lets it walk on. A child on the wrong side of the *geometric*
+        face (a bump map's tilt) is mirrored through the face's plane, keeping its power. ``sign``
+        is +1 for reflected children (incident side), -1 for transmitted ones (far side).
         """
         n_g = sign * n_geo[i]
         n_x = sign * n_mac[i]
@@ -752,7 +752,8 @@ class Integrator:
                             continue
                         n_fac = n_in[sel]
                         if model is not None:
-                            n_fac = self._draw_facets(model, w, sel, n_fac, tangent[rows[sel]], pile.end_temperature(j, a))
+                            n_fac = self._draw_facets(model, w, sel, n_fac, tangent[rows[sel]],
+                                                      pile.end_temperature(j, a))
                         exits, more = self._layer_step(w.take(sel), pile, j, a, n_in[sel], n_fac, tangent[rows[sel]],
                                                        rehits[sel], rows[sel])
                         out += [self._layer_exit(child, r, exit_up, lv, k, p_g, g_up, step, pile.t_body)
@@ -881,7 +882,8 @@ class Integrator:
         absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
         if absorb.any():
             t = t_absorb if np.ndim(t_absorb) == 0 else t_absorb[absorb]
-            self._emit(sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]), np.sqrt(coeff["Ap"][absorb])), t)
+            self._emit(sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]),
+                                                   np.sqrt(coeff["Ap"][absorb])), t)
         if sink.any():
             t = t_body if np.ndim(t_body) == 0 else t_body[sink]
             self._emit(sid[sink], _scale_columns(ml[sink], np.sqrt(coeff["Ts"][sink]), np.sqrt(coeff["Tp"][sink])), t)
