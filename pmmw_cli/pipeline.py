@@ -21,7 +21,7 @@ from pmmw_cli import __version__
 from pmmw_cli.config import load_scenario
 from pmmw_cli.config.load import scenario_to_display
 from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
-from pmmw_cli.imaging.imager import apply_imager, error_footprint, psf_kernel
+from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
 from pmmw_cli.io.exr import write_exr
 from pmmw_cli.io.preview import write_preview
 from pmmw_cli.io.report import write_report
@@ -128,6 +128,9 @@ def aux_channels(img, aux) -> dict:
         channels["aux.material"] = img.material.astype(np.float32)
     if "samples" in aux:
         channels["aux.samples"] = img.samples.astype(np.float32)
+    if "truncated" in aux:
+        channels["aux.truncated"] = img.truncated[..., 0].astype(np.float32)
+        channels["aux.truncation_bound"] = img.truncated[..., 1].astype(np.float32)
     return channels
 
 
@@ -263,29 +266,102 @@ def region_masks(regions, cam) -> dict:
     return masks
 
 
-def region_stats(scn, cam, sensor) -> dict:
-    """Mean sensor temperature per region and the contrast of every pair, in K and noise sigmas."""
+TRUNCATION_NOISE_FRACTION = 0.1  # region bias allowed from truncation, in noise sigmas
+TRUNCATION_LIMIT_NO_NOISE = 0.5  # [K] the same without imager noise
+
+
+def region_limit(noise: float) -> float:
+    """Largest region bias or Monte Carlo error [K] worth no warning: a tenth of the noise
+    sigma, or 0.5 K for a noiseless imager."""
+    return TRUNCATION_NOISE_FRACTION * noise if noise > 0 else TRUNCATION_LIMIT_NO_NOISE
+
+
+def region_stats(scn, cam, sensor, img=None, kernel=None) -> dict:
+    """Per region: mean sensor temperature, its Monte Carlo standard error and truncation bound;
+    per pair of regions: the contrast in K and noise sigmas, with the same two figures.
+
+    A region's mean in the sensor image is a linear functional of the ideal image, with weights
+    W = blur^T(mask / N) (`blur_adjoint`; W = mask / N without an aperture). Pixels' Monte Carlo
+    errors are independent (each tile and sample has its own random stream), so the standard
+    error of the mean is sqrt(sum W^2 sigma^2) with sigma the per-pixel standard error, and that
+    of a contrast uses W_a - W_b. I = Ex2 + Ey2 takes sigma_Ex2 + sigma_Ey2 (an upper bound: the
+    two are correlated through shared paths). Pixels with one sample cannot estimate sigma: then
+    the error is None. The truncation bound is sum |W| b with b the per-pixel bound of paths
+    ended on a guessed temperature (`TileResult.truncated`), for Ex2 and Ey2 (twice it for I).
+    """
     masks = region_masks(scn.output.regions, cam)
     chans = [c for c in ("Ex2", "Ey2", "I") if c in sensor]
-    means, pixels = {}, {}
+    sigma = scn.imager.noise
+    limit = region_limit(sigma)
+    st = scn.render
+    weights = {name: ((blur_adjoint(m / m.sum(), kernel) if kernel is not None else m / m.sum())
+                      if m.any() else None) for name, m in masks.items()}
+    if img is not None:
+        se_maps = {"Ex2": img.stderr[..., 0], "Ey2": img.stderr[..., 1]}
+        se_maps["I"] = se_maps["Ex2"] + se_maps["Ey2"]
+
+    def mc_error(w, c):
+        if img is None or w is None or (img.samples[w != 0.0] < 2).any():
+            return None
+        return float(np.sqrt(np.sum(w * w * se_maps[c] ** 2)))
+
+    def bound(w):
+        if img is None or w is None:
+            return None, None
+        aw = np.abs(w)
+        return float(np.sum(aw * img.truncated[..., 0])), float(np.sum(aw * img.truncated[..., 1]))
+
+    ended = f"render.max_depth {st.max_depth}" + (
+        " and render.threshold with termination: temperature" if st.termination == "temperature" else "")
+    means, pixels, errors, truncation = {}, {}, {}, {}
     for name, m in masks.items():
         pixels[name] = int(m.sum())
         means[name] = {c: (float(sensor[c][m].mean()) if m.any() else float("nan")) for c in chans}
         if not m.any():
             warn(f"output.regions.{name} falls outside the image")
-    sigma = scn.imager.noise
+            continue
+        w = weights[name]
+        errors[name] = {c: mc_error(w, c) for c in chans}
+        frac, b = bound(w)
+        if b is not None:
+            truncation[name] = {"fraction": frac, "bound_K": b}
+            if b > limit:
+                warn(f"output.regions.{name}: paths ended by {ended} carry {frac:.2%} of its power and can "
+                     f"move its mean by up to {b:.3g} K, more than {limit:.3g} K "
+                     f"({'a tenth of the noise sigma' if sigma > 0 else 'no imager noise'}): "
+                     "raise render.max_depth")
     names = list(masks)
     contrasts = {}
     for i, a in enumerate(names):
-        for b in names[i + 1:]:
-            contrasts[f"{a} - {b}"] = {
-                c: {"K": means[a][c] - means[b][c],
-                    # I = Ex2 + Ey2 carries sqrt(2) sigma of per-channel noise
-                    "sigma": (means[a][c] - means[b][c]) / (sigma * (np.sqrt(2.0) if c == "I" else 1.0))
-                    if sigma > 0 else float("nan")}
-                for c in chans
-            }
-    return {"means": means, "pixels": pixels, "contrasts": contrasts, "noise_K": sigma}
+        for b_name in names[i + 1:]:
+            wa, wb = weights[a], weights[b_name]
+            dw = None if wa is None or wb is None else wa - wb
+            _, tb = bound(dw)
+            pair = {}
+            for c in chans:
+                k = means[a][c] - means[b_name][c]
+                scale = sigma * (np.sqrt(2.0) if c == "I" else 1.0)  # I carries sqrt(2) sigma
+                err = mc_error(dw, c)
+                pair[c] = {"K": k, "sigma": k / scale if sigma > 0 else float("nan"), "stderr_K": err,
+                           "truncation_bound_K": None if tb is None else tb * (2.0 if c == "I" else 1.0)}
+                if err is not None and 2.0 * err > limit * (2.0 if c == "I" else 1.0):
+                    warn(f"output.regions: the contrast {a} - {b_name} in {c} has a Monte Carlo standard error "
+                         f"of {err:.3g} K: seeds will differ by more than {limit:.3g} K; raise render.spp "
+                         "or set render.target_error")
+            contrasts[f"{a} - {b_name}"] = pair
+    return {"means": means, "pixels": pixels, "stderr": errors, "truncation": truncation,
+            "contrasts": contrasts, "noise_K": sigma, "limit_K": limit}
+
+
+def truncation_summary(img, scn) -> dict:
+    """Image-wide figures of the paths ended on a guessed temperature (`TileResult.truncated`)."""
+    frac, b = img.truncated[..., 0], img.truncated[..., 1]
+    return {
+        "max_depth": scn.render.max_depth,
+        "mean_fraction": float(frac.mean()), "max_fraction": float(frac.max()),
+        "pixels_truncated": float((frac > 0).mean()),
+        "mean_bound_K": float(b.mean()), "p99_bound_K": float(np.quantile(b, 0.99)), "max_bound_K": float(b.max()),
+    }
 
 
 def band_frequencies(f: float, bandwidth: float, n: int) -> list[float]:
@@ -305,6 +381,7 @@ def average_images(imgs):
         np.sqrt(sum(i.stderr**2 for i in imgs)) / n,
         imgs[len(imgs) // 2].depth, imgs[len(imgs) // 2].material,
         sum(i.samples for i in imgs).astype(np.int32), sum(i.rays for i in imgs), sum(i.t_isect for i in imgs),
+        sum(i.truncated for i in imgs) / n,
     )
 
 
@@ -397,8 +474,11 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
                 rel = f"previews/{stem}_{c}_ideal_sensor.png"
                 write_preview(out_dir / rel, np.concatenate([ideal[c], sensor[c]], axis=1))
                 side[c] = rel
-        regions = region_stats(scn, job.camera, sensor) if scn.output.regions else None
+        kernel = (psf_kernel(job.camera.pixel_angle, job.k0, scn.imager.aperture_diameter)
+                  if scn.imager.aperture_diameter > 0.0 and scn.output.regions else None)
+        regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else None
         renders.append({
+            "truncation": truncation_summary(img, scn),
             **({"side_by_side": side} if side else {}),
             **({"regions": regions} if regions else {}),
             **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),

@@ -105,6 +105,22 @@ def blur(img, kernel):
     return out[r : r + h, r : r + w]
 
 
+def blur_adjoint(weights, kernel):
+    """The transpose of `blur`: for a linear functional sum(weights * blur(img)) of the sensor
+    image, the per-pixel weights it puts on the ideal image. (H, W) -> (H, W) float64.
+
+    Exact, borders included: the adjoint of the mirrored padding folds the padded margin back
+    onto the pixels it was copied from; the kernel is flipped for the adjoint of convolution.
+    """
+    r = kernel.shape[0] // 2
+    h, w = weights.shape
+    index = np.pad(np.arange(h * w).reshape(h, w), r, mode="symmetric")
+    g = np.zeros(index.shape)
+    g[r : r + h, r : r + w] = weights
+    g = fftconvolve(g, kernel[::-1, ::-1], mode="same")
+    return np.bincount(index.ravel(), weights=g.ravel(), minlength=h * w).reshape(h, w)
+
+
 def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diameter: float,
                  noise: float, seed: int):
     """The sensor image from the ideal one.

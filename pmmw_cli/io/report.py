@@ -55,6 +55,11 @@ def _md_link(target: str) -> str:
     return f"<{target}>" if any(c in target for c in " ()<>") else target
 
 
+def _pm(x) -> str:
+    """A standard error for a ``value ± error`` cell."""
+    return "n/a" if x is None else _num(x, ".2g")
+
+
 def _cell(text) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
@@ -124,21 +129,45 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
     regions = report.get("regions") or {}
     if regions.get("means"):
         chans = list(next(iter(regions["means"].values())).keys())
+        errors, trunc = regions.get("stderr") or {}, regions.get("truncation") or {}
         lines += ["## Regions of interest", "",
-                  "Mean sensor temperatures [K] over each region declared in `output.regions`.", "",
-                  "| region | pixels | " + " | ".join(chans) + " |",
-                  "| --- | ---: | " + " | ".join("---:" for _ in chans) + " |"]
+                  "Mean sensor temperatures [K] over each region declared in `output.regions`, with the "
+                  "Monte Carlo standard error of each mean (± s.e.; `n/a` with one sample per pixel) "
+                  "and the truncation bound: the largest change of the Ex2/Ey2 mean that paths ended at "
+                  "`render.max_depth` could bring (fraction of the region's power they carry).", "",
+                  "| region | pixels | " + " | ".join(chans) + " | truncation bound [K] (power) |",
+                  "| --- | ---: | " + " | ".join("---:" for _ in chans) + " | ---: |"]
         for name, m in regions["means"].items():
-            lines.append(f"| {_cell(name)} | {regions['pixels'][name]} | " + " | ".join(_num(m[c]) for c in chans) + " |")
+            e = errors.get(name) or {}
+            t = trunc.get(name)
+            cells = [f"{_num(m[c])} ± {_pm(e.get(c))}" for c in chans]
+            tcell = f"{_num(t['bound_K'], '.3g')} ({_num(100 * t['fraction'], '.2g')} %)" if t else "-"
+            lines.append(f"| {_cell(name)} | {regions['pixels'][name]} | " + " | ".join(cells) + f" | {tcell} |")
         lines.append("")
         if regions.get("contrasts"):
-            lines += ["Contrast between regions (first minus second), in kelvin and in units of the "
-                      f"imager noise sigma ({_num(regions.get('noise_K'))} K per pixel):", "",
-                      "| regions | " + " | ".join(f"{c} [K] | {c} [sigma]" for c in chans) + " |",
-                      "| --- | " + " | ".join("---: | ---:" for _ in chans) + " |"]
+            lines += ["Contrast between regions (first minus second), in kelvin ± its Monte Carlo standard "
+                      "error and in units of the imager noise sigma "
+                      f"({_num(regions.get('noise_K'))} K per pixel); figures above "
+                      f"{_num(regions.get('limit_K'), '.3g')} K are warned about:", "",
+                      "| regions | " + " | ".join(f"{c} [K] | {c} [sigma]" for c in chans) + " | truncation bound [K] |",
+                      "| --- | " + " | ".join("---: | ---:" for _ in chans) + " | ---: |"]
             for pair, cs in regions["contrasts"].items():
-                lines.append(f"| {_cell(pair)} | " + " | ".join(f"{_num(cs[c]['K'])} | {_num(cs[c]['sigma'])}" for c in chans) + " |")
+                first = cs[chans[0]] if chans else {}
+                lines.append(f"| {_cell(pair)} | " + " | ".join(
+                    f"{_num(cs[c]['K'])} ± {_pm(cs[c].get('stderr_K'))} | {_num(cs[c]['sigma'])}" for c in chans)
+                    + f" | {_num(first.get('truncation_bound_K'), '.3g')} |")
             lines.append("")
+
+    trunc = report.get("truncation")
+    if trunc:
+        lines += ["## Path truncation", "",
+                  f"Paths still carrying power at `render.max_depth` = {trunc.get('max_depth')} end on the last "
+                  "object's temperature. Per pixel (`aux.truncated`, `aux.truncation_bound`): mean fraction of "
+                  f"power ended {_num(100 * trunc['mean_fraction'], '.3g')} % (largest "
+                  f"{_num(100 * trunc['max_fraction'], '.3g')} %, {_num(100 * trunc['pixels_truncated'], '.3g')} % "
+                  f"of the pixels); bound on the change of Ex2/Ey2: mean {_num(trunc['mean_bound_K'], '.3g')} K, "
+                  f"99th percentile {_num(trunc['p99_bound_K'], '.3g')} K, largest {_num(trunc['max_bound_K'], '.3g')} K.",
+                  ""]
 
     timing = report.get("timing") or {}
     if timing:

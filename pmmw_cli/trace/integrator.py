@@ -67,6 +67,11 @@ class TileResult:
         Samples taken per pixel (fewer than ``spp`` where adaptive sampling stopped early).
     t_isect : float
         Seconds spent in the intersector (the bare Embree cost of exactly these rays).
+    truncated : ndarray, shape (h, w, 2), float64
+        Per-pixel mean over samples of (the fraction of the detector's power, mean of the Ex and
+        Ey rows, whose path was ended on the last object's temperature instead of being traced:
+        by ``max_depth``, or below ``threshold`` with ``termination: temperature``; the largest
+        change of Ex2 or Ey2 that tracing those paths on could bring [K]).
     """
 
     index: int
@@ -78,6 +83,7 @@ class TileResult:
     rays: int
     samples: np.ndarray
     t_isect: float = 0.0
+    truncated: np.ndarray | None = None
 
 
 class _Wave:
@@ -228,6 +234,25 @@ def brightness_bounds(job: TraceJob, source_range=()):
     return float(min(ts)), float(max(ts))
 
 
+def _scene_heights(job: TraceJob) -> tuple[float, float]:
+    """Lowest and highest height [m] of the scene's geometry and the imager's aperture."""
+    cam = job.camera
+    r_ap = getattr(cam, "aperture_radius", 0.0)
+    z = job.vertices[:, 2]
+    z_lo = min(float(z.min()) if z.size else np.inf, cam.position[2] - r_ap)
+    z_hi = max(float(z.max()) if z.size else -np.inf, cam.position[2] + r_ap)
+    return z_lo, z_hi
+
+
+def atmosphere_source_range(job: TraceJob) -> tuple:
+    """(S_min, S_max) [K] of the layered atmosphere's cells the scene's segments can cross; ()
+    without a layered atmosphere."""
+    if job.atmosphere is None:
+        return ()
+    _, s_min, s_max = job.atmosphere.extremes(*_scene_heights(job))
+    return s_min, s_max
+
+
 def atmosphere_skip_length(job: TraceJob) -> float:
     """Ambient segments shorter than this [m] skip the layered atmosphere (0: none do).
 
@@ -247,12 +272,7 @@ def atmosphere_skip_length(job: TraceJob) -> float:
     st, atm = job.settings, job.atmosphere
     if atm is None or st.atmosphere_tolerance <= 0.0:
         return 0.0
-    cam = job.camera
-    r_ap = getattr(cam, "aperture_radius", 0.0)
-    z = job.vertices[:, 2]
-    z_lo = min(float(z.min()) if z.size else np.inf, cam.position[2] - r_ap)
-    z_hi = max(float(z.max()) if z.size else -np.inf, cam.position[2] + r_ap)
-    alpha_max, s_min, s_max = atm.extremes(z_lo, z_hi)
+    alpha_max, s_min, s_max = atm.extremes(*_scene_heights(job))
     bounds = brightness_bounds(job, (s_min, s_max))
     if bounds is None or alpha_max <= 0.0:
         return 0.0 if bounds is None else np.inf
@@ -275,6 +295,9 @@ class Integrator:
         self.layered = layered if layered.any() else None
         self.rough_scene = media.any_rough  # smooth scenes skip every roughness and bump step
         self.atm_skip_length = atmosphere_skip_length(job)
+        # what a path ended on a guessed temperature could have brought instead (truncation bound)
+        bounds = brightness_bounds(job, atmosphere_source_range(job))
+        self.t_bounds = bounds if bounds is not None else (-np.inf, np.inf)
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:
@@ -304,13 +327,15 @@ class Integrator:
         count = np.zeros(npx, np.int64)
         depth = np.full(npx, np.inf)
         material = np.full(npx, -1.0)
+        trunc = np.zeros((npx, 2))  # summed over samples: ended weight, bound [K]
         active = np.arange(npx)
         done = 0
         batch = st.min_spp if adaptive else st.spp
         while active.size and done < st.spp:
             nb = min(batch, st.spp - done)
-            vals, first_t, first_m = self._trace(pixels[active], done, nb)
+            vals, first_t, first_m, cut = self._trace(pixels[active], done, nb)
             v = vals.reshape(active.size, nb, 4)
+            trunc[active] += cut.reshape(active.size, nb, 2).sum(axis=1)
             if done == 0:
                 ref[active] = v.mean(axis=1)
                 with np.errstate(invalid="ignore"):
@@ -332,6 +357,7 @@ class Integrator:
             index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
             depth.reshape(h, w), material.reshape(h, w), self.rays,
             count.reshape(h, w).astype(np.int32), self.t_isect,
+            (trunc / count[:, None]).reshape(h, w, 2),
         )
 
     def _trace(self, pixels, start, nb):
@@ -340,6 +366,7 @@ class Integrator:
         u, v, pix = pixel_samples(cam.width, pixels, nb, st.seed, start=start, total=st.spp)
         n = u.shape[0]
         self.acc = np.zeros((n, 4))
+        self.cut = np.zeros((n, 2))
         self.first_t = np.full(n, np.inf)
         self.first_m = np.full(n, -1.0)
         sample_no = np.tile(np.arange(start, start + nb, dtype=np.int64), pixels.size)
@@ -359,7 +386,7 @@ class Integrator:
         while wave is not None and len(wave) > 0:
             wave = self._bounce(wave, first)
             first = False
-        return self.acc, self.first_t, self.first_m
+        return self.acc, self.first_t, self.first_m, self.cut
 
     # -- one bounce -----------------------------------------------------------------------
     def _emit(self, sid, m, ta, tb=None):
@@ -920,6 +947,21 @@ class Integrator:
         keep = self._survivors(wv)
         return wv.take(keep) if not keep.all() else wv
 
+    def _end_on_temperature(self, wv: _Wave, sel):
+        """End the selected paths on the last object's temperature (seed 000 sec. 2.2.9) and
+        count what that may have cost: the ended power per row times the largest difference
+        between that temperature and any brightness the path could have gone on to see."""
+        m, t_last, sid = wv.m[sel], wv.last_t[sel], wv.sid[sel]
+        self._emit(sid, m, t_last)
+        p = m.real**2 + m.imag**2
+        rows = p[:, 0, 0] + p[:, 0, 1], p[:, 1, 0] + p[:, 1, 1]
+        t_lo, t_hi = self.t_bounds
+        span = np.maximum(t_hi - t_last, t_last - t_lo)
+        nsamp = self.cut.shape[0]
+        self.cut[:, 0] += np.bincount(sid, weights=0.5 * (rows[0] + rows[1]), minlength=nsamp)
+        bound = np.maximum(rows[0], rows[1]) * span
+        self.cut[:, 1] += np.bincount(sid, weights=bound, minlength=nsamp)
+
     def _survivors(self, wv: _Wave):
         """Which rays go on after the depth cut-off and the weight threshold; the others' power
         is emitted (at the last object's temperature) or, by Russian roulette, dropped with the
@@ -929,11 +971,11 @@ class Integrator:
         dead = weight <= 0.0
         at_depth = (wv.depth >= st.max_depth) & ~dead
         if at_depth.any():
-            self._emit(wv.sid[at_depth], wv.m[at_depth], wv.last_t[at_depth])
+            self._end_on_temperature(wv, at_depth)
         low = (weight < st.threshold) & ~at_depth & ~dead
         if low.any():
             if st.termination == "temperature":
-                self._emit(wv.sid[low], wv.m[low], wv.last_t[low])
+                self._end_on_temperature(wv, low)
                 dead |= low
             else:
                 q = weight[low] / st.threshold

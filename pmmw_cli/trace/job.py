@@ -162,7 +162,7 @@ class Media:
 @dataclass(frozen=True)
 class RenderSettings:
     spp: int = 16
-    max_depth: int = 6
+    max_depth: int = 32
     threshold: float = 1e-3
     seed: int = 1
     termination: str = "roulette"  # or "temperature" (seed 000 sec. 2.2.9)
