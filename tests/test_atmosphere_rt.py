@@ -209,7 +209,8 @@ def _loop_reference(m: AtmosphereModel, z0: float, z1: float, L: float):
     for j in cells:
         overlap = max(0.0, min(m.edges[j + 1], hi) - max(m.edges[j], lo))
         tau = m.alpha[j] * overlap * L / abs(z1 - z0)
-        emission += m.source[j] * (1.0 - np.exp(-tau)) * trans
+        source = m.source[j] + m.source_mu[j] * (z0 - z1) / L  # radiation toward the observer
+        emission += source * (1.0 - np.exp(-tau)) * trans
         trans *= np.exp(-tau)
     return trans, emission
 
@@ -279,22 +280,21 @@ def test_fog_vertical_loss_matches_seed():
         assert lo <= fog_alone <= hi
 
 
-def test_rain_emits_its_absorption_only():
-    # an opaque horizontal path inside rain reads T alpha_abs / alpha_ext: colder than the rain
+def test_rain_scatters_in_as_much_as_it_scatters_out():
+    # an opaque horizontal path inside rain reads the cell's source (1 - omega) T + omega <I0>
+    # (tests/test_atmosphere_scattering.py checks its value); formerly T alpha_abs / alpha
     f = 95 * GHZ
     m = AtmosphereModel(Atmosphere(layers=(Layer("rain", 0.0, 1000.0, rain_rate=10.0),)), f)
     t, emission = m.path(500.0, 500.0, 1e5)
     j = np.searchsorted(m.edges, 500.0) - 1
     a_rain = itu.rain_specific_attenuation_db_km(10.0, f) * itu.NP_M_PER_DB_KM
-    a_gas = m.alpha[j] - a_rain
-    expected = (
-        m.temperature[j]
-        * (a_gas + a_rain * itu.rain_absorption_fraction(f, 10.0))
-        / (a_gas + a_rain)
-    )
+    omega = itu.rain_single_scattering_albedo(f, 10.0)
+    assert m.omega[j] == pytest.approx(omega * a_rain / m.alpha[j], rel=1e-12)
     assert float(t) < 1e-30
-    assert float(emission) == pytest.approx(expected, rel=1e-12)
-    assert float(emission) < 0.7 * m.temperature[j]
+    assert float(emission) == pytest.approx(m.source[j], rel=1e-12)
+    # 1000 m of rain is 1.5 optical depths: the cold sky leaks in, 261 K against 285 K air (the
+    # former source read 148 K)
+    assert 0.85 * m.temperature[j] < float(emission) < m.temperature[j]
 
 
 def test_layers_are_validated():
