@@ -1,8 +1,27 @@
 """Unit strings at the edge: ``"95 GHz"``, ``"0.8 mm"``, ``"10 deg"``, ``"300 K"`` -> SI floats.
 
 Inside pmmw every quantity is SI: [Hz], [m], [rad], [K], [Np/m] for power attenuation, [kg/m^3].
-pint parses the strings; this module only knows which dimension each kind of quantity has and
-what a bare number means for it.
+pint parses the strings; this module only knows which unit each kind of quantity has and what a
+bare number means for it.
+
+A unit is accepted for a kind when its pint *root units* are the kind's, not merely its
+dimensionality: pint counts the radian as dimensionless, so by dimensionality ``0.5 rad``,
+``0.5 percent`` and ``0.5 sr`` would all be "angles" (and ``1 rad/s`` a frequency). By root
+units only radian-based units (``rad``, ``mrad``, ``deg``, ``arcmin``, ``arcsec``, ``turn``,
+``grad``...) are angles, and only ``1/s``-based units are frequencies.
+
+Temperatures come in two kinds. ``temperature`` is absolute: ``20 degC`` is 293.15 K (the
+offset applies), and a difference unit (``delta_degC``) is refused. ``temperature_difference``
+(noise, error goals, tolerances) takes kelvin, ``delta_degC`` or ``delta_degF``; an offset unit
+(``degC``, ``degF``) is refused, since "2 degC" read as a difference (2 K) or as an absolute
+temperature (275.15 K) are both plausible and far apart.
+
+Attenuation is power attenuation: ``P(z) = P(0) exp(-alpha z)`` with alpha in [Np/m]. Its unit
+strings are a level unit over a length (``dB/km``, ``dB/m``, ``Np/m``, ``Np/km``); pint's own
+``dB`` and ``Np`` are logarithmic units that cannot be divided by a length, so they are read as
+multiplicative units of a dimension of their own, with 1 dB = ln(10)/10 Np exactly as power
+ratios go (10 log10 r = 10/ln(10) * ln r). ``Np`` here is the power (opacity) neper, the unit of
+``sky.zenith_opacity``, not the field-amplitude neper of ISO 80000 (which is twice as large).
 """
 
 from __future__ import annotations
@@ -15,115 +34,130 @@ import pint
 
 from pmmw_cli.errors import UserError
 
-
-@lru_cache(maxsize=1)
-def ureg() -> pint.UnitRegistry:
-    return pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
-
-
-_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)$")
-
-
-def _normalise(text: str) -> str:
-    """Accept the usual shorthand for powers of units: ``g/m3`` -> ``g/m**3``."""
-    m = _NUMBER.match(text)
-    if not m:
-        return text
-    number, unit = m.groups()
-    unit = re.sub(r"([A-Za-z])\^?(\d)", r"\1**\2", unit)
-    return f"{number} {unit}".strip()
-
-
-# kind -> (SI unit for pint, unit a bare number is taken in, or None if a unit is required)
-_KINDS: dict[str, tuple[str, str | None]] = {
-    "frequency": ("Hz", None),
-    "length": ("m", "m"),
-    "angle": ("rad", "deg"),
-    "temperature": ("K", "K"),
-    "density": ("kg/m**3", "g/m**3"),
-    "rate": ("m/s", "mm/h"),
-}
-
-_DB_PER = {"db/km": 1e-3, "db/m": 1.0}
+# private names for the multiplicative level units of attenuation (see the module docstring)
+_NEPER = "pmmw_power_neper"
+_DECIBEL = "pmmw_power_decibel"
 _NEPER_PER_DB = math.log(10.0) / 10.0  # power: 1 dB = ln(10)/10 Np
 
 
-def parse_quantity(value, kind: str, *, file=None, key: str | None = None) -> float:
-    """Parse a number or unit string into an SI float.
+@lru_cache(maxsize=1)
+def ureg() -> pint.UnitRegistry:
+    reg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    reg.define(f"{_NEPER} = [pmmw_power_level]")
+    reg.define(f"{_DECIBEL} = {_NEPER_PER_DB!r} * {_NEPER}")
+    return reg
+
+
+_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+_LEVEL = re.compile(r"(?<![A-Za-z_])(?:(db|decibels?)|(np|nepers?))(?![A-Za-z_0-9])", re.IGNORECASE)
+
+
+def _unit_text(unit: str, kind: str) -> str:
+    """Accept the usual shorthand for powers of units: ``g/m3`` -> ``g/m**3``; attenuation
+    levels (``dB``, ``Np``) -> this registry's multiplicative level units."""
+    unit = re.sub(r"([A-Za-z])\^?(\d)", r"\1**\2", unit)
+    if unit.startswith("/"):
+        unit = "1" + unit
+    if kind == "attenuation":
+        unit = _LEVEL.sub(lambda m: _DECIBEL if m.group(1) else _NEPER, unit)
+    return unit
+
+
+# kind -> (internal unit, unit a bare number is taken in (None: a unit is required), example, noun)
+_KINDS: dict[str, tuple[str, str | None, str, str]] = {
+    "frequency": ("Hz", None, "'95 GHz'", "frequency"),
+    "length": ("m", "m", "'0.8 mm' or '600 m'", "length"),
+    "angle": ("rad", "deg", "'10 deg', '0.5 rad' or '600 mrad'", "angle"),
+    "temperature": ("K", "K", "'300 K' or '20 degC'", "temperature"),
+    "temperature_difference": ("K", "K", "'2 K' or '2 delta_degC'", "temperature difference"),
+    "density": ("kg/m**3", "g/m**3", "'0.3 g/m3'", "mass density"),
+    "rate": ("m/s", "mm/h", "'10 mm/h'", "rain rate"),
+    "attenuation": (f"{_NEPER}/m", f"{_DECIBEL}/km", "'0.9 dB/km' or '0.2 Np/km'", "attenuation"),
+}
+
+
+def _a(noun: str) -> str:
+    return ("an " if noun[:1] in "aeiou" else "a ") + noun
+
+
+def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit: str | None = None) -> float:
+    """Parse a number or unit string into a float in the kind's internal (SI) unit.
 
     Parameters
     ----------
     value : str, int or float
-        e.g. ``"95 GHz"``, ``"0.8 mm"``, ``10`` (bare numbers take the kind's default unit).
+        e.g. ``"95 GHz"``, ``"0.8 mm"``, ``"0.5 rad"``, ``"20 degC"``, ``10`` (a bare number
+        takes the kind's default unit: deg, m, K, g/m^3, mm/h, dB/km; a frequency needs a unit,
+        except 0).
     kind : str
-        One of ``frequency`` [Hz], ``length`` [m], ``angle`` [rad], ``temperature`` [K],
-        ``density`` [kg/m^3], ``rate`` [m/s], ``attenuation`` [Np/m of power].
+        One of ``frequency`` [Hz], ``length`` [m], ``angle`` [rad], ``temperature`` [K]
+        (absolute), ``temperature_difference`` [K], ``density`` [kg/m^3], ``rate`` [m/s],
+        ``attenuation`` [Np/m of power].
     file, key : optional
         Where the value came from, for the error message.
+    unit : str, optional
+        Return the value in this pint unit of the kind instead (e.g. ``deg``, ``mm/h``).
 
     Returns
     -------
     float
-        The value in SI units.
+        The value in the internal unit (or ``unit``).
+
+    Raises
+    ------
+    UserError
+        Unreadable, of another kind, a bare number for a frequency, or not finite.
     """
-    if kind == "attenuation":
-        return _parse_attenuation(value, file=file, key=key)
     try:
-        si_unit, bare_unit = _KINDS[kind]
+        internal, bare_unit, example, noun = _KINDS[kind]
     except KeyError:  # programming error, not user error
         raise ValueError(f"unknown quantity kind {kind!r}") from None
-    if isinstance(value, bool):
-        raise UserError(f"expected a {kind} such as {_example(kind)}, got {value!r}", file, key)
-    if isinstance(value, (int, float)):
-        if bare_unit is None:
-            raise UserError(f"a bare number is ambiguous for a {kind}: give a unit, e.g. {_example(kind)}", file, key)
-        q = ureg().Quantity(float(value), bare_unit)
-    elif isinstance(value, str):
-        try:
-            q = ureg().Quantity(_normalise(value))
-        except Exception:
-            raise UserError(f"cannot read {value!r} as a {kind}; expected e.g. {_example(kind)}", file, key) from None
-        if isinstance(q, (int, float)) or q.dimensionless:
-            if bare_unit is None:
-                raise UserError(f"{value!r} has no unit; expected a {kind} such as {_example(kind)}", file, key)
-            q = ureg().Quantity(float(q.magnitude if hasattr(q, "magnitude") else q), bare_unit)
+    reg = ureg()
+    target = reg.Unit(_unit_text(unit, kind)) if unit is not None else reg.Unit(internal)
+
+    def fail(why: str):
+        return UserError(f"{value!r} {why}; expected e.g. {example}", file, key)
+
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise UserError(f"expected {_a(noun)} such as {example}, got {value!r}", file, key)
+    if isinstance(value, str):
+        m = _NUMBER.match(value)
+        if not m:
+            raise fail(f"is not {_a(noun)} (a number and a unit)")
+        number, text = float(m.group(1)), m.group(2)
     else:
-        raise UserError(f"expected a {kind} such as {_example(kind)}, got {type(value).__name__}", file, key)
-    try:
-        out = float(q.to(si_unit).magnitude)
-    except pint.DimensionalityError:
-        raise UserError(f"{value!r} is not a {kind}; expected e.g. {_example(kind)}", file, key) from None
+        number, text = float(value), ""
+    if not text:
+        if bare_unit is None and number != 0.0:  # zero is zero in any unit
+            raise UserError(f"a bare number is ambiguous for {_a(noun)}: give a unit, e.g. {example}", file, key)
+        units = reg.Unit(bare_unit or internal)
+    else:
+        try:
+            units = reg.parse_units(_unit_text(text, kind))
+        except Exception:  # pint raises several types for unknown or malformed units
+            raise fail(f"has an unknown unit {text!r}") from None
+    if not math.isfinite(number):
+        raise UserError(f"{value!r} is not a finite {noun}", file, key)
+
+    # same root units as the kind, so that dimensionless pint units are told apart
+    root = reg.get_root_units(units)[1]
+    if root != reg.get_root_units(target)[1]:
+        hint = ""
+        if kind == "frequency" and "radian" in str(root):
+            hint = " (an angular frequency: give a frequency in Hz)"
+        elif kind == "attenuation" and root == reg.get_root_units("1/m")[1]:
+            hint = " (give the level unit, dB or Np, over a length)"
+        raise fail(f"is not {_a(noun)}{hint}")
+    q = reg.Quantity(number, units)
+    if kind == "temperature" and any(name.startswith("delta_") for name, _ in q.unit_items()):
+        raise UserError(f"{value!r} is a temperature difference; give an absolute temperature, "
+                        f"e.g. {example}", file, key)
+    if kind == "temperature_difference" and reg.Quantity(0.0, units).to(target).magnitude != 0.0:
+        raise UserError(f"{value!r} is on an offset scale, ambiguous for a temperature difference; "
+                        f"give kelvin or delta_degC (2 K = 2 delta_degC), e.g. {example}", file, key)
+    out = float(q.to(target).magnitude)
     if not math.isfinite(out):
-        raise UserError(f"{value!r} is not a finite {kind}", file, key)
+        raise UserError(f"{value!r} is not a finite {noun}", file, key)
+    if kind == "attenuation" and out < 0.0:
+        raise UserError(f"attenuation must be >= 0, got {value!r}", file, key)
     return out
-
-
-def _parse_attenuation(value, *, file, key) -> float:
-    """``"0.9 dB/km"`` -> power attenuation coefficient [Np/m]; bare numbers are dB/km."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        db, per = float(value), "db/km"
-    elif isinstance(value, str):
-        parts = value.strip().split()
-        try:
-            db = float(parts[0])
-            per = "".join(parts[1:]).lower() or "db/km"
-        except (ValueError, IndexError):
-            raise UserError(f"cannot read {value!r} as an attenuation; expected e.g. '0.9 dB/km'", file, key) from None
-        if per not in _DB_PER:
-            raise UserError(f"unknown attenuation unit in {value!r}; use dB/km or dB/m", file, key)
-    else:
-        raise UserError(f"expected an attenuation such as '0.9 dB/km', got {value!r}", file, key)
-    if not math.isfinite(db) or db < 0:
-        raise UserError(f"attenuation must be finite and >= 0, got {value!r}", file, key)
-    return db * _DB_PER[per] * _NEPER_PER_DB
-
-
-def _example(kind: str) -> str:
-    return {
-        "frequency": "'95 GHz'",
-        "length": "'0.8 mm' or '600 m'",
-        "angle": "'10 deg'",
-        "temperature": "'300 K'",
-        "density": "'0.3 g/m3'",
-        "rate": "'10 mm/h'",
-    }.get(kind, "a number with a unit")

@@ -120,7 +120,7 @@ def test_defaults(tmp_path):
     # default: the ITU-R standard atmosphere along paths and its own sky
     assert s.atmosphere.model == "layered" and s.atmosphere.profile == "standard" and not s.atmosphere.layers
     assert s.sky.model == "atmosphere" and s.sky.ground_temperature == 290.0
-    assert (s.render.spp, s.render.max_depth, s.render.threshold, s.render.seed) == (16, 6, 1e-3, 1)
+    assert (s.render.spp, s.render.max_depth, s.render.threshold, s.render.seed) == (16, 32, 1e-3, 1)
     assert s.render.workers is None and s.render.termination == "roulette"
     assert s.output.channels == ("I", "Q", "U", "V", "Ex2", "Ey2") and s.output.aux == ()
     assert s.scene[0].transform.scale == 1.0 and s.scene[0].up_axis is None and s.materials == {}
@@ -267,7 +267,7 @@ def test_cli_values_apply_after_overrides(tmp_path):
         (("name: t", "name: t\noutput: {dir: 5}"), "output.dir", "folder path"),
         (("name: t", "name: t\noutput: {channels: [I, I]}"), "output.channels", "twice"),
         (("name: t", "name: t\noutput: {aux: [normals]}"), "output.aux", "unknown auxiliary channel"),
-        (("name: t", "name: t\natmosphere: {loss: 0.9 dB/parsec}"), "atmosphere.loss", "dB/km"),
+        (("name: t", "name: t\natmosphere: {loss: 0.9 dB/s}"), "atmosphere.loss", "not an attenuation; expected e.g. '0.9 dB/km'"),
         (("name: t", "name: t\natmosphere: {temprature: 3 K}"), "atmosphere.temprature", "allowed: model, profile"),
         (("name: t", "name: t\nmaterials: [asphalt]"), "materials", "mapping"),
         (("name: t", "name: t\nfrequencies: 95 GHz"), "frequencies", "did you mean 'frequency'"),

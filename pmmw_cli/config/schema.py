@@ -1,7 +1,9 @@
 """The typed scenario: pydantic v2 models with every quantity in SI and every input path resolved.
 
 Unit strings are parsed here, at the edge (`pmmw_cli.units.parse_quantity`); the rest of pmmw
-only sees floats in [Hz], [m], [rad], [K], [Np/m]. Unknown keys are errors (``extra="forbid"``).
+only sees floats in [Hz], [m], [rad], [K], [Np/m]. Every field that takes a quantity says so in
+its type, ``Annotated[float, Quantity(kind)]``, which also parses it; range checks follow as
+``after`` validators on the parsed float. Unknown keys are errors (``extra="forbid"``).
 Relative input paths resolve against the scenario file's folder, which the loader passes in the
 validation context as ``base_dir``.
 """
@@ -9,34 +11,62 @@ validation context as ``base_dir``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, Optional, Union
+from typing import Annotated, Any, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from pydantic_core import core_schema
 
 from pmmw_cli.errors import UserError
 from pmmw_cli.units import parse_quantity
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".stl", ".off")
 CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
-AUX = ("depth", "material", "stderr", "samples")
+AUX = ("depth", "material", "stderr", "samples", "truncated")
 
 
 class ConfigValueError(ValueError):
     """A validation failure whose message is already user-facing."""
 
 
-def _q(value, kind):
+def _q(value, kind, unit=None):
     try:
-        return parse_quantity(value, kind)
+        return parse_quantity(value, kind, unit=unit)
     except UserError as e:
         raise ConfigValueError(e.message) from None
 
 
-def _vec3(value, kind="length"):
-    if not isinstance(value, (list, tuple)) or len(value) != 3:
-        raise ConfigValueError(f"expected a list of 3 numbers, got {value!r}")
-    return tuple(_q(v, kind) for v in value)
+@dataclass(frozen=True)
+class Quantity:
+    """Field marker: a unit string or bare number of ``kind`` (see `pmmw_cli.units`), parsed to a
+    float in ``unit`` (None: the kind's SI unit). ``n``: a list of exactly n of them (a vector);
+    ``many``: one value or a list, as a tuple. ``None`` passes through to the field's type."""
+
+    kind: str
+    unit: Optional[str] = None
+    n: Optional[int] = None
+    many: bool = False
+
+    def __get_pydantic_core_schema__(self, source, handler):
+        return core_schema.no_info_before_validator_function(self.parse, handler(source))
+
+    def parse(self, value):
+        if value is None:
+            return None
+        if self.n is not None:
+            if not isinstance(value, (list, tuple)) or len(value) != self.n:
+                raise ConfigValueError(f"expected a list of {self.n} numbers, got {value!r}")
+            return tuple(_q(v, self.kind, self.unit) for v in value)
+        if self.many:
+            values = value if isinstance(value, (list, tuple)) else [value]
+            return tuple(_q(v, self.kind, self.unit) for v in values)
+        return _q(value, self.kind, self.unit)
+
+
+Vec3 = tuple[float, float, float]
+Length = Annotated[float, Quantity("length")]
+Length3 = Annotated[Vec3, Quantity("length", n=3)]  # [m]
 
 
 def _a(what: str) -> str:
@@ -84,15 +114,15 @@ class _Model(BaseModel):
 
 
 class Imager(_Model):
-    position: tuple[float, float, float]
-    look_at: tuple[float, float, float]
-    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    fov: float
+    position: Length3
+    look_at: Length3
+    up: Length3 = (0.0, 0.0, 1.0)
+    fov: Annotated[float, Quantity("angle")]
     resolution: tuple[int, int]
-    aperture_diameter: float = 0.0
-    noise: float = 0.0
-    focus_distance: Optional[float] = None
-    bandwidth: float = 0.0
+    aperture_diameter: Length = 0.0
+    noise: Annotated[float, Quantity("temperature_difference")] = 0.0
+    focus_distance: Annotated[Optional[float], Quantity("length")] = None
+    bandwidth: Annotated[float, Quantity("frequency")] = 0.0
     band_samples: int = Field(5, ge=1, le=64)
     frequency: Optional[Any] = Field(default=None, exclude=True)  # alias of the top-level key
 
@@ -101,35 +131,25 @@ class Imager(_Model):
     def _ints(cls, v):
         return _integer(v)
 
-    @field_validator("focus_distance", mode="before")
+    @field_validator("focus_distance")
     @classmethod
-    def _focus(cls, v):
-        if v is None:
-            return None
-        d = _q(v, "length")
-        if d <= 0:
-            raise ConfigValueError(f"focus distance must be > 0, got {v!r}")
+    def _focus(cls, d):
+        if d is not None and d <= 0:
+            raise ConfigValueError(f"focus distance must be > 0, got {d:g} m")
         return d
 
-    @field_validator("bandwidth", mode="before")
+    @field_validator("bandwidth")
     @classmethod
-    def _bw(cls, v):
-        b = _q(v, "frequency")
+    def _bw(cls, b):
         if b < 0:
-            raise ConfigValueError(f"bandwidth must be >= 0, got {v!r}")
+            raise ConfigValueError(f"bandwidth must be >= 0, got {b:g} Hz")
         return b
 
-    @field_validator("position", "look_at", "up", mode="before")
+    @field_validator("fov")
     @classmethod
-    def _vec(cls, v):
-        return _vec3(v)
-
-    @field_validator("fov", mode="before")
-    @classmethod
-    def _fov(cls, v):
-        fov = _q(v, "angle")
+    def _fov(cls, fov):
         if not 0.0 < fov < math.pi:
-            raise ConfigValueError(f"field of view must be between 0 and 180 deg, got {v!r}")
+            raise ConfigValueError(f"field of view must be between 0 and 180 deg, got {math.degrees(fov):g} deg")
         return fov
 
     @field_validator("resolution", mode="before")
@@ -140,20 +160,18 @@ class Imager(_Model):
             raise ConfigValueError(f"expected [width, height], two integers >= 1, got {v!r}")
         return tuple(v)
 
-    @field_validator("aperture_diameter", mode="before")
+    @field_validator("aperture_diameter")
     @classmethod
-    def _aperture(cls, v):
-        d = _q(v, "length")
+    def _aperture(cls, d):
         if d < 0:
-            raise ConfigValueError(f"must be >= 0, got {v!r}")
+            raise ConfigValueError(f"must be >= 0, got {d:g} m")
         return d
 
-    @field_validator("noise", mode="before")
+    @field_validator("noise")
     @classmethod
-    def _noise(cls, v):
-        t = _q(v, "temperature")
+    def _noise(cls, t):
         if t < 0:
-            raise ConfigValueError(f"noise must be >= 0 K, got {v!r}")
+            raise ConfigValueError(f"noise must be >= 0 K, got {t:g} K")
         return t
 
     @model_validator(mode="after")
@@ -173,23 +191,10 @@ class Imager(_Model):
 
 
 class Transform(_Model):
-    translate: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    translate: Length3 = (0.0, 0.0, 0.0)
+    # stored in degrees: bare numbers stand as they are (no round trip through radians)
+    rotate_deg: Annotated[Vec3, Quantity("angle", unit="deg", n=3)] = (0.0, 0.0, 0.0)
     scale: Union[float, tuple[float, float, float]] = 1.0
-
-    @field_validator("translate", mode="before")
-    @classmethod
-    def _t(cls, v):
-        return _vec3(v)
-
-    @field_validator("rotate_deg", mode="before")
-    @classmethod
-    def _r(cls, v):
-        if not isinstance(v, (list, tuple)) or len(v) != 3:
-            raise ConfigValueError(f"expected 3 angles in degrees, got {v!r}")
-        # bare numbers are degrees as they stand (no round trip through radians)
-        return tuple(math.degrees(_q(a, "angle")) if isinstance(a, str) else _finite_number(a, "angle in degrees")
-                     for a in v)
 
     @field_validator("scale", mode="before")
     @classmethod
@@ -229,40 +234,36 @@ class SceneEntry(_Model):
 
 PROFILES = ("standard", "low_latitude", "mid_latitude_summer", "mid_latitude_winter",
             "high_latitude_summer", "high_latitude_winter")
-MM_PER_H = 1e3 * 3600.0  # [mm/h] per [m/s]
 
 
 class WeatherLayer(_Model):
     """A fog, cloud or rain slab between two heights above the ground."""
 
     kind: Literal["fog", "cloud", "rain"]
-    base: float
-    top: float
-    liquid_water: float = 0.0  # [kg/m^3]
-    rain_rate: float = 0.0  # [mm/h]
+    base: Length
+    top: Length
+    liquid_water: Annotated[float, Quantity("density")] = 0.0  # [kg/m^3]
+    rain_rate: Annotated[float, Quantity("rate", unit="mm/h")] = 0.0  # [mm/h], as ITU-R P.838 takes it
 
-    @field_validator("base", "top", mode="before")
+    @field_validator("base", "top")
     @classmethod
-    def _h(cls, v):
-        z = _q(v, "length")
+    def _h(cls, z):
         if z < 0:
-            raise ConfigValueError(f"heights are above the ground: must be >= 0, got {v!r}")
+            raise ConfigValueError(f"heights are above the ground: must be >= 0, got {z:g} m")
         return z
 
-    @field_validator("liquid_water", mode="before")
+    @field_validator("liquid_water")
     @classmethod
-    def _lw(cls, v):
-        w = _q(v, "density")
+    def _lw(cls, w):
         if w < 0:
-            raise ConfigValueError(f"liquid water content must be >= 0, got {v!r}")
+            raise ConfigValueError(f"liquid water content must be >= 0, got {w * 1e3:g} g/m3")
         return w
 
-    @field_validator("rain_rate", mode="before")
+    @field_validator("rain_rate")
     @classmethod
-    def _rr(cls, v):
-        r = _q(v, "rate") * MM_PER_H
+    def _rr(cls, r):
         if r < 0:
-            raise ConfigValueError(f"rain rate must be >= 0, got {v!r}")
+            raise ConfigValueError(f"rain rate must be >= 0, got {r:g} mm/h")
         return r
 
     @model_validator(mode="after")
@@ -283,12 +284,12 @@ class Atmosphere(_Model):
 
     model: Literal["layered", "uniform"] = "layered"
     profile: Literal[PROFILES] = "standard"
-    ground_temperature: Optional[float] = None
-    humidity: Optional[float] = None  # water-vapour density at the ground [kg/m^3]
-    ground_altitude: float = 0.0
+    ground_temperature: Annotated[Optional[float], Quantity("temperature")] = None
+    humidity: Annotated[Optional[float], Quantity("density")] = None  # water-vapour density at the ground [kg/m^3]
+    ground_altitude: Length = 0.0
     layers: tuple[WeatherLayer, ...] = ()
-    loss: Optional[float] = None  # uniform: [Np/m] of power
-    temperature: Optional[float] = None  # uniform: [K]
+    loss: Annotated[Optional[float], Quantity("attenuation")] = None  # uniform: [Np/m] of power
+    temperature: Annotated[Optional[float], Quantity("temperature")] = None  # uniform: [K]
 
     @model_validator(mode="before")
     @classmethod
@@ -297,30 +298,17 @@ class Atmosphere(_Model):
             data = dict(data, model="uniform")
         return data
 
-    @field_validator("loss", mode="before")
+    @field_validator("temperature", "ground_temperature")
     @classmethod
-    def _loss(cls, v):
-        return None if v is None else _q(v, "attenuation")
+    def _t(cls, t):
+        return None if t is None else _positive_temperature(t)
 
-    @field_validator("temperature", "ground_temperature", mode="before")
+    @field_validator("humidity")
     @classmethod
-    def _t(cls, v):
-        return None if v is None else _positive_temperature(v)
-
-    @field_validator("humidity", mode="before")
-    @classmethod
-    def _hum(cls, v):
-        if v is None:
-            return None
-        h = _q(v, "density")
-        if h < 0:
-            raise ConfigValueError(f"humidity (water-vapour density) must be >= 0, got {v!r}")
+    def _hum(cls, h):
+        if h is not None and h < 0:
+            raise ConfigValueError(f"humidity (water-vapour density) must be >= 0, got {h * 1e3:g} g/m3")
         return h
-
-    @field_validator("ground_altitude", mode="before")
-    @classmethod
-    def _alt(cls, v):
-        return _q(v, "length")
 
     @model_validator(mode="after")
     def _fields_of_model(self):
@@ -337,19 +325,18 @@ class Atmosphere(_Model):
         return self
 
 
-def _positive_temperature(v):
-    t = _q(v, "temperature")
+def _positive_temperature(t):
     if t <= 0:
-        raise ConfigValueError(f"temperature must be > 0 K, got {v!r}")
+        raise ConfigValueError(f"temperature must be > 0 K, got {t:g} K")
     return t
 
 
 class Sky(_Model):
     model: Optional[Literal["atmosphere", "slab", "uniform", "texture"]] = None  # None: see Scenario
-    temperature: Optional[float] = None
+    temperature: Annotated[Optional[float], Quantity("temperature")] = None
     file: Optional[Path] = None
     zenith_opacity: Optional[float] = None
-    ground_temperature: float = 290.0
+    ground_temperature: Annotated[float, Quantity("temperature")] = 290.0
 
     @model_validator(mode="before")
     @classmethod
@@ -361,11 +348,6 @@ class Sky(_Model):
             data["file"] = data.pop("texture")
             data.setdefault("model", "texture")
         return data
-
-    @field_validator("temperature", "ground_temperature", mode="before")
-    @classmethod
-    def _t(cls, v):
-        return None if v is None else _q(v, "temperature")
 
     @field_validator("file", mode="before")
     @classmethod
@@ -395,7 +377,7 @@ class Sky(_Model):
 
 class Render(_Model):
     spp: int = Field(16, ge=1)
-    max_depth: int = Field(6, ge=1, le=64)
+    max_depth: int = Field(32, ge=1, le=64)
     threshold: float = 1e-3
     seed: int = Field(1, ge=0)
     workers: Optional[int] = Field(None, ge=1)
@@ -403,32 +385,29 @@ class Render(_Model):
     termination: Literal["roulette", "temperature"] = "roulette"
     strategy: Literal["split", "stochastic", "hybrid"] = "split"
     split_depth: int = Field(2, ge=0)
-    target_error: Optional[float] = None
+    target_error: Annotated[Optional[float], Quantity("temperature_difference")] = None
     min_spp: int = Field(4, ge=2)
-    default_temperature: float = 290.0
-    atmosphere_tolerance: float = 0.01  # [K] error allowed from skipping the atmosphere on short paths
+    default_temperature: Annotated[float, Quantity("temperature")] = 290.0
+    # [K] error allowed from skipping the atmosphere on short paths
+    atmosphere_tolerance: Annotated[float, Quantity("temperature_difference")] = 0.01
 
     @field_validator("spp", "max_depth", "seed", "tile", "split_depth", "min_spp", mode="before")
     @classmethod
     def _ints(cls, v):
         return _integer(v)
 
-    @field_validator("target_error", mode="before")
+    @field_validator("target_error")
     @classmethod
-    def _target(cls, v):
-        if v is None:
-            return None
-        t = _q(v, "temperature")
-        if t <= 0:
-            raise ConfigValueError(f"target_error must be > 0 K, got {v!r}")
+    def _target(cls, t):
+        if t is not None and t <= 0:
+            raise ConfigValueError(f"target_error must be > 0 K, got {t:g} K")
         return t
 
-    @field_validator("atmosphere_tolerance", mode="before")
+    @field_validator("atmosphere_tolerance")
     @classmethod
-    def _atm_tol(cls, v):
-        t = _q(v, "temperature")
+    def _atm_tol(cls, t):
         if t < 0:
-            raise ConfigValueError(f"atmosphere_tolerance must be >= 0 K (0: never skip), got {v!r}")
+            raise ConfigValueError(f"atmosphere_tolerance must be >= 0 K (0: never skip), got {t:g} K")
         return t
 
     @field_validator("threshold", mode="before")
@@ -444,23 +423,18 @@ class Render(_Model):
     def _workers(cls, v):
         return None if v is None or v == "auto" else _integer(v)
 
-    @field_validator("default_temperature", mode="before")
+    @field_validator("default_temperature")
     @classmethod
-    def _t(cls, v):
-        return _positive_temperature(v)
+    def _t(cls, t):
+        return _positive_temperature(t)
 
 
 class Region(_Model):
     """A named region of interest: a world point with a radius in pixels, or a pixel box."""
 
-    center: Optional[tuple[float, float, float]] = None
+    center: Annotated[Optional[Vec3], Quantity("length", n=3)] = None  # [m]
     radius: float = Field(2.0, gt=0)  # [pixels] around the projected center
     box: Optional[tuple[int, int, int, int]] = None  # [x0, y0, x1, y1] pixels, x1/y1 exclusive
-
-    @field_validator("center", mode="before")
-    @classmethod
-    def _c(cls, v):
-        return None if v is None else _vec3(v)
 
     @model_validator(mode="after")
     def _one(self):
@@ -514,7 +488,7 @@ def _subset(v, allowed, what):
 class Scenario(_Model):
     name: str
     source_file: Path
-    frequencies: tuple[float, ...]
+    frequencies: Annotated[tuple[float, ...], Quantity("frequency", many=True)]
     imager: Imager
     scene: tuple[SceneEntry, ...]
     materials: dict[str, dict] = {}
@@ -539,13 +513,11 @@ class Scenario(_Model):
             raise ConfigValueError("the scene needs at least one entry (- mesh: ..., material: ...)")
         return v
 
-    @field_validator("frequencies", mode="before")
+    @field_validator("frequencies")
     @classmethod
-    def _freqs(cls, v):
-        vals = v if isinstance(v, (list, tuple)) else [v]
-        if not vals:
+    def _freqs(cls, out):
+        if not out:
             raise ConfigValueError("give at least one frequency")
-        out = tuple(_q(f, "frequency") for f in vals)
         if any(f <= 0 for f in out):
             raise ConfigValueError("frequencies must be > 0")
         if len(set(out)) != len(out):
