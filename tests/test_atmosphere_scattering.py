@@ -3,7 +3,8 @@
 Checks: the Mie asymmetry table against an independent Mie code; equilibrium (an isothermal
 scattering atmosphere between boundaries at its own temperature reads that temperature, in the
 sky and along paths); Chandrasekhar's exact emissivity of a semi-infinite isotropic scatterer
-(H-function computed here from its integral equation); Murakowski 2014 sec. 3.3.4 (the 95 GHz
+(H-function computed here from its integral equation); a discrete-ordinates solution of a
+rain-like anisotropic slab; Murakowski 2014 sec. 3.3.4 (the 95 GHz
 rain scene's contrast "on the order of 2 K"); clear air and fog unchanged; a render of an
 isothermal closed box full of rain reads its temperature.
 """
@@ -104,7 +105,8 @@ def test_thick_isothermal_rain_under_the_cosmic_background_reads_its_temperature
     sky = m.sky_temperature(ELEVATIONS)
     print(f"{f_ghz} GHz sky at {np.degrees(ELEVATIONS)} deg: {np.round(sky - 285.0, 7)} K - 285 K")
     np.testing.assert_allclose(sky, 285.0, atol=1e-4)
-    t, emission = m.path(np.full(3, 2.0), np.array([2.0, 300.0, 0.0]), np.array([3000.0, 600.0, 800.0]))
+    z1, L = np.array([2.0, 300.0, 0.0]), np.array([3000.0, 600.0, 800.0])
+    t, emission = m.path(np.full(3, 2.0), z1, L)
     np.testing.assert_allclose(emission + t * 285.0, 285.0, atol=1e-4)
     old = _absorption_only(m).sky_temperature(ELEVATIONS)
     assert np.all(old < 285.0 - 90.0)
@@ -159,6 +161,68 @@ def test_semi_infinite_isotropic_scatterer_matches_chandrasekhar(omega):
     print(f"omega {omega}: mu {mu}, exact {np.round(exact, 4)}, ours {np.round(ours, 4)}, "
           f"error {np.round(100 * rel, 2)} %")
     assert np.abs(rel).max() <= EMISSIVITY_RTOL[omega]
+
+
+def _discrete_ordinates_sky(tau, omega, g, T, t_ground, t_top, n_mu=16, dtau=0.01, l_max=48):
+    """Reference: downwelling brightness [K] at the bottom of a homogeneous isothermal slab of
+    Henyey-Greenstein scatterers (azimuth-mean phase function, Legendre moments (2l + 1) g^l),
+    2 n_mu Gauss directions, by lambda iteration of the full source function on a 0.01 optical
+    depth grid (converged to 0.02 K in dtau and 0.1 K in n_mu). Returns (mu > 0 of the downward
+    directions, brightness)."""
+    from numpy.polynomial.legendre import leggauss, legval
+
+    x, w = leggauss(n_mu)
+    x, w = 0.5 * (x + 1.0), 0.5 * w
+    mu, wt = np.concatenate([x, -x]), np.concatenate([w, w])
+    moments = (2 * np.arange(l_max + 1) + 1) * g ** np.arange(l_max + 1)
+    p_l = np.array([legval(mu, np.eye(l_max + 1)[k]) for k in range(l_max + 1)])
+    phase = np.einsum("l,li,lj->ij", moments, p_l, p_l) * wt[None, :]
+    phase /= phase.sum(axis=1, keepdims=True)  # (1/2) int P dmu' = 1 on the quadrature
+    nz = int(round(tau / dtau))
+    att = np.exp(-(tau / nz) / np.abs(mu))
+    up, dn = mu > 0.0, mu < 0.0
+    S = np.full((nz, mu.size), T)
+    for _ in range(300):
+        I = np.zeros((nz + 1, mu.size))
+        I[0, up] = t_ground
+        for k in range(nz):
+            I[k + 1, up] = I[k, up] * att[up] + S[k, up] * (1.0 - att[up])
+        I[nz, dn] = t_top
+        for k in range(nz - 1, -1, -1):
+            I[k, dn] = I[k + 1, dn] * att[dn] + S[k, dn] * (1.0 - att[dn])
+        S_new = (1.0 - omega) * T + omega * (0.5 * (I[1:] + I[:-1])) @ phase.T
+        if np.abs(S_new - S).max() < 1e-9:
+            break
+        S = S_new
+    return -mu[dn], I[0, dn]
+
+
+@pytest.mark.parametrize(("omega", "g", "tol"), [(0.5, 0.3, 1.2), (0.37, -0.03, 0.4)])
+def test_rain_like_slab_matches_discrete_ordinates(omega, g, tol):
+    """Anisotropic scattering, where no closed form exists: 4 optical depths of rain-like
+    scatterers (95 GHz: omega 0.5, g 0.3; 35 GHz: 0.37, -0.03) at 285 K over a 285 K ground
+    under the 2.725 K background, seen from the ground. Ours against a 32-stream discrete-
+    ordinates solution with the full phase function: observed at most 0.93 K (95 GHz-like,
+    growing toward the zenith: the Eddington field) and 0.21 K (35 GHz-like); tolerances 1.2 and
+    0.4 K. Without the g mu <I1> term of the source the 95 GHz-like error is 2.6 K."""
+    tau, T = 4.0, 285.0
+    mu, ref = _discrete_ordinates_sky(tau, omega, g, T, T, T_CMB)
+    n = 80
+    edges, ones = np.linspace(0.0, tau, n + 1), np.ones(n)  # alpha = 1: heights are depths
+    source, source_mu = scattering_source(
+        np.diff(edges), omega * ones, g * ones, T * ones, ground_temperature=T
+    )
+    el = np.arcsin(mu)
+    ours = layered_sky_temperature(
+        edges, ones, source, el, earth_radius=np.inf, source_mu=source_mu
+    )
+    no_mu = layered_sky_temperature(edges, ones, source, el, earth_radius=np.inf)
+    print(f"omega {omega}, g {g}: elevation {np.round(np.degrees(el[::3]), 1)} deg, "
+          f"DO {np.round(ref[::3], 2)} K, ours - DO {np.round((ours - ref)[::3], 2)} K, "
+          f"without the mu term {np.round((no_mu - ref)[::3], 2)} K")
+    assert np.abs(ours - ref).max() <= tol
+    if g > 0.1:
+        assert np.abs(ours - ref).max() < 0.5 * np.abs(no_mu - ref).max()
 
 
 def test_murakowski_rain_scene_contrast_is_about_2_K():
@@ -239,7 +303,8 @@ def test_isothermal_box_full_of_rain_renders_its_temperature():
     from tests.scenes import hollow_box, make_job, material, render
 
     atm = Atmosphere(layers=(Layer("rain", 0.0, 5000.0, rain_rate=50.0),))
-    room = (hollow_box([-100, -100, 1], [100, 100, 201], 1.0), material(eps=3 + 0.5j, temperature=285.0))
+    walls = material(eps=3 + 0.5j, temperature=285.0)
+    room = (hollow_box([-100, -100, 1], [100, 100, 201], 1.0), walls)
     cam = Camera.look_at([0, -80, 20], [30, 100, 150], [0, 0, 1], np.radians(70), (8, 8))
     settings = RenderSettings(spp=1, max_depth=4, threshold=1e-9, termination="temperature",
                               atmosphere_tolerance=0.0)
@@ -251,6 +316,6 @@ def test_isothermal_box_full_of_rain_renders_its_temperature():
     for c in ("Ex2", "Ey2"):
         np.testing.assert_allclose(images["scattering"][c], 285.0, atol=1e-4)
         assert images["absorption only"][c].max() < 285.0 - 10.0
-    print(f"box: {images['scattering']['Ex2'].min():.6f}-{images['scattering']['Ex2'].max():.6f} K; "
-          f"absorption only {images['absorption only']['Ex2'].min():.1f}-"
-          f"{images['absorption only']['Ex2'].max():.1f} K")
+    new, old = images["scattering"]["Ex2"], images["absorption only"]["Ex2"]
+    print(f"box: {new.min():.6f}-{new.max():.6f} K; "
+          f"absorption only {old.min():.1f}-{old.max():.1f} K")
