@@ -33,8 +33,8 @@ count, so the source is exactly ``S(mu) = (1 - omega) T + omega (<I0> + g mu <I1
 true omega and g (the single-scattering correction of the TMS method, Nakajima & Tanaka 1988),
 <> the average over the cell; it is `source` + `source_mu` mu. Every ray then keeps the formal
 solution below with the true extinction (P.838's attenuation) and this source. Scattering cells
-are split to at most `TAU_MAX_SCATTERING` vertical optical depth so that the cell average
-stands for the source within a cell.
+are split to at most `TAU_MAX_SCATTERING` vertical optical depth (up to `MAX_SPLIT` parts, which
+covers 50 mm/h at 95 GHz) so that the cell average stands for the source within a cell.
 
 Accuracy. An isothermal atmosphere between boundaries at its own temperature gives I0 = T,
 I1 = 0 and reads T exactly (the equilibrium the thesis's fully emitting rain assumed). Against
@@ -96,6 +96,7 @@ HORIZONTAL_SLOPE = 1e-9  # |z1 - z0| / L below which a segment counts as horizon
 # largest vertical optical depth of a scattering cell: its mean source then stands for the source
 # anywhere in it (the two-stream field varies on a scale 1/k >~ 1 optical depth)
 TAU_MAX_SCATTERING = 0.05
+MAX_SPLIT = 20  # but a grid cell is cut into at most this many (heavy rain: 10 m in 200 m cells)
 OMEGA_MAX = 1.0 - 1e-6  # the two-stream eigenvalue k vanishes for conservative scattering
 
 LAYER_KINDS = ("fog", "cloud", "rain")
@@ -422,7 +423,8 @@ class AtmosphereModel:
     ----------
     edges : ndarray, shape (K+1,)
         Cell edges, heights above the ground [m]; every weather-layer base and top is one, and
-        rain is cut into cells of at most `TAU_MAX_SCATTERING` vertical optical depth.
+        rain is cut into cells of at most `TAU_MAX_SCATTERING` vertical optical depth (at most
+        `MAX_SPLIT` parts of a grid cell).
     temperature : ndarray, shape (K,)
         Physical temperature of each cell [K].
     alpha : ndarray, shape (K,)
@@ -467,7 +469,8 @@ class AtmosphereModel:
         # optically thick scattering cells are cut into equal parts (their mean source must stand
         # for the source anywhere in them); the optics are evaluated again at the new midpoints
         tau = cells[3] * np.diff(edges)
-        parts = np.where(cells[4] > 0.0, np.ceil(tau / TAU_MAX_SCATTERING), 1.0).astype(int)
+        parts = np.where(cells[4] > 0.0, np.ceil(tau / TAU_MAX_SCATTERING), 1.0)
+        parts = np.minimum(parts, MAX_SPLIT).astype(int)
         if np.any(parts > 1):
             edges = np.concatenate(
                 [
