@@ -1,6 +1,6 @@
-"""The generated scenes of seed 000 chapter 3 (scenes/{landing,cwd,sar}): shipped assets load with
-the expected material names, every part is closed and outward, the key dimensions match the
-seed, and each script regenerates its assets byte for byte."""
+"""The generated scenes of Murakowski 2014 sec. 2.3.2 and chapter 3 (scenes/{cinderblocks,landing,
+cwd,sar}): shipped assets load with the expected material names, every part is closed and outward,
+the key dimensions match the thesis, and each script regenerates its assets byte for byte."""
 
 from __future__ import annotations
 
@@ -28,6 +28,7 @@ LANDING = {"runway", "ground", "beacon"}
 CWD = {"skin", "clothing", "holster", "gun", "shoes", "ground"}
 SAR = {"dry_ground", "wet_ground", "rocks", "shrubs"}
 SHIPPED = {
+    "cinderblocks/cinderblocks.glb": {"ground", "cinderblock"},
     "landing/landing_plate.glb": LANDING,
     "landing/landing_brackets.glb": LANDING,
     "cwd/cwd_outdoor.glb": CWD,
@@ -39,6 +40,7 @@ SHIPPED = {
     "sar/sar_beacon.glb": SAR | {"blanket"},
 }
 SCRIPTS = {  # script -> the files it writes with its default arguments
+    "cinderblocks": ["cinderblocks.glb"],
     "landing": ["landing_plate.glb", "landing_brackets.glb"],
     "cwd": ["cwd_outdoor.glb", "cwd_outdoor_coated.glb", "cwd_indoor.glb", "cwd_indoor_coated.glb"],
     "sar": ["sar_cessna.glb", "sar_blanket.glb", "sar_beacon.glb"],
@@ -92,6 +94,30 @@ def test_shipped_scene_loads_closed_and_named(rel):
         # Every part, metal included, is a closed outward mesh (dielectrics must be).
         assert m.is_watertight and m.is_winding_consistent, name
         assert m.volume > 0.0, name
+
+
+# -- cinderblocks (Murakowski 2014 sec. 2.3.2) ----------------------------------------------------
+
+def test_cinderblock_cavities_are_wells_closed_by_the_ground():
+    """Every block lies flat on the stack below or on the ground (1 mm gap), its long face towards
+    the imager (+y), so its cavities are vertical wells open at the top and closed at the bottom:
+    a vertical ray down the middle of each cavity meets no block before the ground (z = 0)."""
+    loaded = parts("cinderblocks/cinderblocks.glb")
+    blocks = [m for n, m in loaded if n == "cinderblock"]
+    (ground,) = [m for n, m in loaded if n == "ground"]
+    for b in blocks:
+        ext = b.bounds[1] - b.bounds[0]
+        assert ext == pytest.approx([0.390, 0.190, 0.190], abs=1e-6)  # flat, long axis along x
+    stacks = {}
+    for b in blocks:
+        stacks.setdefault(tuple(np.round(b.centroid[:2], 3)), []).append(b)
+    assert sorted(len(v) for v in stacks.values()) == [2, 3]
+    for (x, y), stack in stacks.items():
+        everything = trimesh.util.concatenate(stack + [ground])
+        for dx in (-0.0895, 0.0895):  # the two cavity centres, 32 + 147 / 2 mm from the middle
+            origin = [[x + dx, y, max(b.bounds[1][2] for b in stack) + 1.0]]
+            hits, _, _ = everything.ray.intersects_location(origin, [[0.0, 0.0, -1.0]])
+            assert hits[:, 2].max() == pytest.approx(0.0, abs=1e-6)  # first hit: the ground
 
 
 # -- landing (seed 000 sec. 3.1) -----------------------------------------------------------------
@@ -183,13 +209,19 @@ def test_cwd_room_holds_both_views():
 # -- search and rescue (seed 000 sec. 3.3) -------------------------------------------------------
 
 def test_sar_terrain_and_clutter():
+    """Sec. 3.3.1: small-scale clutter only ("rocks, boulders, shrubs, and trees"; no large-scale
+    features): every clutter object, wet patches included, is smaller than the 5 m spot of the
+    95 GHz imager on the ground, so that it blurs out, and none comes near the target."""
     rel = "sar/sar_blanket.glb"
     (terrain,) = of(rel, "dry_ground")
     lo, hi = terrain.bounds
     assert hi[:2] - lo[:2] == pytest.approx([600.0, 600.0], rel=GLB_REL)
     assert np.ptp(terrain.vertices[:, 2]) < 12.0  # gentle relief
-    assert len(of(rel, "rocks")) >= 200 and len(of(rel, "shrubs")) >= 200
-    for name in ("rocks", "shrubs"):
+    assert len(of(rel, "rocks")) >= 200 and len(of(rel, "shrubs")) >= 200 and len(of(rel, "wet_ground")) == 200
+    for name in ("rocks", "shrubs", "wet_ground"):
+        across = [np.ptp(m.vertices[:, :2], axis=0).max() for m in of(rel, name)]
+        assert max(across) < 6.0, name
+    for name in ("rocks", "shrubs", "wet_ground"):
         centres = np.array([m.centroid for m in of(rel, name)])
         assert np.hypot(centres[:, 0], centres[:, 1]).min() > 25.0  # clear of the target
 
@@ -216,6 +248,7 @@ def test_sar_targets():
 # -- regeneration --------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("scene", [
+    "cinderblocks",
     "landing",
     pytest.param("cwd", marks=pytest.mark.slow),  # ~8 s: implicit body, clothing, shoes
     pytest.param("sar", marks=pytest.mark.slow),  # ~4 s: terrain, 700 rocks and shrubs

@@ -21,7 +21,7 @@ sit ``--gap`` above the ground and above each other, so no two surfaces coincide
 The scene is built Z-up (pmmw's world frame) and rotated into glTF's Y-up on export; pmmw turns it
 back on load. Run from anywhere:
 
-    python scenes/cinderblocks/make_scene.py [--out PATH] [--ground-size 60] [--near X Y] ...
+    python scenes/cinderblocks/make_scene.py [--out-dir DIR | --out PATH] [--ground-size 60] [--near X Y] ...
 """
 
 from __future__ import annotations
@@ -158,7 +158,8 @@ def build(args) -> dict[str, tuple[str, trimesh.Trimesh]]:
 def main(argv=None) -> None:
     here = Path(__file__).resolve().parent
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", type=Path, default=here / "cinderblocks.glb")
+    p.add_argument("--out-dir", type=Path, default=here, help="writes cinderblocks.glb there")
+    p.add_argument("--out", type=Path, help="output file (default: OUT_DIR/cinderblocks.glb)")
     p.add_argument("--ground-size", type=float, default=60.0, help="ground square side [m]")
     p.add_argument("--ground-thickness", type=float, default=0.5, help="[m]; the top face is z = 0")
     p.add_argument("--ground-center", type=float, nargs=2, default=(0.0, 10.0), metavar=("X", "Y"))
@@ -167,12 +168,13 @@ def main(argv=None) -> None:
     p.add_argument("--gap", type=float, default=0.001, help="clearance under each block [m]")
     args = p.parse_args(argv)
 
+    out = args.out or args.out_dir / "cinderblocks.glb"
     nodes = build(args)
-    export_glb(nodes, args.out)
-    check_glb(nodes, args.out)
+    export_glb(nodes, out)
+    check_glb(nodes, out)
 
     n_tri = sum(len(m.faces) for _, m in nodes.values())
-    print(f"wrote {args.out} ({n_tri} triangles)")
+    print(f"wrote {out} ({n_tri} triangles)")
     for name, (material, m) in nodes.items():
         if material == "cinderblock":
             lo, hi = m.bounds

@@ -1,18 +1,22 @@
-"""Write scenes/sar/sar_{cessna,blanket,beacon}.glb: search and rescue in desert scrub (seed 000 sec. 3.3).
+"""Write scenes/sar/sar_{cessna,blanket,beacon}.glb: search and rescue in desert scrub (Murakowski 2014, sec. 3.3).
 
 A small metal aircraft (a Cessna 172) has crashed in desert scrub land; a search aircraft at
 3000 m looks straight down with a 10 deg field (a 500 m wide swath). Three targets: the wreck;
 instead of it, a 1.5 m x 2 m metallized (Mylar) emergency blanket; or a 6 m x 6 m beacon made of
-twelve such blankets (4 x 3). The ground is dry soil with patches of wet soil, strewn with basalt
-rocks and shrubs (small clutter; no streams or other large features, as in the seed).
+twelve such blankets (4 x 3). The ground is dry soil strewn with small-scale clutter, as the thesis
+models it ("small-scale ground clutter such as rocks, boulders, shrubs, and trees; we do not model
+large-scale clutter objects such as streams or other major terrain features", sec. 3.3.1):
+basalt rocks and boulders, shrubs, and small damp patches of moist soil (Table 3.4 'Wet Ground'),
+each a few metres across at most, below the 5 m (95 GHz) and 13 m (35 GHz) spots on the ground,
+so that the clutter blurs out and the metal targets stay the coldest objects in the scene.
 
 The terrain is one closed solid, 600 m x 600 m: a heightfield top with gentle relief (a seeded
 sum of random plane waves, 25 m to 600 m wavelengths), vertical skirts and a flat bottom. Around
 the target the relief fades out (flat within ``--pad-radius``), so the target lies flat; no
 rock, shrub or wet patch comes within ``--clear-radius`` of it. Wet patches are thin closed slabs
-draped over the terrain on its own grid (same triangulation, ``--gap`` above it). Rocks are closed
-convex hulls of random points; shrubs closed, radially perturbed icospheres; both rest ``--gap``
-above the highest terrain under them. The wreck (fuselage loft, a drooping right wing, the left
+(irregular star-shaped outlines, ``--wet-sizes`` across) sheared into the plane that fits the
+terrain under them. Rocks are closed convex hulls of random points; shrubs closed, radially
+perturbed icospheres. Every clutter object rests ``--gap`` above the highest terrain under it. The wreck (fuselage loft, a drooping right wing, the left
 wing torn off beside it, tail, strut, bent propeller) and the blankets are closed metal meshes;
 metal parts of the wreck may interpenetrate (a perfect conductor has no inside to track).
 
@@ -194,53 +198,6 @@ def pad_weight(r, r0: float, r1: float):
     return s * s * (3 - 2 * s)
 
 
-def wet_mask(terrain: Terrain, args, rng) -> np.ndarray:
-    """Cells (n, n) of wet ground: a smooth random field, favouring low ground, thresholded to
-    ``--wet-fraction``; none near the target; no two cells meeting at a corner only."""
-    cx = (terrain.xs[:-1] + terrain.xs[1:]) / 2
-    gx, gy = np.meshgrid(cx, cx, indexing="ij")
-    f = random_field(gx, gy, rng, 40.0, 250.0, 0.0)
-    f /= f.std()
-    hc = terrain.height(gx, gy)
-    f -= 0.7 * (hc - hc.mean()) / max(hc.std(), 1e-9)
-    allowed = np.hypot(gx, gy) > args.clear_radius + terrain.cell
-    threshold = np.quantile(f[allowed], 1.0 - args.wet_fraction)
-    mask = (f > threshold) & allowed
-    while True:  # fill one cell of every diagonal-only contact, which would give non-manifold edges
-        a, b, c, d = mask[:-1, :-1], mask[1:, :-1], mask[1:, 1:], mask[:-1, 1:]
-        diag = (a & c & ~b & ~d) | (b & d & ~a & ~c)
-        if not diag.any():
-            return mask
-        i, j = np.nonzero(diag)
-        mask[i + 1, j] = True
-
-
-def draped_slab(terrain: Terrain, mask, z0: float, z1: float) -> trimesh.Trimesh:
-    """Closed slab over the masked cells, from terrain + z0 to terrain + z1 [m], on the terrain's
-    grid and triangulation (so its underside is parallel to the terrain surface)."""
-    n = len(terrain.xs) - 1
-    occ = np.zeros((n + 2, n + 2), dtype=bool)
-    occ[1:-1, 1:-1] = mask
-    gx, gy = np.meshgrid(terrain.xs, terrain.ys, indexing="ij")
-    lower = np.column_stack([gx.ravel(), gy.ravel(), (terrain.h + z0).ravel()])
-    upper = lower + [0.0, 0.0, z1 - z0]
-    nv = (n + 1) ** 2
-    vid = np.arange(nv).reshape(n + 1, n + 1)
-    i, j = np.nonzero(mask)
-    a, b, c, d = vid[i, j], vid[i + 1, j], vid[i + 1, j + 1], vid[i, j + 1]
-    faces = [np.column_stack([a, b, c]) + nv, np.column_stack([a, c, d]) + nv,  # top, up
-             np.column_stack([a, c, b]), np.column_stack([a, d, c])]  # bottom, down
-    # Walls where a masked cell meets an unmasked one: edge p -> q counter-clockwise seen from above.
-    for di, dj, p, q in ((0, -1, (0, 0), (1, 0)), (1, 0, (1, 0), (1, 1)), (0, 1, (1, 1), (0, 1)), (-1, 0, (0, 1), (0, 0))):
-        open_side = ~occ[i + 1 + di, j + 1 + dj]
-        ii, jj = i[open_side], j[open_side]
-        vp, vq = vid[ii + p[0], jj + p[1]], vid[ii + q[0], jj + q[1]]
-        faces += [np.column_stack([vp, vq, vq + nv]), np.column_stack([vp, vq + nv, vp + nv])]
-    mesh = trimesh.Trimesh(np.vstack([lower, upper]), np.concatenate(faces), process=False)
-    mesh.remove_unreferenced_vertices()
-    return mesh
-
-
 # -- clutter ----------------------------------------------------------------------------------------
 
 def rock(rng, size: float) -> trimesh.Trimesh:
@@ -265,15 +222,33 @@ def shrub(rng, width: float, height: float) -> trimesh.Trimesh:
     return m
 
 
-def scatter(terrain: Terrain, wet, args, rng):
-    """Rocks and shrubs: node name -> (material, mesh), apart from each other, the target and the
-    wet patches, each resting ``--gap`` above the highest terrain under it."""
+def wet_patch(rng, size: float, thickness: float) -> trimesh.Trimesh:
+    """A closed slab of moist soil, ``thickness`` high [m], on an irregular outline ~``size`` [m]
+    across: 14 points at increasing angles (star-shaped about the centre, so the fans close it)."""
+    k = 14
+    angle = (np.arange(k) + rng.uniform(-0.3, 0.3, k)) * (2 * np.pi / k)
+    r = size / 2 * rng.uniform(0.6, 1.0, k)
+    ring = np.column_stack([r * np.cos(angle), r * np.sin(angle) * rng.uniform(0.5, 1.0)])
+    rings = [np.column_stack([ring, np.full(k, z)]) for z in (0.0, thickness)]
+    m = loft(rings)
+    m.apply_transform(rotation([0, 0, 1], rng.uniform(0.0, 360.0)))
+    return m
+
+
+def scatter(terrain: Terrain, args, rng):
+    """Wet patches, rocks and shrubs: node name -> (material, mesh), apart from each other and the
+    target, each resting ``--gap`` above the highest terrain under it (a wet patch sheared into
+    the plane that fits the terrain under it first, so that it lies on the slope)."""
     half = args.terrain_size / 2
     placed = []  # (x, y, radius)
     nodes = {}
-    kinds = [("rock", i) for i in range(args.rocks)] + [("shrub", i) for i in range(args.shrubs)]
+    kinds = ([("wet", i) for i in range(args.wet_patches)] + [("rock", i) for i in range(args.rocks)]
+             + [("shrub", i) for i in range(args.shrubs)])
     for kind, i in kinds:
-        if kind == "rock":
+        if kind == "wet":
+            size = float(np.exp(rng.uniform(np.log(args.wet_sizes[0]), np.log(args.wet_sizes[1]))))
+            mesh = wet_patch(rng, size, args.wet_thickness)
+        elif kind == "rock":
             size = float(np.exp(rng.uniform(np.log(args.rock_sizes[0]), np.log(args.rock_sizes[1]))))
             mesh = rock(rng, size)
         else:
@@ -288,17 +263,28 @@ def scatter(terrain: Terrain, wet, args, rng):
                 continue
             if any(np.hypot(x - px, y - py) < radius + pr + 0.3 for px, py, pr in placed):
                 continue
-            ci = np.clip(((np.array([x - radius, x + radius]) - terrain.xs[0]) // terrain.cell).astype(int), 0, len(wet) - 1)
-            cj = np.clip(((np.array([y - radius, y + radius]) - terrain.ys[0]) // terrain.cell).astype(int), 0, len(wet) - 1)
-            if wet[ci[0]:ci[1] + 1, cj[0]:cj[1] + 1].any():
-                continue
             break
         else:
             raise SystemExit(f"no room for {kind} {i}")
         placed.append((x, y, radius))
-        base = terrain.max_under(x, y, radius) + args.gap
-        mesh.apply_translation([x, y, base - mesh.bounds[0][2]])
-        nodes[f"{kind}_{i:03d}"] = ("rocks" if kind == "rock" else "shrubs", mesh)
+        if kind == "wet":
+            # Least-squares plane z = c + a dx + b dy through the terrain under the patch; the
+            # slab is sheared into it (a shear keeps it closed and outward) and lifted by the
+            # largest terrain height above that plane.
+            s = np.linspace(-radius, radius, 9)
+            dx, dy = (g.ravel() for g in np.meshgrid(s, s, indexing="ij"))
+            h = terrain.height(x + dx, y + dy)
+            (c, a, b), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(dx), dx, dy]), h, rcond=None)
+            v = mesh.vertices.copy()
+            lift = float((h - (c + a * dx + b * dy)).max()) + args.gap
+            v[:, 2] += c + a * v[:, 0] + b * v[:, 1] + lift
+            v[:, :2] += [x, y]
+            mesh = trimesh.Trimesh(v, mesh.faces, process=False)
+        else:
+            base = terrain.max_under(x, y, radius) + args.gap
+            mesh.apply_translation([x, y, base - mesh.bounds[0][2]])
+        material = {"wet": "wet_ground", "rock": "rocks", "shrub": "shrubs"}[kind]
+        nodes[f"{kind}_{i:03d}"] = (material, mesh)
     return nodes
 
 
@@ -408,7 +394,9 @@ def main(argv=None) -> None:
     p.add_argument("--pad-radius", type=float, default=20.0, help="flat ground around the target [m]; "
                    "the relief returns fully at 3x this")
     p.add_argument("--clear-radius", type=float, default=25.0, help="no clutter this close to the target [m]")
-    p.add_argument("--wet-fraction", type=float, default=0.08, help="fraction of the terrain that is wet")
+    p.add_argument("--wet-patches", type=int, default=200, help="number of damp patches of moist soil")
+    p.add_argument("--wet-sizes", type=float, nargs=2, default=(1.0, 6.0), metavar=("MIN", "MAX"),
+                   help="wet patch size across [m], log-uniform")
     p.add_argument("--wet-thickness", type=float, default=0.03, help="wet slab thickness [m]")
     p.add_argument("--rocks", type=int, default=300)
     p.add_argument("--rock-sizes", type=float, nargs=2, default=(0.3, 2.5), metavar=("MIN", "MAX"), help="[m], log-uniform")
@@ -428,12 +416,7 @@ def main(argv=None) -> None:
 
     rng = np.random.default_rng(args.seed)
     terrain = Terrain(args, rng)
-    wet = wet_mask(terrain, args, rng)
-    clutter = {
-        "terrain": ("dry_ground", terrain.solid()),
-        "wet_patches": ("wet_ground", draped_slab(terrain, wet, args.gap, args.gap + args.wet_thickness)),
-        **scatter(terrain, wet, args, rng),
-    }
+    clutter = {"terrain": ("dry_ground", terrain.solid()), **scatter(terrain, args, rng)}
     for target in targets:
         out = args.out or args.out_dir / f"sar_{target}.glb"
         nodes = {**clutter, **target_nodes(target, args)}
@@ -449,7 +432,9 @@ def main(argv=None) -> None:
     for material, m in clutter.values():
         by_material[material] = by_material.get(material, 0) + len(m.faces)
     print("  " + ", ".join(f"{k}: {v} triangles" for k, v in by_material.items()))
-    print(f"  wet ground: {wet.mean() * 100:.1f} % of the cells; terrain z {terrain.h.min():.2f}..{terrain.h.max():.2f} m")
+    wet_area = sum(m.area_faces[m.face_normals[:, 2] > 0.5].sum() for mat, m in clutter.values() if mat == "wet_ground")
+    print(f"  wet ground: {args.wet_patches} patches, {wet_area:.0f} m^2 ({wet_area / args.terrain_size ** 2 * 100:.2f} % "
+          f"of the terrain); terrain z {terrain.h.min():.2f}..{terrain.h.max():.2f} m")
     print(f"suggested imager: position [0, 0, {IMAGER_ALTITUDE:g}], look_at [0, 0, 0], up [0, 1, 0], "
           f"fov {IMAGER_FOV_DEG:g} deg, resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}] "
           f"(swath {2 * IMAGER_ALTITUDE * np.tan(np.radians(IMAGER_FOV_DEG / 2)):.0f} m)")
