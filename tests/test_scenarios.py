@@ -1,17 +1,20 @@
 """The shipped scenarios: each validates, renders at reduced resolution, and shows the
-phenomenology of seed 000 chapter 3 (checked on the ideal image, with the seed's materials)."""
+phenomenology of Murakowski 2014 sec. 2.3.2 and chapter 3 (checked on the ideal image, with the
+thesis's materials); their weathers reproduce the thesis's attenuations and path losses."""
 
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from pmmw_cli.config.schema import Region
-from pmmw_cli.pipeline import make_job, region_masks, resolve, validate
+from pmmw_cli.pipeline import atmosphere_model, make_job, region_masks, resolve, validate
 from pmmw_cli.physics.jones import stokes_images
 from pmmw_cli.trace.pool import assemble, render_tiles
 
-CONFIGS = sorted(Path(__file__).resolve().parents[1].glob("configs/*.yaml"))
+REPO = Path(__file__).resolve().parents[1]
+CONFIGS = sorted(REPO.glob("configs/*.yaml"))
 
 
 def _render(path, overrides):
@@ -36,7 +39,27 @@ def test_every_shipped_config_validates_and_renders_small(path):
         assert np.all(np.isfinite(img[c])) and img[c].min() > 0.0 and img[c].max() < 400.0
 
 
-LANDING = Path(__file__).resolve().parents[1] / "configs/landing_95ghz.yaml"
+CINDERBLOCKS = REPO / "configs/cinderblocks_35ghz.yaml"
+
+
+def test_cinderblock_cavities_are_warm_and_the_tops_cold():
+    """Sec. 2.3.2, Fig. 2.7: "the top of the cinderblock is very cold" (a nearly specular mirror of
+    the sky in x polarization), "the cavity inside the cinderblock is very warm" (a well closed by
+    the ground: what enters is absorbed after a few bounces and the cavity glows at the blocks'
+    300 K). Ideal image zoomed on the near stack's top from the config's imager. Margins: cavity
+    above 290 K in both polarizations (observed ~299 K), more than 100 K above the top in Ex2
+    (observed ~150 K above) and warmer than the top in Ey2 too (observed ~11 K)."""
+    job, img = _render(CINDERBLOCKS, ["imager.look_at=[-0.35, 3.5, 0.573]", "imager.fov=4 deg",
+                                      "imager.resolution=[64, 64]", "imager.aperture_diameter=0 m", "render.spp=2"])
+    regions = {"cavity": {"center": [-0.44, 3.5, 0.573], "radius": 2},   # left well of the near stack
+               "top": {"center": [-0.35, 3.5, 0.573], "radius": 2}}      # the centre web between the wells
+    ex, ey = _means(job, img, regions, "Ex2"), _means(job, img, regions, "Ey2")
+    assert ex["cavity"] > 290.0 and ey["cavity"] > 290.0, (ex, ey)
+    assert ex["cavity"] - ex["top"] > 100.0, ex
+    assert ey["cavity"] > ey["top"], ey
+
+
+LANDING = REPO / "configs/landing_95ghz.yaml"
 NEAR = ["imager.position=[0, -399.03, 27.90]", "imager.look_at=[0, -2.36, 0.41]", "imager.fov=1 deg",
         "imager.resolution=[80, 80]", "render.spp=4"]
 LANDING_REGIONS = {"beacon": {"center": [0, -2.36, 0.41], "radius": 2.5},
@@ -69,11 +92,24 @@ def test_handgun_differs_from_the_torso_by_more_than_the_noise_outdoors():
         assert abs(m["gun"] - m["torso"]) > 4.0, (chan, m)
 
 
+SAR = REPO / "configs/sar_cessna_95ghz.yaml"
+
+
+def sar_sweep_weathers() -> dict[str, str]:
+    """The `atmosphere.layers` values of configs/sar_sweep.sh, by weather name."""
+    text = (REPO / "configs/sar_sweep.sh").read_text()
+    cloud = re.search(r"^cloud='(.*)'$", text, re.M).group(1)
+    block = re.search(r"declare -A weather=\((.*?)^\)", text, re.M | re.S).group(1)
+    return {k: v.replace("$cloud", cloud) for k, _, v in re.findall(r"\[(\w+)\]=(['\"])(.*)\2", block)}
+
+
 def test_sar_targets_are_the_coldest_objects_and_visible_through_cloud():
     """Sec. 3.3: from 3000 m the metal aircraft and blankets mirror the cold sky: the coldest
-    objects in clear weather; through a cloud deck at 35 GHz they stay more than the 4 K noise
-    colder than the surroundings."""
-    path = Path(__file__).resolve().parents[1] / "configs/sar_cessna_95ghz.yaml"
+    objects in clear weather; through the sweep's cloud deck at 35 GHz they stay more than the 4 K
+    noise colder than the surroundings; through its rain at 95 GHz "there is simply nothing to
+    see" (sec. 3.3.4: under ~2 K even unblurred; here under the 4 K noise)."""
+    path = SAR
+    weathers = sar_sweep_weathers()
     zoom = ["imager.fov=1 deg", "imager.resolution=[60, 60]", "render.spp=2"]
     for target, mesh, r in (("cessna", "sar_cessna.glb", 4), ("blanket", "sar_beacon.glb", 3)):
         target_map = "aircraft: metal" if target == "cessna" else "blanket: metal"
@@ -84,11 +120,66 @@ def test_sar_targets_are_the_coldest_objects_and_visible_through_cloud():
         m = _means(job, img, regions)
         rest = img["Ey2"][~region_masks({"t": Region(center=(0, 0, 0.5), radius=r + 3)}, job.camera)["t"]]
         assert m["target"] < np.percentile(rest, 1), (target, m)
-        cloud = base + ["frequency=35 GHz",
-                        "atmosphere.layers=[{kind: cloud, base: 1000 m, top: 2000 m, liquid_water: 0.5 g/m3}]"]
-        job, img = _render(path, cloud)
+        job, img = _render(path, base + ["frequency=35 GHz", f"atmosphere.layers={weathers['cloud']}"])
         m = _means(job, img, regions)
         assert m["ground"] - m["target"] > 4.0, (target, m)
+        job, img = _render(path, base + ["frequency=95 GHz", f"atmosphere.layers={weathers['rain']}"])
+        m = _means(job, img, regions)
+        assert 0.0 < m["ground"] - m["target"] < 4.0, (target, m)
+
+
+# Murakowski 2014 sec. 3.3.2-3.3.4: path loss from the search aircraft (3000 m) straight down to
+# the ground [dB] at (35, 95) GHz. The thesis's 95 GHz rain figure, 11.7 dB, is less than its own
+# parts: 0.3 dB clear air + 1.5 km x 5.9 dB/km rain (Table 3.5) + 5.3 dB of cloud (its cloudy
+# case less clear air) = 14.45 dB; that sum is the reference here.
+SAR_PATH_LOSS_DB = {"clear": (0.1, 0.3), "cloud": (1.2, 5.6), "rain": (4.8, 0.3 + 1.5 * 5.9 + 5.3)}
+# Tolerances: clear air 0.05 dB (the thesis quotes one decimal); weather 20 % (pmmw's P.838 rain is
+# 7 % / 9 % above Table 3.5's Olsen values, and P.840 cloud attenuation falls with the cloud's
+# temperature, which the thesis does not give: one liquid water content fits 95 GHz to 0.4 % and
+# 35 GHz to 15 %).
+SAR_PATH_LOSS_TOL = {"clear": 0.05, "cloud": 0.20, "rain": 0.20}
+
+
+@pytest.mark.parametrize("weather", sorted(SAR_PATH_LOSS_DB))
+def test_sar_sweep_weathers_reproduce_the_thesis_path_losses(weather):
+    layers = sar_sweep_weathers()[weather]
+    res = resolve(SAR, [f"atmosphere.layers={layers}"])
+    for f_ghz, thesis in zip((35, 95), SAR_PATH_LOSS_DB[weather]):
+        loss = float(atmosphere_model(res.scenario, f_ghz * 1e9).path_loss_db(3000.0, 0.0, 3000.0))
+        tol = SAR_PATH_LOSS_TOL[weather]
+        assert loss == (pytest.approx(thesis, abs=tol) if weather == "clear" else pytest.approx(thesis, rel=tol)), \
+            (weather, f_ghz, loss)
+
+
+def test_sar_rain_is_table_3_5_rain():
+    """Table 3.5: 10 mm/h gives 2.4 dB/km at 35 GHz and 5.9 dB/km at 95 GHz (Olsen's aR^b at 20 C);
+    the sweep's rain is 10 mm/h, and pmmw's P.838 specific attenuation at the ground, gas
+    subtracted, is within 10 % of the table (observed +7 %, +9 %)."""
+    rain = sar_sweep_weathers()["rain"]
+    assert "rain_rate: 10 mm/h" in rain and "top: 1500 m" in rain
+    wet, dry = resolve(SAR, [f"atmosphere.layers={rain}"]), resolve(SAR, ["atmosphere.layers=[]"])
+    for f_ghz, table in ((35, 2.4), (95, 5.9)):
+        a = (atmosphere_model(wet.scenario, f_ghz * 1e9).specific_attenuation_db_km(0.0)
+             - atmosphere_model(dry.scenario, f_ghz * 1e9).specific_attenuation_db_km(0.0))
+        assert a == pytest.approx(table, rel=0.10), (f_ghz, a)
+
+
+# Murakowski 2014 Table 3.2: attenuation at the ground [dB/km], (35, 95) GHz, by weather; the
+# landing config's humid air (15 g/m3, 288 K) reproduces the "Cloudy" (no liquid water) row.
+LANDING_ATTENUATION = {"[]": (0.17, 0.92),
+                       "[{kind: fog, base: 0 m, top: 600 m, liquid_water: 0.3 g/m3}]": (0.40, 2.29),
+                       "[{kind: fog, base: 0 m, top: 600 m, liquid_water: 1.0 g/m3}]": (0.88, 5.05)}
+
+
+@pytest.mark.parametrize("layers", sorted(LANDING_ATTENUATION))
+def test_landing_air_reproduces_table_3_2(layers):
+    """Tolerance 12 %: the thesis's gas model is not given; pmmw's P.676 with 15 g/m3 fits the
+    clear-air 95 GHz value exactly (0.921) and the 35 GHz one 11 % high (0.188); the fog rows then
+    agree within 7 % (P.840 at 288 K: heavy fog 2.15 against 2.29 at 95 GHz)."""
+    res = resolve(LANDING, [f"atmosphere.layers={layers}"])
+    for f_ghz, table in zip((35, 95), LANDING_ATTENUATION[layers]):
+        a = atmosphere_model(res.scenario, f_ghz * 1e9).specific_attenuation_db_km(0.0)
+        assert a == pytest.approx(table, rel=0.12 if layers == "[]" else 0.07), (layers, f_ghz, a)
 
 
 def test_target_error_applies_after_the_blur_only_when_the_imager_blurs():
