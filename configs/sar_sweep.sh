@@ -10,7 +10,8 @@
 # Vertical path loss from the search aircraft (3000 m) to the ground, pmmw (thesis), 35 / 95 GHz:
 # clear 0.11 / 0.30 dB (0.1 / 0.3), cloud 1.02 / 5.58 dB (1.2 / 5.6), rain 4.87 / 15.2 dB
 # (4.8 / 11.7; the thesis's own rain and cloud figures add up to 14.5 dB at 95 GHz).
-# Check: pmmw sky --frequency "95 GHz" --humidity "4 g/m3" --ground-temperature "300 K" --layer ...
+# Checked in tests/test_scenarios.py (AtmosphereModel.path_loss_db); the skies they make:
+# pmmw sky --frequency "95 GHz" --humidity "4 g/m3" --ground-temperature "300 K" --layer "cloud,1000,2000,1.3 g/m3"
 # Pass extra pmmw options after the script name, e.g. `configs/sar_sweep.sh --workers 8 --quiet`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
