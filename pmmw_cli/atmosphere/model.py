@@ -665,14 +665,14 @@ class AtmosphereModel:
         d_lo = np.interp(np.minimum(z0[s], z1[s]), e, self.depth)
         d_hi = np.interp(np.maximum(z0[s], z1[s]), e, self.depth)
         stretch = L[s] / np.abs(dz[s])
-        mu = -dz[s] / L[s]  # direction of the radiation, toward the observer
-        scatters = bool(np.any(self.source_mu))
+        # direction of the radiation, toward the observer (only rain's source depends on it)
+        mu = -dz[s] / L[s] if np.any(self.source_mu) else None
         t = np.ones(s.size)
         em = np.zeros(s.size)
         while s.size:
             tau_v = np.minimum(self.depth[j + 1], d_hi) - np.maximum(self.depth[j], d_lo)
             x = np.expm1(-np.maximum(tau_v, 0.0) * stretch)  # exp(-tau) - 1
-            src = self.source[j] + self.source_mu[j] * mu if scatters else self.source[j]
+            src = self.source[j] if mu is None else self.source[j] + self.source_mu[j] * mu
             em -= src * x * t
             t *= 1.0 + x
             left -= 1
@@ -681,9 +681,11 @@ class AtmosphereModel:
                 trans[s[done]] = t[done]
                 emission[s[done]] = em[done]
                 keep = ~done
-                s, j, step, left, d_lo, d_hi, stretch, mu, t, em = (
-                    a[keep] for a in (s, j, step, left, d_lo, d_hi, stretch, mu, t, em)
+                s, j, step, left, d_lo, d_hi, stretch, t, em = (
+                    a[keep] for a in (s, j, step, left, d_lo, d_hi, stretch, t, em)
                 )
+                if mu is not None:
+                    mu = mu[keep]
             j = j + step
         return trans.reshape(shape), emission.reshape(shape)
 
