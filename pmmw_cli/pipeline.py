@@ -344,7 +344,7 @@ def region_stats(scn, cam, sensor, img=None, kernel=None) -> dict:
                 err = mc_error(dw, c)
                 pair[c] = {"K": k, "sigma": k / scale if sigma > 0 else float("nan"), "stderr_K": err,
                            "truncation_bound_K": None if tb is None else tb * (2.0 if c == "I" else 1.0)}
-                if err is not None and 2.0 * err > limit * (2.0 if c == "I" else 1.0):
+                if err is not None and 2.0 * err > limit * (np.sqrt(2.0) if c == "I" else 1.0):
                     warn(f"output.regions: the contrast {a} - {b_name} in {c} has a Monte Carlo standard error "
                          f"of {err:.3g} K: seeds will differ by more than {limit:.3g} K; raise render.spp "
                          "or set render.target_error")

@@ -120,6 +120,17 @@ def _stderr(s1, s2, count):
     return np.where(c > 1, np.sqrt(var / c), 0.0)
 
 
+def _dilate(mask):
+    """A boolean (h, w) mask grown by one pixel in each of the 8 directions."""
+    p = np.pad(mask, 1)
+    h, w = mask.shape
+    out = np.zeros_like(mask)
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            out |= p[dy:dy + h, dx:dx + w]
+    return out
+
+
 def _normalize(v):
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
@@ -305,8 +316,10 @@ class Integrator:
 
         Without ``target_error`` one pass takes every sample. With it, a first pass of
         ``min_spp`` samples estimates each pixel's Monte Carlo standard error; pixels still above
-        ``target_error * error_footprint`` get passes of doubling size until they reach it or
-        ``spp`` samples. With a blurring imager, error_footprint = 1 / sqrt(sum psf^2): the
+        ``target_error * error_footprint``, and their 8 neighbours in the tile, get passes of
+        doubling size until they reach it or ``spp`` samples. (The neighbours: a pixel that a
+        small object covers in part can miss it with all of its first samples and read zero
+        variance; the seed-to-seed spread of a sub-pixel target's contrast came from such pixels.) With a blurring imager, error_footprint = 1 / sqrt(sum psf^2): the
         pixels' errors are independent, so the blurred error sqrt(sum_k psf_k^2 sigma_k^2) is at
         most that many times the largest sigma_k of the footprint, and stopping every pixel at
         sigma <= target / sqrt(sum psf^2) keeps the sensor image's error at or below the target
@@ -349,7 +362,11 @@ class Integrator:
             if not adaptive:
                 break
             err = _stderr(s1[active], s2[active], count[active])
-            active = active[np.max(err[:, :2], axis=1) > st.target_error * st.error_footprint]
+            need = np.zeros(npx, bool)
+            need[active[np.max(err[:, :2], axis=1) > st.target_error * st.error_footprint]] = True
+            # a pixel that a small object covers in part may miss it with every one of its first
+            # samples (zero variance): its neighbours that did see the edge keep it sampling
+            active = active[_dilate(need.reshape(h, w)).ravel()[active]]
             batch = done  # double the samples of the pixels that still need them
         mean = ref + s1 / count[:, None]
         stderr = _stderr(s1, s2, count)
