@@ -223,7 +223,9 @@ def atmosphere_model(scn, f: float):
                          layers=layers, ground_altitude=a.ground_altitude)
     except ValueError as e:
         raise UserError(str(e), file=scn.source_file, key="atmosphere") from None
-    return AtmosphereModel(atm, f)
+    # the scattering solution stands on the ground the sky model puts below the horizon
+    ground = scn.sky.ground_temperature if scn.sky is not None and scn.sky.model == "atmosphere" else None
+    return AtmosphereModel(atm, f, ground_temperature=ground)
 
 
 class _Progress:
@@ -282,11 +284,13 @@ def region_stats(scn, cam, sensor, img=None, kernel=None) -> dict:
 
     A region's mean in the sensor image is a linear functional of the ideal image, with weights
     W = blur^T(mask / N) (`blur_adjoint`; W = mask / N without an aperture). Pixels' Monte Carlo
-    errors are independent (each tile and sample has its own random stream), so the standard
-    error of the mean is sqrt(sum W^2 sigma^2) with sigma the per-pixel standard error, and that
-    of a contrast uses W_a - W_b. I = Ex2 + Ey2 takes sigma_Ex2 + sigma_Ey2 (an upper bound: the
-    two are correlated through shared paths). Pixels with one sample cannot estimate sigma: then
-    the error is None. The truncation bound is sum |W| b with b the per-pixel bound of paths
+    errors are independent (each pixel has its own random rotations and each tile its own random
+    stream), so the variance of the mean is sum W^2 var_k, and that of a contrast uses
+    W_a - W_b. var_k is estimated from the pixel's two independent replicates (`pixel_samples`):
+    d_k^2 / 4 with d_k their difference (`TileResult.replicate_diff`), unbiased and linear in the
+    channels (d_I = d_Ex2 + d_Ey2), so it holds for the low-discrepancy sampling that the
+    per-sample spread would overstate. Pixels with one sample have no second replicate: then the
+    error is None. The truncation bound is sum |W| b with b the per-pixel bound of paths
     ended on a guessed temperature (`TileResult.truncated`), for Ex2 and Ey2 (twice it for I).
     """
     masks = region_masks(scn.output.regions, cam)
@@ -297,13 +301,13 @@ def region_stats(scn, cam, sensor, img=None, kernel=None) -> dict:
     weights = {name: ((blur_adjoint(m / m.sum(), kernel) if kernel is not None else m / m.sum())
                       if m.any() else None) for name, m in masks.items()}
     if img is not None:
-        se_maps = {"Ex2": img.stderr[..., 0], "Ey2": img.stderr[..., 1]}
-        se_maps["I"] = se_maps["Ex2"] + se_maps["Ey2"]
+        d = img.replicate_diff
+        var_maps = {"Ex2": d[..., 0] ** 2 / 4.0, "Ey2": d[..., 1] ** 2 / 4.0, "I": (d[..., 0] + d[..., 1]) ** 2 / 4.0}
 
     def mc_error(w, c):
         if img is None or w is None or (img.samples[w != 0.0] < 2).any():
             return None
-        return float(np.sqrt(np.sum(w * w * se_maps[c] ** 2)))
+        return float(np.sqrt(np.sum(w * w * var_maps[c])))
 
     def bound(w):
         if img is None or w is None:
@@ -381,7 +385,7 @@ def average_images(imgs):
         np.sqrt(sum(i.stderr**2 for i in imgs)) / n,
         imgs[len(imgs) // 2].depth, imgs[len(imgs) // 2].material,
         sum(i.samples for i in imgs).astype(np.int32), sum(i.rays for i in imgs), sum(i.t_isect for i in imgs),
-        sum(i.truncated for i in imgs) / n,
+        sum(i.truncated for i in imgs) / n, sum(i.replicate_diff for i in imgs) / n,
     )
 
 

@@ -118,9 +118,17 @@ def test_region_standard_errors_predict_the_scatter_over_seeds():
     assert kernel.shape[0] > 3
     scn = SimpleNamespace(output=SimpleNamespace(regions=regions), imager=SimpleNamespace(noise=0.0),
                           render=SimpleNamespace(max_depth=40, termination="roulette"))
+    means, se_mean = _predicted_and_observed_scatter(_roulette_room, scn, kernel)
+    assert abs(np.mean(means) - 300.0) < 4.0 * np.mean(se_mean) / np.sqrt(12)
+
+
+def _predicted_and_observed_scatter(make, scn, kernel):
+    """Render ``make(seed)`` for 12 seeds; assert that the scatter of region a's mean and of the
+    contrast a - b (Ex2, sensor image) is 0.55-1.45 times the mean reported standard error.
+    Returns a's means and standard errors."""
     means, contrasts, se_mean, se_con = [], [], [], []
     for seed in range(1, 13):
-        job = _roulette_room(seed)
+        job = make(seed)
         img = _image(job)
         sensor = {c: blur(v, kernel) for c, v in stokes_images(img.mean).items()}
         st = region_stats(scn, job.camera, sensor, img, kernel)
@@ -130,8 +138,8 @@ def test_region_standard_errors_predict_the_scatter_over_seeds():
         se_con.append(st["contrasts"]["a - b"]["Ex2"]["stderr_K"])
     for observed, predicted in ((np.std(means, ddof=1), np.mean(se_mean)),
                                 (np.std(contrasts, ddof=1), np.mean(se_con))):
-        assert 0.55 < observed / predicted < 1.45
-    assert abs(np.mean(means) - 300.0) < 4.0 * np.mean(se_mean) / np.sqrt(12)
+        assert 0.55 < observed / predicted < 1.45, (observed, predicted)
+    return means, se_mean
 
 
 def test_one_sample_per_pixel_gives_no_standard_error():
@@ -144,3 +152,37 @@ def test_one_sample_per_pixel_gives_no_standard_error():
     st = region_stats(scn, job.camera, stokes_images(img.mean), img, None)
     assert st["stderr"]["a"]["Ex2"] is None
     assert st["truncation"]["a"]["bound_K"] == pytest.approx(0.0)
+
+
+def _checkerboard(seed, spp):
+    """Metal squares (mirroring a 10 K sky) and blackbody squares (300 K) of 0.23 m, seen from
+    4 m straight down with the image turned 30 degrees to them: every square's edges cross
+    pixels at slant, so most of the variance is the pixels' partial coverage, where the
+    low-discrepancy sub-pixel samples beat independent ones."""
+    from pmmw_cli.scene.camera import Camera
+
+    objects, n, a = [], 12, 0.23
+    for i in range(n):
+        for j in range(n):
+            lo = [(i - n / 2) * a, (j - n / 2) * a, -0.1]
+            spec = material(kind="metal", temperature=300.0) if (i + j) % 2 else material(kind="blackbody", temperature=300.0)
+            objects.append((box(lo, [lo[0] + a, lo[1] + a, 0.0]), spec))
+    up = [np.sin(np.radians(30.0)), np.cos(np.radians(30.0)), 0.0]
+    cam = Camera.look_at([0.0, 0.0, 4.0], [0.0, 0.0, 0.0], up, np.radians(30.0), (32, 32))
+    settings = RenderSettings(spp=spp, max_depth=4, threshold=1e-3, tile=32, seed=seed)
+    return make_job(objects, cam, UniformSky(10.0, 300.0), F95, settings)
+
+
+def test_region_standard_errors_hold_for_low_discrepancy_samples_at_edges():
+    """Where partial pixel coverage dominates, the spread of single samples overstates the error
+    of the low-discrepancy pixel means (1.6x here at 8 spp, more at higher spp); the report's
+    estimate (from the two independently rotated replicates of each pixel) predicts the scatter
+    of a region mean and a contrast over 12 seeds within 0.55-1.45 (the sampling range of a
+    12-seed standard deviation at > 99 %)."""
+    from pmmw_cli.config.schema import Region
+
+    regions = {"a": Region(box=[2, 2, 16, 16]), "b": Region(box=[16, 14, 30, 30])}
+    kernel = psf_kernel(np.radians(30) / 32, 2 * np.pi * 95e9 / 3e8, 0.05)
+    scn = SimpleNamespace(output=SimpleNamespace(regions=regions), imager=SimpleNamespace(noise=0.0),
+                          render=SimpleNamespace(max_depth=4, termination="roulette"))
+    _predicted_and_observed_scatter(lambda seed: _checkerboard(seed, 8), scn, kernel)

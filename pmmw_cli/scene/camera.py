@@ -18,6 +18,8 @@ import numpy as np
 # R2 sequence: fractional parts of k / g and k / g^2, g the plastic number (root of x^3 = x + 1).
 _G = 1.32471795724474602596
 R2_ALPHA = np.array([1.0 / _G, 1.0 / (_G * _G)])
+#: Independently rotated R2 sequences per pixel (`pixel_samples`); sample s belongs to s % 2.
+REPLICATES = 2
 
 
 @dataclass(frozen=True)
@@ -131,6 +133,13 @@ def hash_uniform(seed: int, keys, stream: int = 0):
 def pixel_samples(width: int, pixels, spp: int, seed: int, start: int = 0, total: int | None = None):
     """Sub-pixel sample positions for a set of pixels.
 
+    Randomized quasi-Monte Carlo: even and odd sample numbers form two replicates, each the R2
+    low-discrepancy sequence (Roberts 2018) shifted by its own random rotation per pixel
+    (Cranley and Patterson 1976). Within a replicate the points fill the pixel evenly; the two
+    replicates' means are independent, unbiased estimates of the pixel, so half their
+    difference estimates the standard error of the pixel mean (the integrator's
+    ``TileResult.replicate_diff``), where the spread of single samples would overstate it.
+
     Parameters
     ----------
     width : int
@@ -159,9 +168,11 @@ def pixel_samples(width: int, pixels, spp: int, seed: int, start: int = 0, total
     row = (pix // width).astype(np.float64)
     if (total if total is not None else start + spp) == 1:
         return col + 0.5, row + 0.5, pix
-    s = np.tile(np.arange(start, start + spp, dtype=np.float64), pixels.size)
-    rot_u = hash_uniform(seed, pix, stream=1)
-    rot_v = hash_uniform(seed, pix, stream=2)
-    ju = np.mod(rot_u + (s + 0.5) * R2_ALPHA[0], 1.0)
-    jv = np.mod(rot_v + (s + 0.5) * R2_ALPHA[1], 1.0)
+    s = np.tile(np.arange(start, start + spp, dtype=np.int64), pixels.size)
+    # two replicates per pixel (even and odd sample numbers), each an R2 sequence with its own
+    # random rotation: independent randomized-QMC estimates whose difference measures the error
+    key = pix * REPLICATES + s % REPLICATES
+    k = (s // REPLICATES).astype(np.float64)
+    ju = np.mod(hash_uniform(seed, key, stream=1) + (k + 0.5) * R2_ALPHA[0], 1.0)
+    jv = np.mod(hash_uniform(seed, key, stream=2) + (k + 0.5) * R2_ALPHA[1], 1.0)
     return col + ju, row + jv, pix

@@ -115,7 +115,9 @@ class TextureSky:
 class AtmosphereSky:
     """The layered atmosphere's own sky (`pmmw_cli.atmosphere.model.AtmosphereModel`).
 
-    Unpolarized (a horizontally stratified, non-scattering atmosphere), with earth curvature.
+    Unpolarized (a horizontally stratified atmosphere; rain scatters, in the delta-Eddington
+    approximation of `pmmw_cli.atmosphere.model.scattering_source`, without polarizing), with earth
+    curvature.
     Rays leave the scene from various heights; the sky above a ray is taken from a table for the
     nearest of `HEIGHT_STEP`-spaced observer heights below it (cached per height), so an aircraft
     sees only the air above it. Below the horizon: ``ground_temperature``.
@@ -144,9 +146,10 @@ class AtmosphereSky:
         return t, t
 
     def temperature_range(self) -> tuple[float, float]:
-        """Lowest and highest brightness [K]: the sky is a mix of the cells' sources and the CMB."""
-        src = self.model.source
-        ts = (float(src.min()), float(src.max()), T_CMB, self.ground_temperature)
+        """Lowest and highest brightness [K]: the sky is a mix of the cells' sources (in every
+        direction: ``source -+ |source_mu|``) and the CMB."""
+        _, lo, hi = self.model.extremes(0.0, self.model.top)
+        ts = (lo, hi, T_CMB, self.ground_temperature)
         return min(ts), max(ts)
 
 

@@ -35,7 +35,7 @@ from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.physics.jones import rebase, row_power, stokes_terms
 from pmmw_cli.physics.roughness import MAX_REHITS
 from pmmw_cli.physics.vec import cross
-from pmmw_cli.scene.camera import pixel_samples
+from pmmw_cli.scene.camera import REPLICATES, pixel_samples
 from pmmw_cli.trace.intersect import offset_along
 from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
 
@@ -56,7 +56,10 @@ class TileResult:
     mean : ndarray, shape (h, w, 4), float64
         Per-pixel mean of (Ex2, Ey2, U, V) over samples [K].
     stderr : ndarray, shape (h, w, 4), float64
-        Monte Carlo standard error of that mean [K] (zero with one sample).
+        Standard error of that mean [K] as if the samples were independent (zero with one
+        sample): the adaptive sampler's criterion; it overstates the error of the
+        low-discrepancy samples (`pixel_samples`) where a pixel's value varies smoothly or has
+        an edge.
     depth : ndarray, shape (h, w), float64
         Mean first-hit distance [m] (inf where every sample saw the sky).
     material : ndarray, shape (h, w), float64
@@ -72,6 +75,11 @@ class TileResult:
         Ey rows, whose path was ended on the last object's temperature instead of being traced:
         by ``max_depth``, or below ``threshold`` with ``termination: temperature``; the largest
         change of Ex2 or Ey2 that tracing those paths on could bring [K]).
+       replicate_diff : ndarray, shape (h, w, 4), float64
+        Mean of the even samples minus mean of the odd ones (the two independent replicates of
+        `pixel_samples`) [K]; zero where either is empty. ``replicate_diff**2 / 4`` is an
+        unbiased estimate of the variance of ``mean`` (exactly so for equal halves), with one
+        degree of freedom per pixel: sums over many pixels (region means) are what it is for.
     """
 
     index: int
@@ -84,6 +92,7 @@ class TileResult:
     samples: np.ndarray
     t_isect: float = 0.0
     truncated: np.ndarray | None = None
+    replicate_diff: np.ndarray | None = None
 
 
 class _Wave:
@@ -338,6 +347,8 @@ class Integrator:
         ref = np.zeros((npx, 4))  # per-pixel shift of the running sums (first pass mean)
         s1, s2 = np.zeros((npx, 4)), np.zeros((npx, 4))
         count = np.zeros(npx, np.int64)
+        r1 = np.zeros((npx, REPLICATES, 4))  # per replicate: summed shifted values, count
+        rcount = np.zeros((npx, REPLICATES), np.int64)
         depth = np.full(npx, np.inf)
         material = np.full(npx, -1.0)
         trunc = np.zeros((npx, 2))  # summed over samples: ended weight, bound [K]
@@ -358,6 +369,10 @@ class Integrator:
             s1[active] += dv.sum(axis=1)
             s2[active] += (dv * dv).sum(axis=1)
             count[active] += nb
+            for r in range(REPLICATES):
+                j = (np.arange(done, done + nb) % REPLICATES) == r
+                r1[active, r] += dv[:, j].sum(axis=1)
+                rcount[active, r] += int(j.sum())
             done += nb
             if not adaptive:
                 break
@@ -370,11 +385,14 @@ class Integrator:
             batch = done  # double the samples of the pixels that still need them
         mean = ref + s1 / count[:, None]
         stderr = _stderr(s1, s2, count)
+        both = (rcount > 0).all(axis=1)
+        halves = r1 / np.maximum(rcount, 1)[:, :, None]
+        diff = np.where(both[:, None], halves[:, 0] - halves[:, 1], 0.0)
         return TileResult(
             index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
             depth.reshape(h, w), material.reshape(h, w), self.rays,
             count.reshape(h, w).astype(np.int32), self.t_isect,
-            (trunc / count[:, None]).reshape(h, w, 2),
+            (trunc / count[:, None]).reshape(h, w, 2), diff.reshape(h, w, 4),
         )
 
     def _trace(self, pixels, start, nb):

@@ -44,7 +44,7 @@ def _save_tile(tile_dir: Path, r: TileResult):
     save_npz_atomic(
         _tile_path(tile_dir, r.index), index=r.index, box=np.array(r.box), mean=r.mean,
         stderr=r.stderr, depth=r.depth, material=r.material, rays=r.rays, samples=r.samples,
-        t_isect=r.t_isect, truncated=r.truncated,
+        t_isect=r.t_isect, truncated=r.truncated, replicate_diff=r.replicate_diff,
     )
 
 
@@ -54,7 +54,7 @@ def _load_tile(path: Path) -> TileResult | None:
             return TileResult(
                 int(z["index"]), tuple(int(v) for v in z["box"]), z["mean"], z["stderr"],
                 z["depth"], z["material"], int(z["rays"]), z["samples"], float(z["t_isect"]),
-                z["truncated"],
+                z["truncated"], z["replicate_diff"],
             )
     except Exception:  # a damaged tile file is simply rendered again
         return None
@@ -126,11 +126,12 @@ def assemble(job: TraceJob, results: list[TileResult]):
     -------
     Image
         ``mean``, ``stderr`` (H, W, 4); ``depth``, ``material``, ``samples`` (H, W); ``rays``;
-        ``t_isect`` [s] summed over tiles; ``truncated`` (H, W, 2) (`TileResult`).
+        ``t_isect`` [s] summed over tiles; ``truncated`` (H, W, 2), ``replicate_diff``
+        (H, W, 4) (`TileResult`).
     """
     w, h = job.camera.width, job.camera.height
     img = Image(np.zeros((h, w, 4)), np.zeros((h, w, 4)), np.zeros((h, w)), np.zeros((h, w)),
-                np.zeros((h, w), np.int32), 0, 0.0, np.zeros((h, w, 2)))
+                np.zeros((h, w), np.int32), 0, 0.0, np.zeros((h, w, 2)), np.zeros((h, w, 4)))
     for r in results:
         x0, y0, x1, y1 = r.box
         img.mean[y0:y1, x0:x1] = r.mean
@@ -139,6 +140,7 @@ def assemble(job: TraceJob, results: list[TileResult]):
         img.material[y0:y1, x0:x1] = r.material
         img.samples[y0:y1, x0:x1] = r.samples
         img.truncated[y0:y1, x0:x1] = r.truncated
+        img.replicate_diff[y0:y1, x0:x1] = r.replicate_diff
         img.rays += r.rays
         img.t_isect += r.t_isect
     return img
@@ -156,3 +158,4 @@ class Image:
     rays: int
     t_isect: float
     truncated: np.ndarray
+    replicate_diff: np.ndarray
