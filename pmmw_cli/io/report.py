@@ -85,7 +85,11 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
         facts.append(f"- image: `{report['output_exr']}`")
     for key, label in (("pixels", "pixels"), ("spp", "samples per pixel"), ("workers", "workers")):
         if report.get(key) is not None:
-            facts.append(f"- {label}: {report[key]}")
+            value = report[key]
+            mean = report.get("mean_samples_per_pixel")
+            if key == "spp" and isinstance(mean, (int, float)) and mean < value:
+                value = f"{value} at most, {mean:.3g} on average (adaptive sampling)"
+            facts.append(f"- {label}: {value}")
     if report.get("rays") is not None:
         rays = report["rays"]
         facts.append(f"- rays traced: {rays:,}" if isinstance(rays, int) else f"- rays traced: {rays}")
@@ -111,7 +115,7 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
         lines += [
             "## Previews", "",
             "Display scaling: the coldest and hottest 1/256 of the pixels clip to black and white "
-            "(seed 000 sec. 3.2).", "",
+            "(Murakowski 2014 sec. 3.2).", "",
         ]
         for name, rel in previews.items():
             stats = channels.get(name) or {}
