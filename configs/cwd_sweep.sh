@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The concealed-weapon grid of seed 000 sec. 3.2 from the two base configs: outdoor/indoor x
+# The concealed-weapon grid of Murakowski 2014 sec. 3.2 from the two base configs: outdoor/indoor x
 # 35/95 GHz x 4 m (30 deg vertical field) / 20 m (6 deg) = 8 renders into out/cwd/<...>/.
 # Extra pmmw options pass through, e.g. `configs/cwd_sweep.sh --workers 8 --quiet`.
 set -euo pipefail

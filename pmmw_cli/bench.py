@@ -2,7 +2,7 @@
 
 For each scenario (first frequency) a converged reference is made: analytic where one exists (an
 isothermal scene reads its temperature everywhere), otherwise a high-sample render with the
-seed's full splitting, a tiny threshold and extra depth, cached on disk by scenario hash. Then the
+thesis's full splitting, a tiny threshold and extra depth, cached on disk by scenario hash. Then the
 scenario is rendered at increasing samples per pixel with each strategy, recording wall time,
 rays traced, the time spent in Embree for exactly those rays, and the RMS and max error [K] of the
 ideal image and of the sensor image before noise (both images blurred by the imager's PSF).
@@ -381,7 +381,7 @@ def _instrumented(job):
 
 
 def _sky_rt_cost(model, dirs, heights, chunk=20000):
-    """Seconds of per-ray radiative transfer (seed 000 sec. 2.2.7) for these rays, each from its
+    """Seconds of per-ray radiative transfer (Murakowski 2014 sec. 2.2.7) for these rays, each from its
     own height: the work the cached sky tables avoid."""
     from pmmw_cli.atmosphere.model import layered_sky_temperature
 

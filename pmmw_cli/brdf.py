@@ -1,9 +1,9 @@
-"""``pmmw brdf``: the polarized BRDF of a rough layered surface on seed 001's hemispherical grid.
+"""``pmmw brdf``: the polarized BRDF of a rough layered surface on Optics Express 2016's hemispherical grid.
 
 Two methods share one surface description (`Stack`) and one output grid:
 
 ``mc``
-    Seed 001's Monte Carlo: rays enter from the incidence direction, meet rough interfaces whose
+    Optics Express 2016's Monte Carlo: rays enter from the incidence direction, meet rough interfaces whose
     facet normals come from `pmmw_cli.physics.roughness`, split by the polarized Fresnel
     coefficients of `pmmw_cli.physics.fresnel` / `pmmw_cli.physics.multilayer` about each facet,
     and are followed through the layers until they leave the top surface (collected), enter the
@@ -14,33 +14,33 @@ Two methods share one surface description (`Stack`) and one output grid:
     probability proportional to its unpolarized power and the Jones matrix is rescaled, so a
     lossless stack returns R + T = 1 exactly, path by path.
 ``analytic``
-    The polarized Ashikhmin model of seed 003 for one rough interface (the substrate, optionally
+    The polarized Ashikhmin model of Stryjewski et al. 2009 for one rough interface (the substrate, optionally
     under a coherent coating on its facets): the single-reflection term
     ``M1 = D(h) G(wi, wo) M_F(h) / (4 cos th_i cos th_o)`` with the Jones matrix of the facet
     rotated between the facet's (s, p) and the global (h, v) bases, plus the double-reflection
-    term of seed 003 eq. 12-16 written for the same Smith microsurface (facet h1 seen from wi,
+    term of Stryjewski et al. 2009 eq. 12-16 written for the same Smith microsurface (facet h1 seen from wi,
     the reflected ray masked, facet h2, then out to wo)::
 
         f2(wi, wo) cos th_o = E_{h1 ~ D_wi} [ D(h2) G1(wo) M_F2 / (4 A(w12+)) ]
 
     with ``w12`` the direction from facet 1 to facet 2, ``w12+`` it folded into the upper
     hemisphere, ``A`` the projected area and ``M_F2`` the Mueller matrix of the product of the
-    two facets' Jones matrices (seed 003 eq. 15-16: coherent within a path). The masking
+    two facets' Jones matrices (Stryjewski et al. 2009 eq. 15-16: coherent within a path). The masking
     probability and the second facet's visible-normal density combine into ``1/A(w12+)``
     exactly, which is what makes the term reciprocal. The integral over w12 is a scrambled Sobol
     quadrature with a fixed seed (deterministic), sampled from both ends and combined by the
     balance heuristic (`_double_term`); the broad double lobe is evaluated every 2 degrees and
     interpolated onto the grid. ``--shadowing`` picks G in the single term: ``smith`` (``G1
-    G1``, the first order of ``mc``), ``ashikhmin`` (seed 003 eq. 6), ``torrance_sparrow``
+    G1``, the first order of ``mc``), ``ashikhmin`` (Stryjewski et al. 2009 eq. 6), ``torrance_sparrow``
     (SCATMECH's ``Shadowed_Facet_BRDF_Model``) or ``none`` (SCATMECH's ``Facet_BRDF_Model``).
     Its hemispherical totals are integrated over facet normals (`analytic_totals`), not over the
-    grid, so they stay right for lobes narrower than a cell. Seed 003's own double-bounce
+    grid, so they stay right for lobes narrower than a cell. Stryjewski et al. 2009's own double-bounce
     probability (its eq. 17) is garbled in the extraction; this is the Smith form of the same
     idea, and it equals the Monte Carlo's second order.
 
 Grid and bases
 --------------
-Seed 001's collection grid: 91 x 360 cells, 1 degree; row i holds zenith angles within half a
+Optics Express 2016's collection grid: 91 x 360 cells, 1 degree; row i holds zenith angles within half a
 degree of i (row 0 the cap below 0.5 degree, row 90 the band above 89.5), column j azimuths
 within half a degree of j. ``mc`` sums the power of the rays leaving through each cell and
 divides by the cell's projected solid angle (a cell-averaged BRDF); ``analytic`` evaluates the
@@ -100,7 +100,7 @@ __all__ = [
     "run_brdf",
 ]
 
-#: Seed 001's collection grid: zenith rows 0..90 degrees, azimuth columns 0..359 degrees.
+#: Optics Express 2016's collection grid: zenith rows 0..90 degrees, azimuth columns 0..359 degrees.
 N_THETA, N_PHI = 91, 360
 METHODS = ("mc", "analytic", "both")
 SHADOWING = ("smith", "ashikhmin", "torrance_sparrow", "none")
@@ -136,8 +136,8 @@ class Layer:
     thickness : float or None
         [m]; a lossy layer with a thickness attenuates each path by ``exp(-2 k0 Im(n) L)`` over
         its length L (and a ray masked inside it by one wavelength on its way back to the same
-        interface, as in the renderer); without one, absorption inside the layer is ignored (seed
-        001 assumption 3).
+        interface, as in the renderer); without one, absorption inside the layer is ignored (Optics
+        Express 2016, assumption 3).
         Ignored for the substrate (the last layer, a half-space).
     coating : tuple of (complex, float)
         Coherent films ``(eps, thickness [m])``, outermost first, conformal to the facets of the
@@ -642,7 +642,7 @@ class _Tally:
 
 
 def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, threshold=1e-3):
-    """Seed 001's Monte Carlo over a rough layered surface (module docstring).
+    """Optics Express 2016's Monte Carlo over a rough layered surface (module docstring).
 
     Parameters
     ----------
@@ -764,7 +764,7 @@ def _mc_event(pt: _Paths, itf: _Interface, i: int, from_above: bool, stack, rng,
     rh = keep & ~leave
     if np.any(rh):
         back = new.take(np.nonzero(rh)[0])
-        # only where absorption is modelled: a layer with a thickness (seed 001 assumption 3)
+        # only where absorption is modelled: a layer with a thickness (Optics Express 2016 assumption 3)
         lay_above = stack.layers[i - 1] if i > 0 else None
         lossy_above = lay_above is not None and lay_above.thickness is not None
         lossy_below = stack.layers[i].thickness is not None and not itf.last
@@ -852,7 +852,7 @@ def _collect(g: _Paths, tally: _Tally, stokes_in):
 
 
 # ----------------------------------------------------------------------------------------------
-# Analytic polarized Ashikhmin model (seed 003)
+# Analytic polarized Ashikhmin model (Stryjewski et al. 2009)
 # ----------------------------------------------------------------------------------------------
 
 
@@ -874,7 +874,7 @@ def _facet_jones(itf: _Interface, m, k_in, k_out, s_in_basis, p_in_basis, s_out_
 
 def analytic_mueller(stack: Stack, wi, wo, *, phi_o=None, shadowing="smith", double=True, double_samples=256,
                      seed=0):
-    """Seed 003's polarized Ashikhmin BRDF for given outgoing directions (module docstring).
+    """Stryjewski et al. 2009's polarized Ashikhmin BRDF for given outgoing directions (module docstring).
 
     Parameters
     ----------
@@ -927,7 +927,7 @@ def analytic_mueller(stack: Stack, wi, wo, *, phi_o=None, shadowing="smith", dou
     valid = cos_o > 1e-12
     cos_o_safe = np.where(valid, cos_o, 1.0)
 
-    # Single reflection (seed 003 eq. 4 with the full Fresnel Jones matrix, eq. 10-11)
+    # Single reflection (Stryjewski et al. 2009 eq. 4 with the full Fresnel Jones matrix, eq. 10-11)
     hv = _unit(wi[None, :] + wo)
     d_h = model.D(nz, tangent, hv)
     j1, _, _ = _facet_jones(itf, hv, k_in, wo, h_in, v_in, h_out, v_out)
@@ -950,7 +950,7 @@ def analytic_mueller(stack: Stack, wi, wo, *, phi_o=None, shadowing="smith", dou
 
 
 def _double_term(itf: _Interface, model, wi, wo, h_in, v_in, h_out, v_out, n_samples, seed):
-    """Seed 003's double-reflection term for the Smith microsurface, shape (N, 4, 4) [1/sr].
+    """Stryjewski et al. 2009's double-reflection term for the Smith microsurface, shape (N, 4, 4) [1/sr].
 
     ``f2(wi, wo) = int f(w12) dw12`` over the direction w12 from facet 1 (h1 = unit(wi + w12))
     to facet 2 (h2 = unit(wo - w12)), with
@@ -1473,7 +1473,7 @@ def _write_outputs(out: Path, results, summary, wi, mueller, plots):
             "pmmw:brdf:azimuth_deg": summary["azimuth_deg"],
             "pmmw:brdf:stokes_in": summary["stokes_in"],
             "pmmw:brdf:total_reflectance": res.summary["total_reflectance"],
-            "pmmw:brdf:grid": "rows zenith 0..90 deg, columns azimuth 0..359 deg, 1 deg cells (seed 001)",
+            "pmmw:brdf:grid": "rows zenith 0..90 deg, columns azimuth 0..359 deg, 1 deg cells (Optics Express 2016)",
             "pmmw:brdf:units": "I Q U V M: BRDF [1/sr] for incident I = 1; DoP [-]; AoP [deg]",
         }
         path = out / f"brdf_{meth}.exr"

@@ -218,7 +218,7 @@ def brdf(
     gloss: Optional[float] = typer.Option(None, "--gloss", help="Blender gloss in [0, 1] (1 = mirror)."),
     orientation: Optional[float] = typer.Option(None, "--orientation",
                                                 help="Orientation of an anisotropic model's x axis in degrees."),
-    method: str = typer.Option("mc", "--method", help="mc (Monte Carlo, seed 001), analytic (seed 003) or both."),
+    method: str = typer.Option("mc", "--method", help="mc (Monte Carlo, Optics Express 2016), analytic (Stryjewski et al. 2009) or both."),
     samples: str = typer.Option("1000000", "--samples", metavar="N", help="Monte Carlo rays, e.g. 1000000 or 1e6."),
     seed: int = typer.Option(0, "--seed", help="Random seed (same seed, same result)."),
     shadowing: str = typer.Option("smith", "--shadowing",
@@ -232,7 +232,7 @@ def brdf(
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the PNG maps and the in-plane plot."),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary (brdf.json) instead of the text one."),
 ):
-    """Polarized BRDF of a rough (layered) surface on seed 001's 1-degree hemispherical grid."""
+    """Polarized BRDF of a rough (layered) surface on Optics Express 2016's 1-degree hemispherical grid."""
     from pmmw_cli.brdf import run_brdf
 
     res = run_brdf(n=n, eps=eps, material=material, stack=stack, frequency=frequency, wavelength=wavelength,

@@ -188,7 +188,7 @@ def make_job(res: Resolved, f: float) -> TraceJob:
 
 
 def atmosphere_summary(job) -> dict:
-    """What the layered atmosphere does to this scene (seed 000 reports path losses so)."""
+    """What the layered atmosphere does to this scene (Murakowski 2014 reports path losses so)."""
     atm, cam = job.atmosphere, job.camera
     target = np.asarray(cam.position) + cam.k * _target_distance(job)
     dist = float(np.linalg.norm(target - cam.position))
@@ -456,7 +456,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
             "pmmw:imager_k": " ".join(f"{v:.9g}" for v in cam.k),
             "pmmw:scenario": str(scn.source_file), "pmmw:scenario_hash": shash,
             "pmmw:spp": int(scn.render.spp), "pmmw:seed": int(scn.render.seed),
-            "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (seed 000 eq. 2.12)",
+            "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (Murakowski 2014 eq. 2.12)",
             "pmmw:materials": ",".join(job.media.ids),
         }
         exr_path = out_dir / f"{stem}.exr"

@@ -2,7 +2,7 @@
 
 Prints a table or CSV (``elevation_deg,Tv_K,Th_K``), and can write an equirectangular EXR map
 (channels Tv, Th: usable directly as ``sky: {texture: ...}``) and a PNG plot comparing the given
-atmosphere with the weathers of seed 000 chapter 3 at the same frequency.
+atmosphere with the weathers of Murakowski 2014 chapter 3 at the same frequency.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from pmmw_cli.errors import UserError
 from pmmw_cli.units import parse_quantity
 
-# Weathers of seed 000 ch. 3 (Tables 3.2, 3.5): fog 0-600 m, cloud 1-2 km, rain 0-3 km.
+# Weathers of Murakowski 2014 ch. 3 (Tables 3.2, 3.5): fog 0-600 m, cloud 1-2 km, rain 0-3 km.
 PRESETS = {
     "clear": (),
     "cloud 1-2 km, 0.5 g/m3": (("cloud", 1000.0, 2000.0, 0.5e-3, 0.0),),

@@ -280,7 +280,7 @@ class WeatherLayer(_Model):
 class Atmosphere(_Model):
     """``model: layered`` (default): an ITU-R P.835 profile with gases (P.676), weather layers of
     fog/cloud (P.840) and rain (P.838); ``model: uniform``: one absorbing medium of ``loss`` at
-    ``temperature`` along every path (the seed's Blender setting, sec. 2.2.9)."""
+    ``temperature`` along every path (Murakowski 2014's Blender setting, sec. 2.2.9)."""
 
     model: Literal["layered", "uniform"] = "layered"
     profile: Literal[PROFILES] = "standard"

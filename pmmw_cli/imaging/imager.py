@@ -1,11 +1,11 @@
-"""The imager model of seed 000 sec. 2.2.8: Airy-disk PSF and additive Gaussian noise.
+"""The imager model of Murakowski 2014 sec. 2.2.8: Airy-disk PSF and additive Gaussian noise.
 
 The PSF is eq. 2.41, I(th) = (2 J1(k a sin th) / (k a sin th))^2 with a the aperture radius,
 integrated over each pixel's angular footprint (supersampled so that pixels wider than the Airy
 core are integrated, not point-sampled), truncated where the enclosed energy is within
 `PSF_ENERGY_TAIL` of 1, and normalized to unit sum so that flux is conserved. It is applied to
 every channel by FFT convolution, with the image mirrored at its borders so that edges do not
-darken. The same angular pitch is assumed for every pixel (small field of view, as the seed).
+darken. The same angular pitch is assumed for every pixel (small field of view, as Murakowski 2014).
 
 Noise: independent zero-mean Gaussian of the stated sigma [K] on Ex2, Ey2, U and V; I and Q are
 then formed from the noisy Ex2 and Ey2 (so I = Ex2 + Ey2 still holds in the sensor image).

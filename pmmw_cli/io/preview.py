@@ -1,6 +1,6 @@
-"""PNG previews of temperature images with the display scaling of seed 000 sec. 3.2.
+"""PNG previews of temperature images with the display scaling of Murakowski 2014 sec. 3.2.
 
-Display scaling (seed 000 sec. 3.2 footnote): the coldest and hottest 1/256 of the pixels clip to
+Display scaling (Murakowski 2014 sec. 3.2 footnote): the coldest and hottest 1/256 of the pixels clip to
 black and white, and the range between is mapped linearly onto 256 grey levels.
 """
 
@@ -13,7 +13,7 @@ import OpenImageIO as oiio
 
 from pmmw_cli.io.atomic import atomic_path
 
-#: Fraction of the pixels clipped at each end of the display range (seed 000 sec. 3.2 footnote).
+#: Fraction of the pixels clipped at each end of the display range (Murakowski 2014 sec. 3.2 footnote).
 CLIP_FRACTION = 1.0 / 256.0
 
 #: Grey level of an image without contrast (a constant image).
@@ -76,7 +76,7 @@ def display_scale(img, clip_fraction: float = CLIP_FRACTION) -> np.ndarray:
     img : array_like, shape (H, W), float
         Temperatures [K]; NaN pixels are shown black and do not move the range.
     clip_fraction : float
-        Fraction of the pixels clipped at each end (seed 000 sec. 3.2 footnote: 1/256).
+        Fraction of the pixels clipped at each end (Murakowski 2014 sec. 3.2 footnote: 1/256).
 
     Returns
     -------

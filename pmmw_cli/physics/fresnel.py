@@ -1,25 +1,25 @@
-"""Fresnel coefficients of one smooth interface, vectorized over rays (seed 000 sec. 2.2.1-2.2.4).
+"""Fresnel coefficients of one smooth interface, vectorized over rays (Murakowski 2014 sec. 2.2.1-2.2.4).
 
 Conventions (docs/ARCHITECTURE.md, shared/spec/PHYSICS.md)
 -----------------------------------------------------------
 * Time dependence exp(-i w t); relative permittivity eps = eps' + i eps'' with eps'' >= 0 lossy.
-* Every ray is a homogeneous wave (seed 000 sec. 2.2.4): in the incident medium 1 its direction
+* Every ray is a homogeneous wave (Murakowski 2014 sec. 2.2.4): in the incident medium 1 its direction
   is real and makes the real angle theta_1 with the surface normal, ``cos1 = cos(theta_1)``.
 * Normal wave-vector components in units of k0: ``q1 = n1 cos1`` with ``n1 = sqrt(eps1)``
   (Im n1 >= 0), and in any other medium j ``q_j = sqrt(eps_j - kpar2)`` with
-  ``kpar2 = eps1 sin^2(theta_1)`` (phase matching, seed 000 eq. 2.18-2.20), branch Im q_j >= 0
+  ``kpar2 = eps1 sin^2(theta_1)`` (phase matching, Murakowski 2014 eq. 2.18-2.20), branch Im q_j >= 0
   (the wave decays away from the interface; evanescent under total internal reflection) when
   the incident medium is lossless. Under a lossy incident medium kpar2 is complex and Im q >= 0
   can pick a backward-running wave; the medium the wave is transmitted into then takes the
-  outgoing root Re q >= 0 (seed eq. 2.20: kt points the same way as ki), see `normal_component`.
+  outgoing root Re q >= 0 (Murakowski 2014 eq. 2.20: kt points the same way as ki), see `normal_component`.
 * Admittances: ``Y = q`` for s, ``Y = q / eps`` for p. ``r = (Y1 - Y2)/(Y1 + Y2)`` and
   ``t = 1 + r``, evaluated as ``2 Y1/(Y1 + Y2)`` (no cancellation near r = -1): the E-field ratio
-  for s and the H-field ratio for p (seed 000 eq. 2.24, 2.25), so that at normal incidence
+  for s and the H-field ratio for p (Murakowski 2014 eq. 2.24, 2.25), so that at normal incidence
   ``rp = -rs`` and a perfect conductor has ``rs = -1, rp = +1``. This pairs with ``p = k x s``
   (`pmmw_cli.physics.jones`).
 * Powers are fluxes through the interface: ``R = |r|^2``, ``T = |t|^2 Re(Y2)/Re(Y1)``
-  (seed 000 eq. 2.34 with its Re{} factors). From a lossy medium 1 the homogeneous-wave picture can
-  give ``R + T != 1``: above 1, R and T are scaled down to sum to 1 (seed 000 sec. 2.2.4); below
+  (Murakowski 2014 eq. 2.34 with its Re{} factors). From a lossy medium 1 the homogeneous-wave picture can
+  give ``R + T != 1``: above 1, R and T are scaled down to sum to 1 (Murakowski 2014 sec. 2.2.4); below
   1, the remainder ``A = 1 - R - T`` is absorbed (and emitted) at the surface.
 
 The private helpers ``_incident``, ``_normal_below`` and ``_close`` are shared with
@@ -47,21 +47,21 @@ class Fresnel(NamedTuple):
     Attributes
     ----------
     rs, rp : ndarray, complex128
-        Amplitude reflection: E-field ratio for s, H-field ratio for p (seed 000 eq. 2.24).
+        Amplitude reflection: E-field ratio for s, H-field ratio for p (Murakowski 2014 eq. 2.24).
     ts, tp : ndarray, complex128
-        Amplitude transmission into the exit medium, same field as r (seed 000 eq. 2.25).
+        Amplitude transmission into the exit medium, same field as r (Murakowski 2014 eq. 2.25).
         Zero where nothing is transmitted (metal substrate, exactly grazing incidence).
     Rs, Rp : ndarray, float64
-        Reflected power fraction, in [0, 1] (seed 000 eq. 2.34a, b).
+        Reflected power fraction, in [0, 1] (Murakowski 2014 eq. 2.34a, b).
     Ts, Tp : ndarray, float64
-        Transmitted power fraction, in [0, 1] (seed 000 eq. 2.34c, d).
+        Transmitted power fraction, in [0, 1] (Murakowski 2014 eq. 2.34c, d).
     As, Ap : ndarray, float64
         Absorbed power fraction ``1 - R - T`` (>= 0), emitted by the surface or coating
-        (seed 000 eq. 2.36). ``R + T + A == 1`` to rounding.
+        (Murakowski 2014 eq. 2.36). ``R + T + A == 1`` to rounding.
 
     Notes
     -----
-    After the seed's renormalization (sec. 2.2.4) ``R`` may differ from ``|r|^2`` (and ``T``
+    After the thesis's renormalization (sec. 2.2.4) ``R`` may differ from ``|r|^2`` (and ``T``
     from the ``|t|^2`` flux): use the powers for weights and the amplitudes only for phases.
     """
 
@@ -90,7 +90,7 @@ def normal_component(eps, kpar2, branch="decaying"):
     branch : {"decaying", "outgoing"}
         ``"decaying"``: Im q >= 0, and Re q >= 0 where Im q == 0 (the field decays away from the
         interface). ``"outgoing"``: Re q >= 0, and Im q >= 0 where Re q == 0 (the wave runs away
-        from the interface: "kt pointing in the same direction as ki", seed 000 eq. 2.20).
+        from the interface: "kt pointing in the same direction as ki", Murakowski 2014 eq. 2.20).
         The two agree whenever Im(eps - kpar2) >= 0, which always holds for a lossless incident
         medium (kpar2 real) and a passive medium (Im eps >= 0); evanescent waves (eps real,
         kpar2 > eps) are ``+i sqrt(kpar2 - eps)`` on both. They differ only under a lossy
@@ -198,9 +198,9 @@ def _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
     Fresnel
     """
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        # s: Y1 = q1; r = (Y1 B - C)/(Y1 B + C), t = 2 Y1 amp/(Y1 B + C) (seed 000 eq. 2.24a, 2.25a)
+        # s: Y1 = q1; r = (Y1 B - C)/(Y1 B + C), t = 2 Y1 amp/(Y1 B + C) (Murakowski 2014 eq. 2.24a, 2.25a)
         num_s, den_s = q1 * bs - cs, q1 * bs + cs
-        # p: Y1 = q1/eps1, numerator and denominator multiplied by eps1 (seed 000 eq. 2.24b, 2.25b)
+        # p: Y1 = q1/eps1, numerator and denominator multiplied by eps1 (Murakowski 2014 eq. 2.24b, 2.25b)
         num_p, den_p = q1 * bp - eps1 * cp, q1 * bp + eps1 * cp
         rs, ts = num_s / den_s, 2.0 * q1 * amp_s / den_s
         rp, tp = num_p / den_p, 2.0 * q1 * amp_p / den_p
@@ -240,7 +240,7 @@ def _degenerate(den, r, t, amp, b, opaque, metal_r):
 
 
 def _powers(r, t, y1, y2, opaque):
-    """R, T, A for one polarization (seed 000 eq. 2.34, sec. 2.2.4).
+    """R, T, A for one polarization (Murakowski 2014 eq. 2.34, sec. 2.2.4).
 
     Parameters
     ----------
@@ -271,7 +271,7 @@ def _powers(r, t, y1, y2, opaque):
         T = np.maximum(T, 0.0)
     total = R + T
     over = total > 1.0
-    # seed 000 sec. 2.2.4: "if it occurs, we scale R and T such that R + T = 1"
+    # Murakowski 2014 sec. 2.2.4: "if it occurs, we scale R and T such that R + T = 1"
     scale = np.where(over, total, 1.0)
     R, T = R / scale, T / scale
     A = np.maximum(1.0 - R - T, 0.0)
@@ -308,7 +308,7 @@ def interface(eps1, eps2, cos1, with_q2=False):
     shape = np.broadcast_shapes(eps1.shape, eps2.shape, cos1.shape)
     eps1, eps2, cos1 = (np.broadcast_to(a, shape) for a in (eps1, eps2, cos1))
     q1, q1sq = _incident(eps1, cos1)
-    # q2^2 = eps2 - eps1 sin^2 (seed 000 eq. 2.20), the transmitted wave runs forward. Under a
+    # q2^2 = eps2 - eps1 sin^2 (Murakowski 2014 eq. 2.20), the transmitted wave runs forward. Under a
     # lossy incident medium the decaying root can run backwards (Re q2 < 0: negative flux, R > 1
     # and a jump to total reflection just off normal incidence); "outgoing" is continuous with
     # the lossless case.
@@ -316,6 +316,6 @@ def interface(eps1, eps2, cos1, with_q2=False):
     one = np.ones(shape, dtype=np.complex128)
     with np.errstate(divide="ignore", invalid="ignore"):
         y2p = (q2 / eps2).real
-    # (B, C) of a bare half-space: Y_in = q2 (s), q2/eps2 (p); t = 1 + r (seed 000 eq. 2.25)
+    # (B, C) of a bare half-space: Y_in = q2 (s), q2/eps2 (p); t = 1 + r (Murakowski 2014 eq. 2.25)
     coeffs = _close(q1, eps1, one, q2, eps2, q2, one, eps2, q2.real, y2p, opaque=False)
     return (coeffs, q2) if with_q2 else coeffs

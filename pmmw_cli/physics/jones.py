@@ -16,7 +16,7 @@ Frames
   on-axis x and y, as eq. 2.11b reads literally, would lose a factor up to cos^2 of the off-axis
   angle).
 * Each traced segment carries a real orthonormal basis (s, p) perpendicular to ``d`` with
-  ``p = k x s`` (seed 000 eq. 2.23b). At an interface with normal n (pointing back into the
+  ``p = k x s`` (Murakowski 2014 eq. 2.23b). At an interface with normal n (pointing back into the
   incident medium), ``s = n x k / |n x k|``: the same s for the incident, reflected and
   transmitted waves, so the interface acts as ``diag(chi_s, chi_p)`` (eq. 2.39, 2.40).
 * Fresnel amplitudes follow PHYSICS.md: r_s is the E-field ratio, r_p the H-field ratio
@@ -58,7 +58,7 @@ def basis_change(s_old, p_old, s_new, p_new):
     Returns
     -------
     ndarray, shape (n, 2, 2), float64
-        ``B`` with ``M_new = M_old @ B`` (seed 000 eq. 2.35).
+        ``B`` with ``M_new = M_old @ B`` (Murakowski 2014 eq. 2.35).
     """
     b = np.empty((s_old.shape[0], 2, 2))
     b[:, 0, 0] = np.einsum("ij,ij->i", s_new, s_old)
@@ -70,7 +70,7 @@ def basis_change(s_old, p_old, s_new, p_new):
 
 def rebase(m, s_old, p_old, s_new, p_new):
     """``M @ basis_change(s_old, p_old, s_new, p_new)``: a Jones matrix re-expressed in a new
-    local basis (seed 000 eq. 2.35), written out per element (3 x faster than a batched matmul
+    local basis (Murakowski 2014 eq. 2.35), written out per element (3 x faster than a batched matmul
     of 2 x 2 matrices).
 
     Parameters

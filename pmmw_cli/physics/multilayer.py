@@ -1,8 +1,8 @@
-"""Coherent thin-film stacks (coatings) without overflow, vectorized over rays (seed 000 2.2.3).
+"""Coherent thin-film stacks (coatings) without overflow, vectorized over rays (Murakowski 2014 2.2.3).
 
 Method
 ------
-The seed's transfer matrices (eq. 2.27-2.31) multiply ``exp(-i k0 q d)`` factors that grow without
+Murakowski 2014's transfer matrices (eq. 2.27-2.31) multiply ``exp(-i k0 q d)`` factors that grow without
 bound in thick lossy layers. Here the stack is reduced from the exit medium upward (Rouard's
 method), carrying for each polarization the input admittance of everything below the current
 interface, ``Y_in = C / B``, as the projective pair ``(B, C)`` of tangential fields (U, V)
@@ -112,9 +112,9 @@ def stack(eps, thickness, cos1, k0, substrate="dielectric"):
         Arrays of shape (N,) (the broadcast ray shape): ``rs, rp`` the stack's amplitude
         reflection, ``ts, tp`` its amplitude transmission into the exit medium (E-field for s,
         H-field for p, as `pmmw_cli.physics.fresnel.interface`), ``Rs, Rp, Ts, Tp`` powers with
-        ``T = |t|^2 Re(Y_exit)/Re(Y_1)`` (seed 000 eq. 2.34 with eq. 2.31's r and t), and
+        ``T = |t|^2 Re(Y_exit)/Re(Y_1)`` (Murakowski 2014 eq. 2.34 with eq. 2.31's r and t), and
         ``As, Ap = 1 - R - T``: the power absorbed in the layers, emitted at the coating
-        temperature (seed 000 eq. 2.36). R + T > 1 (lossy incident medium) is renormalized as in
+        temperature (Murakowski 2014 eq. 2.36). R + T > 1 (lossy incident medium) is renormalized as in
         `interface`. With L == 2 this is `interface` bit for bit.
 
     Raises
@@ -146,7 +146,7 @@ def stack(eps, thickness, cos1, k0, substrate="dielectric"):
 
     eps1 = eps[..., 0]
     q1, q1sq = _incident(eps1, cos1)
-    # seed 000 eq. 2.20. Layers: decaying root, so that |exp(i beta)| <= 1 (a layer's matrix is
+    # Murakowski 2014 eq. 2.20. Layers: decaying root, so that |exp(i beta)| <= 1 (a layer's matrix is
     # even in q_j, the sign does not change r or t). Exit half-space: outgoing root, as in
     # `interface` (they differ only under a lossy incident medium).
     q = _normal_below(eps[..., 1:], eps1[..., None], q1sq[..., None], branch="decaying")

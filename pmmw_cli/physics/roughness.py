@@ -10,10 +10,10 @@ Models
 Every distribution ``D(m)`` is normalized over projected area, ``int D(m) (m.n) dw_m = 1``
 [1/sr], and every masking function is Smith's for that distribution,
 ``G1(w) = (w.n) / A(w)`` with the projected area ``A(w) = int (w.m)+ D(m) dw_m`` (which is also
-the seed 003 eq. 7 ensemble average: ``P(k) = <n.h> (n.k) / <h.k>+``).
+the Stryjewski et al. 2009 eq. 7 ensemble average: ``P(k) = <n.h> (n.k) / <h.k>+``).
 
 ``ashikhmin_shirley`` (``ex``, ``ey`` >= 0, ``orientation_deg``)
-    ``D = sqrt((ex+2)(ey+2))/(2 pi) cos^(ex cos^2 phi + ey sin^2 phi) theta`` (seed 001 eq. 9; the
+    ``D = sqrt((ex+2)(ey+2))/(2 pi) cos^(ex cos^2 phi + ey sin^2 phi) theta`` (Optics Express 2016 eq. 9; the
     extracted ``(ex+2)(ey+2)/2 pi`` lost its square root). phi is measured from the tangent
     rotated by ``orientation_deg`` about n. ``A`` is exact for ``ex == ey`` (closed form below);
     for ``ex != ey`` it is the isotropic form at the exponent ``e*`` with
@@ -24,9 +24,9 @@ the seed 003 eq. 7 ensemble average: ``P(k) = <n.h> (n.k) / <h.k>+``).
     percent for ex/ey = 1e5. (Masking errors change the shape of the multiple-scattering part,
     never the energy balance: see "How the renderer uses this".)
 ``blinn_phong`` (``m`` >= 0)
-    Seed 003 eq. 3, ``rho(h) = (m+1)/(2 pi) cos^m`` per solid angle, i.e. ``D = (m+2)/(2 pi)
+    Stryjewski et al. 2009 eq. 3, ``rho(h) = (m+1)/(2 pi) cos^m`` per solid angle, i.e. ``D = (m+2)/(2 pi)
     cos^m`` per projected area: the isotropic Ashikhmin-Shirley surface ``ex = ey = m``.
-    Seed 003 eq. 18-23 expand ``<k.h>+`` in factorials and fail for large m; here (Smith's
+    Stryjewski et al. 2009 eq. 18-23 expand ``<k.h>+`` in factorials and fail for large m; here (Smith's
     integral over the marginal slope density ``(1+q^2)^-(m+3)/2``)::
 
         A(theta) = cos(theta) (1 - I_x((m+2)/2, 1/2) / 2) + K sin^(m+2)(theta),
@@ -34,7 +34,7 @@ the seed 003 eq. 7 ensemble average: ``P(k) = <n.h> (n.k) / <h.k>+``).
 
     with the regularized incomplete beta function I and K from ``betaln``: no factorial, no
     overflow, no cancellation, finite and accurate from m = 0 to 1e6 and beyond
-    (`blinn_phong_mean_cos` gives seed 003's ``<k.h>+ = (m+1)/(m+2) A``).
+    (`blinn_phong_mean_cos` gives Stryjewski et al. 2009's ``<k.h>+ = (m+1)/(m+2) A``).
 ``ggx`` (``alpha`` or ``alpha_x``, ``alpha_y`` > 0, ``orientation_deg``)
     Trowbridge-Reitz; what most renderers ship (Blender, Mitsuba, pbrt, Unreal):
     ``A(w) = (w.z + sqrt(w.z^2 + alpha_w^2 (1 - w.z^2))) / 2``.
@@ -42,7 +42,7 @@ the seed 003 eq. 7 ensemble average: ``P(k) = <n.h> (n.k) / <h.k>+``).
     ``D = exp(-tan^2 theta (cos^2 phi/ax^2 + sin^2 phi/ay^2)) / (pi ax ay cos^4 theta)``;
     ``A(w) = w.z (1 + erf a)/2 + alpha_w sin(theta) exp(-a^2) / (2 sqrt pi)``, ``a = cot theta / alpha_w``.
 ``blender_gloss`` (``gloss`` in [0, 1])
-    Seed 000 sec. 2.2.6, Blender's glossy perturbation kept literally for the seed's scenes:
+    Murakowski 2014 sec. 2.2.6, Blender's glossy perturbation kept literally for the thesis's scenes:
     ``m = unit(n + r (x cos phi + y sin phi))``, ``r = sqrt(1 - b^(2L))``, ``L = (1 - g)^3``, b and
     phi uniform. It is not a microfacet distribution with a visibility law: every ray gets a
     normal from that recipe (no masking, ``G1 = 1`` above the horizon, 0 below). The only change:
@@ -67,7 +67,7 @@ its horizon, where hardly any facet faces it), takes one proposal with the impor
 ``D_wo(m) / D_wo^GGX(m)`` instead of 1: unbiased, and rare (none in 1e6 copper paths here). The
 extra uniforms for rejection rounds are a hash of the bits of ``(u1, u2)`` (splitmix64), so ``m``
 is a deterministic function of ``(u1, u2)``: runs stay reproducible tile by tile. The
-seed 001 sampling formula (normals from ``D cos``, no visibility) is `sample_dcos`, used for
+Optics Express 2016 sampling formula (normals from ``D cos``, no visibility) is `sample_dcos`, used for
 quadratures.
 
 How the renderer uses this
@@ -122,8 +122,8 @@ masking (random walk on the microsurface): its first-order term is the classic
 return the energy that single-scattering models lose. A smooth surface (no ``roughness:``) never
 calls this module.
 
-References: seed 001 (Ashikhmin-Shirley microfacets over layers, eq. 9); seed 003 (polarized
-Ashikhmin model, eq. 3-7, 18-23); seed 000 sec. 2.2.6 (Blender gloss); B. G. Smith (1967);
+References: Optics Express 2016 (Ashikhmin-Shirley microfacets over layers, eq. 9); Stryjewski et al. 2009 (polarized
+Ashikhmin model, eq. 3-7, 18-23); Murakowski 2014 sec. 2.2.6 (Blender gloss); B. G. Smith (1967);
 Walter et al., EGSR 2007; Heitz, JCGT 3(2) 2014 and Heitz et al., SIGGRAPH 2016 (random walk);
 Dupuy and Benyoub, HPG 2023 (spherical caps).
 """
@@ -501,7 +501,7 @@ class _Microfacet:
         return _to_world(ml, frame), np.where(_dot(ml, wl) > 0.0, weight, 0.0)
 
     def sample_dcos(self, n_macro, tangent, u1, u2):
-        """Normals drawn from ``D(m) (m.n)`` (seed 001's sampling formula generalized), with
+        """Normals drawn from ``D(m) (m.n)`` (Optics Express 2016's sampling formula generalized), with
         that density [1/sr]; no visibility. Used for quadratures (`pmmw brdf --method analytic`)."""
         frame = self._frame(n_macro, tangent)
         ml = self._dcos_local(np.asarray(u1, dtype=np.float64), np.asarray(u2, dtype=np.float64))
@@ -613,7 +613,7 @@ class _ASProjectedArea:
         """Exact A for cos(theta_w) = c >= 0 and azimuth phi_w, arrays of one shape (slow).
 
         The azimuth integral runs over ``psi`` with ``tan(phi) = k tan(psi)``,
-        ``k = sqrt((ex+2)/(ey+2))`` (the sampling map of seed 001 with +2): then
+        ``k = sqrt((ex+2)/(ey+2))`` (the sampling map of Optics Express 2016 with +2): then
         ``dphi = (e(phi)+2)/sqrt((ex+2)(ey+2)) dpsi`` cancels the ``1/(e+2)`` peak of J where
         the exponent is small, and Gauss-Legendre converges to 1e-6 with 48 nodes per piece
         even for ex/ey = 1e5.
@@ -677,7 +677,7 @@ def _area_table(ex, ey):
 
 
 class AshikhminShirley(_Microfacet):
-    """Anisotropic Ashikhmin-Shirley distribution (seed 001 eq. 9), exponents ``ex``, ``ey`` >= 0."""
+    """Anisotropic Ashikhmin-Shirley distribution (Optics Express 2016 eq. 9), exponents ``ex``, ``ey`` >= 0."""
 
     name = "ashikhmin_shirley"
 
@@ -723,7 +723,7 @@ class AshikhminShirley(_Microfacet):
                 - 0.5 * (e + 4.0) * math.log1p((4.0 - gamma) / e))
 
     def _exponent(self, v):
-        """e(phi) of seed 001 eq. 9 for local vectors (any length); ex where v is along z."""
+        """e(phi) of Optics Express 2016 eq. 9 for local vectors (any length); ex where v is along z."""
         r2 = v[:, 0] ** 2 + v[:, 1] ** 2
         if not self.anisotropic:
             return np.full(v.shape[0], self.ex)
@@ -765,7 +765,7 @@ class AshikhminShirley(_Microfacet):
 
     def _dcos_local(self, u1, u2):
         # azimuth density 1/(e(phi)+2): tan phi = sqrt((ex+2)/(ey+2)) tan(pi u/2) per quadrant
-        # (seed 001's formula with +2 for the cosine weight), cos theta = u2^(1/(e+2))
+        # (Optics Express 2016's formula with +2 for the cosine weight), cos theta = u2^(1/(e+2))
         q = np.floor(4.0 * u1)
         frac = 4.0 * u1 - q
         base = np.arctan(math.sqrt((self.ex + 2.0) / (self.ey + 2.0)) * np.tan(0.5 * np.pi * frac))
@@ -777,7 +777,7 @@ class AshikhminShirley(_Microfacet):
 
 
 class BlinnPhong(AshikhminShirley):
-    """Blinn-Phong distribution of seed 003 eq. 3 with exponent ``m`` >= 0 (isotropic)."""
+    """Blinn-Phong distribution of Stryjewski et al. 2009 eq. 3 with exponent ``m`` >= 0 (isotropic)."""
 
     name = "blinn_phong"
 
@@ -789,14 +789,14 @@ class BlinnPhong(AshikhminShirley):
         return {"m": self.m}
 
     def mean_cos(self, cos_theta):
-        """Seed 003 eq. 18: ``<k.h>+`` over ``rho(h) = (m+1)/(2 pi) cos^m`` (`blinn_phong_mean_cos`)."""
+        """Stryjewski et al. 2009 eq. 18: ``<k.h>+`` over ``rho(h) = (m+1)/(2 pi) cos^m`` (`blinn_phong_mean_cos`)."""
         return blinn_phong_mean_cos(self.m, cos_theta)
 
 
 def blinn_phong_mean_cos(m, cos_theta):
-    """Seed 003 eq. 18, ``<k.h>+ = int rho(h) (k.h)+ dw_h`` with ``rho = (m+1)/(2 pi) cos^m``.
+    """Stryjewski et al. 2009 eq. 18, ``<k.h>+ = int rho(h) (k.h)+ dw_h`` with ``rho = (m+1)/(2 pi) cos^m``.
 
-    Stable replacement of seed 003 eq. 19-23 (module docstring): ``(m+1)/(m+2) A(theta)``.
+    Stable replacement of Stryjewski et al. 2009 eq. 19-23 (module docstring): ``(m+1)/(m+2) A(theta)``.
 
     Parameters
     ----------
@@ -897,7 +897,7 @@ class Beckmann(GGX):
 
 
 class BlenderGloss(_Microfacet):
-    """Seed 000 sec. 2.2.6: Blender's gloss perturbation, ``gloss`` g in [0, 1] (1 = smooth)."""
+    """Murakowski 2014 sec. 2.2.6: Blender's gloss perturbation, ``gloss`` g in [0, 1] (1 = smooth)."""
 
     name = "blender_gloss"
 
@@ -958,7 +958,7 @@ class BlenderGloss(_Microfacet):
         return _to_world(ml, frame), (_dot(ml, wl) > 0.0).astype(np.float64)
 
     def masking(self, n_macro, tangent, w):
-        """No masking in the seed's recipe: 1 above the macro surface, 0 on the wrong side."""
+        """No masking in the thesis's recipe: 1 above the macro surface, 0 on the wrong side."""
         w = np.asarray(w, dtype=np.float64)
         n = np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)
         return (_dot(w, n) > 0.0).astype(np.float64)
@@ -1011,7 +1011,7 @@ def torrance_sparrow(n_macro, m, wi, wo):
 
 
 def ashikhmin_pair(g1_i, g1_o, n_macro, wi, wo):
-    """Seed 003 eq. 6: ``(1 - f) G1(wi) G1(wo) + f min(G1(wi), G1(wo))`` with ``f = cos(phi/2)``,
+    """Stryjewski et al. 2009 eq. 6: ``(1 - f) G1(wi) G1(wo) + f min(G1(wi), G1(wo))`` with ``f = cos(phi/2)``,
     phi the angle between the projections of wi and wo on the macro surface (f = 1 in
     backscatter, 0 in the forward specular plane).
 

@@ -1,6 +1,6 @@
-"""Bump maps: a height field that tilts a surface's macro normal (seed 000 sec. 2.2.6, 3.2).
+"""Bump maps: a height field that tilts a surface's macro normal (Murakowski 2014 sec. 2.2.6, 3.2).
 
-The seed's cinderblock and truck scenes put a bump map on the ground plane: a height texture
+Murakowski 2014's cinderblock and truck scenes put a bump map on the ground plane: a height texture
 that changes the normal used for shading without changing the geometry. Here a material's
 ``bump:`` entry is a periodic height field ``h(u, v)`` [m] over planar coordinates: at a hit
 point, ``(u, v)`` are the two world coordinates other than the dominant axis of the face's normal

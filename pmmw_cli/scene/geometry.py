@@ -11,7 +11,7 @@ asset is turned +90 deg about X on load: ``(x, y, z)_gltf -> (x, -z, y)_world``.
 carry no convention and are taken as Z up unless the entry says ``up_axis: y``.
 
 Orientation. Face normals point outward by counter-clockwise winding (trimesh's convention); the
-tracer relies on it to tell entering a medium from leaving it (seed 000 sec. 2.2.9), so every
+tracer relies on it to tell entering a medium from leaving it (Murakowski 2014 sec. 2.2.9), so every
 entry is checked: closed (watertight) or not, and a closed entry with negative volume (inside
 out) is turned right side out with a warning.
 """

@@ -7,7 +7,7 @@ An entry (the same schema in the database files and in a scenario's ``materials:
       eps: {35 GHz: [5.5, 0.5], 95 GHz: [2.49, 6.8e-2]}   # [eps', eps''] per frequency
       temperature: 300 K          # optional physical temperature
       kind: dielectric            # dielectric (default) | metal | blackbody | opaque | thin
-      source: "seed 000 Table A.1, refs [19, 15]"
+      source: "Murakowski 2014 Table A.1, refs [19, 15]"
       coating:                    # optional, outermost layer first
         - {material: denim, thickness: 0.8 mm, temperature: 300 K}
       thickness: 1 mm             # only for kind thin (the sheet's own thickness)
@@ -16,7 +16,7 @@ An entry (the same schema in the database files and in a scenario's ``materials:
 
 ``eps: [eps', eps'']`` (no frequencies) is one value for every frequency. eps = eps' + i eps'',
 eps'' >= 0 lossy (``docs/ARCHITECTURE.md``). ``metal`` and ``blackbody`` have no ``eps``
-(seed 000 sec. 2.2.9); every other kind needs one. Between tabulated frequencies eps' and eps''
+(Murakowski 2014 sec. 2.2.9); every other kind needs one. Between tabulated frequencies eps' and eps''
 are interpolated linearly in frequency; outside the table the nearest tabulated value is used and
 a warning names the material and its range.
 
@@ -68,7 +68,7 @@ _REL_TOL = 1e-9  # frequencies closer than this (relative) are the same frequenc
 
 @dataclass(frozen=True)
 class CoatingLayer:
-    """One coherent layer of a coating (seed 000 sec. 2.2.3).
+    """One coherent layer of a coating (Murakowski 2014 sec. 2.2.3).
 
     Attributes
     ----------
@@ -434,7 +434,7 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
     if kind in _NO_EPS_KINDS:
         if eps is not None:
             errors.append(UserError(
-                f"a {kind} has no permittivity (seed 000 sec. 2.2.9): remove `eps`, or use kind dielectric or opaque",
+                f"a {kind} has no permittivity (Murakowski 2014 sec. 2.2.9): remove `eps`, or use kind dielectric or opaque",
                 origin, _join(base_key, "eps")))
     elif eps is None:
         errors.append(UserError(f"kind {kind} needs `eps`: {_EPS_EXAMPLE}", origin, base_key))

@@ -1,6 +1,6 @@
 """The bounce loop: a wavefront of backward rays per bounce, vectorized over rays.
 
-Follows the flowchart of seed 000 sec. 2.2.5 (fig. 2.5). Every ray carries a Jones matrix M
+Follows the flowchart of Murakowski 2014 sec. 2.2.5 (fig. 2.5). Every ray carries a Jones matrix M
 (convention in `pmmw_cli.physics.jones`). At each bounce, for all rays at once:
 
 1. intersect (Embree); rays that miss see the sky;
@@ -9,16 +9,16 @@ Follows the flowchart of seed 000 sec. 2.2.5 (fig. 2.5). Every ray carries a Jon
 3. media are tracked with closed orientable meshes and a per-ray medium stack (sec. 2.2.9):
    crossing a face outward-to-inward enters the face's material; crossing inward-to-outward
    leaves it if it is the current medium, or silently drops it from the stack if it is a medium
-   further down (slightly interpenetrating touching objects, as the seed prescribes);
+   further down (slightly interpenetrating touching objects, as Murakowski 2014 prescribes);
 4. at an interaction, the surface's coating stack (or bare interface) gives r, t, R, T, A; the
    coating's absorption A emits at the coating temperature (eq. 2.36); ``metal`` reflects
    everything, ``blackbody`` and ``opaque`` emit the transmitted power at their temperature,
    ``thin`` sheets transmit without changing medium or direction;
 5. the reflected and transmitted children continue (deterministic splitting). A child beyond
-   ``max_depth`` ends on the last object's temperature (seed). A child whose weight (the power
+   ``max_depth`` ends on the last object's temperature (Murakowski 2014). A child whose weight (the power
    it can still bring to the detector) is below ``threshold`` ends by Russian roulette
    (unbiased: survivors are scaled by 1/p) or, with ``termination: temperature``, on the last
-   object's temperature as the seed does.
+   object's temperature as Murakowski 2014 does.
 
 With these rules the weights of all events of a primary ray add to 1 per polarization, so an
 isothermal enclosure reads its temperature exactly (PHYSICS.md, "Energy bookkeeping").
@@ -328,8 +328,8 @@ class Integrator:
         ``target_error * error_footprint``, and their 8 neighbours in the tile, get passes of
         doubling size until they reach it or ``spp`` samples. (The neighbours: a pixel that a
         small object covers in part can miss it with all of its first samples and read zero
-        variance; the seed-to-seed spread of a sub-pixel target's contrast came from such pixels.) With a blurring imager, error_footprint = 1 / sqrt(sum psf^2): the
-        pixels' errors are independent, so the blurred error sqrt(sum_k psf_k^2 sigma_k^2) is at
+        variance; the seed-to-seed spread of a sub-pixel target's contrast came from such
+        pixels.) With a blurring imager, error_footprint = 1 / sqrt(sum psf^2): the pixels' errors are independent, so the blurred error sqrt(sum_k psf_k^2 sigma_k^2) is at
         most that many times the largest sigma_k of the footprint, and stopping every pixel at
         sigma <= target / sqrt(sum psf^2) keeps the sensor image's error at or below the target
         (up to how well a few samples estimate sigma).
@@ -459,7 +459,7 @@ class Integrator:
         cur = wv.stack[rows, wv.top].astype(np.int64)
 
         # The layered atmosphere along ambient segments: transmittance and own emission of the
-        # layers crossed, seen from the segment's near end (issue 3; exact for straight segments).
+        # layers crossed, seen from the segment's near end (exact for straight segments).
         if job.atmosphere is not None:
             amb = (cur == 0) & (t > self.atm_skip_length)  # shorter ones: below the error budget
             if amb.any():
@@ -768,9 +768,9 @@ class Integrator:
         return leave, (back, pos[j[a]], n_g[stay][a], n_x[stay][a], cur[a], face_med[j[a]], other[a], leaving[a],
                        prim[j[a]])
 
-    # -- rough coating layers (seed 001) ----------------------------------------------------------
+    # -- rough coating layers (Optics Express 2016) ----------------------------------------------------------
     def _walk_layers(self, wv: _Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim):
-        """Rays meeting a surface with rough coating layers: the seed 001 walk through them.
+        """Rays meeting a surface with rough coating layers: the Optics Express 2016 walk through them.
 
         The surface is a pile of interfaces at one point: interface j < L is the rough top of
         rough layer j (`RoughLayer`, with its coherent films), interface L the substrate's own
@@ -953,7 +953,7 @@ class Integrator:
     def _choose_branches(self, wv: _Wave, coeff, trans):
         """Which children to follow (``render.strategy``) and their amplitude gains.
 
-        ``split`` follows both (the seed's deterministic splitting). ``stochastic`` follows one,
+        ``split`` follows both (Murakowski 2014's deterministic splitting). ``stochastic`` follows one,
         reflected with probability P = (Rs + Rp) / (Rs + Rp + Ts + Tp), and divides its power by
         the probability of the choice (unbiased). ``hybrid`` splits for the first
         ``split_depth`` interactions of a path and chooses after that.
@@ -978,12 +978,12 @@ class Integrator:
         return keep_r, keep_t, gain_r, gain_t
 
     def _terminate(self, wv: _Wave):
-        """Depth cut-off and weight threshold (seed 000 sec. 2.2.5, 2.2.9)."""
+        """Depth cut-off and weight threshold (Murakowski 2014 sec. 2.2.5, 2.2.9)."""
         keep = self._survivors(wv)
         return wv.take(keep) if not keep.all() else wv
 
     def _end_on_temperature(self, wv: _Wave, sel):
-        """End the selected paths on the last object's temperature (seed 000 sec. 2.2.9) and
+        """End the selected paths on the last object's temperature (Murakowski 2014 sec. 2.2.9) and
         count what that may have cost: the ended power per row times the largest difference
         between that temperature and any brightness the path could have gone on to see."""
         m, t_last, sid = wv.m[sel], wv.last_t[sel], wv.sid[sel]
@@ -1114,7 +1114,7 @@ def _tangents(n):
 
 
 def _refract(d, n_in, eps1, eps2, q2=None):
-    """Real transmitted direction under the homogeneous-wave assumption (seed 000 sec. 2.2.4).
+    """Real transmitted direction under the homogeneous-wave assumption (Murakowski 2014 sec. 2.2.4).
 
     The tangential wave-vector component is conserved (eq. 2.18) and the normal component is
     Re q2 = Re sqrt(eps2 - eps1 sin^2 th1) (eq. 2.20, outgoing branch Re q2 >= 0), so that for

@@ -13,7 +13,7 @@ import numpy as np
 
 from pmmw_cli.scene.camera import Camera
 
-# Material kind codes (seed 000 sec. 2.2.9).
+# Material kind codes (Murakowski 2014 sec. 2.2.9).
 DIELECTRIC, METAL, BLACKBODY, OPAQUE, THIN = 0, 1, 2, 3, 4
 KIND_CODES = {"dielectric": DIELECTRIC, "metal": METAL, "blackbody": BLACKBODY, "opaque": OPAQUE, "thin": THIN}
 
@@ -22,14 +22,14 @@ C0 = 299_792_458.0  # speed of light [m/s]
 
 @dataclass(frozen=True)
 class Coating:
-    """A coherent layer stack on a surface, outermost layer first (seed 000 sec. 2.2.3).
+    """A coherent layer stack on a surface, outermost layer first (Murakowski 2014 sec. 2.2.3).
 
     Attributes
     ----------
     eps : ndarray, shape (L,), complex128
     thickness : ndarray, shape (L,), float64 [m]
     temperature : float
-        Temperature at which the stack's own absorption emits [K] (seed 000 eq. 2.36): the
+        Temperature at which the stack's own absorption emits [K] (Murakowski 2014 eq. 2.36): the
         layers' temperatures weighted by eps'' x thickness, a proxy of each layer's share of the
         absorbed power for layers thinner than a penetration depth.
     """
@@ -50,7 +50,7 @@ class Coating:
 
 @dataclass(frozen=True)
 class RoughLayer:
-    """A coating layer with a rough top surface of its own: an incoherent layer (seed 001).
+    """A coating layer with a rough top surface of its own: an incoherent layer (Optics Express 2016).
 
     Attributes
     ----------
@@ -117,7 +117,7 @@ class Media:
         Kind codes (`DIELECTRIC` ...).
     temperature : ndarray, shape (K,), float64 [K]
     alpha : ndarray, shape (K,), float64
-        Power absorption coefficient [Np/m] (seed 000 eq. 2.37: alpha = 2 k0 Im n).
+        Power absorption coefficient [Np/m] (Murakowski 2014 eq. 2.37: alpha = 2 k0 Im n).
     coating : tuple of (Coating or None), length K
         For ``thin`` media the sheet itself is the last layer of the stack.
     roughness : tuple of (MicrofacetModel or None), length K or empty
@@ -165,8 +165,8 @@ class RenderSettings:
     max_depth: int = 32
     threshold: float = 1e-3
     seed: int = 1
-    termination: str = "roulette"  # or "temperature" (seed 000 sec. 2.2.9)
-    strategy: str = "split"  # "split" (seed), "stochastic", or "hybrid"
+    termination: str = "roulette"  # or "temperature" (Murakowski 2014 sec. 2.2.9)
+    strategy: str = "split"  # "split" (Murakowski 2014), "stochastic", or "hybrid"
     split_depth: int = 2  # hybrid: interactions split deterministically before choosing
     target_error: float | None = None  # [K] adaptive sampling goal (per pixel, or after the PSF)
     min_spp: int = 4  # adaptive sampling: first pass

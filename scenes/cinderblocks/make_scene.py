@@ -1,4 +1,4 @@
-"""Write scenes/cinderblocks/cinderblocks.glb: cinderblocks in the desert (seed 000 sec. 2.3.2).
+"""Write scenes/cinderblocks/cinderblocks.glb: cinderblocks in the desert (Murakowski 2014 sec. 2.3.2).
 
 The first validation scene of Murakowski 2014 (sec. 2.3.2, Fig. 2.7, Table 2.1): stacks of
 cinderblocks on open, flat sand, seen at 35 GHz by an imager on a cart focused at 7 m. The top of
@@ -40,7 +40,7 @@ FACE_SHELL = 0.032  # the two long walls
 WEB = 0.032  # the two end webs and the centre web
 # -> two cavities of (390 - 3 x 32) / 2 = 147 mm x (190 - 2 x 32) = 126 mm.
 
-IMAGER_HEIGHT = 1.5  # [m], the seed's cart-mounted dish
+IMAGER_HEIGHT = 1.5  # [m], the thesis's cart-mounted dish
 
 # Stacks, bottom block first: (pose, yaw [deg]). Poses: "flat" (cavities vertical, open at the
 # top), "side" (turned about the long axis: cavities along y, through-holes towards the imager),

@@ -1,4 +1,4 @@
-"""Write scenes/cwd/cwd_{outdoor,indoor}[_coated].glb: a man with a concealed gun (seed 000 sec. 3.2).
+"""Write scenes/cwd/cwd_{outdoor,indoor}[_coated].glb: a man with a concealed gun (Murakowski 2014 sec. 3.2).
 
 A bald man in street clothing (denim) carries a metal handgun in a leather shoulder holster under
 his left arm; he wears leather shoes and stands on asphalt, outdoors or in a closed room. The
@@ -41,7 +41,7 @@ from pmmw_cli.scene.export import check_glb, export_glb
 VARIANTS = ("outdoor", "indoor")
 CLOTHINGS = ("shell", "coating")
 
-# Seed 000 sec. 3.2.1: imager 1.5 m up, 1.0 m aperture, 740 x 440 pixels, 4 K noise; 30 deg field
+# Murakowski 2014 sec. 3.2.1: imager 1.5 m up, 1.0 m aperture, 740 x 440 pixels, 4 K noise; 30 deg field
 # at 4 m and 6 deg at 20 m. A standing person needs the long side vertical, so the image is taken
 # as 440 wide x 740 high with the stated field vertical; pmmw's fov is horizontal (see main).
 IMAGER_HEIGHT = 1.5

@@ -1,9 +1,9 @@
-"""Write scenes/landing/landing_{plate,brackets}.glb: a runway with passive beacons (seed 000 sec. 3.1).
+"""Write scenes/landing/landing_{plate,brackets}.glb: a runway with passive beacons (Murakowski 2014 sec. 3.1).
 
 A small aircraft makes its final approach on a 4 deg glide slope to a 20 m x 600 m asphalt runway
 in moist-soil ground. Passive mmW beacons stand every 50 m along both sides of the runway and every
 5 m across both ends. A beacon is a metal mirror at 45 deg that reflects the coldest sky, the
-zenith, towards the approaching aircraft (seed 000 fig. 3.1):
+zenith, towards the approaching aircraft (Murakowski 2014 fig. 3.1):
 
 * ``plate``: one 1 m x 1 m metal plate tilted 45 deg about the x axis, facing -y and up;
 * ``brackets``: ten low angle brackets (90 deg angle iron, legs 10 cm, each leg at 45 deg, ridge
@@ -37,7 +37,7 @@ from pmmw_cli.scene.export import check_glb, export_glb
 STYLES = ("plate", "brackets")
 MATERIALS = {"runway", "ground", "beacon"}
 
-# Seed 000 sec. 3.1.1: 10 deg field of view, 500 x 500 pixels, 0.6 m aperture, 4 K noise.
+# Murakowski 2014 sec. 3.1.1: 10 deg field of view, 500 x 500 pixels, 0.6 m aperture, 4 K noise.
 IMAGER_FOV_DEG = 10.0
 IMAGER_RESOLUTION = (500, 500)
 

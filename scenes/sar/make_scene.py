@@ -42,7 +42,7 @@ TARGETS = ("cessna", "blanket", "beacon")
 TARGET_MATERIAL = {"cessna": "aircraft", "blanket": "blanket", "beacon": "blanket"}
 CLUTTER_MATERIALS = {"dry_ground", "wet_ground", "rocks", "shrubs"}
 
-# Seed 000 sec. 3.3.1: imager at 3000 m pointing down, 10 deg field, 300 x 300 pixels, 2 m aperture.
+# Murakowski 2014 sec. 3.3.1: imager at 3000 m pointing down, 10 deg field, 300 x 300 pixels, 2 m aperture.
 IMAGER_ALTITUDE = 3000.0
 IMAGER_FOV_DEG = 10.0
 IMAGER_RESOLUTION = (300, 300)
