@@ -389,6 +389,56 @@ def average_images(imgs):
     )
 
 
+def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = None, shash: str = "",
+                    resume: bool = False, shard=None, quiet: bool = True):
+    """Trace the image at frequency f [Hz], averaged over the imager's sub-bands.
+
+    Tiles are kept in ``tile_root/<label>-<shash>/`` when a root is given (resumable), nowhere
+    otherwise. With ``shard=(i, n)`` only that shard's tiles are rendered and no image is made.
+
+    Returns
+    -------
+    job : TraceJob or None
+        The job at f (None for a shard).
+    img : Image or None
+    tile_dirs : list of Path
+    """
+    scn = res.scenario
+    stem = _stem(scn, f)
+    imgs, dirs = [], []
+    for fk in band_frequencies(f, scn.imager.bandwidth, scn.imager.band_samples):
+        job = make_job(res, fk)
+        label = stem if fk == f else f"{stem}@{fk / 1e9:.6g}GHz"
+        tile_dir = None if tile_root is None else tile_root / f"{label}-{shash}"
+        if tile_dir is not None:
+            dirs.append(tile_dir)
+        if shard is not None:
+            mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0]]
+            done = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=True,
+                                progress=_Progress(label, quiet), tiles=mine)
+            print(f"{label}: shard {shard[0]}/{shard[1]}: {len(done)} tiles in {tile_dir}; "
+                  "assemble with `pmmw render ... --resume` once every shard is done")
+            continue
+        results = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=resume,
+                               progress=_Progress(label, quiet))
+        imgs.append(assemble(job, results))
+    if shard is not None:
+        return None, None, dirs
+    if len(imgs) == 1:
+        return job, imgs[0], dirs
+    return make_job(res, f), average_images(imgs), dirs
+
+
+def imager_model(scn, job, ideal: dict):
+    """The sensor image (`apply_imager` with the scenario's aperture, noise and seed) and the PSF
+    kernel it blurred with (None without an aperture)."""
+    im = scn.imager
+    kernel = psf_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter) if im.aperture_diameter > 0.0 else None
+    sensor = apply_imager(ideal, pixel_angle=job.camera.pixel_angle, k0=job.k0, aperture_diameter=im.aperture_diameter,
+                          noise=im.noise, seed=scn.render.seed, kernel=kernel)
+    return sensor, kernel
+
+
 def _stem(scn, f: float) -> str:
     return scn.name if len(scn.frequencies) == 1 else f"{scn.name}_{f / 1e9:g}GHz"
 
@@ -415,33 +465,15 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     for f in scn.frequencies:
         t1 = time.perf_counter()
         stem = _stem(scn, f)
-        imgs = []
-        for fk in band_frequencies(f, scn.imager.bandwidth, scn.imager.band_samples):
-            job = make_job(res, fk)
-            label = stem if fk == f else f"{stem}@{fk / 1e9:.6g}GHz"
-            tile_dir = out_dir / ".pmmw-tiles" / f"{label}-{shash}"
-            tile_dirs.append(tile_dir)
-            if shard is not None:
-                mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0]]
-                done = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=True,
-                                    progress=_Progress(label, quiet), tiles=mine)
-                print(f"{label}: shard {shard[0]}/{shard[1]}: {len(done)} tiles in {tile_dir}; "
-                      "assemble with `pmmw render ... --resume` once every shard is done")
-                continue
-            results = render_tiles(job, workers=n_workers, tile_dir=tile_dir, resume=resume,
-                                   progress=_Progress(label, quiet))
-            imgs.append(assemble(job, results))
-        if shard is not None:
+        job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=out_dir / ".pmmw-tiles",
+                                         shash=shash, resume=resume, shard=shard, quiet=quiet)
+        tile_dirs += dirs
+        if img is None:
             continue
-        img = imgs[0] if len(imgs) == 1 else average_images(imgs)
-        job = make_job(res, f) if len(imgs) > 1 else job
         mean, rays = img.mean, img.rays
         t_trace = time.perf_counter() - t1
         ideal = stokes_images(mean)
-        sensor = apply_imager(
-            ideal, pixel_angle=job.camera.pixel_angle, k0=job.k0,
-            aperture_diameter=scn.imager.aperture_diameter, noise=scn.imager.noise, seed=scn.render.seed,
-        )
+        sensor, kernel = imager_model(scn, job, ideal)
         channels = {c: sensor[c].astype(np.float32) for c in scn.output.channels}
         channels.update({f"ideal.{c}": ideal[c].astype(np.float32) for c in scn.output.channels})
         channels.update(aux_channels(img, scn.output.aux))
@@ -478,8 +510,6 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
                 rel = f"previews/{stem}_{c}_ideal_sensor.png"
                 write_preview(out_dir / rel, np.concatenate([ideal[c], sensor[c]], axis=1))
                 side[c] = rel
-        kernel = (psf_kernel(job.camera.pixel_angle, job.k0, scn.imager.aperture_diameter)
-                  if scn.imager.aperture_diameter > 0.0 and scn.output.regions else None)
         regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else None
         renders.append({
             "truncation": truncation_summary(img, scn),

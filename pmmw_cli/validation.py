@@ -15,12 +15,11 @@ measures it, the command a user runs to see the same, and a verdict:
 
 Renders are the shipped configs with the thesis's variants as ``--set`` overrides (the sweeps in
 ``configs/*_sweep.sh``), at the shipped resolution and sampling, with the imager noise switched
-off so that a contrast is the expected one. "Visible" is judged by the signal-to-noise ratio of an
-ideal observer who knows what to look for (the matched filter; Rose 1948 used the same for the
-eye): the target's contrast averaged over one blur spot against the noise averaged over it
-(`Render.snr`). Visible from SNR 3
-(``VISIBLE_SNR``), clearly visible from 10 (``CLEAR_SNR``); the thesis's own "visible" and "lost
-in the noise" are judgements of noisy images by eye. The whole run takes about 5 minutes on two
+off so that a contrast is the expected one. "Visible" is judged by a signal-to-noise ratio, as
+Rose 1948 did for the eye: the target's contrast averaged over one blur spot against the noise
+averaged over it (`Render.snr`). Visible from SNR 3 (``VISIBLE_SNR``), clearly visible from 10
+(``CLEAR_SNR``); the thesis's own "visible" and "lost in the noise" are judgements of noisy
+images by eye. The whole run takes about 5 minutes on two
 cores.
 """
 
@@ -33,6 +32,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from pmmw_cli.trace.job import C0
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -62,7 +63,7 @@ SAR_WEATHER = {
     "rain": f"[{{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h}}, {SAR_CLOUD}]",
 }
 SAR_GROUND = "dry_ground: sar_dry_ground, wet_ground: sar_wet_ground, rocks: sar_rocks, shrubs: oak_leaves"
-SAR_TARGET = {"cessna": "aircraft", "blanket": "blanket", "beacon": "blanket"}
+SAR_TARGET = ("cessna", "blanket", "beacon")  # scenes/sar/sar_<target>.glb
 
 
 # -- measurements ---------------------------------------------------------------------------------
@@ -77,7 +78,6 @@ class Render:
     ideal: dict
     regions: dict
     noise: float
-    seconds: float
     masks: dict = field(default_factory=dict)
     kernel: np.ndarray | None = None
 
@@ -88,8 +88,8 @@ class Render:
         """Signal-to-noise ratio of region a against region b over one blur spot [-].
 
         The contrast of the two regions over the per-pixel noise sigma, times the blur's
-        footprint 1 / sqrt(sum psf^2) (`imaging.imager.error_footprint`: the number of pixels
-        whose noise a PSF-weighted average over one spot averages down). This is the
+        footprint 1 / sqrt(sum psf^2) (`imaging.imager.error_footprint`: the factor by which a
+        PSF-weighted average over one spot lowers white per-pixel noise). This is the
         matched-filter SNR of a target that fills the spot; for a target much smaller than the
         spot the matched filter gives about half of it.
         """
@@ -123,31 +123,25 @@ class Measure:
         return self._cache[key]
 
     def _render(self, config, overrides) -> Render:
-        from pmmw_cli.imaging.imager import apply_imager, psf_kernel
         from pmmw_cli.physics.jones import stokes_images
-        from pmmw_cli.pipeline import make_job, region_masks, region_stats, resolve
-        from pmmw_cli.trace.pool import assemble, render_tiles
+        from pmmw_cli.pipeline import imager_model, region_masks, region_stats, resolve, trace_frequency
+        from pmmw_cli.trace.pool import default_workers
 
         t0 = time.perf_counter()
         quick = self.QUICK if self.quick else []
         res = resolve(REPO / config, overrides + quick + ["imager.noise=0"])
         noise = resolve(REPO / config, overrides).scenario.imager.noise
         scn = res.scenario
-        job = make_job(res, scn.frequencies[0])
-        img = assemble(job, render_tiles(job, workers=self.workers))
+        job, img, _ = trace_frequency(res, scn.frequencies[0], workers=self.workers or default_workers())
         ideal = stokes_images(img.mean)
-        im = scn.imager
-        sensor = apply_imager(ideal, pixel_angle=job.camera.pixel_angle, k0=job.k0,
-                              aperture_diameter=im.aperture_diameter, noise=0.0, seed=scn.render.seed)
-        kernel = (psf_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter)
-                  if im.aperture_diameter > 0.0 else None)
+        sensor, kernel = imager_model(scn, job, ideal)
         regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else {}
         masks = region_masks(scn.output.regions, job.camera) if scn.output.regions else {}
         dt = time.perf_counter() - t0
         self.log(f"  {config} {' '.join(overrides)}: {dt:.1f} s")
         # the report's sigmas are those of the noise the config has, not of this noiseless render
         regions = dict(regions, noise_K=noise)
-        return Render(config, overrides, sensor, ideal, regions, noise, dt, masks, kernel)
+        return Render(config, overrides, sensor, ideal, regions, noise, masks, kernel)
 
     # the thesis's variants
     def landing(self, f_ghz: int, range_m: int, weather: str) -> Render:
@@ -208,11 +202,13 @@ def _verdict(ok: bool, reason_if_not: str = "") -> tuple[str, str]:
 
 
 def _airy_null_diameter(f_hz, d, r):
-    return 2.44 * 299792458.0 / f_hz / d * r
+    """Diameter of the Airy disk's first dark ring [m] at range r [m]: 2.44 lambda / D r."""
+    return 2.44 * C0 / f_hz / d * r
 
 
 def _fwhm(f_hz, d, r):
-    return 1.029 * 299792458.0 / f_hz / d * r
+    """Half-power width of the Airy pattern [m] at range r [m]: 1.029 lambda / D r."""
+    return 1.029 * C0 / f_hz / d * r
 
 
 def section_cart(m: Measure) -> list[Row]:

@@ -122,7 +122,7 @@ def blur_adjoint(weights, kernel):
 
 
 def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diameter: float,
-                 noise: float, seed: int):
+                 noise: float, seed: int, kernel=None):
     """The sensor image from the ideal one.
 
     Parameters
@@ -134,6 +134,8 @@ def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diamete
     noise : float
         1-sigma Gaussian noise [K] per polarization channel; none when 0.
     seed : int
+    kernel : ndarray, optional
+        The `psf_kernel` of these arguments, when the caller has it already.
 
     Returns
     -------
@@ -142,7 +144,7 @@ def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diamete
     """
     base = {c: np.asarray(ideal[c], float) for c in ("Ex2", "Ey2", "U", "V")}
     if aperture_diameter > 0.0:
-        kern = psf_kernel(pixel_angle, k0, aperture_diameter)
+        kern = kernel if kernel is not None else psf_kernel(pixel_angle, k0, aperture_diameter)
         base = {c: blur(v, kern) for c, v in base.items()}
     if noise > 0.0:
         rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, 0x5EED])))

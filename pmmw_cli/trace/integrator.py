@@ -30,6 +30,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import binary_dilation
 
 from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.physics.jones import rebase, row_power, stokes_terms
@@ -42,6 +43,7 @@ from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, THIN, T
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
 _A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
+_NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
 _MAX_WALK = 1000  # facet events of one walk through rough coating layers (never reached in tests)
 
 
@@ -127,17 +129,6 @@ def _stderr(s1, s2, count):
     c = count[:, None].astype(float)
     var = np.maximum(s2 - s1 * s1 / c, 0.0) / np.maximum(c - 1.0, 1.0)
     return np.where(c > 1, np.sqrt(var / c), 0.0)
-
-
-def _dilate(mask):
-    """A boolean (h, w) mask grown by one pixel in each of the 8 directions."""
-    p = np.pad(mask, 1)
-    h, w = mask.shape
-    out = np.zeros_like(mask)
-    for dy in (0, 1, 2):
-        for dx in (0, 1, 2):
-            out |= p[dy:dy + h, dx:dx + w]
-    return out
 
 
 def _normalize(v):
@@ -347,8 +338,7 @@ class Integrator:
         ref = np.zeros((npx, 4))  # per-pixel shift of the running sums (first pass mean)
         s1, s2 = np.zeros((npx, 4)), np.zeros((npx, 4))
         count = np.zeros(npx, np.int64)
-        r1 = np.zeros((npx, REPLICATES, 4))  # per replicate: summed shifted values, count
-        rcount = np.zeros((npx, REPLICATES), np.int64)
+        r1 = np.zeros((npx, REPLICATES, 4))  # per replicate: summed shifted values
         depth = np.full(npx, np.inf)
         material = np.full(npx, -1.0)
         trunc = np.zeros((npx, 2))  # summed over samples: ended weight, bound [K]
@@ -370,9 +360,7 @@ class Integrator:
             s2[active] += (dv * dv).sum(axis=1)
             count[active] += nb
             for r in range(REPLICATES):
-                j = (np.arange(done, done + nb) % REPLICATES) == r
-                r1[active, r] += dv[:, j].sum(axis=1)
-                rcount[active, r] += int(j.sum())
+                r1[active, r] += dv[:, (r - done) % REPLICATES::REPLICATES].sum(axis=1)
             done += nb
             if not adaptive:
                 break
@@ -381,13 +369,15 @@ class Integrator:
             need[active[np.max(err[:, :2], axis=1) > st.target_error * st.error_footprint]] = True
             # a pixel that a small object covers in part may miss it with every one of its first
             # samples (zero variance): its neighbours that did see the edge keep it sampling
-            active = active[_dilate(need.reshape(h, w)).ravel()[active]]
+            grown = binary_dilation(need.reshape(h, w), structure=_NEIGHBOURS).ravel()
+            active = active[grown[active]]
             batch = done  # double the samples of the pixels that still need them
         mean = ref + s1 / count[:, None]
         stderr = _stderr(s1, s2, count)
-        both = (rcount > 0).all(axis=1)
+        # every pixel took samples 0 .. count-1: replicate r holds the sample numbers = r mod 2
+        rcount = np.stack([(count + REPLICATES - 1 - r) // REPLICATES for r in range(REPLICATES)], axis=1)
         halves = r1 / np.maximum(rcount, 1)[:, :, None]
-        diff = np.where(both[:, None], halves[:, 0] - halves[:, 1], 0.0)
+        diff = np.where((rcount > 0).all(axis=1)[:, None], halves[:, 0] - halves[:, 1], 0.0)
         return TileResult(
             index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
             depth.reshape(h, w), material.reshape(h, w), self.rays,
