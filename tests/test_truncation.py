@@ -186,3 +186,34 @@ def test_region_standard_errors_hold_for_low_discrepancy_samples_at_edges():
     scn = SimpleNamespace(output=SimpleNamespace(regions=regions), imager=SimpleNamespace(noise=0.0),
                           render=SimpleNamespace(max_depth=4, termination="roulette"))
     _predicted_and_observed_scatter(lambda seed: _checkerboard(seed, 8), scn, kernel)
+
+
+def test_the_rain_sky_stays_within_the_range_the_truncation_bound_assumes():
+    """A path ended early can at most be wrong by the gap to the hottest or coldest brightness the
+    sky can show. With scattering rain the source depends on direction (source -+ |source_mu|),
+    so the range must cover every elevation and observer height, not only the cells' mean
+    sources; checked on 10 mm/h rain under a cloud at 95 GHz (the SAR rain weather) over a 250 K
+    ground, colder than the air, which the scattering solution sees."""
+    from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+    from pmmw_cli.scene.sky import AtmosphereSky
+
+    atm = Atmosphere(profile="standard", layers=(Layer("rain", 0.0, 1500.0, rain_rate=10.0),
+                                                 Layer("cloud", 1000.0, 2000.0, liquid_water=1.3e-3)))
+    model = AtmosphereModel(atm, 95e9, ground_temperature=250.0)
+    assert np.abs(model.source_mu).max() > 1.0  # the direction term is there to be covered
+    sky = AtmosphereSky(model, 250.0)
+    lo, hi = sky.temperature_range()
+    el = np.radians(np.linspace(0.0, 90.0, 91))
+    for h in (0.0, 750.0, 1500.0, 3000.0):
+        t = model.sky_temperature(el, height=h)
+        assert lo <= t.min() and t.max() <= hi, (h, t.min(), t.max(), lo, hi)
+
+
+def test_the_rain_two_stream_ground_is_the_skys_ground():
+    """The scene's sky puts `sky.ground_temperature` below the horizon; the scattering solution of
+    the same atmosphere stands on the same ground."""
+    from pmmw_cli.pipeline import atmosphere_model, resolve
+
+    res = resolve("configs/sar_cessna_95ghz.yaml", ["sky.ground_temperature=260 K",
+                                                   "atmosphere.layers=[{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h}]"])
+    assert atmosphere_model(res.scenario, 95e9).ground_temperature == pytest.approx(260.0)
