@@ -1,5 +1,5 @@
 # pmmw: two commands on a fresh machine.
-#   make render   create .venv, install pmmw, render the shipped landing scenario (seed 000 sec. 3.1)
+#   make render   create .venv, install pmmw, render the shipped landing scenario (Murakowski 2014, sec. 3.1)
 #   make test     create .venv, install pmmw with test extras, run the test suite
 PYTHON ?= python3
 VENV   ?= .venv

@@ -71,7 +71,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
+from pmmw_cli.io.yamlio import read_yaml
 
 from pmmw_cli.errors import UserError, UserErrors
 from pmmw_cli.physics import fresnel, multilayer
@@ -301,10 +301,7 @@ def load_stack(path, *, frequency=None, wavelength=None) -> Stack:
     file = str(path)
     if not path.is_file():
         raise UserError("stack file not found", file)
-    try:
-        raw = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as ex:
-        raise UserError(f"cannot parse YAML: {ex}", file) from None
+    raw = read_yaml(path, "stack file")
     if not isinstance(raw, dict):
         raise UserError("a stack file is a mapping with `layers:` (and optionally frequency, ambient)", file)
     errors: list[UserError] = []

@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import signal
 import sys
 from pathlib import Path
 from typing import List, Optional
@@ -16,7 +17,7 @@ from typing import List, Optional
 import typer
 import yaml
 
-from pmmw_cli import __version__
+from pmmw_cli import __version__, interrupt
 from pmmw_cli.errors import UserError
 
 app = typer.Typer(
@@ -30,16 +31,19 @@ EXIT_USER_ERROR = 2
 
 
 def _user_errors(fn):
+    """One line and an exit status instead of a traceback: `UserError` 2, `EnvironmentProblem` 1,
+    a signal 128 + N (`pmmw_cli.interrupt`; a KeyboardInterrupt counts as SIGINT)."""
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except UserError as e:
+        except UserError as e:  # an EnvironmentProblem too, with its own status
             typer.echo(f"error: {e}", err=True)
-            raise typer.Exit(EXIT_USER_ERROR) from None
-        except KeyboardInterrupt:
-            typer.echo("interrupted: finished tiles are kept; run again with --resume to continue", err=True)
-            raise typer.Exit(130) from None
+            raise typer.Exit(getattr(e, "exit_status", EXIT_USER_ERROR)) from None
+        except (KeyboardInterrupt, interrupt.Interrupted) as e:
+            stop = e if isinstance(e, interrupt.Interrupted) else interrupt.Interrupted(signal.SIGINT)
+            interrupt.report(stop)
+            raise typer.Exit(stop.status) from None
 
     return wrapper
 
@@ -61,12 +65,13 @@ def render(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar; one summary line per image."),
     shard: Optional[str] = typer.Option(None, "--shard", metavar="I/N",
                                         help="Render only tiles I mod N (cluster jobs); assemble later with --resume."),
+    force: bool = typer.Option(False, "--force", help="Render even when memory or disk look too small for it."),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
     from pmmw_cli.pipeline import parse_shard, render as run
 
     run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
-        quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard))
+        quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard), force=force)
 
 
 @app.command()
@@ -89,9 +94,8 @@ def materials_list(
 ):
     """List every material id with its kind, permittivity, temperature and source."""
     from pmmw_cli.scene.materials import MaterialDB, format_material_table
-    from pmmw_cli.units import parse_quantity
 
-    f = parse_quantity(frequency, "frequency", file="--frequency") if frequency else None
+    f = _frequency(frequency) if frequency else None
     typer.echo(format_material_table(MaterialDB.load(), f))
 
 
@@ -103,9 +107,8 @@ def materials_show(
 ):
     """Show one material: its permittivity table (or value at a frequency), coating, source."""
     from pmmw_cli.scene.materials import MaterialDB, format_material
-    from pmmw_cli.units import parse_quantity
 
-    f = parse_quantity(frequency, "frequency", file="--frequency") if frequency else None
+    f = _frequency(frequency) if frequency else None
     typer.echo(format_material(MaterialDB.load(), material_id, f))
 
 
@@ -126,9 +129,8 @@ def sky(
 ):
     """Sky brightness temperature against elevation and polarization, from the layered atmosphere."""
     from pmmw_cli import skycmd
-    from pmmw_cli.units import parse_quantity
 
-    f = parse_quantity(frequency, "frequency", file="--frequency")
+    f = _frequency(frequency)
     if fmt not in ("table", "csv"):
         raise UserError(f"expected table or csv, got {fmt!r}", file="--format")
     try:
@@ -143,6 +145,19 @@ def sky(
         skycmd.write_map(exr, atm, f)
     if plot is not None:
         skycmd.write_plot(plot, atm, f)
+
+
+def _frequency(text: str, option: str = "--frequency") -> float:
+    """A frequency option [Hz], within the range of pmmw's models."""
+    from pmmw_cli.config.schema import FREQUENCY_RANGE
+    from pmmw_cli.units import parse_quantity
+
+    f = parse_quantity(text, "frequency", file=option)
+    lo, hi = FREQUENCY_RANGE
+    if not lo <= f <= hi:
+        raise UserError(f"{text!r} is outside the {lo / 1e9:g}-{hi / 1e9:g} GHz that pmmw's atmosphere and "
+                        "material models cover", option)
+    return f
 
 
 def _count(text: str, option: str) -> int:

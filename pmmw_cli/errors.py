@@ -2,7 +2,8 @@
 
 A `UserError` is a problem with the user's input (scenario, asset, material, command line). The
 CLI prints it as one paragraph, ``error: FILE: KEY.PATH: message``, and exits with status 2; it
-never shows a traceback. Everything else is a bug and may show one.
+never shows a traceback. An `EnvironmentProblem` (the machine stopped the job) prints the same
+way with status 1. Everything else is a bug and may show one.
 """
 
 from __future__ import annotations
@@ -24,7 +25,12 @@ class UserError(Exception):
         Dotted key path inside that file, e.g. ``materials.runway.eps`` or ``scene[2].mesh``.
     """
 
+    exit_status = 2
+    MAX_MESSAGE = 600  # characters: a huge value quoted in a message is cut, not printed whole
+
     def __init__(self, message: str, file: str | Path | None = None, key: str | None = None):
+        if len(message) > self.MAX_MESSAGE:
+            message = f"{message[:self.MAX_MESSAGE]}... ({len(message):,} characters in all)"
         super().__init__(message)
         self.message = message
         self.file = str(file) if file is not None else None
@@ -46,6 +52,14 @@ class UserErrors(UserError):
         if len(self.errors) == 1:
             return str(self.errors[0])
         return f"{len(self.errors)} problems:\n" + "\n".join(f"  - {e}" for e in self.errors)
+
+
+class EnvironmentProblem(UserError):
+    """The machine, not the input, stopped the job: an output folder that cannot be written, a
+    full or read-only disk, a worker killed for memory. Printed like a `UserError` (one line naming
+    the path or the tile and the cause) but with exit status 1."""
+
+    exit_status = 1
 
 
 _WARNINGS: list[str] = []

@@ -7,6 +7,7 @@ are meshes loaded, Embree scenes built and rays traced.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import shutil
@@ -20,14 +21,15 @@ import numpy as np
 from pmmw_cli import __version__
 from pmmw_cli.config import load_scenario
 from pmmw_cli.config.load import scenario_to_display
-from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
+from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors, clear_warnings, collected_warnings, warn
 from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
 from pmmw_cli.io.exr import write_exr
 from pmmw_cli.io.preview import write_preview
 from pmmw_cli.io.report import write_report
+from pmmw_cli.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
 from pmmw_cli.physics.jones import stokes_images
 from pmmw_cli.scene.camera import Camera
-from pmmw_cli.scene.geometry import build_geometry
+from pmmw_cli.scene.geometry import asset_files, build_geometry
 from pmmw_cli.scene.materials import MaterialDB
 from pmmw_cli.scene.sky import make_sky
 from pmmw_cli.trace.job import (
@@ -136,17 +138,36 @@ def aux_channels(img, aux) -> dict:
 
 def scenario_hash(scn, db: MaterialDB | None = None) -> str:
     """Hash of everything that changes the traced tiles (not workers, not output settings): the
-    scenario, its mesh and sky files and, given the resolved database, every material in it
-    (an edited ``materials/*.yaml`` or bump texture must not reuse old tiles either)."""
+    scenario, the pmmw version, every byte of every file the trace reads (`input_files`: meshes
+    with their glTF buffers, OBJ material libraries and textures, the sky texture) and, given the
+    resolved database, every material in it (an edited ``materials/*.yaml`` must not reuse old
+    tiles either)."""
     d = scenario_to_display(scn)
     d.pop("output", None)
     d["render"].pop("workers", None)
     h = hashlib.sha256((json.dumps(d, sort_keys=True, default=str) + __version__).encode())
     if db is not None:
         h.update("".join(repr(db.get(m)) for m in db.ids()).encode())
-    for path in sorted({str(e.mesh) for e in scn.scene} | ({str(scn.sky.file)} if scn.sky.file else set())):
-        h.update(Path(path).read_bytes())  # assets too: a regenerated mesh must not reuse old tiles
+    for path in input_files(scn):
+        try:
+            h.update(f"{path.stat().st_size}\0".encode())  # delimits one file's bytes from the next's
+            with open(path, "rb") as f:
+                for block in iter(lambda: f.read(1 << 20), b""):
+                    h.update(block)
+        except OSError as e:
+            raise UserError(f"cannot read: {e.strerror or e}", file=path) from None
     return h.hexdigest()[:16]
+
+
+def input_files(scn) -> list[Path]:
+    """Every file a render of ``scn`` reads besides the material database: the scenario, each
+    mesh and the files it names (`asset_files`), the sky texture."""
+    files = [Path(scn.source_file)]
+    for e in scn.scene:
+        files += asset_files(e.mesh)
+    if scn.sky.file:
+        files.append(Path(scn.sky.file))
+    return list(dict.fromkeys(Path(p).resolve() for p in files))
 
 
 def parse_shard(text: str | None):
@@ -443,13 +464,108 @@ def _stem(scn, f: float) -> str:
     return scn.name if len(scn.frequencies) == 1 else f"{scn.name}_{f / 1e9:g}GHz"
 
 
+def output_names(scn, f: float) -> dict:
+    """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``,
+    ``previews`` and ``side_by_side`` (channel -> PNG), ``reports`` (JSON, Markdown)."""
+    stem = _stem(scn, f)
+    chans = scn.output.channels
+    side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
+    suffix = "" if len(scn.frequencies) == 1 else f"_{f / 1e9:g}GHz"
+    on = scn.output.previews
+    return {
+        "exr": f"{stem}.exr",
+        "previews": {c: f"previews/{stem}_{c}.png" for c in chans} if on else {},
+        "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
+        "reports": [f"report{suffix}.json", f"report{suffix}.md"],
+    }
+
+
+def _all_outputs(names: dict) -> list[str]:
+    return [names["exr"], *names["previews"].values(), *names["side_by_side"].values(), *names["reports"]]
+
+
+# [s] per camera path per core: the shipped landing scene on a 2-core laptop (docs/benchmarks.md);
+# refracting and rough scenes take several times longer
+SECONDS_PER_PATH = 1e-5
+WORKER_BASE_BYTES = 250e6  # a render worker: interpreter, numpy, Embree, one wave of MAX_WAVE rays
+TILE_BYTES_PER_PIXEL = 17 * 8  # float64 fields of a TileResult per pixel (pool._save_tile)
+
+
+def estimate_resources(scn, triangles: int, workers: int) -> dict:
+    """Memory, disk and time a render of ``scn`` needs, from its size (upper bounds, except the
+    time, which is a rough guide for landing-like scenes).
+
+    Memory: the parent holds each frequency's tiles, its sub-band images and the output channels
+    (~136 B per pixel per image); each worker its share of the scene and one wave of rays, which
+    the integrator bounds (`MAX_WAVE`), so it does not grow with spp. Disk: the resumable tiles
+    (~136 B per pixel per sub-band) and the EXR (4 B per channel per pixel, uncompressed bound).
+    """
+    w, h = scn.imager.resolution
+    px = w * h
+    bands = scn.imager.band_samples if scn.imager.bandwidth > 0 else 1
+    nf = len(scn.frequencies)
+    n_chan = 2 * len(scn.output.channels) + 6
+    paths = px * scn.render.spp * bands * nf
+    parent = px * (TILE_BYTES_PER_PIXEL * (bands + 2) + 12 * n_chan) + 200e6
+    worker = WORKER_BASE_BYTES + 200.0 * triangles
+    return {
+        "pixels": px, "camera_paths_at_most": paths,
+        "memory_bytes": int(parent + workers * worker),
+        "disk_bytes": int(px * (TILE_BYTES_PER_PIXEL * bands + 4 * n_chan) * nf),
+        "time_s_rough": paths * SECONDS_PER_PATH / max(1, workers),
+    }
+
+
+def available_memory() -> float | None:
+    """Memory the system can give without swapping [bytes] (Linux MemAvailable), or None."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def _check_memory(est: dict, source, force: bool) -> None:
+    free = available_memory()
+    if free is not None and est["memory_bytes"] > free and not force:
+        raise EnvironmentProblem(
+            f"the render needs about {est['memory_bytes'] / 1e9:.3g} GB of memory and {free / 1e9:.3g} GB are "
+            "available: lower imager.resolution or render.workers (or pass --force to try anyway)", file=source)
+
+
+def remove_stale_tiles(tile_root: Path, scn, shash: str) -> int:
+    """Delete tile folders of this scenario's images made from other inputs (another hash):
+    they can never be resumed. Returns how many were removed."""
+    if not tile_root.is_dir():
+        return 0
+    stems = {_stem(scn, f) for f in scn.frequencies}
+    removed = 0
+    for d in tile_root.iterdir():
+        label, _, h = d.name.rpartition("-")
+        if not d.is_dir() or h == shash or len(h) != len(shash):
+            continue
+        base = label.split("@", 1)[0] if "@" in label and label.endswith("GHz") else label
+        if base in stems:
+            shutil.rmtree(d, ignore_errors=True)
+            removed += 1
+    return removed
+
+
 def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
-           quiet=False, keep_tiles=False, shard=None) -> list[Path]:
+           quiet=False, keep_tiles=False, shard=None, force=False) -> list[Path]:
     """The ``pmmw render`` job. Returns the EXR paths written.
 
     With ``shard=(i, n)`` only tiles whose index is i modulo n are rendered into the tile folder
     and no image is written: run the n shards anywhere that shares the output folder, then run
     once more with ``resume=True`` (and no shard) to assemble the image.
+
+    Before tracing, the outputs are checked (`check_outputs`: writable, no input overwritten,
+    names that fit, room on the disk) and memory is estimated (`estimate_resources`); ``force``
+    renders past the memory and disk estimates. Each frequency's EXR, previews and reports are
+    staged and moved into place together (`Staging`), reports last.
     """
     clear_warnings()
     t0 = time.perf_counter()
@@ -457,91 +573,115 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     res = resolve(path, overrides, cli=cli)
     scn = res.scenario
     out_dir = Path(scn.output.dir) if scn.output.dir is not None else Path.cwd() / "out" / scn.name
-    out_dir.mkdir(parents=True, exist_ok=True)
     n_workers = scn.render.workers or default_workers()
+    est = estimate_resources(scn, int(res.geometry.faces.shape[0]), n_workers)
+    names = {f: output_names(scn, f) for f in scn.frequencies}
+    check_outputs(out_dir, [n for f in scn.frequencies for n in _all_outputs(names[f])],
+                  input_files(scn), key="output.dir" if out is None else "--out",
+                  disk_bytes=est["disk_bytes"], force=force)
+    _check_memory(est, scn.source_file, force)
+    remove_stale_staging(out_dir)
     t_resolve = time.perf_counter() - t0
     written, renders, tile_dirs = [], [], []
     shash = scenario_hash(scn, res.db)
-    for f in scn.frequencies:
-        t1 = time.perf_counter()
-        stem = _stem(scn, f)
-        job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=out_dir / ".pmmw-tiles",
-                                         shash=shash, resume=resume, shard=shard, quiet=quiet)
-        tile_dirs += dirs
-        if img is None:
-            continue
-        mean, rays = img.mean, img.rays
-        t_trace = time.perf_counter() - t1
-        ideal = stokes_images(mean)
-        sensor, kernel = imager_model(scn, job, ideal)
-        channels = {c: sensor[c].astype(np.float32) for c in scn.output.channels}
-        channels.update({f"ideal.{c}": ideal[c].astype(np.float32) for c in scn.output.channels})
-        channels.update(aux_channels(img, scn.output.aux))
-        cam = job.camera
-        attrs = {
-            "pmmw:version": __version__, "pmmw:units": "K (Rayleigh-Jeans brightness temperature)",
-            "pmmw:frequency_hz": float(f), "pmmw:fov_deg": float(np.degrees(cam.fov)),
-            "pmmw:resolution": f"{cam.width}x{cam.height}",
-            "pmmw:imager_position_m": " ".join(f"{v:g}" for v in cam.position),
-            "pmmw:imager_x": " ".join(f"{v:.9g}" for v in cam.x),
-            "pmmw:imager_y": " ".join(f"{v:.9g}" for v in cam.y),
-            "pmmw:imager_k": " ".join(f"{v:.9g}" for v in cam.k),
-            "pmmw:scenario": str(scn.source_file), "pmmw:scenario_hash": shash,
-            "pmmw:spp": int(scn.render.spp), "pmmw:seed": int(scn.render.seed),
-            "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (Murakowski 2014 eq. 2.12)",
-            "pmmw:materials": ",".join(job.media.ids),
-        }
-        exr_path = out_dir / f"{stem}.exr"
-        write_exr(exr_path, channels, attrs)
-        written.append(exr_path)
-        t_total = time.perf_counter() - t1
-        stats, previews = {}, {}
+    tile_root = out_dir / ".pmmw-tiles"
+    stale = remove_stale_tiles(tile_root, scn, shash)
+    if stale and not quiet:
+        print(f"removed {stale} tile folder(s) of an earlier version of this scenario (other inputs: never resumable)",
+              file=sys.stderr)
+    with contextlib.ExitStack() as staging:  # staged outputs are deleted on the way out, committed or not
+        for f in scn.frequencies:
+            t1 = time.perf_counter()
+            try:
+                job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=tile_root,
+                                                 shash=shash, resume=resume, shard=shard, quiet=quiet)
+            except OSError as e:  # saving tiles: disk full, quota, a folder gone read-only
+                raise os_problem(e, tile_root, "save the finished tiles") from None
+            tile_dirs += dirs
+            if img is None:
+                continue
+            t_trace = time.perf_counter() - t1
+            staged = staging.enter_context(Staging(out_dir))
+            renders.append((staged, _finish_frequency(scn, f, job, img, names[f], staged, shash, t_trace,
+                                                      n_workers)))
+            written.append(out_dir / names[f]["exr"])
+        total = time.perf_counter() - t0
+        for staged, r in renders:
+            report = {
+                "name": _stem(scn, r["frequency_hz"]), "version": __version__, **r,
+                "timing": {"resolve_s": round(t_resolve, 3), **r["timing"], "total_s": round(total, 3)},
+                "warnings": collected_warnings(), "scenario": scenario_to_display(scn),
+            }
+            reports = names[r["frequency_hz"]]["reports"]
+            try:
+                write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
+            except OSError as e:
+                raise os_problem(e, out_dir, "write the report") from None
+            staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports)
+            print(
+                f"{report['name']}: {r['pixels']} px x {r['spp']} spp, {r['rays'] / 1e6:.2f} M rays, "
+                f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}"
+            )
+    if renders and not keep_tiles:  # only once every output is in place: until then tiles resume
+        for d in tile_dirs:
+            shutil.rmtree(d, ignore_errors=True)
+        if tile_root.is_dir() and not any(tile_root.iterdir()):
+            tile_root.rmdir()
+    return written
+
+
+def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
+    """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
+    frequency's report entry (the caller adds the report and commits them together)."""
+    t1 = time.perf_counter()
+    ideal = stokes_images(img.mean)
+    sensor, kernel = imager_model(scn, job, ideal)
+    if not all(np.isfinite(sensor[c]).all() for c in scn.output.channels):
+        raise RuntimeError(f"non-finite pixels in the {f / 1e9:g} GHz image: a bug, please report it")
+    channels = {c: sensor[c].astype(np.float32) for c in scn.output.channels}
+    channels.update({f"ideal.{c}": ideal[c].astype(np.float32) for c in scn.output.channels})
+    channels.update(aux_channels(img, scn.output.aux))
+    cam = job.camera
+    attrs = {
+        "pmmw:version": __version__, "pmmw:units": "K (Rayleigh-Jeans brightness temperature)",
+        "pmmw:frequency_hz": float(f), "pmmw:fov_deg": float(np.degrees(cam.fov)),
+        "pmmw:resolution": f"{cam.width}x{cam.height}",
+        "pmmw:imager_position_m": " ".join(f"{v:g}" for v in cam.position),
+        "pmmw:imager_x": " ".join(f"{v:.9g}" for v in cam.x),
+        "pmmw:imager_y": " ".join(f"{v:.9g}" for v in cam.y),
+        "pmmw:imager_k": " ".join(f"{v:.9g}" for v in cam.k),
+        "pmmw:scenario": str(scn.source_file), "pmmw:scenario_hash": shash,
+        "pmmw:spp": int(scn.render.spp), "pmmw:seed": int(scn.render.seed),
+        "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (Murakowski 2014 eq. 2.12)",
+        "pmmw:materials": ",".join(job.media.ids),
+    }
+    try:
+        write_exr(staged.path(names["exr"]), channels, attrs)
+        stats = {}
         for c in scn.output.channels:
             chan = sensor[c]
             stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
-            if scn.output.previews:
-                rel = f"previews/{stem}_{c}.png"
-                lo, hi = write_preview(out_dir / rel, chan)
+            if c in names["previews"]:
+                lo, hi = write_preview(staged.path(names["previews"][c]), chan)
                 stats[c].update(display_low=lo, display_high=hi)
-                previews[c] = rel
-        side = {}
-        if scn.output.previews:
-            for c in ("Ex2", "Ey2") if "Ex2" in scn.output.channels else scn.output.channels[:1]:
-                rel = f"previews/{stem}_{c}_ideal_sensor.png"
-                write_preview(out_dir / rel, np.concatenate([ideal[c], sensor[c]], axis=1))
-                side[c] = rel
-        regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else None
-        renders.append({
-            "truncation": truncation_summary(img, scn),
-            **({"side_by_side": side} if side else {}),
-            **({"regions": regions} if regions else {}),
-            **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
-            "frequency_hz": f, "output_exr": str(exr_path), "channels": stats, "previews": previews,
-            "rays": rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),
+        for c, rel in names["side_by_side"].items():
+            write_preview(staged.path(rel), np.concatenate([ideal[c], sensor[c]], axis=1))
+    except OSError as e:
+        raise os_problem(e, staged.out_dir, "write the image") from None
+    regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else None
+    t_total = time.perf_counter() - t1 + t_trace
+    return {
+        "truncation": truncation_summary(img, scn),
+        **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
+        **({"regions": regions} if regions else {}),
+        **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
+        "frequency_hz": f, "output_exr": str(staged.out_dir / names["exr"]), "channels": stats,
+        "previews": dict(names["previews"]),
+        "rays": img.rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),
                                      "frequency_total_s": round(t_total, 3)},
-            "mean_samples_per_pixel": float(img.samples.mean()),
-            "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
-        })
-        if not keep_tiles:
-            for d in tile_dirs:
-                shutil.rmtree(d, ignore_errors=True)
-    tiles_root = out_dir / ".pmmw-tiles"
-    if not keep_tiles and tiles_root.is_dir() and not any(tiles_root.iterdir()):
-        tiles_root.rmdir()
-    total = time.perf_counter() - t0
-    for r in renders:
-        report = {
-            "name": _stem(scn, r["frequency_hz"]), "version": __version__, **r,
-            "timing": {"resolve_s": round(t_resolve, 3), **r["timing"], "total_s": round(total, 3)},
-            "warnings": collected_warnings(), "scenario": scenario_to_display(scn),
-        }
-        suffix = "" if len(renders) == 1 else f"_{r['frequency_hz'] / 1e9:g}GHz"
-        write_report(out_dir, report, r["previews"], basename=f"report{suffix}")
-        print(
-            f"{report['name']}: {r['pixels']} px x {r['spp']} spp, {r['rays'] / 1e6:.2f} M rays, "
-            f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}"
-        )
-    return written
+        "mean_samples_per_pixel": float(img.samples.mean()),
+        "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
+    }
 
 
 def validate(path, overrides=()) -> dict:
@@ -571,5 +711,19 @@ def validate(path, overrides=()) -> dict:
             }
             for i, mid in enumerate(media.ids)
         }
+    if scn.sky.model == "texture":  # read and check it now, as render would
+        make_sky(scn.sky, scn.frequencies[0])
+    est = estimate_resources(scn, int(geom.faces.shape[0]), scn.render.workers or default_workers())
+    free = available_memory()
+    out["resources"] = {
+        "camera_paths_at_most": est["camera_paths_at_most"],
+        "memory_GB": round(est["memory_bytes"] / 1e9, 3),
+        **({"memory_available_GB": round(free / 1e9, 3)} if free is not None else {}),
+        "disk_GB": round(est["disk_bytes"] / 1e9, 3),
+        "time_s_rough": round(est["time_s_rough"], 1),
+    }
+    if free is not None and est["memory_bytes"] > free:
+        warn(f"the render needs about {est['memory_bytes'] / 1e9:.3g} GB of memory and {free / 1e9:.3g} GB are "
+             "available: `pmmw render` will refuse it without --force")
     out["warnings"] = collected_warnings()
     return out

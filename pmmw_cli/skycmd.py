@@ -11,7 +11,7 @@ import os
 from pathlib import Path
 
 import numpy as np
-import yaml
+from pmmw_cli.io.yamlio import read_yaml
 from pydantic import ValidationError
 
 from pmmw_cli.errors import UserError
@@ -48,10 +48,7 @@ def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], g
     if file is not None:
         if not Path(file).is_file():
             raise UserError("file not found", file=file)
-        try:
-            data = yaml.safe_load(Path(file).read_text())
-        except yaml.YAMLError as e:
-            raise UserError(f"malformed YAML: {e}", file=file) from None
+        data = read_yaml(file, "atmosphere file")
         data = data.get("atmosphere", data) if isinstance(data, dict) else data
         if not isinstance(data, dict):
             raise UserError("expected an atmosphere mapping (or a scenario with an `atmosphere:` key)", file=file)

@@ -63,6 +63,8 @@ def _unit_text(unit: str, kind: str) -> str:
     return unit
 
 
+TEMPERATURE_MAX = 1e6  # [K] hotter than any source a passive imager sees (the sun is ~7000 K at 95 GHz)
+
 # kind -> (internal unit, unit a bare number is taken in (None: a unit is required), example, noun)
 _KINDS: dict[str, tuple[str, str | None, str, str]] = {
     "frequency": ("Hz", None, "'95 GHz'", "frequency"),
@@ -140,7 +142,10 @@ def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit:
         raise UserError(f"{value!r} is not a finite {noun}", file, key)
 
     # same root units as the kind, so that dimensionless pint units are told apart
-    root = reg.get_root_units(units)[1]
+    try:
+        root = reg.get_root_units(units)[1]
+    except Exception:  # pint's logarithmic units (dB, Np) have no root units outside attenuation
+        raise fail(f"is not {_a(noun)}") from None
     if root != reg.get_root_units(target)[1]:
         hint = ""
         if kind == "frequency" and "radian" in str(root):
@@ -158,6 +163,9 @@ def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit:
     out = float(q.to(target).magnitude)
     if not math.isfinite(out):
         raise UserError(f"{value!r} is not a finite {noun}", file, key)
+    if kind == "temperature" and not 0.0 <= out <= TEMPERATURE_MAX:
+        raise UserError(f"{value!r} is {'below absolute zero' if out < 0.0 else 'hotter than pmmw takes'}; "
+                        f"temperatures are 0 K to {TEMPERATURE_MAX:g} K", file, key)
     if kind == "attenuation" and out < 0.0:
         raise UserError(f"attenuation must be >= 0, got {value!r}", file, key)
     return out

@@ -1,4 +1,4 @@
-"""ITU-R atmosphere equations (`pmmw_cli.atmosphere.itu`) against `itur`, PHYSICS.md and seed 000.
+"""ITU-R atmosphere equations (`pmmw_cli.atmosphere.itu`) against `itur`, PHYSICS.md and Murakowski 2014.
 
 `itur` 0.4 is an independent implementation of the same Recommendations (P.676-12, P.835-6,
 P.840, P.838-3): where the equations and tables are the same, the agreement must be to rounding,

@@ -263,7 +263,7 @@ def test_vertical_loss_matches_quadrature_of_itu_profile():
 def test_fog_vertical_loss_matches_seed():
     """Seed 000 sec. 3.1.3 (heavy fog, 0.3 g/m^3, 0-600 m): 0.8 dB at 95 GHz vertically through it.
 
-    The 0.8 dB is the fog alone, (2.29 - 0.92) dB/km x 0.6 km = 0.82 dB from Table 3.2; the seed's
+    The 0.8 dB is the fog alone, (2.29 - 0.92) dB/km x 0.6 km = 0.82 dB from Table 3.2; the thesis's
     1.0 g/m^3 row implies a colder-fog K_l that gives 0.74 dB for the same fog. Ours (fog at the
     standard profile's 15 C to 11 C) must lie in that range, 0.70-0.85 dB. The extreme fog
     (1 g/m^3) gives (5.05 - 0.92) x 0.6 = 2.48 dB by Table 3.2, within its 7 %.

@@ -1,5 +1,5 @@
 """`pmmw brdf` (pmmw_cli.brdf): energy balance, reciprocity, Monte Carlo against the analytic
-model order by order, rough-to-smooth convergence, the seed 001 copper case (0.8692) and the
+model order by order, rough-to-smooth convergence, the Optics Express 2016 copper case (0.8692) and the
 numbers of its literal variants, NIST SCATMECH (pySCATMECH, slow, skipped when absent), the
 outputs and the user errors."""
 
@@ -16,7 +16,7 @@ from pmmw_cli.errors import UserError
 from pmmw_cli.physics import fresnel
 from pmmw_cli.physics import roughness as R
 
-COPPER_N = 0.23 + 3.46j  # seed 001 sec. 4.2, 635 nm
+COPPER_N = 0.23 + 3.46j  # Optics Express 2016 sec. 4.2, 635 nm
 Q_RECIP = np.diag([1.0, 1.0, -1.0, 1.0])  # Mueller reciprocity: M(wo->wi) = Q M(wi->wo)^T Q
 
 
@@ -266,7 +266,7 @@ def _seed_literal(samples, shadowing, rng):
 
 
 def test_seed_001_copper_literal_variants_reproduce_0926_and_0873():
-    """The issue's two readings of seed 001: the literal model without shadowing gives ~0.926
+    """Two readings of Optics Express 2016: the literal model without shadowing gives ~0.926
     (0.925 here), with Torrance-Sparrow shadowing and discarded below-horizon rays ~0.873."""
     rng = np.random.default_rng(1)
     assert _seed_literal(400_000, "none", rng) == pytest.approx(0.925, abs=2e-3)
@@ -278,7 +278,7 @@ def test_seed_001_copper_literal_variants_reproduce_0926_and_0873():
 
 
 def test_seed_001_copper_total_reflectance_fast():
-    """Ours for seed 001's copper case (ex = ey = 15, 40 degrees): 0.9266, against the seed's
+    """Ours for Optics Express 2016's copper case (ex = ey = 15, 40 degrees): 0.9266, against the paper's
     0.8692 (docs/brdf.md explains the difference); 50k paths give +-1e-4."""
     s, res = _mc(_copper(R.AshikhminShirley(15, 15)), 40.0, 50_000)
     assert s["total_reflectance"] == pytest.approx(0.9266, abs=5e-4)

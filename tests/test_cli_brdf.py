@@ -1,4 +1,4 @@
-"""`pmmw brdf` as a user runs it: the copper case of seed 001, --eps against --n, the files
+"""`pmmw brdf` as a user runs it: the copper case of Optics Express 2016, --eps against --n, the files
 written, --method analytic, polarized input, database materials and stack files, and user errors.
 
 The physics is tested in tests/test_brdf.py; here each tolerance is the command's own Monte Carlo
@@ -21,7 +21,7 @@ from pmmw_cli.io.exr import read_exr
 
 runner = CliRunner()
 
-COPPER_N = 0.23 + 3.46j  # seed 001 sec. 4.2, 635 nm
+COPPER_N = 0.23 + 3.46j  # Optics Express 2016 sec. 4.2, 635 nm
 COPPER = ["--n", "0.23+3.46j", "--incidence", "40", "--ex", "15", "--ey", "15"]
 # pmmw's Monte Carlo for this case with 1e6 rays: 0.92664 +- 0.00002 (docs/brdf.md, and the slow
 # test in tests/test_brdf.py asserts it to 1e-4).

@@ -272,7 +272,7 @@ def test_cli_values_apply_after_overrides(tmp_path):
         (("name: t", "name: t\nmaterials: [asphalt]"), "materials", "mapping"),
         (("name: t", "name: t\nfrequencies: 95 GHz"), "frequencies", "did you mean 'frequency'"),
         (("frequency: 95 GHz\n", ""), "frequency", "required key missing"),
-        (("95 GHz", "[35 GHz, -95 GHz]"), "frequency", "> 0"),
+        (("95 GHz", "[35 GHz, -95 GHz]"), "frequency", "outside the 1-1000 GHz"),
         (("95 GHz", "95"), "frequency", "give a unit"),
         (("fov: 10 deg", "fov: 10 deg, frequency: 95 m"), "imager.frequency", "not a frequency"),
         (("resolution: [50, 40]", "resolution: [50, 0]"), "imager.resolution", "integers >= 1"),

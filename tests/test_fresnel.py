@@ -17,13 +17,13 @@ def textbook(eps1, eps2, theta):
     """Closed-form Fresnel amplitudes and (lossless medium 1) power coefficients.
 
     r_p is in the convention (n2 cos i - n1 cos t)/(n2 cos i + n1 cos t) (Born & Wolf's r_par,
-    equal to the H-field ratio of seed 000 eq. 2.24b; at normal incidence r_p = -r_s). The branch
+    equal to the H-field ratio of Murakowski 2014 eq. 2.24b; at normal incidence r_p = -r_s). The branch
     of cos t is the physical one: the transmitted field must decay into medium 2,
     Im(n2 cos t) >= 0, and run forward when it does not decay.
     """
     n1, n2 = np.sqrt(complex(eps1)), np.sqrt(complex(eps2))
     ci = np.cos(theta)
-    sin_t = n1 * np.sin(theta) / n2  # Snell, seed 000 eq. 2.17
+    sin_t = n1 * np.sin(theta) / n2  # Snell, Murakowski 2014 eq. 2.17
     ct = np.sqrt(1.0 - sin_t**2 + 0j)
     kz = n2 * ct
     flip = (kz.imag < 0) | ((kz.imag == 0) & (kz.real < 0))
@@ -246,7 +246,7 @@ def test_index_matched_near_grazing_passes_everything():
 
 
 def test_lossy_incident_medium_bookkeeping():
-    """From a lossy medium: the seed's rule (sec. 2.2.4) applied to the raw flux ratios.
+    """From a lossy medium: the thesis's rule (sec. 2.2.4) applied to the raw flux ratios.
 
     The raw powers |r|^2 and |t|^2 Re(q2)/Re(q1) are recomputed here from textbook amplitudes with
     q2 the forward-running root (principal square root, seed eq. 2.20). Where they sum above 1
@@ -279,7 +279,7 @@ def test_lossy_incident_medium_bookkeeping():
             np.testing.assert_allclose(A, np.where(over, 0.0, 1 - tot), atol=1e-14)
             assert np.all((R >= 0) & (R <= 1) & (T >= 0) & (T <= 1) & (A >= 0) & (A <= 1))
             np.testing.assert_allclose(R + T + A, 1.0, rtol=0, atol=1e-15)
-    assert seen_over and seen_under, "both branches of the seed's rule must be exercised"
+    assert seen_over and seen_under, "both branches of the thesis's rule must be exercised"
 
 
 def test_lossy_incident_medium_continuous_off_normal():

@@ -1,4 +1,4 @@
-"""The imager model (seed 000 sec. 2.2.8) against closed forms of the Airy pattern."""
+"""The imager model (Murakowski 2014 sec. 2.2.8) against closed forms of the Airy pattern."""
 
 import numpy as np
 from scipy.special import j1

@@ -203,7 +203,7 @@ def test_read_exr_without_order_attribute_uses_file_order(tmp_path):
 
 # ---------------------------------------------------------------- display scaling
 
-CLIP = 1.0 / 256.0  # seed 000 sec. 3.2 footnote
+CLIP = 1.0 / 256.0  # Murakowski 2014 sec. 3.2 footnote
 
 
 def test_display_scale_clips_exactly_1_in_256_each_end():

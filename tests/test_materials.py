@@ -1,4 +1,4 @@
-"""The material database: shipped numbers against seed 000's tables, interpolation, overrides,
+"""The material database: shipped numbers against Murakowski 2014's tables, interpolation, overrides,
 validation errors (file + dotted key), duplicate ids, suggestions, and the `pmmw materials` text."""
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def _eps(db, mid, f_ghz):
 # --- the shipped database ------------------------------------------------------------------
 
 
-APPENDIX_A = {  # seed 000 Table A.1: id -> {GHz: eps}
+APPENDIX_A = {  # Murakowski 2014 Table A.1: id -> {GHz: eps}
     "concrete": {35: 5.5 + 0.5j, 95: 2.49 + 6.8e-2j},
     "asphalt": {35: 2.5 + 0.6j},
     "brick": {35: 1.3 + 7.4e-2j},
@@ -66,7 +66,7 @@ APPENDIX_A = {  # seed 000 Table A.1: id -> {GHz: eps}
     "salt_water": {35: 12.3 + 23.2j, 95: 5.82 + 10.1j},
 }
 
-CHAPTERS = {  # seed 000 Tables 2.1-2.3, 3.1, 3.3, 3.4: id -> ({GHz: eps}, T [K])
+CHAPTERS = {  # Murakowski 2014 Tables 2.1-2.3, 3.1, 3.3, 3.4: id -> ({GHz: eps}, T [K])
     "cinderblock": ({35: 5.5 + 0.5j}, 300),  # Table 2.1
     "desert_sand": ({35: 3.9 + 0.56j}, 300),  # Tables 2.1, 2.2
     "sa9_tire": ({35: 7.7 + 0.38j}, 300),  # Table 2.2
@@ -269,7 +269,7 @@ def test_unknown_coating_material_is_an_error(db):
         ({"x": {"eps": [2, "a"]}}, "materials.x.eps[1]", "number"),
         ({"x": {"eps": [2]}}, "materials.x.eps", "two numbers"),
         ({"x": {"eps": [2, float("inf")]}}, "materials.x.eps[1]", "finite"),
-        ({"x": {"eps": [2, 0.1], "temperature": "-3 K"}}, "materials.x.temperature", "> 0"),
+        ({"x": {"eps": [2, 0.1], "temperature": "-3 K"}}, "materials.x.temperature", "below absolute zero"),
         ({"x": {"eps": [2, 0.1], "temperature": "3 m"}}, "materials.x.temperature", "temperature"),
         ({"x": {"eps": [2, 0.1], "kind": "metl"}}, "materials.x.kind", "metal"),
         ({"x": {"temperature": "300 K"}}, "materials.x", "needs `eps`"),

@@ -93,7 +93,7 @@ def _room_camera():
 def test_isothermal_enclosure_reads_its_temperature():
     """Energy conservation: every pixel reads T in Ex2 and Ey2, Q, U, V vanish.
 
-    With deterministic splitting and the seed's depth/threshold termination on the last object's
+    With deterministic splitting and the thesis's depth/threshold termination on the last object's
     temperature, every event's weights add to exactly 1 (PHYSICS.md), so the tolerance is
     rounding only (1e-6 K), whatever the materials. The sky (0 K) must never be seen.
     """
@@ -187,7 +187,7 @@ def test_metal_mirror_at_45_degrees_sees_the_sky_overhead():
 
 
 def test_interpenetrating_objects_of_equal_permittivity_act_as_one_medium():
-    """Medium stack (seed 000 sec. 2.2.9): two slightly interpenetrating lossless blocks of the same
+    """Medium stack (Murakowski 2014 sec. 2.2.9): two slightly interpenetrating lossless blocks of the same
     permittivity but different ids show no interface between them, so a ray crosses them as one
     block. Reference: the same scene with one block spanning both. A blackbody under the blocks
     makes the transmitted path visible. Tolerance 1e-3 K: entering the second block is an

@@ -3,7 +3,7 @@
 References: energy conservation (isothermal enclosures read their temperature; a rough lossless
 dielectric reflects plus transmits 1), `pmmw_cli.brdf.monte_carlo` (the same estimator written a
 second time, path by path over an infinite plane, independent of the renderer's wavefront,
-media stack, geometry and intersector), the seed 001 copper number, and the flat-surface
+media stack, geometry and intersector), the Optics Express 2016 copper number, and the flat-surface
 Fresnel closed form as the exponent grows.
 """
 
@@ -180,7 +180,7 @@ def test_bump_tilts_the_normal_like_a_tilted_plane():
 
 
 # ---------------------------------------------------------------------------------------------
-# rough coating layers: the seed 001 walk through layers in the renderer
+# rough coating layers: the Optics Express 2016 walk through layers in the renderer
 # ---------------------------------------------------------------------------------------------
 
 
@@ -216,7 +216,7 @@ def test_isothermal_room_with_rough_coating_layers_reads_its_temperature():
 def test_rough_layer_over_a_substrate_matches_the_brdf_monte_carlo(substrate):
     """A 2 mm rough lossy layer (GGX 0.3) over rough metal (GGX 0.2) or over a lossy dielectric:
     the pixel (sky 1 K, everything else 0 K) reads the directional-hemispherical reflectance of
-    `pmmw brdf`'s layered Monte Carlo (seed 001: the layer absorbs along each path's length) per
+    `pmmw brdf`'s layered Monte Carlo (Optics Express 2016: the layer absorbs along each path's length) per
     polarization. 20000 samples each side, standard errors <= 0.003: tolerance 0.012."""
     layer_eps, d = 2.25 + 0.05j, 2e-3
     if substrate == "metal":
@@ -253,7 +253,7 @@ def test_bump_texture_file_gives_its_slopes(tmp_path):
 
 
 def test_rough_cinderblocks_config_resolves_its_rough_bumpy_sand():
-    """The shipped rough variant of the seed's cinderblock scene: `pmmw validate` reports the
+    """The shipped rough variant of the thesis's cinderblock scene: `pmmw validate` reports the
     sand's GGX roughness and its Gaussian bump map (RMS slope sqrt(2) 2 cm / 25 cm = 0.113, one
     realization over 16 x 16 correlation lengths: 10 %)."""
     from pathlib import Path

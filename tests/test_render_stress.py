@@ -1,6 +1,6 @@
 """Numerical stress of whole renders: scale, degenerate geometry, and random scenes.
 
-Invariants (no reference code needed): every pixel is finite; with the seed's termination on the
+Invariants (no reference code needed): every pixel is finite; with the thesis's termination on the
 last object's temperature every pixel is a convex combination of the scene's temperatures, so
 Ex2 and Ey2 lie within [min T, max T]; |U|, |V| <= I; nothing self-intersects at km scale.
 """

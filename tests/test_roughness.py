@@ -1,5 +1,5 @@
 """Microfacet models (pmmw_cli.physics.roughness): normalization, Smith masking against
-independent quadratures, exact visible-normal sampling, seed 003's ensemble average against a
+independent quadratures, exact visible-normal sampling, Stryjewski et al. 2009's ensemble average against a
 high-precision direct integration (mpmath), the registry and its user errors."""
 
 from __future__ import annotations
@@ -289,7 +289,7 @@ def test_rotated_macro_frame_rotates_the_normals():
 
 
 def test_blender_gloss_follows_the_seed_recipe():
-    """tan(theta_m) = r = sqrt(1 - b^(2L)), L = (1 - g)^3 (seed 000 sec. 2.2.6); gloss 1 is a
+    """tan(theta_m) = r = sqrt(1 - b^(2L)), L = (1 - g)^3 (Murakowski 2014 sec. 2.2.6); gloss 1 is a
     mirror; a drawn facet that faces away from wo is replaced by its mirror image."""
     rng = np.random.default_rng(6)
     n = 100_000

@@ -120,7 +120,7 @@ def test_cinderblock_cavities_are_wells_closed_by_the_ground():
             assert hits[:, 2].max() == pytest.approx(0.0, abs=1e-6)  # first hit: the ground
 
 
-# -- landing (seed 000 sec. 3.1) -----------------------------------------------------------------
+# -- landing (Murakowski 2014 sec. 3.1) -----------------------------------------------------------------
 
 @pytest.mark.parametrize("style", ["plate", "brackets"])
 def test_landing_runway_and_ground(style):
@@ -171,7 +171,7 @@ def test_landing_bracket_beacons():
     assert np.diff(np.sort(row[:, 1])) == pytest.approx(np.full(9, 1.0 + 2 * leg * np.cos(np.radians(45.0))), abs=1e-3)
 
 
-# -- concealed weapon detection (seed 000 sec. 3.2) ----------------------------------------------
+# -- concealed weapon detection (Murakowski 2014 sec. 3.2) ----------------------------------------------
 
 def test_cwd_person():
     rel = "cwd/cwd_outdoor.glb"
@@ -206,7 +206,7 @@ def test_cwd_room_holds_both_views():
     assert not merged(walls).contains(imager).any()  # in the cavity, not in the wall
 
 
-# -- search and rescue (seed 000 sec. 3.3) -------------------------------------------------------
+# -- search and rescue (Murakowski 2014 sec. 3.3) -------------------------------------------------------
 
 def test_sar_terrain_and_clutter():
     """Sec. 3.3.1: small-scale clutter only ("rocks, boulders, shrubs, and trees"; no large-scale

@@ -8,11 +8,11 @@ import re
 import typing
 from pathlib import Path
 
-import yaml
 from pydantic import BaseModel, ValidationError
 
 from pmmw_cli.config.schema import Scenario
 from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.io.yamlio import MalformedYAML, load_yaml, read_yaml
 
 _INDEX = re.compile(r"^(.*?)\[(\d+)\]$")
 
@@ -40,18 +40,7 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None) -> Scenario:
         raise UserError("scenario file not found", file=path)
     if not path.is_file():
         raise UserError("is not a file (expected a scenario YAML)", file=path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise UserError(f"cannot read: {e}", file=path) from None
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
-        raise UserError(f"malformed YAML: {where}{e.problem or e}", file=path) from None
-    except yaml.YAMLError as e:
-        raise UserError(f"malformed YAML: {e}", file=path) from None
+    raw = read_yaml(path, "scenario")
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):
@@ -93,9 +82,9 @@ def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = No
         key, text = item.split("=", 1)
         key = key.strip()
         try:
-            value = yaml.safe_load(text) if text.strip() else ""
-        except yaml.YAMLError:
-            value = text
+            value = load_yaml(text, "--set", key.strip()) if text.strip() else ""
+        except MalformedYAML:
+            value = text  # not YAML: taken as the string typed
         items.append((key, value))
     items.extend((values or {}).items())
     for key, value in items:

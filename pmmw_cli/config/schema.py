@@ -18,6 +18,7 @@ from typing import Annotated, Any, Literal, Optional, Union
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 from pydantic_core import core_schema
 
+from pmmw_cli.atmosphere.model import F_MAX, F_MIN
 from pmmw_cli.errors import UserError
 from pmmw_cli.units import parse_quantity
 
@@ -107,6 +108,13 @@ def _input_path(value, info: ValidationInfo) -> Path:
 
 
 _NAME_FORBIDDEN = set("/\\\0")
+MAX_NAME = 100  # characters of `name`: output files add up to ~40 (`_300GHz_Ex2_ideal_sensor.png`,
+# temporary-file suffixes) and file systems take 255 bytes per file name
+MAX_SIDE = 16384  # [pixels] per image side
+MAX_PIXELS = 1 << 26  # 64 Mpx (8192 x 8192)
+MAX_SPP = 1 << 20
+MAX_SEED = (1 << 63) - 1
+FREQUENCY_RANGE = (F_MIN, F_MAX)  # [Hz] the ITU-R atmosphere models' range
 
 
 class _Model(BaseModel):
@@ -158,6 +166,9 @@ class Imager(_Model):
         if (not isinstance(v, (list, tuple)) or len(v) != 2
                 or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in v)):
             raise ConfigValueError(f"expected [width, height], two integers >= 1, got {v!r}")
+        if max(v) > MAX_SIDE or v[0] * v[1] > MAX_PIXELS:
+            raise ConfigValueError(f"{v[0]} x {v[1]} pixels is more than pmmw renders (at most {MAX_SIDE} per side "
+                                   f"and {MAX_PIXELS // (1 << 20)} Mpx in all)")
         return tuple(v)
 
     @field_validator("aperture_diameter")
@@ -376,17 +387,17 @@ class Sky(_Model):
 
 
 class Render(_Model):
-    spp: int = Field(16, ge=1)
+    spp: int = Field(16, ge=1, le=MAX_SPP)
     max_depth: int = Field(32, ge=1, le=64)
     threshold: float = 1e-3
-    seed: int = Field(1, ge=0)
+    seed: int = Field(1, ge=0, le=MAX_SEED)
     workers: Optional[int] = Field(None, ge=1)
     tile: int = Field(32, ge=8, le=512)
     termination: Literal["roulette", "temperature"] = "roulette"
     strategy: Literal["split", "stochastic", "hybrid"] = "split"
     split_depth: int = Field(2, ge=0)
     target_error: Annotated[Optional[float], Quantity("temperature_difference")] = None
-    min_spp: int = Field(4, ge=2)
+    min_spp: int = Field(4, ge=2, le=MAX_SPP)
     default_temperature: Annotated[float, Quantity("temperature")] = 290.0
     # [K] error allowed from skipping the atmosphere on short paths
     atmosphere_tolerance: Annotated[float, Quantity("temperature_difference")] = 0.01
@@ -503,6 +514,8 @@ class Scenario(_Model):
         # the name becomes output file names: keep it one plain path component
         if not v.strip() or v.strip() in (".", "..") or _NAME_FORBIDDEN & set(v) or not v.isprintable():
             raise ConfigValueError(f"name {v!r} must be a plain file name: not empty, no / or \\")
+        if len(v) > MAX_NAME or len(v.encode("utf-8")) > 2 * MAX_NAME:
+            raise ConfigValueError(f"name is {len(v)} characters long; at most {MAX_NAME} (it names the output files)")
         return v
 
     @field_validator("scene")
@@ -518,8 +531,11 @@ class Scenario(_Model):
     def _freqs(cls, out):
         if not out:
             raise ConfigValueError("give at least one frequency")
-        if any(f <= 0 for f in out):
-            raise ConfigValueError("frequencies must be > 0")
+        lo, hi = FREQUENCY_RANGE
+        bad = [f for f in out if not lo <= f <= hi]
+        if bad:
+            raise ConfigValueError(f"{bad[0] / 1e9:g} GHz is outside the {lo / 1e9:g}-{hi / 1e9:g} GHz that pmmw's "
+                                   "atmosphere and material models cover")
         if len(set(out)) != len(out):
             raise ConfigValueError("a frequency is listed twice")
         return out
@@ -549,4 +565,13 @@ class Scenario(_Model):
         elif self.sky.model == "atmosphere" and not layered:
             raise ConfigValueError("sky model 'atmosphere' needs a layered atmosphere (atmosphere: {profile: ...}), "
                                    "not 'none' or model: uniform")
+        return self
+
+    @model_validator(mode="after")
+    def _band(self):
+        lo, hi = FREQUENCY_RANGE
+        half = self.imager.bandwidth / 2.0
+        if half > 0 and any(not (lo <= f - half and f + half <= hi) for f in self.frequencies):
+            raise ConfigValueError(f"imager.bandwidth {2 * half / 1e9:g} GHz reaches outside {lo / 1e9:g}-"
+                                   f"{hi / 1e9:g} GHz around a frequency")
         return self

@@ -538,7 +538,8 @@ class _Microfacet:
         pending = np.ones(n, dtype=bool)
         below = np.nonzero(wo[:, 2] < 0.0)[0]
         if below.size:
-            p_acc = _area_any(self._a_up_local, wo[below]) / (bound * area_ggx(wo[below]))
+            with np.errstate(divide="ignore", invalid="ignore"):  # 0/0 at grazing: NaN is hopeless below
+                p_acc = _area_any(self._a_up_local, wo[below]) / (bound * area_ggx(wo[below]))
             hopeless = below[~(p_acc >= _MIN_ACCEPT)]
             if hopeless.size:
                 weighted(hopeless, u1[hopeless], u2[hopeless])

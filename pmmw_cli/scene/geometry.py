@@ -14,14 +14,24 @@ Orientation. Face normals point outward by counter-clockwise winding (trimesh's 
 tracer relies on it to tell entering a medium from leaving it (Murakowski 2014 sec. 2.2.9), so every
 entry is checked: closed (watertight) or not, and a closed entry with negative volume (inside
 out) is turned right side out with a warning.
+
+Broken files. A mesh that is empty, truncated, corrupt, unreadable, names an external file that is
+missing, or has non-finite vertices is a `UserError` saying what is wrong, never a traceback or a
+numpy warning: light checks (STL length, GLB header, glTF JSON and the files it names) run before
+trimesh, and whatever trimesh still trips on is reported with its exception.
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
+import json
 import re
+import struct
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 import trimesh
@@ -30,11 +40,22 @@ from pmmw_cli.errors import UserError, UserErrors, warn
 from pmmw_cli.trace.intersect import DEGENERATE_REL
 
 MESH_FORMATS = {".glb": "gltf", ".gltf": "gltf", ".obj": "obj", ".ply": "ply", ".stl": "stl"}
+_FORMAT_NAMES = {"gltf": "glTF", "obj": "OBJ", "ply": "PLY", "stl": "STL"}
 
 # glTF (Y up) -> world (Z up): +90 deg about X, (x, y, z) -> (x, -z, y).
 Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+MAX_COORDINATE = 1e7  # [m] 10,000 km: farther is a wrong unit or scale (and would lose the mm of coatings)
 
 _OBJ_NAMES_MTL = "__pmmw_material_names__.mtl"
+
+# Reader exceptions are quoted in the message up to this length (some repeat a whole buffer).
+_EXCEPTION_CHARS = 200
+
+# MTL statements that name a texture file (the file name is the statement's last word).
+_MTL_MAPS = {
+    "map_ka", "map_kd", "map_ks", "map_ke", "map_ns", "map_d", "map_bump", "bump", "disp", "decal",
+    "refl", "norm", "map_pr", "map_pm", "map_ps", "map_rma", "map_orm",
+}
 
 
 @dataclass
@@ -100,40 +121,258 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
     Raises
     ------
     UserError
-        With ``file=path``: unknown format, unreadable file, or no triangles.
+        With ``file=path``: unknown format; an empty, unreadable, truncated or corrupt file; a
+        glTF buffer or image file that is missing or shorter than its ``byteLength``; faces that
+        name missing vertices; non-finite vertex coordinates; no triangles.
     """
     path = Path(path)
-    fmt = MESH_FORMATS.get(path.suffix.lower())
-    if fmt is None:
-        raise UserError(
-            f"unsupported mesh format {path.suffix!r}; supported: {', '.join(sorted(MESH_FORMATS))}", file=path
-        )
+    fmt = _mesh_format(path)
     if up_axis not in (None, "y", "z"):
         raise UserError(f"up_axis must be 'y' or 'z', got {up_axis!r}", file=path)
+    _check_file(path, fmt)
     try:
-        scene = _read_obj(path) if fmt == "obj" else _load_scene(str(path), process=False)
+        with _quiet():
+            scene = _read_obj(path) if fmt == "obj" else _load_scene(str(path), process=False)
+    except UserError:
+        raise
     except Exception as e:  # whatever the reader trips on, the file is the user's to fix
-        raise UserError(f"cannot read mesh: {type(e).__name__}: {e}", file=path) from e
+        why = _describe(e)
+        if isinstance(e, IndexError):  # e.g. an OBJ face naming a vertex past the last one
+            why = f"an index past the end of its data, a truncated file? {why}"
+        raise UserError(f"not a valid {_FORMAT_NAMES[fmt]} file ({why})", file=path) from e
 
     rotate = Y_UP_TO_Z_UP if (up_axis or ("y" if fmt == "gltf" else "z")) == "y" else None
     parts = []
+    n_not_finite = 0
     for node in sorted(scene.graph.nodes_geometry):
         transform, geom_name = scene.graph[node]
         geom = scene.geometry[geom_name]
         if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
             continue  # points, lines and empty primitives carry no surface
-        mesh = trimesh.Trimesh(
-            vertices=np.asarray(geom.vertices, dtype=np.float64),
-            faces=np.asarray(geom.faces, dtype=np.int64),
-            process=False,
-        )
-        mesh.apply_transform(transform)  # flips the winding itself for mirroring transforms
-        if rotate is not None:
-            mesh.vertices = mesh.vertices @ rotate.T
+        vertices = np.asarray(geom.vertices, dtype=np.float64)
+        faces = np.asarray(geom.faces, dtype=np.int64)
+        if faces.min() < 0 or faces.max() >= len(vertices):
+            raise UserError(
+                f"faces name vertices past the mesh's {len(vertices)} vertices (a truncated file?)", file=path
+            )
+        with _quiet():  # a NaN vertex is reported below, not as numpy's warning
+            mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+            mesh.apply_transform(transform)  # flips the winding itself for mirroring transforms
+            if rotate is not None:
+                mesh.vertices = mesh.vertices @ rotate.T
+        n_not_finite += int((~np.isfinite(mesh.vertices)).any(axis=1).sum())
         parts.append((_material_name(geom, geom_name, fmt), mesh))
+    if n_not_finite:
+        what = "1 vertex is" if n_not_finite == 1 else f"{n_not_finite} vertices are"
+        raise UserError(f"{what} not finite (NaN or infinite coordinates)", file=path)
     if not parts:
         raise UserError("the mesh has no triangles", file=path)
     return parts
+
+
+def asset_files(mesh_path) -> list[Path]:
+    """The mesh file and every external file it names, for hashing what a render was made from.
+
+    glTF/GLB: ``buffers[].uri`` and ``images[].uri`` that are not ``data:`` URIs, URL-decoded
+    and resolved next to the mesh file. OBJ: its ``mtllib`` files and the texture maps they
+    name (``map_Kd`` and the like), relative to the OBJ and to each ``.mtl``. PLY and STL name
+    no other files.
+
+    A glTF's buffers and images must exist (`load_entry_mesh` needs them), so a missing one
+    raises; an OBJ is read without its ``.mtl`` (only the ``usemtl`` names matter), so a missing
+    library or texture is left out of the list instead.
+
+    Parameters
+    ----------
+    mesh_path : str or Path
+        The mesh file.
+
+    Returns
+    -------
+    list of Path
+        The mesh file first, then the files it names, in the order named, each once.
+
+    Raises
+    ------
+    UserError
+        With ``file=mesh_path``: unknown format, the mesh file missing, or a glTF whose JSON is
+        malformed or that names a missing file.
+    """
+    path = Path(mesh_path)
+    fmt = _mesh_format(path)
+    if not path.is_file():
+        raise UserError("mesh file not found", file=path)
+    files = [path]
+    if fmt == "gltf":
+        files += [p for _, _, p, _ in _gltf_external_files(path, _gltf_json(path))]
+    elif fmt == "obj":
+        files += _obj_external_files(path)
+    return list(dict.fromkeys(files))
+
+
+def _mesh_format(path: Path) -> str:
+    fmt = MESH_FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise UserError(
+            f"unsupported mesh format {path.suffix!r}; supported: {', '.join(sorted(MESH_FORMATS))}", file=path
+        )
+    return fmt
+
+
+@contextlib.contextmanager
+def _quiet():
+    """No numpy floating-point warnings while a possibly broken mesh is read (what is wrong with
+    it is reported as a `UserError` instead)."""
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        yield
+
+
+def _describe(e: Exception) -> str:
+    """``"ExceptionClass: message"`` on one line, at most `_EXCEPTION_CHARS` long."""
+    text = " ".join(str(e).split())
+    text = f"{type(e).__name__}: {text}" if text else type(e).__name__
+    return text if len(text) <= _EXCEPTION_CHARS else text[: _EXCEPTION_CHARS - 3] + "..."
+
+
+# -- light checks before trimesh reads a file -------------------------------------------------
+
+def _check_file(path: Path, fmt: str) -> None:
+    """Raise a `UserError` for an unreadable or empty file and for what the format's own light
+    checks find (STL length, GLB header, glTF JSON and the files it names)."""
+    try:
+        size = path.stat().st_size
+        with path.open("rb"):
+            pass
+    except OSError as e:
+        raise UserError(f"cannot read the mesh file: {e.strerror or _describe(e)}", file=path) from None
+    if size == 0:
+        raise UserError("the mesh file is empty (0 bytes)", file=path)
+    if fmt == "stl":
+        _check_stl(path, size)
+    elif fmt == "gltf":
+        tree = _gltf_json(path)
+        for kind, uri, file, byte_length in _gltf_external_files(path, tree):
+            have = file.stat().st_size
+            if byte_length is not None and have < byte_length:
+                raise UserError(
+                    f"glTF {kind} {uri!r} named by {path.name} is truncated: {have} bytes, its byteLength is "
+                    f"{byte_length}",
+                    file=path,
+                )
+
+
+def _check_stl(path: Path, size: int) -> None:
+    """A binary STL is an 84-byte header (80 free bytes, uint32 triangle count N) and 50 bytes
+    per triangle; anything else must be ASCII STL text (``solid ...``)."""
+    with path.open("rb") as f:
+        head = f.read(84)
+    n = struct.unpack("<I", head[80:84])[0] if len(head) == 84 else None
+    if n is not None and size == 84 + 50 * n:
+        return
+    if head.lstrip()[:5].lower() == b"solid":
+        data = path.read_bytes()
+        try:
+            data.decode("utf-8")
+        except UnicodeDecodeError:
+            pass  # a binary STL whose header starts with "solid": report it as binary
+        else:
+            if not re.search(rb"(?i)endsolid", data):
+                raise UserError("not a valid STL file (ASCII STL truncated: no 'endsolid' line)", file=path)
+            return
+    if n is None:
+        why = f"binary STL truncated: an 84-byte header expected, the file has {size} bytes"
+    else:
+        why = (
+            f"binary STL truncated or corrupt: 84 + 50 x N = {84 + 50 * n} bytes expected for its "
+            f"N = {n} triangles, the file has {size}"
+        )
+    raise UserError(f"not a valid STL file ({why}; not ASCII STL either)", file=path)
+
+
+def _gltf_json(path: Path) -> dict:
+    """The JSON of a ``.gltf`` file or of a GLB's first chunk, checked to be a JSON object.
+
+    GLB layout (glTF 2.0 specification, "GLB File Format Specification"): a 12-byte header
+    (magic ``glTF``, version 2, total length), then chunks of (uint32 length, uint32 type, data);
+    the first is the JSON.
+    """
+    if path.suffix.lower() != ".glb":
+        data = path.read_bytes()
+    else:
+        size = path.stat().st_size
+        with path.open("rb") as f:
+            head = f.read(20)
+            if len(head) < 12 or head[:4] != b"glTF":
+                raise UserError("not a valid GLB file (it does not start with the 'glTF' magic)", file=path)
+            version, length = struct.unpack("<II", head[4:12])
+            if version != 2:
+                raise UserError(f"GLB version {version}; only glTF 2 is supported", file=path)
+            if size < length:
+                raise UserError(f"GLB truncated: its header says {length} bytes, the file has {size}", file=path)
+            if len(head) < 20:
+                raise UserError("GLB truncated: no JSON chunk", file=path)
+            chunk_length, chunk_type = struct.unpack("<II", head[12:20])
+            if chunk_type != 0x4E4F534A:  # b"JSON" read as little-endian uint32
+                raise UserError("not a valid GLB file (the first chunk is not JSON)", file=path)
+            if size < 20 + chunk_length:
+                raise UserError(
+                    f"GLB truncated: the JSON chunk needs {chunk_length} bytes, {size - 20} are left", file=path
+                )
+            data = f.read(chunk_length)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise UserError(f"glTF JSON is not UTF-8 text (byte {e.start})", file=path) from None
+    try:
+        tree = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise UserError(f"glTF JSON is malformed at line {e.lineno}, column {e.colno}: {e.msg}", file=path) from None
+    if not isinstance(tree, dict):
+        raise UserError(f"glTF JSON is a {type(tree).__name__}, not an object", file=path)
+    return tree
+
+
+def _gltf_external_files(path: Path, tree: dict) -> list[tuple[str, str, Path, int | None]]:
+    """(kind, uri, file, byteLength or None) of every buffer and image a glTF names by a
+    non-``data:`` URI; raises a `UserError` for one that does not exist."""
+    out = []
+    for kind, items in (("buffer", tree.get("buffers")), ("image", tree.get("images"))):
+        for item in items if isinstance(items, list) else []:
+            uri = item.get("uri") if isinstance(item, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:"):
+                continue
+            file = path.parent / unquote(uri)
+            if not file.is_file():
+                raise UserError(f"glTF {kind} {uri!r} named by {path.name} not found", file=path)
+            byte_length = item.get("byteLength") if kind == "buffer" else None
+            out.append((kind, uri, file, byte_length if isinstance(byte_length, int) else None))
+    return out
+
+
+def _obj_external_files(path: Path) -> list[Path]:
+    """The existing ``mtllib`` files of an OBJ and the existing texture maps they name."""
+    files = []
+    for mtl in _named_files(path, {"mtllib"}, whole_words=True):
+        files.append(mtl)
+        files += _named_files(mtl, _MTL_MAPS, whole_words=False)
+    return files
+
+
+def _named_files(path: Path, keywords: set, whole_words: bool) -> list[Path]:
+    """Existing files named by the lines of text file `path` that start with one of `keywords`,
+    relative to its folder. A statement's rest of line is one file name if such a file exists
+    (names with spaces); otherwise each word (``whole_words``: ``mtllib a.mtl b.mtl``) or the
+    last word (texture maps, after their options) is."""
+    files = []
+    for line in path.read_text(errors="replace").splitlines():
+        words = line.split()
+        if len(words) < 2 or words[0].lower() not in keywords:
+            continue
+        rest = line.strip()[len(words[0]):].strip()
+        candidates = [rest] if (path.parent / rest).is_file() else (words[1:] if whole_words else words[-1:])
+        files += [path.parent / c for c in candidates if (path.parent / c).is_file()]
+    return files
 
 
 def _read_obj(path: Path) -> trimesh.Scene:
@@ -143,7 +382,10 @@ def _read_obj(path: Path) -> trimesh.Scene:
     the names only (appearance is irrelevant here), so the real library is replaced by one that
     just declares them.
     """
-    text = path.read_text(errors="replace")
+    data = path.read_bytes()
+    if b"\0" in data:
+        raise UserError("not a valid OBJ file (binary data, not OBJ text)", file=path)
+    text = data.decode(errors="replace")
     names = list(dict.fromkeys(re.findall(r"^[ \t]*usemtl[ \t]+(.+?)[ \t]*$", text, flags=re.MULTILINE)))
     text = re.sub(r"^[ \t]*mtllib\b.*$", "", text, flags=re.MULTILINE)
     resolver = None
@@ -249,6 +491,12 @@ def build_geometry(entries, scenario_file=None) -> SceneGeometry:
             errors.extend(e.errors if isinstance(e, UserErrors) else [e])
             continue
         label = f"{key}:{getattr(entry, 'name', None) or Path(entry.mesh).name}"
+        reach = float(np.abs(v).max()) if len(v) else 0.0
+        if not reach <= MAX_COORDINATE:
+            errors.append(UserError(f"{entry.mesh}: a vertex lies {reach:.3g} m from the origin (after the transform); "
+                                    f"pmmw scenes lie within {MAX_COORDINATE:g} m of it (is a unit or scale wrong?)",
+                                    scenario_file, f"{key}.mesh"))
+            continue
         closed, volume = _closed_and_volume(v, f)
         if closed and volume < 0.0:
             f = np.ascontiguousarray(f[:, ::-1])
@@ -305,7 +553,10 @@ def _build_entry(entry, key: str, scenario_file):
     if not mesh_path.is_file():
         raise UserError(f"mesh file not found: {mesh_path}", file=scenario_file, key=f"{key}.mesh")
 
-    parts = load_entry_mesh(mesh_path, getattr(entry, "up_axis", None))
+    try:
+        parts = load_entry_mesh(mesh_path, getattr(entry, "up_axis", None))
+    except UserError as e:
+        raise UserError(f"{e.file or mesh_path}: {e.message}", file=scenario_file, key=f"{key}.mesh") from None
     names = [name for name, _ in parts]
     if materials:
         have = list(dict.fromkeys(names))
@@ -344,7 +595,9 @@ def _build_entry(entry, key: str, scenario_file):
         warn(f"{key}: dropped {int((~ok).sum())} degenerate (zero-area) faces of {len(f)} in {mesh_path.name}")
         f, part = f[ok], part[ok]
     if len(f) == 0:
-        raise UserError("the mesh has no triangles of non-zero area", file=mesh_path)
+        raise UserError(
+            f"{mesh_path}: the mesh has no triangles of non-zero area", file=scenario_file, key=f"{key}.mesh"
+        )
     return v, np.ascontiguousarray(f), part, names
 
 

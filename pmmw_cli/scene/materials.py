@@ -43,10 +43,10 @@ from pathlib import Path
 from typing import Annotated, Any, Iterable, Literal, Optional
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, StrictStr, ValidationError
 
 from pmmw_cli.errors import UserError, UserErrors, warn
+from pmmw_cli.io.yamlio import read_yaml
 from pmmw_cli.physics.roughness import make_model
 from pmmw_cli.scene.bump import make_bump
 from pmmw_cli.units import parse_quantity
@@ -484,49 +484,8 @@ def _raise(errors: list[UserError]) -> None:
         raise UserErrors(errors)
 
 
-# ----------------------------------------------------------------------------------------------
-# YAML reading: line numbers on syntax errors, duplicate keys are errors
-# ----------------------------------------------------------------------------------------------
-
-
-class _Loader(yaml.SafeLoader):
-    pass
-
-
-def _construct_mapping(loader, node, deep=False):
-    loader.flatten_mapping(node)
-    seen = set()
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        try:
-            dup = key in seen
-            seen.add(key)
-        except TypeError:  # unhashable key: let the stock constructor report it
-            break
-        if dup:
-            raise yaml.constructor.ConstructorError(
-                "while constructing a mapping", node.start_mark, f"found duplicate key {key!r}", key_node.start_mark
-            )
-    return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
-
-
-_Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-
-
 def _read_yaml(path: Path):
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as e:
-        raise UserError(f"cannot read material database file: {e.strerror or e}", path) from None
-    try:
-        return yaml.load(text, Loader=_Loader)  # noqa: S506 (a SafeLoader subclass)
-    except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark or e.context_mark
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
-        what = ": ".join(p for p in (e.context, e.problem) if p)
-        raise UserError(f"invalid YAML at {where}{what}", path) from None
-    except yaml.YAMLError as e:
-        raise UserError(f"invalid YAML: {e}", path) from None
+    return read_yaml(path, "material database file")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from pmmw_cli.errors import UserError
+from pmmw_cli.units import TEMPERATURE_MAX
 from pmmw_cli.io.exr import read_exr, write_exr
 
 #: Channel names of a sky texture: vertical and horizontal polarization [K].
@@ -38,12 +39,13 @@ _TWO_PI = 2.0 * np.pi
 
 def _check_temperatures(name: str, t: np.ndarray) -> str | None:
     """A description of the first bad pixel of a temperature map, or None if all are valid."""
-    bad = ~np.isfinite(t) | (t < 0.0)
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(t) | (t < 0.0) | (t > TEMPERATURE_MAX)
     if not bad.any():
         return None
     v, u = np.argwhere(bad)[0]
-    return (f"channel {name!r} has {int(bad.sum())} negative or non-finite pixel(s), the first at "
-            f"row {v}, column {u}: {t[v, u]} (temperatures must be finite and >= 0 K)")
+    return (f"channel {name!r} has {int(bad.sum())} negative, too hot or non-finite pixel(s), the first at "
+            f"row {v}, column {u}: {t[v, u]} (temperatures must be finite, 0 K to {TEMPERATURE_MAX:g} K)")
 
 
 class SkyTexture:

@@ -45,6 +45,7 @@ _TINY = 1e-12
 _A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
 _MAX_WALK = 1000  # facet events of one walk through rough coating layers (never reached in tests)
+MAX_WAVE = 1 << 16  # camera rays traced at once: a tile's pass of more is split, so memory is flat in spp
 
 
 @dataclass
@@ -346,22 +347,24 @@ class Integrator:
         done = 0
         batch = st.min_spp if adaptive else st.spp
         while active.size and done < st.spp:
-            nb = min(batch, st.spp - done)
-            vals, first_t, first_m, cut = self._trace(pixels[active], done, nb)
-            v = vals.reshape(active.size, nb, 4)
-            trunc[active] += cut.reshape(active.size, nb, 2).sum(axis=1)
-            if done == 0:
-                ref[active] = v.mean(axis=1)
-                with np.errstate(invalid="ignore"):
-                    depth[active] = first_t.reshape(active.size, nb).mean(axis=1)
-                material[active] = first_m.reshape(active.size, nb)[:, 0]
-            dv = v - ref[active][:, None, :]
-            s1[active] += dv.sum(axis=1)
-            s2[active] += (dv * dv).sum(axis=1)
-            count[active] += nb
-            for r in range(REPLICATES):
-                r1[active, r] += dv[:, (r - done) % REPLICATES::REPLICATES].sum(axis=1)
-            done += nb
+            end = min(done + batch, st.spp)
+            while done < end:  # the pass in chunks of at most MAX_WAVE camera rays: memory stays flat in spp
+                nb = min(end - done, max(1, MAX_WAVE // active.size))
+                vals, first_t, first_m, cut = self._trace(pixels[active], done, nb)
+                v = vals.reshape(active.size, nb, 4)
+                trunc[active] += cut.reshape(active.size, nb, 2).sum(axis=1)
+                if done == 0:
+                    ref[active] = v.mean(axis=1)
+                    with np.errstate(invalid="ignore"):
+                        depth[active] = first_t.reshape(active.size, nb).mean(axis=1)
+                    material[active] = first_m.reshape(active.size, nb)[:, 0]
+                dv = v - ref[active][:, None, :]
+                s1[active] += dv.sum(axis=1)
+                s2[active] += (dv * dv).sum(axis=1)
+                count[active] += nb
+                for r in range(REPLICATES):
+                    r1[active, r] += dv[:, (r - done) % REPLICATES::REPLICATES].sum(axis=1)
+                done += nb
             if not adaptive:
                 break
             err = _stderr(s1[active], s2[active], count[active])

@@ -1,30 +1,61 @@
-"""Render the tiles of a job on a process pool.
+"""Render the tiles of a job on worker processes.
 
-Each worker builds the Embree scene once (in the pool initializer) and renders whole tiles.
-Tiles are fixed by the job (not by the worker count) and each tile seeds its own random stream
-from (run seed, tile index), so images are identical whatever ``--workers`` is.
+Each worker builds the Embree scene once and then renders whole tiles, one at a time, that the
+parent sends it over a pipe. Tiles are fixed by the job (not by the worker count) and each tile
+seeds its own random stream from (run seed, tile index), so images are identical whatever
+``--workers`` is.
 
 Finished tiles are saved atomically to ``tile_dir`` as they arrive; with ``resume`` the tiles
-already there are loaded instead of re-rendered, so an interrupted render loses nothing.
+already there are checked and loaded instead of re-rendered, so an interrupted render loses
+nothing.
+
+The parent waits on every worker's pipe and process sentinel together, so a worker that dies (the
+kernel's OOM killer sends SIGKILL) is seen at once, with the tile it was rendering: that tile is
+rendered once more by another process, and if it kills that one too the render stops with an
+`EnvironmentProblem` naming it. (``multiprocessing.Pool`` never notices a dead worker and waits
+forever; ``concurrent.futures`` does notice but cannot say which task killed it.) Workers ignore
+SIGINT; the parent kills and reaps them on every way out (`pmmw_cli.interrupt`).
 """
 
 from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import pickle
+import signal
 import sys
 import time
+import traceback
+from collections import deque
 from dataclasses import dataclass
+from multiprocessing.connection import wait
 from pathlib import Path
 
 import numpy as np
 
+from pmmw_cli import interrupt
+from pmmw_cli.errors import EnvironmentProblem
 from pmmw_cli.io.atomic import save_npz_atomic
 from pmmw_cli.trace.integrator import Integrator, TileResult
 from pmmw_cli.trace.intersect import make_intersector
 from pmmw_cli.trace.job import TraceJob
 
 _WORKER: Integrator | None = None
+
+#: Renders more of a tile whose worker process died, each in another process.
+_RETRIES = 1
+
+#: What a saved tile must hold (`TileResult`): per array, its channels after (h, w) (None: none),
+#: dtype kind, and the test every value passes. Depth is inf where every sample saw the sky.
+_TILE_ARRAYS = {
+    "mean": (4, "f", np.isfinite),
+    "stderr": (4, "f", lambda a: np.isfinite(a) & (a >= 0.0)),
+    "depth": (None, "f", lambda a: a >= 0.0),
+    "material": (None, "f", lambda a: np.isfinite(a) & (a >= -1.0)),
+    "samples": (None, "i", lambda a: a >= 1),
+    "truncated": (2, "f", np.isfinite),
+    "replicate_diff": (4, "f", np.isfinite),
+}
 
 
 def _init_worker(job: TraceJob, kind: str):
@@ -48,16 +79,28 @@ def _save_tile(tile_dir: Path, r: TileResult):
     )
 
 
-def _load_tile(path: Path) -> TileResult | None:
+def _load_tile(path: Path, tile) -> TileResult | None:
+    """The result saved at ``path`` for ``tile`` (index, x0, y0, x1, y1), or None (render it again)
+    when the file is missing, damaged, another tile's, or holds a wrong shape, dtype or value."""
+    index, x0, y0, x1, y1 = tile
     try:
         with np.load(path) as z:
-            return TileResult(
-                int(z["index"]), tuple(int(v) for v in z["box"]), z["mean"], z["stderr"],
-                z["depth"], z["material"], int(z["rays"]), z["samples"], float(z["t_isect"]),
-                z["truncated"], z["replicate_diff"],
+            arrays = {k: z[k] for k in _TILE_ARRAYS}
+            r = TileResult(
+                int(z["index"]), tuple(int(v) for v in z["box"]), arrays["mean"], arrays["stderr"],
+                arrays["depth"], arrays["material"], int(z["rays"]), arrays["samples"],
+                float(z["t_isect"]), arrays["truncated"], arrays["replicate_diff"],
             )
-    except Exception:  # a damaged tile file is simply rendered again
+    except Exception:  # unreadable, a key missing, a scalar that is not one
         return None
+    if r.index != index or r.box != (x0, y0, x1, y1) or r.rays < 0 or not r.t_isect >= 0.0:
+        return None
+    for key, (channels, kind, valid) in _TILE_ARRAYS.items():
+        a = arrays[key]
+        shape = (y1 - y0, x1 - x0) + (() if channels is None else (channels,))
+        if a.shape != shape or a.dtype.kind != kind or not np.all(valid(a)):
+            return None
+    return r
 
 
 def default_workers() -> int:
@@ -80,6 +123,12 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     tile_dir : Path, optional
         Where finished tiles are saved (and, with ``resume``, loaded from).
     progress : callable(done, total, rays, elapsed), optional
+
+    Raises
+    ------
+    EnvironmentProblem
+        A tile's worker process died on every try (`_RETRIES`), or workers keep dying before
+        they render anything. The tiles finished by then are saved.
     """
     tiles = job.tiles() if tiles is None else tiles
     results: dict[int, TileResult] = {}
@@ -87,11 +136,9 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
         tile_dir.mkdir(parents=True, exist_ok=True)
         if resume:
             for t in tiles:
-                path = _tile_path(tile_dir, t[0])
-                if path.exists():
-                    r = _load_tile(path)
-                    if r is not None and r.box == tuple(t[1:]):
-                        results[t[0]] = r
+                r = _load_tile(_tile_path(tile_dir, t[0]), t)
+                if r is not None:
+                    results[t[0]] = r
     todo = [t for t in tiles if t[0] not in results]
     workers = default_workers() if workers is None else max(1, int(workers))
     workers = min(workers, max(1, len(todo)))
@@ -112,11 +159,145 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
         for t in todo:
             _collect(_render(t))
     elif todo:
-        ctx = mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
-        with ctx.Pool(workers, initializer=_init_worker, initargs=(job, intersector)) as pool:
-            for r in pool.imap_unordered(_render, todo, chunksize=1):
-                _collect(r)
+        _render_on_workers(job, intersector, todo, workers, _collect)
     return [results[t[0]] for t in tiles]
+
+
+class _Worker:
+    """A worker process, the parent's end of its pipe, and the tile it renders (None: none)."""
+
+    def __init__(self, process, conn):
+        self.process = process
+        self.conn = conn
+        self.tile = None
+
+
+class _WorkerTraceback(Exception):
+    """The traceback of an exception raised in a worker: the cause of the one re-raised here."""
+
+
+def _attempt(fn, *args):
+    """``("ok", fn(*args))``, or ``("error", (exception, traceback))`` for the parent to raise."""
+    try:
+        return "ok", fn(*args)
+    except Exception as e:
+        text = traceback.format_exc()
+        try:
+            pickle.loads(pickle.dumps(e))
+        except Exception:
+            e = RuntimeError(f"{type(e).__name__}: {e}")
+        return "error", (e, text)
+
+
+def _work(conn, job: TraceJob, kind: str, inherited):
+    """A worker's life: build the scene (then say so), render each tile the parent sends.
+
+    ``inherited`` are the parent's ends of pipes that the fork copied here; closed, so that a
+    worker sees EOF (and returns) once its parent is gone.
+    """
+    interrupt.as_worker()
+    for c in inherited:
+        c.close()
+    try:
+        conn.send(_attempt(_init_worker, job, kind))
+        while True:
+            conn.send(_attempt(_render, conn.recv()))
+    except (EOFError, OSError):  # the parent is done with us, or gone
+        return
+
+
+def _death(exitcode: int, remedy: str) -> str:
+    """How a worker process ended, from its exit code (-N: signal N), and what to try."""
+    if exitcode >= 0:
+        return f"exited with status {exitcode}"
+    try:
+        name = f"signal {-exitcode} ({signal.Signals(-exitcode).name})"
+    except ValueError:
+        name = f"signal {-exitcode}"
+    if -exitcode == signal.SIGKILL:  # what the kernel's OOM killer sends
+        return f"was killed by {name}, probably for lack of memory ({remedy})"
+    return f"died of {name}"
+
+
+_KEPT = "finished tiles are kept: run again with --resume"
+
+
+def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
+    """Render the tiles ``todo`` on ``n`` worker processes, calling ``collect`` with each result."""
+    ctx = mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
+    forked = ctx.get_start_method() == "fork"
+    queue = deque(todo)
+    deaths = dict.fromkeys((t[0] for t in todo), 0)
+    idle_deaths = 0
+    live: list[_Worker] = []
+    retired: list[_Worker] = []
+
+    def start():
+        ours, theirs = ctx.Pipe()
+        inherited = [w.conn for w in live] + [ours] if forked else []
+        with interrupt.deferred():
+            p = ctx.Process(target=_work, args=(theirs, job, kind, inherited), daemon=True)
+            p.start()
+            live.append(_Worker(p, ours))
+        theirs.close()
+
+    try:
+        for _ in range(n):
+            start()
+        while live:
+            ready = set(wait([w.conn for w in live] + [w.process.sentinel for w in live]))
+            for w in [w for w in live if w.conn in ready or w.process.sentinel in ready]:
+                reply = None
+                if w.conn in ready:
+                    try:
+                        reply = w.conn.recv()
+                    except (EOFError, OSError):  # it died: its sentinel is ready too
+                        pass
+                if reply is not None:
+                    status, value = reply
+                    if status == "error":
+                        raise value[0] from _WorkerTraceback(value[1])
+                    if value is not None:  # a tile (None: the worker is ready)
+                        collect(value)
+                    w.tile = None
+                if reply is None or w.process.sentinel in ready:
+                    live.remove(w)
+                    w.process.join()
+                    w.conn.close()
+                    if w.tile is None:
+                        idle_deaths += 1
+                        if idle_deaths > n:
+                            how = _death(w.process.exitcode, "use fewer --workers")
+                            raise EnvironmentProblem(f"{idle_deaths} worker processes died before rendering a "
+                                                     f"tile, the last one {how}; {_KEPT}")
+                    else:
+                        index, x0, y0, x1, y1 = w.tile
+                        deaths[index] += 1
+                        if deaths[index] > _RETRIES:
+                            how = _death(w.process.exitcode, "lower render.spp or render.tile, or use fewer --workers")
+                            raise EnvironmentProblem(f"tile {index} (pixels x {x0}..{x1 - 1}, y {y0}..{y1 - 1}): the "
+                                                     f"worker process rendering it {how}, on each of "
+                                                     f"{deaths[index]} tries; {_KEPT}")
+                        queue.appendleft(w.tile)
+                    if queue:
+                        start()
+                elif queue:
+                    w.tile = queue.popleft()
+                    try:
+                        w.conn.send(w.tile)
+                    except OSError:  # it died just now: its sentinel says so next
+                        pass
+                else:  # nothing left for it: EOF ends it
+                    live.remove(w)
+                    w.conn.close()
+                    retired.append(w)
+    finally:
+        with interrupt.deferred():
+            for w in live + retired:
+                w.conn.close()
+                w.process.kill()
+            for w in live + retired:
+                w.process.join()
 
 
 def assemble(job: TraceJob, results: list[TileResult]):
