@@ -355,3 +355,20 @@ def test_no_traceback_from_the_console_script_for_an_unwritable_output(tmp_path)
     assert p.returncode in (1, 2) and "Traceback" not in p.stderr
     assert p.stderr.strip().count("\n") == 0 and p.stderr.startswith("error:"), p.stderr
     assert os.path.exists(tmp_path / "file")
+
+
+def test_a_read_only_output_folder_is_one_line_with_status_1(tmp_path, monkeypatch):
+    """A read-only file system was a traceback. (The test runs as root, which writes anywhere, so
+    the file system's refusal is simulated where pmmw creates the folder.)"""
+    real = Path.mkdir
+    target = tmp_path / "ro" / "out"
+
+    def read_only(self, *a, **k):
+        if self == target:
+            raise OSError(errno.EROFS, "Read-only file system", str(self))
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(Path, "mkdir", read_only)
+    res = _run("render", _scene(tmp_path), "--out", target)
+    assert res.exit_code == 1
+    _one_error_line(res, str(target), "cannot create the output folder: the file system is read-only")
