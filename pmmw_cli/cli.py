@@ -264,6 +264,42 @@ def brdf(
 
 @app.command()
 @_user_errors
+def po(
+    mesh: Path = typer.Argument(..., help="Mesh file (glTF/GLB, OBJ, PLY, STL), in metres."),
+    material: Optional[str] = typer.Option(None, "--material", metavar="ID", help="Material id from the database."),
+    eps: Optional[str] = typer.Option(None, "--eps", metavar="EPS", help="Permittivity eps' + i eps'', e.g. 5.5+0.5j."),
+    frequency: str = typer.Option(..., "--frequency", "-f", help="e.g. '95 GHz'."),
+    incidence: str = typer.Option("0,0", "--incidence", metavar="THETA,PHI",
+                                  help="Direction the wave comes from, degrees (theta from +z, phi from +x)."),
+    polarization: str = typer.Option("theta", "--polarization", help="Incident E along theta-hat or phi-hat."),
+    theta: Optional[str] = typer.Option(None, "--theta", metavar="START:STOP:STEP",
+                                        help="Observation theta in degrees (default 0:180:1)."),
+    phi: Optional[str] = typer.Option(None, "--phi", metavar="P1,P2,...",
+                                      help="Observation phi cuts in degrees (default: the incidence's phi)."),
+    monostatic: bool = typer.Option(False, "--monostatic", help="Each observation direction is also the incidence."),
+    bounces: int = typer.Option(1, "--bounces", help="Reflections traced before radiating (1: physical optics)."),
+    method: str = typer.Option("direct", "--method", help="Far-field summation: direct."),
+    fmt: str = typer.Option("table", "--format", help="csv, json or table (to standard output)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Also write po.csv and po.json in this folder."),
+    plot: Optional[Path] = typer.Option(None, "--plot", metavar="FILE.png", help="Write a plot of RCS against theta."),
+):
+    """Radar cross section of a mesh by physical optics (bistatic pattern or monostatic cuts)."""
+    from pmmw_cli.po.command import format_rows, run_po, write_outputs, write_plot
+
+    if fmt not in ("csv", "json", "table"):
+        raise UserError(f"expected csv, json or table, got {fmt!r}", "--format")
+    res = run_po(mesh, material=material, eps=eps, frequency=_frequency(frequency), incidence=incidence,
+                 polarization=polarization, theta=theta, phi=phi, monostatic=monostatic, bounces=bounces,
+                 method=method)
+    typer.echo(format_rows(res, fmt))
+    if out is not None:
+        write_outputs(res, out)
+    if plot is not None:
+        write_plot(res, plot, Path(mesh).name)
+
+
+@app.command()
+@_user_errors
 def bench(
     scenarios: Optional[List[Path]] = typer.Argument(None, help="Scenario YAML files."),
     spp: str = typer.Option("1,2,4,8,16,32", "--spp", help="Comma-separated samples per pixel to try."),

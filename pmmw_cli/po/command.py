@@ -1,0 +1,230 @@
+"""`pmmw po`: bistatic and monostatic radar cross sections of a mesh (physical optics).
+
+Options are parsed and checked here (every bad value is a `UserError` naming the option); the
+physics is `pmmw_cli.po.solver`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from pmmw_cli.errors import UserError
+from pmmw_cli.io.atomic import atomic_path, write_text_atomic
+from pmmw_cli.po import solver
+
+CSV_HEADER = "theta_deg,phi_deg,rcs_theta_m2,rcs_phi_m2"
+MAX_DIRECTIONS = 1_000_000
+
+
+def _floats(text: str, option: str, count: int | None = None, example: str = "30,0") -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or (count is not None and len(values) != count) or not all(math.isfinite(v) for v in values):
+        n = f"{count} " if count else ""
+        raise UserError(f"expected {n}comma-separated angles in degrees like {example}, got {text!r}", option)
+    return values
+
+
+def parse_incidence(text: str) -> tuple[float, float]:
+    """``"THETA,PHI"`` [deg] -> (theta, phi) [rad]; theta in [0, 180]."""
+    th, ph = _floats(text, "--incidence", 2)
+    if not 0.0 <= th <= 180.0:
+        raise UserError(f"theta must be within 0..180 deg, got {th:g}", "--incidence")
+    return math.radians(th), math.radians(ph)
+
+
+def parse_theta(text: str) -> np.ndarray:
+    """``"START:STOP:STEP"`` [deg] (STOP included when the steps land on it), or one angle."""
+    parts = text.split(":")
+    try:
+        nums = [float(p) for p in parts]
+    except ValueError:
+        nums = []
+    if len(nums) not in (1, 3) or not all(math.isfinite(v) for v in nums):
+        raise UserError(f"expected START:STOP:STEP in degrees like 0:180:1 (or one angle), got {text!r}", "--theta")
+    if len(nums) == 1:
+        values = np.array(nums)
+    else:
+        start, stop, step = nums
+        if step <= 0.0:
+            raise UserError(f"the step must be > 0 deg, got {step:g}", "--theta")
+        count = int(math.floor((stop - start) / step + 1e-9)) + 1
+        if count < 1:
+            raise UserError(f"no angle from {start:g} to {stop:g} deg (STOP must be >= START)", "--theta")
+        if count > MAX_DIRECTIONS:
+            raise UserError(f"{count} angles; at most {MAX_DIRECTIONS}", "--theta")
+        values = start + step * np.arange(count)
+    if values.min() < 0.0 or values.max() > 180.0:
+        raise UserError("theta must lie within 0..180 deg", "--theta")
+    return np.radians(values)
+
+
+def parse_phi(text: str) -> np.ndarray:
+    return np.radians(_floats(text, "--phi", None, "0,90"))
+
+
+@dataclass
+class Result:
+    theta: np.ndarray  # (D,) [rad]
+    phi: np.ndarray
+    rcs_theta: np.ndarray  # [m^2]
+    rcs_phi: np.ndarray
+    summary: dict
+
+
+def load_target(mesh: Path, material: str | None, eps: str | None, f: float) -> solver.Target:
+    """The mesh with one material: a database id or a permittivity."""
+    from pmmw_cli.brdf import parse_complex
+    from pmmw_cli.pipeline import build_media
+    from pmmw_cli.scene.geometry import load_entry_mesh
+    from pmmw_cli.scene.materials import MaterialDB
+
+    if (material is None) == (eps is None):
+        raise UserError("give exactly one of --material ID or --eps EPS", "--material")
+    db = MaterialDB.load()
+    if eps is not None:
+        value = parse_complex(eps, file="--eps")
+        if not (np.isfinite(value.real) and np.isfinite(value.imag)) or value.imag < 0.0:
+            raise UserError(f"expected a finite permittivity with eps'' >= 0 (lossy), got {eps!r}", "--eps")
+        material = "po_eps"
+        db = db.with_overrides({material: {"eps": [value.real, value.imag]}}, file="--eps")
+    else:
+        mat = db.get(material, file="--material")
+        if mat.roughness is not None or mat.bump is not None:
+            from pmmw_cli.errors import warn
+
+            warn(f"material {material!r} is rough; physical optics takes its surface as smooth")
+    parts = load_entry_mesh(mesh)
+    verts, faces, off = [], [], 0
+    for _, m in parts:
+        verts.append(np.asarray(m.vertices, float))
+        faces.append(np.asarray(m.faces, np.int64) + off)
+        off += len(m.vertices)
+    scn = SimpleNamespace(render=SimpleNamespace(default_temperature=290.0), atmosphere=None)
+    media = build_media(db, [material], f, scn)
+    faces_all = np.concatenate(faces)
+    return solver.Target(np.concatenate(verts), faces_all, np.ones(len(faces_all), int), media)
+
+
+def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, polarization="theta",
+           theta=None, phi=None, monostatic=False, bounces=1, method="direct") -> Result:
+    """The ``pmmw po`` job; see the command's help."""
+    if polarization not in ("theta", "phi"):
+        raise UserError(f"expected theta or phi, got {polarization!r}", "--polarization")
+    if bounces != 1:
+        raise UserError("only single-bounce physical optics is implemented (--bounces 1); shooting and "
+                        "bouncing rays for dihedrals and trihedrals is not yet", "--bounces")
+    if method != "direct":
+        raise UserError(f"only the direct sum is implemented (--method direct), got {method!r}", "--method")
+    th_i, ph_i = parse_incidence(incidence)
+    thetas = parse_theta(theta) if theta is not None else np.radians(np.arange(0.0, 180.5, 1.0))
+    phis = parse_phi(phi) if phi is not None else np.array([ph_i])
+    if thetas.size * phis.size > MAX_DIRECTIONS:
+        raise UserError(f"{thetas.size * phis.size} directions; at most {MAX_DIRECTIONS}", "--theta")
+    pp, tt = np.meshgrid(phis, thetas, indexing="ij")  # rows: each phi cut in theta order
+    tt, pp = tt.ravel(), pp.ravel()
+    t0 = time.perf_counter()
+    target = load_target(Path(mesh), material, eps, frequency)
+    k0 = 2.0 * np.pi * frequency / solver.C0
+    if monostatic:
+        s_t, s_p, n_lit = solver.monostatic(target, k0, polarization, tt, pp)
+        back = None
+        lit = int(n_lit.max(initial=0))
+        if lit == 0:
+            raise UserError("no facet is lit from any of the directions", "--theta")
+    else:
+        s_t, s_p, lit = solver.bistatic(target, k0, th_i, ph_i, polarization, tt, pp)
+        if lit == 0:
+            raise UserError("no facet of the mesh is lit from this direction", "--incidence")
+        b_t, b_p, _ = solver.bistatic(target, k0, th_i, ph_i, polarization, np.array([th_i]), np.array([ph_i]))
+        back = float(b_t[0] + b_p[0])
+    total = s_t + s_p
+    peak = int(np.argmax(total))
+    summary = {
+        "frequency_hz": float(frequency), "wavelength_m": solver.C0 / frequency,
+        "incidence_deg": [math.degrees(th_i), math.degrees(ph_i)], "polarization": polarization,
+        "monostatic": bool(monostatic), "method": method, "bounces": bounces,
+        "facets": int(len(target.faces)), "facets_lit": lit,
+        "backscatter_rcs_m2": back if back is not None else None,
+        "peak": {"theta_deg": math.degrees(tt[peak]), "phi_deg": math.degrees(pp[peak]),
+                 "rcs_m2": float(total[peak]), "rcs_dBsm": _dbsm(total[peak])},
+        "time_s": round(time.perf_counter() - t0, 3),
+    }
+    if monostatic:
+        summary.pop("incidence_deg")
+    return Result(tt, pp, s_t, s_p, summary)
+
+
+def _dbsm(x):
+    return float(10.0 * np.log10(max(float(x), 1e-30)))
+
+
+def format_rows(res: Result, fmt: str) -> str:
+    rows = [(math.degrees(t), math.degrees(p), a, b)
+            for t, p, a, b in zip(res.theta, res.phi, res.rcs_theta, res.rcs_phi)]
+    if fmt == "csv":
+        return "\n".join([CSV_HEADER] + [f"{t:.6g},{p:.6g},{a:.9g},{b:.9g}" for t, p, a, b in rows])
+    if fmt == "json":
+        return json.dumps({**res.summary, "rows": [
+            {"theta_deg": t, "phi_deg": p, "rcs_theta_m2": a, "rcs_phi_m2": b} for t, p, a, b in rows]}, indent=2)
+    if fmt == "table":
+        s = res.summary
+        head = [f"{s['frequency_hz'] / 1e9:g} GHz, {s['polarization']} polarization, "
+                + ("monostatic" if s["monostatic"] else f"incidence theta {s['incidence_deg'][0]:g} deg, "
+                   f"phi {s['incidence_deg'][1]:g} deg")
+                + f"; {s['facets_lit']} of {s['facets']} facets lit; {s['time_s']:.2f} s"]
+        if s["backscatter_rcs_m2"] is not None:
+            head.append(f"backscatter {s['backscatter_rcs_m2']:.4g} m^2 ({_dbsm(s['backscatter_rcs_m2']):.2f} dBsm)")
+        p = s["peak"]
+        head.append(f"peak {p['rcs_m2']:.4g} m^2 ({p['rcs_dBsm']:.2f} dBsm) at theta {p['theta_deg']:g}, "
+                    f"phi {p['phi_deg']:g} deg")
+        lines = [f"{'theta_deg':>9} {'phi_deg':>8} {'rcs_theta_dBsm':>15} {'rcs_phi_dBsm':>13}"]
+        lines += [f"{t:9.3f} {p_:8.3f} {_dbsm(a):15.3f} {_dbsm(b):13.3f}" for t, p_, a, b in rows]
+        return "\n".join(head + lines)
+    raise UserError(f"expected csv, json or table, got {fmt!r}", "--format")
+
+
+def write_outputs(res: Result, out: Path) -> list[Path]:
+    """``po.csv`` and ``po.json`` in ``out``, atomically."""
+    out.mkdir(parents=True, exist_ok=True)
+    return [write_text_atomic(out / "po.csv", format_rows(res, "csv") + "\n"),
+            write_text_atomic(out / "po.json", format_rows(res, "json") + "\n")]
+
+
+def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
+    """RCS in dBsm against theta, one line per phi cut and polarization."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = res.summary
+    fig, ax = plt.subplots(figsize=(7.0, 4.4), dpi=110)
+    for p in np.unique(res.phi):
+        sel = res.phi == p
+        for comp, style in ((res.rcs_theta, "-"), (res.rcs_phi, "--")):
+            if np.any(comp[sel] > 0):
+                label = f"phi {math.degrees(p):g} deg, sigma_{'theta' if comp is res.rcs_theta else 'phi'}"
+                ax.plot(np.degrees(res.theta[sel]), 10 * np.log10(np.maximum(comp[sel], 1e-30)), style, label=label)
+    mode = "monostatic" if s["monostatic"] else f"incidence ({s['incidence_deg'][0]:g}, {s['incidence_deg'][1]:g}) deg"
+    ax.set_title(f"{mesh_name}: {s['frequency_hz'] / 1e9:g} GHz, {s['polarization']} polarization, {mode}")
+    ax.set_xlabel("theta [deg]")
+    ax.set_ylabel("RCS [dBsm]")
+    peak = s["peak"]["rcs_dBsm"]
+    ax.set_ylim(peak - 60.0, peak + 5.0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp)
+    plt.close(fig)
+    return path
