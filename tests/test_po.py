@@ -185,3 +185,45 @@ def test_a_mesh_with_nan_vertices_is_refused(tmp_path):
     (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n")
     res = runner.invoke(app, ["po", str(tmp_path / "nan.obj"), "--material", "metal", "--frequency", "95 GHz"])
     assert res.exit_code == 2 and "not finite" in res.output
+
+
+def _sphere(tmp_path, radius, subdivisions):
+    path = tmp_path / f"sphere_{subdivisions}.ply"
+    trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius).export(path)
+    return path
+
+
+@pytest.mark.parametrize("ka, sub, eps", [(50, 5, None), (100, 6, None), (50, 5, 5.5 + 0.5j)])
+def test_sphere_backscatter_against_mie(tmp_path, ka, sub, eps):
+    """A faceted sphere against the exact Mie series (tests/po_refs.py, no shared code): PO's
+    backscatter error at these sizes is the O(1/ka) creeping-wave and edge terms PO lacks
+    (PO exact for a PEC sphere: 1 - sin(2ka)/ka + ..., i.e. within 1/ka = 0.09 dB at ka 50) plus
+    the facets' (sagitta < lambda/100 here); the issue's bound is a few tenths of a dB. The lossy
+    sphere (eps 5.5+0.5j absorbs ~20 Np across its diameter) returns only its front-face
+    reflection, which PO has exactly."""
+    from tests.po_refs import sphere_backscatter_rcs
+
+    radius = ka / K0
+    target = load_target(_sphere(tmp_path, radius, sub), "metal" if eps is None else None,
+                         None if eps is None else f"{eps.real}+{eps.imag}j", F)
+    s_t, s_p, _ = solver.bistatic(target, K0, 0.0, 0.0, "theta", np.array([0.0]), np.array([0.0]))
+    ours = 10 * np.log10(s_t[0] + s_p[0])
+    mie = 10 * np.log10(sphere_backscatter_rcs(radius, LAM, eps))
+    assert ours == pytest.approx(mie, abs=0.3)
+
+
+def test_sphere_bistatic_lit_region_against_mie(tmp_path):
+    """Bistatic PEC sphere at ka 50, observation 0-55 deg from the backscatter direction (specular
+    points well inside the lit region), both cuts: within 1 dB of Mie (the issue's bound; measured
+    0.5 dB). Farther out PO lacks the shadow boundary's diffraction and creeping waves: the
+    difference oscillates by up to +-2 dB at 80-100 deg (docs/validation.md), the same with 4x
+    the facets, so it is PO's and not the mesh's."""
+    from tests.po_refs import sphere_bistatic_rcs
+
+    radius = 50 / K0
+    target = load_target(_sphere(tmp_path, radius, 5), "metal", None, F)
+    theta = np.radians(np.linspace(0.0, 55.0, 12))
+    for phi in (0.0, np.pi / 2):
+        s_t, s_p, _ = solver.bistatic(target, K0, 0.0, 0.0, "theta", theta, np.full(theta.size, phi))
+        m_t, m_p = sphere_bistatic_rcs(radius, LAM, None, np.degrees(theta), np.degrees(phi))
+        assert np.max(np.abs(10 * np.log10((s_t + s_p) / (m_t + m_p)))) < 1.0
