@@ -277,7 +277,10 @@ def po(
     phi: Optional[str] = typer.Option(None, "--phi", metavar="P1,P2,...",
                                       help="Observation phi cuts in degrees (default: the incidence's phi)."),
     monostatic: bool = typer.Option(False, "--monostatic", help="Each observation direction is also the incidence."),
-    bounces: int = typer.Option(1, "--bounces", help="Reflections traced before radiating (1: physical optics)."),
+    bounces: int = typer.Option(1, "--bounces", help="Reflections whose currents radiate (1: physical optics; "
+                                                     "2+: ray tubes add the reflected waves' currents)."),
+    tube: Optional[str] = typer.Option(None, "--tube", metavar="LENGTH",
+                                       help="Ray-tube side for --bounces > 1 (default: a quarter wavelength)."),
     method: str = typer.Option("direct", "--method", help="Far-field summation: direct."),
     fmt: str = typer.Option("table", "--format", help="csv, json or table (to standard output)."),
     out: Optional[Path] = typer.Option(None, "--out", help="Also write po.csv and po.json in this folder."),
@@ -285,12 +288,13 @@ def po(
 ):
     """Radar cross section of a mesh by physical optics (bistatic pattern or monostatic cuts)."""
     from pmmw_cli.po.command import format_rows, run_po, write_outputs, write_plot
+    from pmmw_cli.units import parse_quantity
 
     if fmt not in ("csv", "json", "table"):
         raise UserError(f"expected csv, json or table, got {fmt!r}", "--format")
     res = run_po(mesh, material=material, eps=eps, frequency=_frequency(frequency), incidence=incidence,
                  polarization=polarization, theta=theta, phi=phi, monostatic=monostatic, bounces=bounces,
-                 method=method)
+                 method=method, tube=None if tube is None else parse_quantity(tube, "length", file="--tube"))
     typer.echo(format_rows(res, fmt))
     if out is not None:
         write_outputs(res, out)

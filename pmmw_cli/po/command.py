@@ -115,14 +115,19 @@ def load_target(mesh: Path, material: str | None, eps: str | None, f: float) -> 
     return solver.Target(np.concatenate(verts), faces_all, np.ones(len(faces_all), int), media)
 
 
+MAX_BOUNCES = 16
+
+
 def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, polarization="theta",
-           theta=None, phi=None, monostatic=False, bounces=1, method="direct") -> Result:
-    """The ``pmmw po`` job; see the command's help."""
+           theta=None, phi=None, monostatic=False, bounces=1, method="direct", tube=None) -> Result:
+    """The ``pmmw po`` job; see the command's help. ``tube``: ray-tube side [m] for bounces > 1
+    (default a quarter wavelength)."""
     if polarization not in ("theta", "phi"):
         raise UserError(f"expected theta or phi, got {polarization!r}", "--polarization")
-    if bounces != 1:
-        raise UserError("only single-bounce physical optics is implemented (--bounces 1); shooting and "
-                        "bouncing rays for dihedrals and trihedrals is not yet", "--bounces")
+    if not 1 <= bounces <= MAX_BOUNCES:
+        raise UserError(f"expected 1 to {MAX_BOUNCES} bounces, got {bounces}", "--bounces")
+    if tube is not None and not (math.isfinite(tube) and tube > 0.0):
+        raise UserError(f"the ray-tube side must be a length > 0, got {tube!r}", "--tube")
     if method != "direct":
         raise UserError(f"only the direct sum is implemented (--method direct), got {method!r}", "--method")
     th_i, ph_i = parse_incidence(incidence)
@@ -136,16 +141,17 @@ def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, p
     target = load_target(Path(mesh), material, eps, frequency)
     k0 = 2.0 * np.pi * frequency / solver.C0
     if monostatic:
-        s_t, s_p, n_lit = solver.monostatic(target, k0, polarization, tt, pp)
+        s_t, s_p, n_lit = _tubes(solver.monostatic, target, k0, polarization, tt, pp, bounces, tube)
         back = None
         lit = int(n_lit.max(initial=0))
         if lit == 0:
             raise UserError("no facet is lit from any of the directions", "--theta")
     else:
-        s_t, s_p, lit = solver.bistatic(target, k0, th_i, ph_i, polarization, tt, pp)
+        s_t, s_p, lit = _tubes(solver.bistatic, target, k0, th_i, ph_i, polarization, tt, pp, bounces, tube)
         if lit == 0:
             raise UserError("no facet of the mesh is lit from this direction", "--incidence")
-        b_t, b_p, _ = solver.bistatic(target, k0, th_i, ph_i, polarization, np.array([th_i]), np.array([ph_i]))
+        b_t, b_p, _ = _tubes(solver.bistatic, target, k0, th_i, ph_i, polarization, np.array([th_i]),
+                             np.array([ph_i]), bounces, tube)
         back = float(b_t[0] + b_p[0])
     total = s_t + s_p
     peak = int(np.argmax(total))
@@ -162,6 +168,13 @@ def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, p
     if monostatic:
         summary.pop("incidence_deg")
     return Result(tt, pp, s_t, s_p, summary)
+
+
+def _tubes(fn, *args):
+    try:
+        return fn(*args)
+    except ValueError as e:  # sbr.tube_grid: too many tubes for the target's size
+        raise UserError(f"{e}: the target is too large for this tube size; give a larger --tube", "--tube") from None
 
 
 def _dbsm(x):

@@ -134,34 +134,51 @@ def currents(target: Target, d_inc: np.ndarray, e_inc: np.ndarray, k0: float):
     J, M : (F, 3) complex128
         Current amplitudes [A/m], [V/m] at the origin phase (J(r) = J exp(i k k_hat . r)).
     """
-    k_hat = -d_inc
     lit, n = lit_facets(target, d_inc)
     F = len(target.faces)
     J = np.zeros((F, 3), complex)
     M = np.zeros((F, 3), complex)
-    ei = np.broadcast_to(e_inc.astype(complex), (F, 3))
-    hi = np.broadcast_to(np.cross(k_hat, e_inc).astype(complex) / ETA0, (F, 3))
-    cos1 = np.clip(n @ d_inc, 0.0, 1.0)
+    k_hat = np.broadcast_to(-d_inc, (int(lit.sum()), 3))
+    ei = np.broadcast_to(e_inc.astype(complex), k_hat.shape)
+    J[lit], M[lit], _, _ = surface_currents(target.media, target.face_medium[lit], n[lit], k_hat, ei, k0)
+    return lit, J, M
+
+
+def surface_currents(media, medium, n, k_hat, e, k0):
+    """Currents of plane waves meeting surfaces, and the waves they reflect (one row per wave).
+
+    Parameters
+    ----------
+    media : Media; medium : (R,) int, each surface's material index
+    n : (R, 3) unit normals facing the incoming wave (n . k_hat < 0)
+    k_hat : (R, 3) unit propagation directions; e : (R, 3) complex E-field at the surface point
+
+    Returns
+    -------
+    J, M : (R, 3) complex, n x (Hi + Hr) and -n x (Ei + Er)
+    e_r : (R, 3) complex, the reflected E-field there; k_r : (R, 3) its direction
+    """
+    R = len(medium)
+    hi = np.cross(k_hat, e) / ETA0
+    cos1 = np.clip(-np.einsum("ij,ij->i", n, k_hat), 0.0, 1.0)
     s = np.cross(k_hat, n)
     s_norm = np.linalg.norm(s, axis=1)
     # normal incidence: any tangent is s; take one perpendicular to n
     fallback = np.cross(n, np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
     s = np.where(s_norm[:, None] > 1e-12, s / np.maximum(s_norm, 1e-300)[:, None],
                  fallback / np.linalg.norm(fallback, axis=1)[:, None])
-    k_r = k_hat - 2.0 * (n @ k_hat)[:, None] * n
-    rs, rp = np.zeros(F, complex), np.zeros(F, complex)
-    job = SimpleNamespace(media=target.media, k0=k0)
-    for m in np.unique(target.face_medium[lit]):
-        sel = lit & (target.face_medium == m)
+    k_r = k_hat - 2.0 * np.einsum("ij,ij->i", n, k_hat)[:, None] * n
+    rs, rp = np.zeros(R, complex), np.zeros(R, complex)
+    job = SimpleNamespace(media=media, k0=k0)
+    for m in np.unique(medium):
+        sel = medium == m
         c, _, _ = surface_response(job, 0, int(m), int(m), False, cos1[sel])
         rs[sel], rp[sel] = c.rs, c.rp
-    e_s = np.einsum("ij,ij->i", ei, s)
+    e_s = np.einsum("ij,ij->i", e, s)
     h_s = np.einsum("ij,ij->i", hi, s)
-    er = (rs * e_s)[:, None] * s + (ETA0 * rp * h_s)[:, None] * np.cross(s, k_r)
-    hr = (rs * e_s / ETA0)[:, None] * np.cross(k_r, s) + (rp * h_s)[:, None] * s
-    J[lit] = np.cross(n[lit], hi[lit] + hr[lit])
-    M[lit] = -np.cross(n[lit], ei[lit] + er[lit])
-    return lit, J, M
+    e_r = (rs * e_s)[:, None] * s + (ETA0 * rp * h_s)[:, None] * np.cross(s, k_r)
+    h_r = (rs * e_s / ETA0)[:, None] * np.cross(k_r, s) + (rp * h_s)[:, None] * s
+    return np.cross(n, hi + h_r), -np.cross(n, e + e_r), e_r, k_r
 
 
 def _phi1_i(t):
@@ -200,6 +217,29 @@ def triangle_integral(tri: np.ndarray, area: np.ndarray, q: np.ndarray) -> np.nd
     return 2.0 * area[:, None] * np.exp(1j * mid) * g
 
 
+def radiation_vectors(target: Target, lit, J, M, k_hat, k0, r_hat):
+    """N and L (D, 3) of the lit facets' currents toward the unit directions ``r_hat`` (D, 3)."""
+    tri, area, Jl, Ml = target.tri[lit], target.area[lit], J[lit], M[lit]
+    D = r_hat.shape[0]
+    N = np.zeros((D, 3), complex)
+    L = np.zeros((D, 3), complex)
+    step = max(1, _CHUNK // max(1, len(area)))
+    for d0 in range(0, D, step):
+        q = k0 * (k_hat[None, :] - r_hat[d0:d0 + step])
+        I = triangle_integral(tri, area, q)
+        N[d0:d0 + step] = I.T @ Jl
+        L[d0:d0 + step] = I.T @ Ml
+    return N, L
+
+
+def components(N, L, theta, phi):
+    """``(L_phi + eta N_theta, -(L_theta - eta N_phi))`` at the angles [rad] (flat arrays)."""
+    th, ph = theta_phi_hats(theta, phi)
+    n_th, n_ph = np.einsum("dc,dc->d", N, th), np.einsum("dc,dc->d", N, ph)
+    l_th, l_ph = np.einsum("dc,dc->d", L, th), np.einsum("dc,dc->d", L, ph)
+    return l_ph + ETA0 * n_th, -(l_th - ETA0 * n_ph)
+
+
 def far_field(target: Target, lit, J, M, k_hat, k0, theta, phi):
     """Scattered far-field components for observation angles [rad] (arrays of one shape D).
 
@@ -211,21 +251,9 @@ def far_field(target: Target, lit, J, M, k_hat, k0, theta, phi):
     """
     theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
     shape = theta.shape
-    r_hat = direction(theta.ravel(), phi.ravel())
-    th, ph = theta_phi_hats(theta.ravel(), phi.ravel())
-    tri, area, Jl, Ml = target.tri[lit], target.area[lit], J[lit], M[lit]
-    D = r_hat.shape[0]
-    N = np.zeros((D, 3), complex)
-    L = np.zeros((D, 3), complex)
-    step = max(1, _CHUNK // max(1, len(area)))
-    for d0 in range(0, D, step):
-        q = k0 * (k_hat[None, :] - r_hat[d0:d0 + step])
-        I = triangle_integral(tri, area, q)
-        N[d0:d0 + step] = I.T @ Jl
-        L[d0:d0 + step] = I.T @ Ml
-    n_th, n_ph = np.einsum("dc,dc->d", N, th), np.einsum("dc,dc->d", N, ph)
-    l_th, l_ph = np.einsum("dc,dc->d", L, th), np.einsum("dc,dc->d", L, ph)
-    return (l_ph + ETA0 * n_th).reshape(shape), (-(l_th - ETA0 * n_ph)).reshape(shape)
+    N, L = radiation_vectors(target, lit, J, M, k_hat, k0, direction(theta.ravel(), phi.ravel()))
+    ft, fp = components(N, L, theta.ravel(), phi.ravel())
+    return ft.reshape(shape), fp.reshape(shape)
 
 
 def incident(theta_i: float, phi_i: float, polarization: str):
@@ -235,23 +263,35 @@ def incident(theta_i: float, phi_i: float, polarization: str):
     return d, (th if polarization == "theta" else ph)
 
 
-def bistatic(target: Target, k0: float, theta_i: float, phi_i: float, polarization: str, theta, phi):
+def bistatic(target: Target, k0: float, theta_i: float, phi_i: float, polarization: str, theta, phi,
+             bounces: int = 1, tube: float | None = None):
     """Bistatic RCS [m^2] (sigma_theta, sigma_phi) at observation angles [rad], and the number of
-    lit facets."""
+    lit facets. ``bounces`` > 1 adds the currents of waves reflected that many times, by shooting
+    and bouncing ray tubes of side ``tube`` [m] (`pmmw_cli.po.sbr`)."""
     d_inc, e_inc = incident(theta_i, phi_i, polarization)
     lit, J, M = currents(target, d_inc, e_inc, k0)
-    ft, fp = far_field(target, lit, J, M, -d_inc, k0, theta, phi)
+    theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
+    shape = theta.shape
+    r_hat = direction(theta.ravel(), phi.ravel())
+    N, L = radiation_vectors(target, lit, J, M, -d_inc, k0, r_hat)
+    if bounces > 1:
+        from pmmw_cli.po.sbr import bounce_radiation
+
+        N2, L2 = bounce_radiation(target, k0, d_inc, e_inc, bounces, r_hat, tube)
+        N, L = N + N2, L + L2
+    ft, fp = components(N, L, theta.ravel(), phi.ravel())
     scale = k0 * k0 / (4.0 * np.pi)
-    return scale * np.abs(ft) ** 2, scale * np.abs(fp) ** 2, int(lit.sum())
+    return (scale * np.abs(ft) ** 2).reshape(shape), (scale * np.abs(fp) ** 2).reshape(shape), int(lit.sum())
 
 
-def monostatic(target: Target, k0: float, polarization: str, theta, phi):
+def monostatic(target: Target, k0: float, polarization: str, theta, phi, bounces: int = 1,
+               tube: float | None = None):
     """Backscatter RCS [m^2] (sigma_theta, sigma_phi) with the radar at each of the angles [rad]
     (incidence = observation), and the lit facets at each."""
     theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
     s_t, s_p, n_lit = np.zeros(theta.shape), np.zeros(theta.shape), np.zeros(theta.shape, int)
     for idx in np.ndindex(theta.shape):
         a, b, n = bistatic(target, k0, float(theta[idx]), float(phi[idx]), polarization,
-                           theta[idx], phi[idx])
+                           theta[idx], phi[idx], bounces, tube)
         s_t[idx], s_p[idx], n_lit[idx] = a, b, n
     return s_t, s_p, n_lit
