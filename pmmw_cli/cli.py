@@ -265,10 +265,11 @@ def brdf(
 @app.command()
 @_user_errors
 def po(
-    mesh: Path = typer.Argument(..., help="Mesh file (glTF/GLB, OBJ, PLY, STL), in metres."),
+    mesh: Path = typer.Argument(..., help="Mesh file (glTF/GLB, OBJ, PLY, STL), in metres, or a job YAML "
+                                          "(configs/po_*.yaml)."),
     material: Optional[str] = typer.Option(None, "--material", metavar="ID", help="Material id from the database."),
     eps: Optional[str] = typer.Option(None, "--eps", metavar="EPS", help="Permittivity eps' + i eps'', e.g. 5.5+0.5j."),
-    frequency: str = typer.Option(..., "--frequency", "-f", help="e.g. '95 GHz'."),
+    frequency: Optional[str] = typer.Option(None, "--frequency", "-f", help="e.g. '95 GHz' (a mesh needs it)."),
     incidence: str = typer.Option("0,0", "--incidence", metavar="THETA,PHI",
                                   help="Direction the wave comes from, degrees (theta from +z, phi from +x)."),
     polarization: str = typer.Option("theta", "--polarization", help="Incident E along theta-hat or phi-hat."),
@@ -290,6 +291,14 @@ def po(
     from pmmw_cli.po.command import format_rows, run_po, write_outputs, write_plot
     from pmmw_cli.units import parse_quantity
 
+    if mesh.suffix.lower() in (".yaml", ".yml"):
+        from pmmw_cli.po.job import run_job
+
+        for path in run_job(mesh, out):
+            typer.echo(f"wrote {path}")
+        return
+    if frequency is None:
+        raise UserError("a mesh needs --frequency, e.g. '95 GHz'", "--frequency")
     if fmt not in ("csv", "json", "table"):
         raise UserError(f"expected csv, json or table, got {fmt!r}", "--format")
     res = run_po(mesh, material=material, eps=eps, frequency=_frequency(frequency), incidence=incidence,

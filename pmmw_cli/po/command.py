@@ -42,7 +42,7 @@ def parse_incidence(text: str) -> tuple[float, float]:
     return math.radians(th), math.radians(ph)
 
 
-def parse_theta(text: str) -> np.ndarray:
+def parse_theta(text: str, option: str = "--theta", lo: float = 0.0, hi: float = 180.0) -> np.ndarray:
     """``"START:STOP:STEP"`` [deg] (STOP included when the steps land on it), or one angle."""
     parts = text.split(":")
     try:
@@ -50,26 +50,29 @@ def parse_theta(text: str) -> np.ndarray:
     except ValueError:
         nums = []
     if len(nums) not in (1, 3) or not all(math.isfinite(v) for v in nums):
-        raise UserError(f"expected START:STOP:STEP in degrees like 0:180:1 (or one angle), got {text!r}", "--theta")
+        raise UserError(f"expected START:STOP:STEP in degrees like 0:180:1 (or one angle), got {text!r}", option)
     if len(nums) == 1:
         values = np.array(nums)
     else:
         start, stop, step = nums
         if step <= 0.0:
-            raise UserError(f"the step must be > 0 deg, got {step:g}", "--theta")
+            raise UserError(f"the step must be > 0 deg, got {step:g}", option)
         count = int(math.floor((stop - start) / step + 1e-9)) + 1
         if count < 1:
-            raise UserError(f"no angle from {start:g} to {stop:g} deg (STOP must be >= START)", "--theta")
+            raise UserError(f"no angle from {start:g} to {stop:g} deg (STOP must be >= START)", option)
         if count > MAX_DIRECTIONS:
-            raise UserError(f"{count} angles; at most {MAX_DIRECTIONS}", "--theta")
+            raise UserError(f"{count} angles; at most {MAX_DIRECTIONS}", option)
         values = start + step * np.arange(count)
-    if values.min() < 0.0 or values.max() > 180.0:
-        raise UserError("theta must lie within 0..180 deg", "--theta")
+    if values.min() < lo or values.max() > hi:
+        raise UserError(f"angles must lie within {lo:g}..{hi:g} deg", option)
     return np.radians(values)
 
 
-def parse_phi(text: str) -> np.ndarray:
-    return np.radians(_floats(text, "--phi", None, "0,90"))
+def parse_phi(text: str, option: str = "--phi") -> np.ndarray:
+    """``"P1,P2,..."`` or ``"START:STOP:STEP"`` [deg] -> [rad]."""
+    if ":" in text:
+        return parse_theta(text, option=option, lo=-360.0, hi=720.0)
+    return np.radians(_floats(text, option, None, "0,90"))
 
 
 @dataclass
@@ -133,12 +136,25 @@ def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, p
     th_i, ph_i = parse_incidence(incidence)
     thetas = parse_theta(theta) if theta is not None else np.radians(np.arange(0.0, 180.5, 1.0))
     phis = parse_phi(phi) if phi is not None else np.array([ph_i])
-    if thetas.size * phis.size > MAX_DIRECTIONS:
-        raise UserError(f"{thetas.size * phis.size} directions; at most {MAX_DIRECTIONS}", "--theta")
-    pp, tt = np.meshgrid(phis, thetas, indexing="ij")  # rows: each phi cut in theta order
-    tt, pp = tt.ravel(), pp.ravel()
+    tt, pp = grid(thetas, phis)
     t0 = time.perf_counter()
     target = load_target(Path(mesh), material, eps, frequency)
+    return compute(target, frequency, th_i, ph_i, polarization, tt, pp, monostatic=monostatic, bounces=bounces,
+                   method=method, tube=tube, t0=t0)
+
+
+def grid(thetas, phis):
+    """Flat (theta, phi) [rad] of every phi cut in theta order; refused beyond MAX_DIRECTIONS."""
+    if thetas.size * phis.size > MAX_DIRECTIONS:
+        raise UserError(f"{thetas.size * phis.size} directions; at most {MAX_DIRECTIONS}", "--theta")
+    pp, tt = np.meshgrid(phis, thetas, indexing="ij")
+    return tt.ravel(), pp.ravel()
+
+
+def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=False, bounces=1,
+            method="direct", tube=None, t0=None) -> Result:
+    """RCS of ``target`` at ``frequency`` [Hz] on the directions (tt, pp) [rad]."""
+    t0 = time.perf_counter() if t0 is None else t0
     k0 = 2.0 * np.pi * frequency / solver.C0
     if monostatic:
         s_t, s_p, n_lit = _tubes(solver.monostatic, target, k0, polarization, tt, pp, bounces, tube)
@@ -206,11 +222,25 @@ def format_rows(res: Result, fmt: str) -> str:
     raise UserError(f"expected csv, json or table, got {fmt!r}", "--format")
 
 
-def write_outputs(res: Result, out: Path) -> list[Path]:
-    """``po.csv`` and ``po.json`` in ``out``, atomically."""
-    out.mkdir(parents=True, exist_ok=True)
-    return [write_text_atomic(out / "po.csv", format_rows(res, "csv") + "\n"),
-            write_text_atomic(out / "po.json", format_rows(res, "json") + "\n")]
+def write_outputs(res: Result, out: Path, stem: str = "po") -> list[Path]:
+    """``<stem>.csv`` and ``<stem>.json`` in ``out``, atomically."""
+    return [write_text_atomic(out / f"{stem}.csv", format_rows(res, "csv") + "\n"),
+            write_text_atomic(out / f"{stem}.json", format_rows(res, "json") + "\n")]
+
+
+def write_map(res: Result, thetas, phis, path: Path) -> Path:
+    """An EXR of the RCS [m^2] over the grid: rows theta, columns phi (channels rcs_theta,
+    rcs_phi), angles in the header."""
+    from pmmw_cli.io.exr import write_exr
+
+    shape = (phis.size, thetas.size)
+    attrs = {"pmmw:units": "m^2 (bistatic RCS)", "pmmw:frequency_hz": res.summary["frequency_hz"],
+             "pmmw:theta_deg": f"{math.degrees(thetas[0]):g}:{math.degrees(thetas[-1]):g}:{thetas.size}",
+             "pmmw:phi_deg": f"{math.degrees(phis[0]):g}:{math.degrees(phis[-1]):g}:{phis.size}",
+             "pmmw:polarization": res.summary["polarization"]}
+    write_exr(path, {"rcs_theta": res.rcs_theta.reshape(shape).T.astype(np.float32),
+                     "rcs_phi": res.rcs_phi.reshape(shape).T.astype(np.float32)}, attrs)
+    return path
 
 
 def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
@@ -222,15 +252,23 @@ def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
 
     s = res.summary
     fig, ax = plt.subplots(figsize=(7.0, 4.4), dpi=110)
-    for p in np.unique(res.phi):
-        sel = res.phi == p
-        for comp, style in ((res.rcs_theta, "-"), (res.rcs_phi, "--")):
-            if np.any(comp[sel] > 0):
-                label = f"phi {math.degrees(p):g} deg, sigma_{'theta' if comp is res.rcs_theta else 'phi'}"
-                ax.plot(np.degrees(res.theta[sel]), 10 * np.log10(np.maximum(comp[sel], 1e-30)), style, label=label)
+    thetas, phis = np.unique(res.theta), np.unique(res.phi)
+    # x: theta, one line per phi cut; an azimuth cut (one theta) runs along phi instead
+    along, across, x_name = ((res.phi, res.theta, "phi") if thetas.size == 1 and phis.size > 1
+                             else (res.theta, res.phi, "theta"))
+    cuts = np.unique(across)
+    if cuts.size > 8:  # a full grid: the 8 cuts nearest evenly spread values
+        cuts = cuts[np.linspace(0, cuts.size - 1, 8).round().astype(int)]
+    for c in cuts:
+        sel = across == c
+        for comp, name, style in ((res.rcs_theta, "theta", "-"), (res.rcs_phi, "phi", "--")):
+            if comp[sel].max() > 1e-12 * s["peak"]["rcs_m2"]:
+                cut = f"{'phi' if x_name == 'theta' else 'theta'} {math.degrees(c):g} deg, " if cuts.size > 1 else ""
+                ax.plot(np.degrees(along[sel]), 10 * np.log10(np.maximum(comp[sel], 1e-30)), style,
+                        label=f"{cut}sigma_{name}")
+    ax.set_xlabel(f"{x_name} [deg]")
     mode = "monostatic" if s["monostatic"] else f"incidence ({s['incidence_deg'][0]:g}, {s['incidence_deg'][1]:g}) deg"
     ax.set_title(f"{mesh_name}: {s['frequency_hz'] / 1e9:g} GHz, {s['polarization']} polarization, {mode}")
-    ax.set_xlabel("theta [deg]")
     ax.set_ylabel("RCS [dBsm]")
     peak = s["peak"]["rcs_dBsm"]
     ax.set_ylim(peak - 60.0, peak + 5.0)

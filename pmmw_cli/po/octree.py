@@ -34,7 +34,7 @@ from scipy import sparse
 
 from pmmw_cli.po.solver import ETA0, direction, theta_phi_hats, triangle_integral
 
-_LEAF_WAVELENGTHS = 1.0  # leaf side [wavelengths]: the leaf grid cost F M_leaf^2 grows fast with it
+_LEAF_WAVELENGTHS = 3.0  # leaf side [wavelengths]: the leaf grid cost F M_leaf^2 grows fast with it
 _OVERSAMPLE = 2  # root grid upsampling before the local interpolation to the requested directions
 _LAGRANGE = 8  # points per angle of the final Lagrange stencil (error ~ (pi/oversample)^p / p!)
 _CHUNK = 1 << 21  # complex elements per block of work (memory ~ 16-100 B each)
@@ -90,7 +90,7 @@ def _upsample(a: np.ndarray, n: int) -> np.ndarray:
 
 
 def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n):
-    """Exact patterns (B, 6, n, n) of the leaves about their centres (B, 3).
+    """Exact patterns V (B, 3, n, n) of the leaves about their centres (B, 3).
 
     tri : (F, 3, 3) [m]; area : (F,) [m^2]; src : (F, 6) complex, [J, M]; box : (F,) int, sorted.
     """
@@ -109,8 +109,11 @@ def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n):
     step = max(1, _CHUNK // max(1, F))
     for d0 in range(0, len(q), step):
         out[:, d0:d0 + step] = S @ triangle_integral(local, area, q[d0:d0 + step])
-    out = out.reshape(B, 6, half, n)
-    full = np.empty((B, 6, n, n), complex)
+    out = out.reshape(B, 6, half * n)
+    # V = eta N + L x r_hat, the one vector both far-field components project (module docstring)
+    out = ETA0 * out[:, :3] + np.cross(out[:, 3:], r_hat.T[None], axis=1)
+    out = out.reshape(B, 3, half, n)
+    full = np.empty((B, 3, n, n), complex)
     full[:, :, :half] = out
     # theta_j for j > n/2 is the direction (theta_{n-j}, phi + pi)
     mirror = n - np.arange(half, n)
@@ -133,20 +136,20 @@ def _lagrange(u: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _interpolate(P: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Periodic Lagrange interpolation of torus samples (6, n, n) at angles (D,) -> (D, 6)."""
+    """Periodic Lagrange interpolation of torus samples (C, n, n) at angles (D,) -> (D, C)."""
     n = P.shape[-1]
     p = _LAGRANGE
     h = 2.0 * np.pi / n
     it, wt = _lagrange(np.mod(theta, 2.0 * np.pi) / h, p)
     ip, wp = _lagrange(np.mod(phi, 2.0 * np.pi) / h, p)
-    out = np.empty((len(theta), 6), complex)
+    out = np.empty((len(theta), P.shape[0]), complex)
     j = np.arange(p)
-    step = max(1, _CHUNK // (6 * p * p))
+    step = max(1, _CHUNK // (P.shape[0] * p * p))
     for d0 in range(0, len(theta), step):
         sl = slice(d0, d0 + step)
         rt = (it[sl, None] + j) % n  # (d, p)
         rp = (ip[sl, None] + j) % n
-        g = P[:, rt[:, :, None], rp[:, None, :]]  # (6, d, p, p)
+        g = P[:, rt[:, :, None], rp[:, None, :]]  # (C, d, p, p)
         out[sl] = np.einsum("cdab,da,db->dc", g, wt[sl], wp[sl])
     return out
 
@@ -216,8 +219,8 @@ def far_field_octree(target, lit, J, M, k_hat, k0, theta, phi, tol=1e-3):
         q = k0 * (k_hat[None, None, :] - direction(th, ph))  # (n, n, 3)
         octant = child["ijk"] & 1  # (B, 3): child centre - parent centre = (octant - 1/2) side/2
         slot = (octant[:, 0] * 2 + octant[:, 1]) * 2 + octant[:, 2]
-        Pp = np.zeros((len(parent["centres"]), 6, n, n), complex)
-        step = max(1, _CHUNK // (6 * n * n))
+        Pp = np.zeros((len(parent["centres"]), 3, n, n), complex)
+        step = max(1, _CHUNK // (3 * n * n))
         for o in np.unique(slot):
             # each parent has at most one child per octant: one translation, no repeated index
             sel = np.flatnonzero(slot == o)
@@ -231,14 +234,13 @@ def far_field_octree(target, lit, J, M, k_hat, k0, theta, phi, tol=1e-3):
         P = Pp
 
     root = levels[-1]
-    n_fine = sfft.next_fast_len(_OVERSAMPLE * root["n"])
+    n_fine = sfft.next_fast_len(int(np.ceil(_OVERSAMPLE * root["n"])))
     n_fine += n_fine % 2
     Pf = _upsample(P[0], n_fine)
-    NL = _interpolate(Pf, th_o, ph_o)  # (D, 6)
+    V = _interpolate(Pf, th_o, ph_o)  # (D, 3)
     r_hat = direction(th_o, ph_o)
-    NL *= np.exp(1j * k0 * ((k_hat[None, :] - r_hat) @ root["centres"][0]))[:, None]
-    N, L = NL[:, :3], NL[:, 3:]
+    V *= np.exp(1j * k0 * ((k_hat[None, :] - r_hat) @ root["centres"][0]))[:, None]
     th, ph = theta_phi_hats(th_o, ph_o)
-    n_th, n_ph = np.einsum("dc,dc->d", N, th), np.einsum("dc,dc->d", N, ph)
-    l_th, l_ph = np.einsum("dc,dc->d", L, th), np.einsum("dc,dc->d", L, ph)
-    return (l_ph + ETA0 * n_th).reshape(shape), (-(l_th - ETA0 * n_ph)).reshape(shape)
+    f_theta = np.einsum("dc,dc->d", V, th)
+    f_phi = np.einsum("dc,dc->d", V, ph)
+    return f_theta.reshape(shape), f_phi.reshape(shape)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from pmmw_cli.po import solver
+from pmmw_cli.trace.intersect import offset_origins
 
 MAX_TUBES = 4_000_000
 _CHUNK = 1 << 21  # tube x direction elements at once
@@ -69,7 +70,6 @@ def bounce_radiation(target: solver.Target, k0: float, d_inc, e_inc, bounces: in
     N = np.zeros((D, 3), complex)
     L = np.zeros((D, 3), complex)
     isect = target.intersector
-    size = float(np.ptp(target.vertices, axis=0).max())
     for bounce in range(1, bounces + 1):
         if len(origins) == 0:
             break
@@ -98,7 +98,7 @@ def bounce_radiation(target: solver.Target, k0: float, d_inc, e_inc, bounces: in
                 N[d0:d0 + step] += w.T @ J
                 L[d0:d0 + step] += w.T @ M
         # the reflected tube leaves the hit point, its side vectors mirrored
-        origins = r + (1e-7 * size + 1e-9) * n
+        origins = offset_origins(r, n, k_r, scale=isect.face_scale[prim])
         ta = ta - 2.0 * np.einsum("ij,ij->i", ta, n)[:, None] * n
         tb = tb - 2.0 * np.einsum("ij,ij->i", tb, n)[:, None] * n
         d, e = k_r, e_r

@@ -56,7 +56,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from pmmw_cli.trace.integrator import surface_response
-from pmmw_cli.trace.intersect import make_intersector
+from pmmw_cli.trace.intersect import make_intersector, offset_origins
 
 C0 = 299_792_458.0  # [m/s]
 ETA0 = 376.730313668  # [ohm] impedance of free space
@@ -117,9 +117,10 @@ def lit_facets(target: Target, d_inc: np.ndarray) -> tuple[np.ndarray, np.ndarra
     cos_i = target.normal @ d_inc
     n_eff = np.where(cos_i[:, None] < 0.0, -target.normal, target.normal)
     facing = np.abs(cos_i) > 1e-9
-    size = float(np.ptp(target.vertices, axis=0).max()) if len(target.vertices) else 1.0
-    origins = target.centroid + (1e-7 * size + 1e-9) * n_eff
-    t, _ = target.intersector.intersect(origins, np.broadcast_to(d_inc, origins.shape).copy())
+    isect = target.intersector
+    d = np.broadcast_to(d_inc, target.centroid.shape).copy()
+    origins = offset_origins(target.centroid, n_eff, d, scale=isect.face_scale)  # past Embree's float32
+    t, _ = isect.intersect(origins, d)
     lit = facing & ~np.isfinite(t)
     return lit, n_eff
 

@@ -1,0 +1,194 @@
+"""`pmmw po JOB.yaml`: physical-optics jobs from a file (`configs/po_*.yaml`).
+
+A job names its targets as a scenario names its scene (meshes, ``transform``, material ids from
+the database, ``materials`` overrides), and lists frequencies, polarizations and an observation
+grid::
+
+    name: beacon_plate
+    targets:
+      - {mesh: ../scenes/po/beacon_plate.ply, material: metal}
+    frequency: [35 GHz, 95 GHz]
+    polarization: [theta, phi]         # default [theta]
+    monostatic: true                   # or incidence: [30 deg, 0 deg]
+    observation: {theta: "0:90:0.05", phi: "270"}
+    bounces: 1
+    output: {dir: out/po_beacon_plate}
+
+It writes, per frequency and polarization, ``<name>_<f>GHz_<pol>.csv`` / ``.json`` / ``.png``,
+an EXR map (``rcs_theta``, ``rcs_phi`` over theta rows and phi columns) when the grid covers the
+whole sphere, and ``report.md`` with every run's backscatter and peak.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Annotated, Literal, Optional, Union
+
+import numpy as np
+from pydantic import Field, ValidationError, field_validator, model_validator
+
+from pmmw_cli.config.schema import FREQUENCY_RANGE, Quantity, SceneEntry, _Model
+from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.io.atomic import write_text_atomic
+from pmmw_cli.io.yamlio import read_yaml
+from pmmw_cli.po import command, solver
+
+
+class Observation(_Model):
+    theta: Union[str, float] = "0:180:1"  # [deg] START:STOP:STEP or one angle
+    phi: Union[str, float, list[float]] = 0.0  # [deg] START:STOP:STEP, one angle or a list
+
+
+class Output(_Model):
+    dir: Optional[Path] = None
+    plot: bool = True
+
+
+class PoJob(_Model):
+    name: str
+    source_file: Path
+    targets: tuple[SceneEntry, ...]
+    materials: dict[str, dict] = {}
+    frequencies: Annotated[tuple[float, ...], Quantity("frequency", many=True)]
+    polarization: tuple[Literal["theta", "phi"], ...] = ("theta",)
+    incidence: Annotated[Optional[tuple[float, float]], Quantity("angle", n=2)] = None  # [rad]
+    monostatic: bool = False
+    observation: Observation = Observation()
+    bounces: int = Field(1, ge=1, le=command.MAX_BOUNCES)
+    method: Literal["direct"] = "direct"
+    tube: Annotated[Optional[float], Quantity("length")] = None
+    output: Output = Output()
+
+    @field_validator("polarization", mode="before")
+    @classmethod
+    def _pols(cls, v):
+        return (v,) if isinstance(v, str) else v
+
+    @field_validator("frequencies")
+    @classmethod
+    def _freqs(cls, out):
+        lo, hi = FREQUENCY_RANGE
+        bad = [f for f in out if not lo <= f <= hi]
+        if not out or bad:
+            raise ValueError(f"give frequencies within {lo / 1e9:g}-{hi / 1e9:g} GHz")
+        return out
+
+    @model_validator(mode="after")
+    def _mode(self):
+        if self.monostatic == (self.incidence is not None):
+            raise ValueError("give either `monostatic: true` or an `incidence: [theta, phi]`, not both or neither")
+        return self
+
+
+def load_job(path: Path, out: Path | None = None) -> PoJob:
+    """Read and check a job file; every problem is named by file and key."""
+    raw = read_yaml(path, "physical-optics job")
+    if not isinstance(raw, dict):
+        raise UserError("a job is a mapping (name, targets, frequency, ...)", path)
+    data = dict(raw)
+    data.setdefault("name", path.stem)
+    data["source_file"] = str(path.resolve())
+    if "frequency" in data:
+        data["frequencies"] = data.pop("frequency")
+    if isinstance(data.get("targets"), list):
+        data["targets"] = [dict(e, key=f"targets[{i}]") if isinstance(e, dict) else e
+                           for i, e in enumerate(data["targets"])]
+    if out is not None:
+        data["output"] = dict(data.get("output") or {}, dir=str(out))
+    try:
+        job = PoJob.model_validate(data, context={"base_dir": path.resolve().parent})
+    except ValidationError as exc:
+        errors = []
+        for err in exc.errors():
+            loc = ["frequency" if p == "frequencies" else p for p in err["loc"]
+                   if not (isinstance(p, str) and ("[" in p or p.startswith("function-")))]
+            key = "".join(f"[{p}]" if isinstance(p, int) else (f".{p}" if i else str(p)) for i, p in enumerate(loc))
+            msg = "unknown key" if err["type"] == "extra_forbidden" else (
+                "required key missing" if err["type"] == "missing" else str(err.get("ctx", {}).get("error", err["msg"])))
+            errors.append(UserError(msg, path, key or None))
+        raise (UserErrors(errors) if len(errors) > 1 else errors[0]) from None
+    if job.output.dir is not None and not job.output.dir.is_absolute():
+        object.__setattr__(job.output, "dir", Path.cwd() / job.output.dir)
+    return job
+
+
+def _targets(job: PoJob, f: float):
+    from pmmw_cli.pipeline import build_media
+    from pmmw_cli.scene.geometry import build_geometry
+    from pmmw_cli.scene.materials import MaterialDB
+
+    db = MaterialDB.load().with_overrides(dict(job.materials), file=job.source_file)
+    errors = []
+    for e in job.targets:
+        for key, mid in ([(f"{e.key}.material", e.material)] if e.material is not None
+                         else [(f"{e.key}.materials.{n}", m) for n, m in e.materials.items()]):
+            try:
+                db.get(mid, file=job.source_file, key=key)
+            except UserError as err:
+                errors.append(err)
+    if errors:
+        raise UserErrors(errors) if len(errors) > 1 else errors[0]
+    geom = build_geometry(job.targets, scenario_file=job.source_file)
+    scn = SimpleNamespace(render=SimpleNamespace(default_temperature=290.0), atmosphere=None)
+    media = build_media(db, geom.material_ids, f, scn)
+    return solver.Target(geom.vertices, geom.faces, (geom.face_material + 1).astype(int), media)
+
+
+def _angles(value, option, theta: bool) -> np.ndarray:
+    if isinstance(value, list):
+        return np.radians(np.array(value, float))
+    text = str(value)
+    return command.parse_theta(text, option=option) if theta else command.parse_phi(text, option=option)
+
+
+def run_job(path: Path, out: Path | None = None) -> list[Path]:
+    """Run every (frequency, polarization) of the job; returns the files written."""
+    job = load_job(Path(path), out)
+    key = str(job.source_file)
+    thetas = _angles(job.observation.theta, f"{key}: observation.theta", True)
+    phis = _angles(job.observation.phi, f"{key}: observation.phi", False)
+    tt, pp = command.grid(thetas, phis)
+    out_dir = job.output.dir or Path.cwd() / "out" / job.name
+    th_i, ph_i = job.incidence if job.incidence is not None else (0.0, 0.0)
+    written, runs = [], []
+    for f in job.frequencies:
+        target = _targets(job, f)
+        for pol in job.polarization:
+            res = command.compute(target, f, th_i, ph_i, pol, tt, pp, monostatic=job.monostatic,
+                                  bounces=job.bounces, method=job.method, tube=job.tube)
+            stem = f"{job.name}_{f / 1e9:g}GHz_{pol}"
+            written += command.write_outputs(res, out_dir, stem)
+            if job.output.plot:
+                written.append(command.write_plot(res, out_dir / f"{stem}.png", job.name))
+            if _full_sphere(thetas, phis):
+                written.append(command.write_map(res, thetas, phis, out_dir / f"{stem}.exr"))
+            runs.append((stem, res))
+    written.append(write_text_atomic(out_dir / "report.md", _report(job, runs)))
+    return written
+
+
+def _full_sphere(thetas, phis) -> bool:
+    return (thetas.size > 1 and phis.size > 1 and thetas.min() <= 1e-9 and thetas.max() >= math.pi - 1e-9
+            and phis.max() - phis.min() >= 2 * math.pi * (1 - 1.0 / phis.size) - 1e-9)
+
+
+def _report(job: PoJob, runs) -> str:
+    mode = "monostatic" if job.monostatic else (
+        f"incidence theta {math.degrees(job.incidence[0]):g} deg, phi {math.degrees(job.incidence[1]):g} deg")
+    lines = [f"# {job.name}: physical optics", "",
+             f"- job: `{job.source_file}`", f"- {mode}; bounces {job.bounces}; method {job.method}",
+             f"- observation: theta `{job.observation.theta}`, phi `{job.observation.phi}` (degrees)", "",
+             "| run | facets lit | backscatter [dBsm] | peak [dBsm] | peak at (theta, phi) [deg] | time [s] |",
+             "| --- | ---: | ---: | ---: | --- | ---: |"]
+    for stem, res in runs:
+        s = res.summary
+        back = "" if s["backscatter_rcs_m2"] is None else f"{command._dbsm(s['backscatter_rcs_m2']):.2f}"
+        p = s["peak"]
+        lines.append(f"| {stem} | {s['facets_lit']} / {s['facets']} | {back} | {p['rcs_dBsm']:.2f} | "
+                     f"({p['theta_deg']:g}, {p['phi_deg']:g}) | {s['time_s']:.2f} |")
+    if job.output.plot:
+        lines.append("")
+        lines += [f"![{stem}]({stem}.png)" for stem, _ in runs]
+    return "\n".join(lines) + "\n"

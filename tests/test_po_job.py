@@ -1,0 +1,91 @@
+"""`pmmw po JOB.yaml`: the job file's keys, its outputs, and its errors named by file and key."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from pmmw_cli.cli import app
+from pmmw_cli.io.exr import read_exr
+
+runner = CliRunner()
+C0 = 299_792_458.0
+
+
+@pytest.fixture()
+def job(tmp_path):
+    v = [[-0.05, -0.03, 0], [0.05, -0.03, 0], [0.05, 0.03, 0], [-0.05, 0.03, 0]]
+    trimesh.Trimesh(vertices=v, faces=[[0, 1, 2], [0, 2, 3]], process=False).export(tmp_path / "plate.ply")
+
+    def write(body: str):
+        path = tmp_path / "job.yaml"
+        path.write_text("name: plate\ntargets:\n  - {mesh: plate.ply, material: metal, "
+                        "transform: {translate: [0, 0, 1 m]}}\n" + body)
+        return path
+
+    return write
+
+
+def test_a_job_writes_every_run_a_report_and_a_full_sphere_map(job, tmp_path):
+    path = job("frequency: [35 GHz, 95 GHz]\npolarization: [theta, phi]\nincidence: [0 deg, 0 deg]\n"
+               "observation: {theta: '0:180:30', phi: '0:300:60'}\n")
+    res = runner.invoke(app, ["po", str(path), "--out", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    out = tmp_path / "o"
+    for f in (35, 95):
+        for pol in ("theta", "phi"):
+            stem = f"plate_{f}GHz_{pol}"
+            rows = (out / f"{stem}.csv").read_text().splitlines()
+            assert rows[0] == "theta_deg,phi_deg,rcs_theta_m2,rcs_phi_m2" and len(rows) == 1 + 7 * 6
+            summary = json.loads((out / f"{stem}.json").read_text())
+            lam = C0 / (f * 1e9)
+            # the translation moves the phase, not the magnitude: 4 pi A^2 / lambda^2 straight back
+            assert summary["backscatter_rcs_m2"] == pytest.approx(4 * np.pi * (0.1 * 0.06) ** 2 / lam**2, rel=1e-5)
+            chans, attrs = read_exr(out / f"{stem}.exr")
+            assert chans["rcs_theta"].shape == (7, 6)
+            assert (out / f"{stem}.png").stat().st_size > 10_000
+    report = (out / "report.md").read_text()
+    assert report.count("| plate_") == 4 and "![plate_95GHz_phi](plate_95GHz_phi.png)" in report
+
+
+def test_monostatic_job_azimuth_cut(job, tmp_path):
+    path = job("frequency: 95 GHz\nmonostatic: true\nobservation: {theta: 30, phi: '0:350:10'}\n"
+               f"output: {{dir: '{tmp_path / 'm'}', plot: false}}\n")
+    res = runner.invoke(app, ["po", str(path)])
+    assert res.exit_code == 0, res.output
+    rows = (tmp_path / "m" / "plate_95GHz_theta.csv").read_text().splitlines()[1:]
+    assert len(rows) == 36 and all(r.startswith("30,") for r in rows)
+    assert not list((tmp_path / "m").glob("*.png")) and not list((tmp_path / "m").glob("*.exr"))
+
+
+@pytest.mark.parametrize("body, key", [
+    ("frequency: 95 GHz\n", "incidence"),  # neither monostatic nor incidence
+    ("frequency: 95 GHz\nmonostatic: true\nincidence: [0, 0]\n", "incidence"),
+    ("frequency: 2000 GHz\nmonostatic: true\n", "frequency"),
+    ("frequency: 95 GHz\nmonostatic: true\nbounces: 0\n", "bounces"),
+    ("frequency: 95 GHz\nmonostatic: true\npolarisation: theta\n", "polarisation"),
+    ("frequency: 95 GHz\nmonostatic: true\nobservation: {theta: '0:90:0'}\n", "observation.theta"),
+    ("frequency: 95 GHz\nmonostatic: true\nmaterials: {metal: {kind: plasma}}\n", "materials.metal"),
+])
+def test_job_errors_name_the_file_and_key(job, body, key):
+    res = runner.invoke(app, ["po", str(job(body))])
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip() and not x.startswith("warning:")]
+    assert lines[0].startswith("error:") and "job.yaml" in lines[0] and key in res.output, res.output
+    assert "Traceback" not in res.output
+
+
+@pytest.mark.parametrize("name", ["po_beacon_plate", "po_angle_bracket", "po_handgun", "po_sphere"])
+def test_shipped_po_jobs_validate(name):
+    """Each shipped job loads (its meshes exist and its keys are right); the renders themselves
+    are run for the README (`pmmw po configs/po_*.yaml`)."""
+    from pathlib import Path
+
+    from pmmw_cli.po.job import _targets, load_job
+
+    job = load_job(Path("configs") / f"{name}.yaml")
+    target = _targets(job, job.frequencies[0])
+    assert len(target.faces) > 0 and math.isfinite(float(target.area.sum()))
