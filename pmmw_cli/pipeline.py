@@ -23,6 +23,7 @@ from pmmw_cli.config import load_scenario
 from pmmw_cli.config.load import scenario_to_display
 from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors, clear_warnings, collected_warnings, warn
 from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
+from pmmw_cli.io.atomic import write_text_atomic
 from pmmw_cli.io.exr import write_exr
 from pmmw_cli.io.preview import write_preview
 from pmmw_cli.io.report import write_report
@@ -171,15 +172,15 @@ def input_files(scn) -> list[Path]:
 
 
 def parse_shard(text: str | None):
-    """``"I/N"`` -> (I, N) with 0 <= I < N; None -> None."""
+    """``"I/N"`` -> (I, N) with 1 <= I <= N (as a job array numbers its tasks); None -> None."""
     if text is None:
         return None
     try:
         i, n = (int(v) for v in text.split("/"))
     except ValueError:
         raise UserError(f"expected I/N (e.g. 3/16), got {text!r}", file="--shard") from None
-    if not (n >= 1 and 0 <= i < n):
-        raise UserError(f"need 0 <= I < N, got {text!r}", file="--shard")
+    if not (n >= 1 and 1 <= i <= n):
+        raise UserError(f"shards count from 1: need 1 <= I <= N, got {text!r}", file="--shard")
     return i, n
 
 
@@ -433,15 +434,21 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
         tile_dir = None if tile_root is None else tile_root / f"{label}-{shash}"
         if tile_dir is not None:
             dirs.append(tile_dir)
+        if tile_dir is not None:
+            _write_manifest(tile_dir, res.scenario, shash)
+        counts: dict = {}
         if shard is not None:
-            mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0]]
-            done = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=True,
-                                progress=_Progress(label, quiet), tiles=mine)
-            print(f"{label}: shard {shard[0]}/{shard[1]}: {len(done)} tiles in {tile_dir}; "
-                  "assemble with `pmmw render ... --resume` once every shard is done")
+            mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0] - 1]
+            render_tiles(job, workers=workers, tile_dir=tile_dir, resume=True,
+                         progress=_Progress(label, quiet), tiles=mine, counts=counts)
+            print(f"{label}: shard {shard[0]}/{shard[1]}: {counts['rendered']} tiles rendered, {counts['reused']} "
+                  f"already there, in {tile_dir}; assemble with `pmmw render ... --resume` once every shard is done")
             continue
         results = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=resume,
-                               progress=_Progress(label, quiet))
+                               progress=_Progress(label, quiet), counts=counts)
+        if resume:
+            print(f"{label}: --resume: {counts['reused']} tiles found, {counts['rendered']} rendered",
+                  file=sys.stderr)
         imgs.append(assemble(job, results))
     if shard is not None:
         return None, None, dirs
@@ -536,22 +543,78 @@ def _check_memory(est: dict, source, force: bool) -> None:
             "available: lower imager.resolution or render.workers (or pass --force to try anyway)", file=source)
 
 
-def remove_stale_tiles(tile_root: Path, scn, shash: str) -> int:
-    """Delete tile folders of this scenario's images made from other inputs (another hash):
-    they can never be resumed. Returns how many were removed."""
+MANIFEST = "manifest.json"
+
+
+def _write_manifest(tile_dir: Path, scn, shash: str) -> None:
+    """What the tiles in ``tile_dir`` were rendered from (compared by `other_tile_folders`)."""
+    path = tile_dir / MANIFEST
+    if not path.exists():
+        d = scenario_to_display(scn)
+        d.pop("output", None)
+        d["render"].pop("workers", None)
+        tile_dir.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(path, json.dumps({"hash": shash, "version": __version__, "scenario": d}, indent=1,
+                                           default=str))
+
+
+def other_tile_folders(tile_root: Path, scn, shash: str) -> list[Path]:
+    """Tile folders of this scenario's images made from other inputs (another hash)."""
     if not tile_root.is_dir():
-        return 0
+        return []
     stems = {_stem(scn, f) for f in scn.frequencies}
-    removed = 0
-    for d in tile_root.iterdir():
+    found = []
+    for d in sorted(tile_root.iterdir()):
         label, _, h = d.name.rpartition("-")
         if not d.is_dir() or h == shash or len(h) != len(shash):
             continue
         base = label.split("@", 1)[0] if "@" in label and label.endswith("GHz") else label
         if base in stems:
-            shutil.rmtree(d, ignore_errors=True)
-            removed += 1
-    return removed
+            found.append(d)
+    return found
+
+
+def _differences(a, b, prefix="") -> list[str]:
+    """Dotted keys whose values differ between two display dicts, as ``key: old -> new``."""
+    out = []
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b), key=str):
+            out += _differences(a.get(k), b.get(k), f"{prefix}.{k}" if prefix else str(k))
+    elif a != b:
+        out.append(f"{prefix}: {a!r} -> {b!r}")
+    return out
+
+
+def refuse_other_tiles(tile_root: Path, scn, shash: str, what: str) -> None:
+    """Tiles of this scenario made with other settings are never mixed in nor silently
+    re-rendered over: name the folder and the settings that differ."""
+    for d in other_tile_folders(tile_root, scn, shash):
+        if not any(d.glob("tile_*.npz")):
+            continue
+        try:
+            old = json.loads((d / MANIFEST).read_text())
+            now = scenario_to_display(scn)
+            now.pop("output", None)
+            now["render"].pop("workers", None)
+            diff = _differences(json.loads(json.dumps(old["scenario"], default=str)),
+                                json.loads(json.dumps(now, default=str)))
+            if old.get("version") != __version__:
+                diff.append(f"pmmw version: {old.get('version')} -> {__version__}")
+            why = "; ".join(diff[:6]) or "the same settings but other input files (a mesh, texture or material changed)"
+        except (OSError, ValueError, KeyError):
+            why = "settings unknown (no readable manifest)"
+        raise UserError(f"{d.name} holds tiles of this scenario rendered from other inputs ({why}); run every "
+                        "shard with the same scenario, or render without --resume to start afresh (which "
+                        "deletes them)", file=what)
+
+
+def remove_stale_tiles(tile_root: Path, scn, shash: str) -> int:
+    """Delete tile folders of this scenario's images made from other inputs (another hash):
+    they can never be resumed. Returns how many were removed."""
+    stale = other_tile_folders(tile_root, scn, shash)
+    for d in stale:
+        shutil.rmtree(d, ignore_errors=True)
+    return len(stale)
 
 
 def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
@@ -585,7 +648,9 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     written, renders, tile_dirs = [], [], []
     shash = scenario_hash(scn, res.db)
     tile_root = out_dir / ".pmmw-tiles"
-    stale = remove_stale_tiles(tile_root, scn, shash)
+    if resume or shard is not None:
+        refuse_other_tiles(tile_root, scn, shash, "--resume" if shard is None else f"--shard {shard[0]}/{shard[1]}")
+    stale = 0 if (resume or shard is not None) else remove_stale_tiles(tile_root, scn, shash)
     if stale and not quiet:
         print(f"removed {stale} tile folder(s) of an earlier version of this scenario (other inputs: never resumable)",
               file=sys.stderr)

@@ -196,17 +196,36 @@ def test_shards_then_resume_assemble_the_same_image(tmp_path):
     scn = _scene(tmp_path)
     assert _run("render", scn, "--out", tmp_path / "clean", "--workers", "1").exit_code == 0
     out = tmp_path / "out"
-    for i, w in ((0, 1), (1, 2)):
+    for i, w in ((1, 1), (2, 2)):
         res = _run("render", scn, "--out", out, "--workers", w, "--shard", f"{i}/2")
         assert res.exit_code == 0, res.output
         assert not list(out.glob("*.exr"))
     assert len(list((out / ".pmmw-tiles").rglob("tile_*.npz"))) == 6
-    assert _run("render", scn, "--out", out, "--resume").exit_code == 0
+    res = _run("render", scn, "--out", out, "--resume")
+    assert res.exit_code == 0 and "6 tiles found, 0 rendered" in res.output, res.output
     a, _ = read_exr(tmp_path / "clean" / "tiny.exr")
     b, _ = read_exr(out / "tiny.exr")
     for c in a:
         np.testing.assert_array_equal(a[c], b[c])
-    assert _run("render", scn, "--shard", "2/2").exit_code == 2
+    for bad in ("0/2", "3/2", "1/0"):  # shards count from 1, as job arrays do
+        res = _run("render", scn, "--shard", bad)
+        assert res.exit_code == 2 and "--shard" in res.output
+
+
+def test_a_shard_or_resume_with_other_settings_is_refused_naming_them(tmp_path):
+    """A shard rendered with other settings used to be silently re-rendered at assembly, its
+    tiles left behind: now the assembly (and any further shard) is refused, naming the folder and
+    the settings that differ; a fresh render (no --resume) starts over and deletes them."""
+    scn = _scene(tmp_path)
+    out = tmp_path / "out"
+    assert _run("render", scn, "--out", out, "--shard", "1/2").exit_code == 0
+    res = _run("render", scn, "--out", out, "--shard", "2/2", "--spp", "4")
+    assert res.exit_code == 2 and "render.spp: 2 -> 4" in res.output and "--shard 2/2" in res.output, res.output
+    res = _run("render", scn, "--out", out, "--resume", "--set", "sky.temperature=50 K")
+    assert res.exit_code == 2 and "sky.temperature" in res.output and "--resume" in res.output, res.output
+    assert len(list((out / ".pmmw-tiles").rglob("tile_*.npz"))) == 3  # nothing deleted
+    assert _run("render", scn, "--out", out, "--spp", "4").exit_code == 0
+    assert not (out / ".pmmw-tiles").exists()
 
 
 def test_sky_command_table_csv_map_and_plot(tmp_path):
@@ -234,8 +253,9 @@ def test_sky_command_table_csv_map_and_plot(tmp_path):
 
 
 def test_resume_does_not_reuse_tiles_of_a_changed_mesh(tmp_path):
-    """Tiles are keyed by the scenario and the content of its assets: editing a mesh in place
-    invalidates them, so --resume renders the new geometry."""
+    """Tiles are keyed by the scenario and the content of its assets: after a mesh is edited in
+    place, --resume refuses the old tiles (naming why) instead of mixing them in, and a fresh
+    render draws the new geometry."""
     scn = _scene(tmp_path)
     out = tmp_path / "out"
     assert _run("render", scn, "--out", out, "--workers", "1", "--keep-tiles").exit_code == 0
@@ -243,6 +263,8 @@ def test_resume_does_not_reuse_tiles_of_a_changed_mesh(tmp_path):
     block = trimesh.creation.box(extents=[2.0, 0.2, 1.0])
     block.apply_translation([0, 4, 0.5])
     block.export(tmp_path / "block.obj")
-    assert _run("render", scn, "--out", out, "--workers", "1", "--resume").exit_code == 0
+    res = _run("render", scn, "--out", out, "--workers", "1", "--resume")
+    assert res.exit_code == 2 and "other input files" in res.output, res.output
+    assert _run("render", scn, "--out", out, "--workers", "1").exit_code == 0
     after, _ = read_exr(out / "tiny.exr")
     assert np.abs(after["ideal.Ex2"] - before["ideal.Ex2"]).max() > 1.0

@@ -112,7 +112,7 @@ def default_workers() -> int:
 
 def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | None = None,
                  resume: bool = False, intersector: str = "embree", progress=None,
-                 tiles=None) -> list[TileResult]:
+                 tiles=None, counts: dict | None = None) -> list[TileResult]:
     """Render ``tiles`` (default: all of the job's tiles) and return their results.
 
     Parameters
@@ -123,6 +123,8 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     tile_dir : Path, optional
         Where finished tiles are saved (and, with ``resume``, loaded from).
     progress : callable(done, total, rays, elapsed), optional
+    counts : dict, optional
+        Filled with ``reused`` (tiles loaded from ``tile_dir``) and ``rendered``.
 
     Raises
     ------
@@ -140,6 +142,8 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
                 if r is not None:
                     results[t[0]] = r
     todo = [t for t in tiles if t[0] not in results]
+    if counts is not None:
+        counts.update(reused=len(tiles) - len(todo), rendered=len(todo))
     workers = default_workers() if workers is None else max(1, int(workers))
     workers = min(workers, max(1, len(todo)))
     start = time.perf_counter()
