@@ -119,10 +119,11 @@ def load_target(mesh: Path, material: str | None, eps: str | None, f: float) -> 
 
 
 MAX_BOUNCES = 16
+METHODS = ("auto", "direct", "octree")
 
 
 def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, polarization="theta",
-           theta=None, phi=None, monostatic=False, bounces=1, method="direct", tube=None) -> Result:
+           theta=None, phi=None, monostatic=False, bounces=1, method="auto", tube=None) -> Result:
     """The ``pmmw po`` job; see the command's help. ``tube``: ray-tube side [m] for bounces > 1
     (default a quarter wavelength)."""
     if polarization not in ("theta", "phi"):
@@ -131,8 +132,8 @@ def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, p
         raise UserError(f"expected 1 to {MAX_BOUNCES} bounces, got {bounces}", "--bounces")
     if tube is not None and not (math.isfinite(tube) and tube > 0.0):
         raise UserError(f"the ray-tube side must be a length > 0, got {tube!r}", "--tube")
-    if method != "direct":
-        raise UserError(f"only the direct sum is implemented (--method direct), got {method!r}", "--method")
+    if method not in METHODS:
+        raise UserError(f"expected one of {', '.join(METHODS)}, got {method!r}", "--method")
     th_i, ph_i = parse_incidence(incidence)
     thetas = parse_theta(theta) if theta is not None else np.radians(np.arange(0.0, 180.5, 1.0))
     phis = parse_phi(phi) if phi is not None else np.array([ph_i])
@@ -152,7 +153,7 @@ def grid(thetas, phis):
 
 
 def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=False, bounces=1,
-            method="direct", tube=None, t0=None) -> Result:
+            method="auto", tube=None, t0=None) -> Result:
     """RCS of ``target`` at ``frequency`` [Hz] on the directions (tt, pp) [rad]."""
     t0 = time.perf_counter() if t0 is None else t0
     k0 = 2.0 * np.pi * frequency / solver.C0
@@ -163,7 +164,8 @@ def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=F
         if lit == 0:
             raise UserError("no facet is lit from any of the directions", "--theta")
     else:
-        s_t, s_p, lit = _tubes(solver.bistatic, target, k0, th_i, ph_i, polarization, tt, pp, bounces, tube)
+        s_t, s_p, lit = _tubes(solver.bistatic, target, k0, th_i, ph_i, polarization, tt, pp, bounces, tube,
+                               method)
         if lit == 0:
             raise UserError("no facet of the mesh is lit from this direction", "--incidence")
         b_t, b_p, _ = _tubes(solver.bistatic, target, k0, th_i, ph_i, polarization, np.array([th_i]),

@@ -57,7 +57,7 @@ class PoJob(_Model):
     monostatic: bool = False
     observation: Observation = Observation()
     bounces: int = Field(1, ge=1, le=command.MAX_BOUNCES)
-    method: Literal["direct"] = "direct"
+    method: Literal["auto", "direct", "octree"] = "auto"
     tube: Annotated[Optional[float], Quantity("length")] = None
     output: Output = Output()
 

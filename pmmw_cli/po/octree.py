@@ -1,8 +1,13 @@
 """Octree aggregation of the physical-optics far field (Xia et al. 2023, supplement sec. 1.2.2).
 
 `far_field_octree` returns what `pmmw_cli.po.solver.far_field` returns (same conventions, stated
-in that module), to a relative accuracy ``tol`` of the pattern's peak, in
-O(F M_leaf^2 + sum over levels of boxes x M^2 log M + D) instead of O(F D).
+in that module), to a relative accuracy ``tol`` of the pattern's peak. The direct sum costs
+O(F D); this costs O(F M_leaf^2 log M_leaf + (boxes x M^2 log M per level) + D), so it wins
+for D above a few thousand directions (the crossover hardly depends on F).
+
+Both far-field components project one vector, V = eta N + L x r_hat: f_theta = theta_hat . V
+and f_phi = phi_hat . V (phi_hat . L = theta_hat . (L x r_hat), theta_hat . L = -phi_hat .
+(L x r_hat)), so three components are aggregated instead of six.
 
 Algorithm
 ---------
@@ -11,13 +16,15 @@ Algorithm
 * A box with centre c radiates the pattern
   ``P_c(r_hat) = sum_k [J_k, M_k] integral_T_k exp(i q . (r - c)) dS``, q = k0 (k_hat - r_hat),
   whose r_hat dependence is exp(-i k0 r_hat . (r - c)) with |r - c| <= R (R: the farthest facet
-  vertex from c). On the torus (theta, phi) in [0, 2 pi)^2 (theta past pi is the direction
-  (2 pi - theta, phi + pi)) its Fourier series is band-limited to
+  vertex from c, over the level). On the torus (theta, phi) in [0, 2 pi)^2 (theta past pi is
+  the direction (2 pi - theta, phi + pi)) its Fourier series is band-limited to
   L = k0 R + a (k0 R)^(1/3) (the excess-bandwidth rule behind Xia et al. 2023 eq. 6,
   M = k d + 6 (k d)^(1/3) with d = 2 R; a from ``tol``), so a uniform torus grid of
   M >= 2 L + 1 points per angle holds it exactly.
-* Leaves evaluate P exactly (`solver.triangle_integral`) on their grid; only theta in [0, pi] is
-  computed, the rest is the same directions relabelled.
+* Each facet's own phase integral about its centroid is a scalar pattern of the same kind with
+  R its circumradius: it is computed exactly (`solver.triangle_integral`) on that small grid
+  (theta in [0, pi] only; the rest are the same directions relabelled), upsampled to the
+  leaf grid, translated to the leaf centre and summed with its currents as weights.
 * Going up, each child's grid is upsampled to the parent's by zero-padding its 2-D FFT
   (trigonometric interpolation, exact for the band-limited pattern), multiplied by the
   translation exp(i q . (c_child - c_parent)) and summed into the parent.
@@ -34,16 +41,20 @@ from scipy import sparse
 
 from pmmw_cli.po.solver import ETA0, direction, theta_phi_hats, triangle_integral
 
-_LEAF_WAVELENGTHS = 3.0  # leaf side [wavelengths]: the leaf grid cost F M_leaf^2 grows fast with it
+_LEAF_WAVELENGTHS = 3.0  # leaf side [wavelengths]; 1.5-6 cost within 20 % (40-wavelength sphere)
 _OVERSAMPLE = 2  # root grid upsampling before the local interpolation to the requested directions
-_LAGRANGE = 8  # points per angle of the final Lagrange stencil (error ~ (pi/oversample)^p / p!)
+_LAGRANGE = 12  # points per angle of the final Lagrange stencil; with 2x oversampling ~1e-5
 _CHUNK = 1 << 21  # complex elements per block of work (memory ~ 16-100 B each)
 
 
 def _excess(tol: float) -> float:
-    """The constant a in L = kR + a (kR)^(1/3) for a truncation error ``tol`` (the usual
-    MLFMA excess-bandwidth formula a = 1.8 log10(1/tol)^(2/3))."""
-    return 1.8 * max(np.log10(1.0 / tol), 1.0) ** (2.0 / 3.0)
+    """The constant a in L = kR + a (kR)^(1/3) for a truncation error ``tol``.
+
+    The MLFMA rule a = 1.8 log10(1/tol)^(2/3) bounds spherical-harmonic truncation; on the
+    (theta, phi) torus half of it measured ~1e-4 at tol = 1e-3 (40-wavelength sphere, 7 levels),
+    and it sets the cost of every level.
+    """
+    return 0.9 * max(np.log10(1.0 / tol), 1.0) ** (2.0 / 3.0)
 
 
 def _grid_size(kR: float, tol: float) -> int:
@@ -89,36 +100,59 @@ def _upsample(a: np.ndarray, n: int) -> np.ndarray:
     return sfft.ifft2(spec, axes=(-2, -1), workers=-1) * ((n / m) ** 2)
 
 
-def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n):
-    """Exact patterns V (B, 3, n, n) of the leaves about their centres (B, 3).
-
-    tri : (F, 3, 3) [m]; area : (F,) [m^2]; src : (F, 6) complex, [J, M]; box : (F,) int, sorted.
-    """
-    B = len(centres)
+def _half_grid(n: int) -> np.ndarray:
+    """Directions (n // 2 + 1, n, 3) of the torus rows theta in [0, pi]."""
     th, ph = _grid(n)
-    half = n // 2 + 1  # rows theta in [0, pi]; the others are the same directions
-    r_hat = direction(th[:half], ph[:half]).reshape(-1, 3)
-    q = k0 * (k_hat[None, :] - r_hat)
-    local = tri - centres[box][:, None, :]
-    F = len(area)
+    return direction(th[: n // 2 + 1], ph[: n // 2 + 1])
+
+
+def _unfold(half: np.ndarray) -> np.ndarray:
+    """Torus samples (..., n, n) from the rows theta in [0, pi] (..., n // 2 + 1, n): theta_j
+    for j > n/2 is the direction (theta_{n-j}, phi + pi)."""
+    h, n = half.shape[-2:]
+    full = np.empty(half.shape[:-2] + (n, n), half.dtype)
+    full[..., :h, :] = half
+    full[..., h:, :] = np.roll(half[..., n - np.arange(h, n), :], -(n // 2), axis=-1)
+    return full
+
+
+def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n, tol):
+    """Patterns V (B, 3, n, n) of the leaves about their centres (B, 3).
+
+    Each facet's phase integral about its own centroid is a scalar pattern of small bandwidth
+    (its circumradius), so it is evaluated exactly on a coarse grid, upsampled to the leaf grid
+    and translated to the leaf centre; the currents, constant on the facet, multiply after.
+
+    tri : (F, 3, 3) [m]; area : (F,) [m^2]; src : (F, 6) complex, [J, M]; box : (F,) int.
+    """
+    B, F = len(centres), len(area)
+    cen = tri.mean(axis=1)
+    local = tri - cen[:, None, :]
+    r_hat = direction(*_grid(n))  # (n, n, 3)
+    q = k0 * (k_hat[None, None, :] - r_hat)
     # (6 B, F) sum of each box's currents, component by component
     rows = (box[:, None] * 6 + np.arange(6)[None, :]).ravel()
     cols = np.repeat(np.arange(F), 6)
-    S = sparse.csr_matrix((src.ravel(), (rows, cols)), shape=(6 * B, F))
-    out = np.empty((6 * B, half * n), complex)
-    step = max(1, _CHUNK // max(1, F))
-    for d0 in range(0, len(q), step):
-        out[:, d0:d0 + step] = S @ triangle_integral(local, area, q[d0:d0 + step])
-    out = out.reshape(B, 6, half * n)
+    S = sparse.csc_matrix((src.ravel(), (rows, cols)), shape=(6 * B, F))
+    out = np.zeros((6 * B, n * n), complex)
+    # facets grouped by their own grid, so a few large ones do not set every facet's
+    kr, which = np.unique(np.ceil(k0 * np.linalg.norm(local, axis=2).max(axis=1)),
+                          return_inverse=True)
+    n_of = np.array([min(n, _grid_size(r, tol)) for r in kr])[which]
+    step = max(1, _CHUNK // (n * n))
+    for n_f in np.unique(n_of):
+        q_f = k0 * (k_hat[None, :] - _half_grid(n_f).reshape(-1, 3))
+        group = np.flatnonzero(n_of == n_f)
+        for f0 in range(0, len(group), step):
+            sl = group[f0:f0 + step]
+            I = triangle_integral(local[sl], area[sl], q_f)
+            I = _upsample(_unfold(I.reshape(-1, n_f // 2 + 1, n_f)), n)
+            I *= np.exp(1j * np.einsum("ijc,fc->fij", q, cen[sl] - centres[box[sl]]))
+            out += S[:, sl] @ I.reshape(-1, n * n)
+    out = out.reshape(B, 6, n * n)
     # V = eta N + L x r_hat, the one vector both far-field components project (module docstring)
-    out = ETA0 * out[:, :3] + np.cross(out[:, 3:], r_hat.T[None], axis=1)
-    out = out.reshape(B, 3, half, n)
-    full = np.empty((B, 3, n, n), complex)
-    full[:, :, :half] = out
-    # theta_j for j > n/2 is the direction (theta_{n-j}, phi + pi)
-    mirror = n - np.arange(half, n)
-    full[:, :, half:] = np.roll(out[:, :, mirror], -(n // 2), axis=-1)
-    return full
+    out = ETA0 * out[:, :3] + np.cross(out[:, 3:], r_hat.reshape(-1, 3).T[None], axis=1)
+    return out.reshape(B, 3, n, n)
 
 
 def _lagrange(u: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
@@ -211,7 +245,7 @@ def far_field_octree(target, lit, J, M, k_hat, k0, theta, phi, tol=1e-3):
         b["n"] = max(b["n"], a["n"])
 
     leaf = levels[0]
-    P = _leaf_patterns(tri, area, src, leaf["box"], leaf["centres"], k_hat, k0, leaf["n"])
+    P = _leaf_patterns(tri, area, src, leaf["box"], leaf["centres"], k_hat, k0, leaf["n"], tol)
     for child, parent in zip(levels[:-1], levels[1:]):
         n = parent["n"]
         pid = np.searchsorted(parent["keys"], child["keys"] >> 3)

@@ -264,23 +264,40 @@ def incident(theta_i: float, phi_i: float, polarization: str):
     return d, (th if polarization == "theta" else ph)
 
 
+OCTREE_DIRECTIONS = 3000  # `method="auto"`: the octree from this many directions on (docs/benchmarks_po.md)
+OCTREE_FACETS = 1000  # ... and this many lit facets
+
+
 def bistatic(target: Target, k0: float, theta_i: float, phi_i: float, polarization: str, theta, phi,
-             bounces: int = 1, tube: float | None = None):
+             bounces: int = 1, tube: float | None = None, method: str = "auto"):
     """Bistatic RCS [m^2] (sigma_theta, sigma_phi) at observation angles [rad], and the number of
     lit facets. ``bounces`` > 1 adds the currents of waves reflected that many times, by shooting
-    and bouncing ray tubes of side ``tube`` [m] (`pmmw_cli.po.sbr`)."""
+    and bouncing ray tubes of side ``tube`` [m] (`pmmw_cli.po.sbr`). ``method``: ``direct`` sums
+    every facet for every direction; ``octree`` aggregates far fields up an octree
+    (`pmmw_cli.po.octree`, 1e-3 of the peak); ``auto`` takes the octree for many directions."""
     d_inc, e_inc = incident(theta_i, phi_i, polarization)
     lit, J, M = currents(target, d_inc, e_inc, k0)
     theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
     shape = theta.shape
-    r_hat = direction(theta.ravel(), phi.ravel())
-    N, L = radiation_vectors(target, lit, J, M, -d_inc, k0, r_hat)
+    th, ph = theta.ravel(), phi.ravel()
+    r_hat = direction(th, ph)
+    if method == "auto":
+        method = "octree" if th.size >= OCTREE_DIRECTIONS and lit.sum() >= OCTREE_FACETS else "direct"
+    if method == "octree":
+        from pmmw_cli.po.octree import far_field_octree
+
+        ft, fp = far_field_octree(target, lit, J, M, -d_inc, k0, th, ph)
+        N = L = np.zeros((th.size, 3), complex)
+    else:
+        N, L = radiation_vectors(target, lit, J, M, -d_inc, k0, r_hat)
+        ft = fp = 0.0
     if bounces > 1:
         from pmmw_cli.po.sbr import bounce_radiation
 
         N2, L2 = bounce_radiation(target, k0, d_inc, e_inc, bounces, r_hat, tube)
         N, L = N + N2, L + L2
-    ft, fp = components(N, L, theta.ravel(), phi.ravel())
+    f2t, f2p = components(N, L, th, ph)
+    ft, fp = ft + f2t, fp + f2p
     scale = k0 * k0 / (4.0 * np.pi)
     return (scale * np.abs(ft) ** 2).reshape(shape), (scale * np.abs(fp) ** 2).reshape(shape), int(lit.sum())
 
