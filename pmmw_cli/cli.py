@@ -264,6 +264,51 @@ def brdf(
 
 @app.command()
 @_user_errors
+def sweep(
+    scenario: Path = typer.Argument(..., help="Scenario YAML, or a sweep file (scenario, grid, zip, executor, ...)."),
+    grid: Optional[List[str]] = typer.Option(None, "--grid", metavar="KEY=LIST",
+                                             help="A key and its values, e.g. 'frequency=[35 GHz, 95 GHz]' or "
+                                                  "'imager.noise=linspace(1 K, 4 K, 4)' (repeatable)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Sweep folder (default ./out/<scenario>_sweep)."),
+    zip_: bool = typer.Option(False, "--zip", help="The lists side by side (a flight path) instead of every combination."),
+    executor: Optional[str] = typer.Option(None, "--executor", help="local (default) or dask."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", metavar="ADDRESS",
+                                            help="A running Dask scheduler, e.g. tcp://host:8786."),
+    cluster: Optional[Path] = typer.Option(None, "--cluster", metavar="FILE.yaml",
+                                           help="A dask-jobqueue cluster (kind: slurm|pbs|sge|lsf, queue, cores, "
+                                                "memory, walltime, jobs)."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1,
+                                          help="Local: processes per render; dask LocalCluster: workers."),
+    resume: bool = typer.Option(False, "--resume", help="Skip variants already rendered with the same inputs."),
+    dry_run: bool = typer.Option(False, "--dry-run", help="Print the batch job script of --cluster and stop."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress line."),
+):
+    """Render a grid of variants of a scenario; write sweep.csv and a trade-study report."""
+    from pmmw_cli.io.yamlio import read_yaml
+    from pmmw_cli.sweep import SweepSpec, load_sweep_file, parse_grid_options, run_sweep
+
+    raw = read_yaml(scenario, "scenario or sweep file") if scenario.is_file() else None
+    if isinstance(raw, dict) and "grid" in raw:
+        spec = load_sweep_file(scenario)
+        if grid:
+            spec.grid += parse_grid_options(grid)
+    else:
+        if not grid:
+            raise UserError("give at least one --grid KEY=LIST (or a sweep file)", "--grid")
+        spec = SweepSpec(scenario=scenario, grid=parse_grid_options(grid))
+    spec.zip = True if zip_ else spec.zip
+    spec.executor = executor or spec.executor
+    spec.scheduler = scheduler or spec.scheduler
+    spec.cluster = cluster or spec.cluster
+    spec.out = out or spec.out
+    spec.workers = workers or spec.workers
+    if (spec.scheduler or spec.cluster) and spec.executor == "local":
+        spec.executor = "dask"
+    raise typer.Exit(run_sweep(spec, resume=resume, quiet=quiet, dry_run=dry_run))
+
+
+@app.command()
+@_user_errors
 def po(
     mesh: Path = typer.Argument(..., help="Mesh file (glTF/GLB, OBJ, PLY, STL), in metres, or a job YAML "
                                           "(configs/po_*.yaml)."),
@@ -282,7 +327,8 @@ def po(
                                                      "2+: ray tubes add the reflected waves' currents)."),
     tube: Optional[str] = typer.Option(None, "--tube", metavar="LENGTH",
                                        help="Ray-tube side for --bounces > 1 (default: a quarter wavelength)."),
-    method: str = typer.Option("direct", "--method", help="Far-field summation: direct."),
+    method: str = typer.Option("auto", "--method", help="Far-field sum: direct, octree (aggregated, 1e-3 of the "
+                                                        "peak) or auto (octree from 3000 directions)."),
     fmt: str = typer.Option("table", "--format", help="csv, json or table (to standard output)."),
     out: Optional[Path] = typer.Option(None, "--out", help="Also write po.csv and po.json in this folder."),
     plot: Optional[Path] = typer.Option(None, "--plot", metavar="FILE.png", help="Write a plot of RCS against theta."),
@@ -325,8 +371,17 @@ def bench(
     with_scaling: bool = typer.Option(False, "--scaling", help="Also measure cost against triangle count (1e3-1e6)."),
     render_times: Optional[List[Path]] = typer.Option(None, "--render-times", help="Also time these configs as shipped (repeatable)."),
     skip_configs: Optional[List[Path]] = typer.Option(None, "--skips", help="Also measure what each skip saves on these configs (repeatable)."),
+    po: bool = typer.Option(False, "--po", help="Instead: physical optics, direct sum against octree "
+                                                 "(docs/benchmarks_po.md)."),
 ):
     """Run time against error for each scenario and sampling strategy (docs/benchmarks.md)."""
+    if po:
+        from pmmw_cli.po.bench import run as run_po_bench
+
+        target = out if out != Path("docs/benchmarks.md") else Path("docs/benchmarks_po.md")
+        run_po_bench(target, command="pmmw bench " + " ".join(sys.argv[2:]))
+        typer.echo(f"wrote {target}")
+        return
     from pmmw_cli.bench import STRATEGIES, bench as run
 
     try:

@@ -14,7 +14,7 @@ measures it, the command a user runs to see the same, and a verdict:
   sec. 2.3.3-2.3.4) or is a visual detail of a figure that no number captures.
 
 Renders are the shipped configs with the thesis's variants as ``--set`` overrides (the sweeps in
-``configs/*_sweep.sh``), at the shipped resolution and sampling, with the imager noise switched
+``configs/*_sweep.yaml``), at the shipped resolution and sampling, with the imager noise switched
 off so that a contrast is the expected one. "Visible" is judged by a signal-to-noise ratio, as
 Rose 1948 did for the eye: the target's contrast averaged over one blur spot against the noise
 averaged over it (`Render.snr`). Visible from SNR 3 (``VISIBLE_SNR``), clearly visible from 10

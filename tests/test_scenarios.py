@@ -14,7 +14,10 @@ from pmmw_cli.physics.jones import stokes_images
 from pmmw_cli.trace.pool import assemble, render_tiles
 
 REPO = Path(__file__).resolve().parents[1]
-CONFIGS = sorted(REPO.glob("configs/*.yaml"))
+# scenarios: not the sweep files (*_sweep, *_trade) nor the physical-optics jobs (po_*)
+CONFIGS = sorted(p for p in REPO.glob("configs/*.yaml")
+                 if not (p.stem.startswith("po_") or p.stem.endswith(("_sweep", "_trade"))))
+SWEEPS = sorted(p for p in REPO.glob("configs/*.yaml") if p.stem.endswith(("_sweep", "_trade")))
 
 
 def _render(path, overrides):
@@ -96,11 +99,12 @@ SAR = REPO / "configs/sar_cessna_95ghz.yaml"
 
 
 def sar_sweep_weathers() -> dict[str, str]:
-    """The `atmosphere.layers` values of configs/sar_sweep.sh, by weather name."""
-    text = (REPO / "configs/sar_sweep.sh").read_text()
-    cloud = re.search(r"^cloud='(.*)'$", text, re.M).group(1)
-    block = re.search(r"declare -A weather=\((.*?)^\)", text, re.M | re.S).group(1)
-    return {k: v.replace("$cloud", cloud) for k, _, v in re.findall(r"\[(\w+)\]=(['\"])(.*)\2", block)}
+    """The `atmosphere.layers` values of configs/sar_sweep.yaml (clear, cloud, rain in its order), as
+    --set values."""
+    from pmmw_cli.sweep import _yaml_value, load_sweep_file
+
+    layers = dict(load_sweep_file(REPO / "configs/sar_sweep.yaml").grid)["atmosphere.layers"]
+    return dict(zip(("clear", "cloud", "rain"), (_yaml_value(v) for v in layers)))
 
 
 def test_sar_targets_are_the_coldest_objects_and_visible_through_cloud():
@@ -193,3 +197,17 @@ def test_target_error_applies_after_the_blur_only_when_the_imager_blurs():
     assert blurred.settings.error_footprint == error_footprint(kern) > 5.0
     ideal = make_job(resolve(LANDING, ["render.target_error=0.4 K", "imager.aperture_diameter=0 m"]), 95e9)
     assert ideal.settings.error_footprint == 1.0
+
+
+@pytest.mark.parametrize("path", SWEEPS, ids=lambda p: p.stem)
+def test_shipped_sweep_files_resolve_every_variant(path):
+    """Each shipped sweep file loads, and every one of its variants is a valid scenario (the
+    renders themselves are the README's trade studies)."""
+    from pmmw_cli.config import load_scenario
+    from pmmw_cli.sweep import load_sweep_file, overrides_of, variants
+
+    spec = load_sweep_file(path)
+    combos = variants(spec)
+    assert combos
+    for params in combos:
+        load_scenario(spec.scenario, overrides_of(params))

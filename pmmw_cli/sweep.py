@@ -1,0 +1,497 @@
+"""`pmmw sweep`: a grid of renders of one scenario, a results table and a trade-study report.
+
+A sweep varies scenario keys (``--grid KEY=LIST``, each list a YAML list or
+``linspace(START, STOP, N)`` with an optional unit): every combination, or with ``zip`` the lists
+side by side (a flight path of poses). Each variant is an ordinary render (`pipeline.render`)
+into ``DIR/<variant>/``; ``DIR/sweep.csv`` has one row per variant: ``variant``, one column per
+grid key, ``status``, ``exr``, ``wall_s``, then every region's mean and every pairwise contrast
+in K and in noise sigmas from the variant's report. ``DIR/report.md`` adds plots of the contrasts
+against the swept values and a contact sheet of the previews.
+
+Executors: ``local`` renders the variants one after another, each on all cores (variants and
+tiles share the machine without oversubscribing it); ``dask`` sends each variant to a Dask
+cluster as one task (rendered in the worker's process): a ``LocalCluster`` when no address is
+given, a running scheduler (``--scheduler tcp://host:8786``), or a batch-queue cluster from
+dask-jobqueue (``--cluster slurm.yaml``). The same seeds give bit-identical images everywhere.
+
+A variant is done when its folder holds ``variant.json`` with the hash of the scenario it renders
+(`pipeline.scenario_hash`); ``--resume`` skips those. A failed variant is recorded with its error
+and the others go on; the sweep then exits non-zero.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import itertools
+import json
+import math
+import re
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.io.atomic import write_text_atomic
+from pmmw_cli.io.yamlio import load_yaml, read_yaml
+
+EXECUTORS = ("local", "dask")
+MAX_VARIANTS = 10_000
+_LINSPACE = re.compile(r"^\s*linspace\(\s*([^,]+?)\s*,\s*([^,]+?)\s*,\s*(\d+)\s*\)\s*$")
+_NUMBER_UNIT = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)$")
+
+
+@dataclass
+class SweepSpec:
+    scenario: Path
+    grid: list[tuple[str, list]]  # (key, values) in order
+    zip: bool | list = False  # True: every list side by side; a list of keys: those side by side
+    executor: str = "local"
+    scheduler: str | None = None
+    cluster: Path | None = None
+    out: Path | None = None
+    source: str = "--grid"  # where the grid came from, for messages
+    workers: int | None = None
+    names: dict = field(default_factory=dict)  # key -> display label of each value (table, plots)
+    axis: dict = field(default_factory=dict)  # the plots' x axis: key, label, values (numbers per value)
+
+
+def linspace(text: str, where: str) -> list | None:
+    """``linspace(2000 m, 200 m, 10)`` -> ['2000 m', '1800 m', ...] (None if not a linspace)."""
+    m = _LINSPACE.match(text)
+    if not m:
+        return None
+    ends = []
+    for part in (m.group(1), m.group(2)):
+        nm = _NUMBER_UNIT.match(part)
+        if not nm:
+            raise UserError(f"linspace ends must be numbers with an optional unit, got {part!r}", where)
+        ends.append((float(nm.group(1)), nm.group(2).strip()))
+    (a, ua), (b, ub), n = ends[0], ends[1], int(m.group(3))
+    if ua != ub:
+        raise UserError(f"linspace ends must share a unit, got {ua!r} and {ub!r}", where)
+    if n < 1:
+        raise UserError("linspace needs at least 1 point", where)
+    values = [a + (b - a) * k / (n - 1) if n > 1 else a for k in range(n)]
+    return [f"{v:.10g} {ua}" if ua else float(f"{v:.12g}") for v in values]
+
+
+def grid_values(value, where: str) -> list:
+    """A grid entry's values: a YAML list, a linspace string, or one value."""
+    if isinstance(value, str):
+        lin = linspace(value, where)
+        if lin is not None:
+            return lin
+    if isinstance(value, list):
+        if not value:
+            raise UserError("an empty list: give at least one value", where)
+        return value
+    return [value]
+
+
+def parse_grid_options(items: list[str]) -> list[tuple[str, list]]:
+    """``KEY=YAML_LIST`` items (``--grid``) -> [(key, values)]."""
+    out = []
+    for item in items:
+        if "=" not in item:
+            raise UserError(f"expected KEY=LIST, e.g. 'frequency=[35 GHz, 95 GHz]', got {item!r}", "--grid")
+        key, text = (s.strip() for s in item.split("=", 1))
+        lin = linspace(text, f"--grid {key}")
+        out.append((key, lin if lin is not None else grid_values(load_yaml(text, "--grid", key), f"--grid {key}")))
+    keys = [k for k, _ in out]
+    if len(set(keys)) != len(keys):
+        raise UserError("a key is swept twice", "--grid")
+    return out
+
+
+def load_sweep_file(path: Path) -> SweepSpec:
+    """A sweep file: ``scenario``, ``grid`` (key -> list or linspace), ``zip``, ``executor``,
+    ``scheduler``, ``cluster``, ``out``; relative paths against the file's folder (``out``
+    against the current folder, as a scenario's output folder)."""
+    raw = read_yaml(path, "sweep file")
+    if not isinstance(raw, dict):
+        raise UserError("a sweep file is a mapping with scenario and grid", path)
+    allowed = {"scenario", "grid", "zip", "executor", "scheduler", "cluster", "out", "workers", "names", "axis"}
+    errors = [UserError(f"unknown key; allowed: {', '.join(sorted(allowed))}", path, k) for k in raw if k not in allowed]
+    for k in ("scenario", "grid"):
+        if k not in raw:
+            errors.append(UserError("required key missing", path, k))
+    if errors:
+        raise UserErrors(errors) if len(errors) > 1 else errors[0]
+    if not isinstance(raw["grid"], dict) or not raw["grid"]:
+        raise UserError("expected a mapping of scenario key -> list of values", path, "grid")
+    base = path.resolve().parent
+    grid = [(str(k), grid_values(v, f"{path}: grid.{k}")) for k, v in raw["grid"].items()]
+    scn = Path(str(raw["scenario"]))
+    cluster = raw.get("cluster")
+    zipped = raw.get("zip", False)
+    if not isinstance(zipped, (bool, list)):
+        raise UserError("expected true, false or a list of grid keys", path, "zip")
+    lengths = dict((k, len(v)) for k, v in grid)
+    names = raw.get("names") or {}
+    if not isinstance(names, dict):
+        raise UserError("expected a mapping of grid key -> list of labels", path, "names")
+    for k, labels in names.items():
+        if k not in lengths or not isinstance(labels, list) or len(labels) != lengths[k]:
+            raise UserError(f"names.{k} must label each of the grid's {lengths.get(k, 0)} values of {k!r}", path,
+                            f"names.{k}")
+    axis = raw.get("axis") or {}
+    if axis and (not isinstance(axis, dict) or axis.get("key") not in lengths
+                 or not isinstance(axis.get("values", []), list)
+                 or ("values" in axis and len(axis["values"]) != lengths[axis["key"]])):
+        raise UserError("expected {key: a grid key, label: text, values: one number per value}", path, "axis")
+    return SweepSpec(
+        scenario=scn if scn.is_absolute() else base / scn, grid=grid, zip=zipped,
+        executor=str(raw.get("executor", "local")), scheduler=raw.get("scheduler"),
+        cluster=None if cluster is None else (Path(cluster) if Path(cluster).is_absolute() else base / cluster),
+        out=None if raw.get("out") is None else Path(str(raw["out"])), source=str(path),
+        workers=raw.get("workers"), names={k: [str(x) for x in v] for k, v in names.items()}, axis=dict(axis),
+    )
+
+
+def zipped_keys(spec: SweepSpec) -> list[str]:
+    """The keys whose lists go side by side: all with ``zip: true``, the listed ones with a list."""
+    keys = [k for k, _ in spec.grid]
+    if spec.zip is True:
+        return keys
+    if not spec.zip:
+        return []
+    unknown = [k for k in spec.zip if k not in keys]
+    if unknown:
+        raise UserError(f"zip names {unknown[0]!r}, which is not in the grid", spec.source, "zip")
+    return list(spec.zip)
+
+
+def variants(spec: SweepSpec) -> list[dict]:
+    """Every combination of the grid's values; zipped keys go side by side as one axis (a
+    flight path of poses), in product with the others."""
+    zipped = zipped_keys(spec)
+    axes = []  # each axis: a list of {key: value} steps
+    if zipped:
+        lists = [dict(spec.grid)[k] for k in zipped]
+        if len({len(v) for v in lists}) != 1:
+            raise UserError(f"zipped lists must have one length, got {[len(v) for v in lists]} for {zipped}",
+                            spec.source, "zip")
+        axes.append([dict(zip(zipped, c)) for c in zip(*lists)])
+    axes += [[{k: v} for v in values] for k, values in spec.grid if k not in zipped]
+    combos = [dict(kv for step in c for kv in step.items()) for c in itertools.product(*axes)]
+    if len(combos) > MAX_VARIANTS:
+        raise UserError(f"{len(combos)} variants; at most {MAX_VARIANTS}", spec.source)
+    order = [k for k, _ in spec.grid]
+    return [{k: c[k] for k in order} for c in combos]
+
+
+def _yaml_value(v) -> str:
+    return yaml.safe_dump(v, default_flow_style=True, width=10_000).strip().removesuffix("...").strip()
+
+
+def overrides_of(params: dict) -> list[str]:
+    return [f"{k}={_yaml_value(v)}" for k, v in params.items()]
+
+
+def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: int | None, shash: str) -> dict:
+    """Render one variant (a Dask task or a local call); never raises for a user error: the
+    outcome is in ``status``."""
+    from pmmw_cli.errors import UserError as _UserError
+    from pmmw_cli.pipeline import render
+
+    t0 = time.perf_counter()
+    out = Path(out_dir)
+    try:
+        exrs = render(scenario, overrides, out=out, workers=workers, quiet=True)
+    except _UserError as e:
+        return {"status": f"failed: {e}", "exr": "", "wall_s": round(time.perf_counter() - t0, 3)}
+    write_text_atomic(out / "variant.json", json.dumps({"hash": shash, "overrides": overrides}, indent=1))
+    return {"status": "done", "exr": str(exrs[0]) if exrs else "", "wall_s": round(time.perf_counter() - t0, 3)}
+
+
+def _variant_hash(scenario: Path, overrides: list[str]) -> str:
+    from pmmw_cli.pipeline import resolve, scenario_hash
+
+    res = resolve(scenario, overrides)
+    return scenario_hash(res.scenario, res.db)
+
+
+def _done(out_dir: Path, shash: str) -> bool:
+    try:
+        return json.loads((out_dir / "variant.json").read_text())["hash"] == shash and any(out_dir.glob("*.exr"))
+    except (OSError, ValueError, KeyError):
+        return False
+
+
+def _client(spec: SweepSpec, n_tasks: int):
+    from dask.distributed import Client, LocalCluster
+
+    if spec.cluster is not None:
+        cluster = jobqueue_cluster(spec.cluster)
+        cluster.scale(jobs=int(read_yaml(spec.cluster, "cluster file").get("jobs", 1)))
+        return Client(cluster), cluster
+    if spec.scheduler:
+        return Client(spec.scheduler), None
+    from pmmw_cli.trace.pool import default_workers
+
+    n = max(1, min(spec.workers or default_workers(), n_tasks))
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+    return Client(cluster), cluster
+
+
+CLUSTER_KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster"}
+
+
+def jobqueue_cluster(path: Path):
+    """A dask-jobqueue cluster from a YAML file: ``kind`` (slurm, pbs, sge, lsf), ``queue``,
+    ``cores``, ``memory``, ``walltime``, ``jobs``, and any other keyword of the cluster class."""
+    import dask_jobqueue
+
+    cfg = dict(read_yaml(path, "cluster file") or {})
+    kind = str(cfg.pop("kind", "slurm")).lower()
+    if kind not in CLUSTER_KINDS:
+        raise UserError(f"unknown kind {kind!r}; known: {', '.join(CLUSTER_KINDS)}", path, "kind")
+    cfg.pop("jobs", None)
+    cfg.setdefault("processes", cfg.get("cores"))  # one single-threaded process per core: a render per process
+    for key in ("cores", "memory"):
+        if key not in cfg:
+            raise UserError("required key missing", path, key)
+    cls = getattr(dask_jobqueue, CLUSTER_KINDS[kind])
+    try:
+        return cls(**cfg)
+    except (TypeError, ValueError) as e:
+        raise UserError(f"dask-jobqueue refused it: {e}", path) from None
+
+
+def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry_run: bool = False) -> int:
+    """Render every variant, write ``sweep.csv`` and ``report.md``; returns the exit status
+    (0 all done, 1 some failed)."""
+    if spec.executor not in EXECUTORS:
+        raise UserError(f"expected one of {', '.join(EXECUTORS)}, got {spec.executor!r}", "--executor")
+    if dry_run:
+        if spec.cluster is None:
+            raise UserError("--dry-run prints the batch job script of --cluster FILE", "--dry-run")
+        print(jobqueue_cluster(spec.cluster).job_script())
+        return 0
+    if not spec.scenario.is_file():
+        raise UserError("scenario file not found", spec.scenario)
+    out = (spec.out or Path.cwd() / "out" / f"{spec.scenario.stem}_sweep").resolve()
+    combos = variants(spec)
+    names = [f"v{i:03d}" for i in range(len(combos))]
+    plans, rows = [], {}
+    for name, params in zip(names, combos):
+        overrides = overrides_of(params)
+        try:
+            shash = _variant_hash(spec.scenario, overrides)
+        except UserError as e:
+            rows[name] = {"status": f"failed: {e}", "exr": "", "wall_s": 0.0}
+            continue
+        vdir = out / name
+        if resume and _done(vdir, shash):
+            rows[name] = {"status": "done", "exr": str(next(vdir.glob("*.exr"))), "wall_s": 0.0, "resumed": True}
+            continue
+        plans.append((name, overrides, vdir, shash))
+    log = _Log(len(combos), quiet)
+    log.update(len(rows))
+    if spec.executor == "local":
+        for name, overrides, vdir, shash in plans:
+            rows[name] = render_variant(str(spec.scenario), overrides, str(vdir), spec.workers, shash)
+            log.update(len(rows))
+    elif plans:
+        from dask.distributed import as_completed
+
+        client, cluster = _client(spec, len(plans))
+        try:
+            futures = {client.submit(render_variant, str(spec.scenario), ov, str(vd), 1, sh, key=f"pmmw-{name}-{sh}",
+                                     retries=1, pure=False): name for name, ov, vd, sh in plans}
+            for fut in as_completed(futures):
+                name = futures[fut]
+                try:
+                    rows[name] = fut.result()
+                except Exception as e:  # a task that failed twice (a worker lost both times, a bug)
+                    rows[name] = {"status": f"failed: {type(e).__name__}: {str(e)[:200]}", "exr": "", "wall_s": 0.0}
+                log.update(len(rows))
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    table = [_row(spec, out, name, params, rows[name]) for name, params in zip(names, combos)]
+    write_table(out / "sweep.csv", table)
+    write_report(out, spec, table)
+    failed = [r for r in table if r["status"] != "done"]
+    print(f"sweep: {len(table) - len(failed)} of {len(table)} variants done -> {out / 'sweep.csv'}")
+    for r in failed:
+        print(f"  {r['variant']}: {r['status']}", file=sys.stderr)
+    return 1 if failed else 0
+
+
+class _Log:
+    """A progress line on a terminal; a plain line every few seconds into a log file."""
+
+    def __init__(self, total: int, quiet: bool):
+        self.total, self.quiet, self.t0, self.last = total, quiet, time.perf_counter(), 0.0
+
+    def update(self, done: int):
+        if self.quiet:
+            return
+        now = time.perf_counter() - self.t0
+        left = now / done * (self.total - done) if done else float("nan")
+        msg = f"sweep: {done}/{self.total} variants, {now:.0f} s, {left:.0f} s left"
+        if sys.stderr.isatty():
+            sys.stderr.write("\r" + msg + ("\n" if done == self.total else ""))
+            sys.stderr.flush()
+        elif now - self.last >= 5.0 or done == self.total:
+            print(msg, file=sys.stderr, flush=True)
+            self.last = now
+
+
+def _row(spec, out: Path, name: str, params: dict, result: dict) -> dict:
+    row = {"variant": name, **{k: _label(spec, k, v) for k, v in params.items()},
+           "status": result["status"], "exr": (str(Path(result["exr"]).relative_to(out)) if result.get("exr") else ""),
+           "wall_s": result["wall_s"]}
+    report = out / name / "report.json"
+    if result["status"] == "done" and report.is_file():
+        rep = json.loads(report.read_text())
+        regions = rep.get("regions") or {}
+        for region, chans in (regions.get("means") or {}).items():
+            for c, v in chans.items():
+                row[f"mean {region} {c} [K]"] = v
+        for pair, chans in (regions.get("contrasts") or {}).items():
+            for c, v in chans.items():
+                row[f"contrast {pair} {c} [K]"] = v["K"]
+                row[f"contrast {pair} {c} [sigma]"] = v["sigma"]
+    return row
+
+
+def _label(spec: SweepSpec, key: str, value):
+    """A value as the table shows it: its name from ``names``, or itself (YAML for lists)."""
+    if key in spec.names:
+        return spec.names[key][[_yaml_value(v) for v in dict(spec.grid)[key]].index(_yaml_value(value))]
+    return value if isinstance(value, (int, float, str)) else _yaml_value(value)
+
+
+def write_table(path: Path, table: list[dict]) -> Path:
+    cols = list(dict.fromkeys(k for row in table for k in row))
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+    w.writeheader()
+    for row in table:
+        w.writerow({k: row.get(k, "") for k in cols})
+    return write_text_atomic(path, buf.getvalue())
+
+
+def _numeric(values) -> list[float] | None:
+    """Plot positions of a grid key's values (numbers or numbers with a unit), or None."""
+    out = []
+    for v in values:
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            out.append(float(v))
+            continue
+        m = _NUMBER_UNIT.match(str(v))
+        if not m:
+            return None
+        out.append(float(m.group(1)))
+    return out
+
+
+def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
+    """``report.md``: the table, a plot per I contrast against the swept keys, a contact sheet."""
+    keys = [k for k, _ in spec.grid]
+    lines = [f"# Sweep of `{spec.scenario.name}`", "",
+             f"- grid (every combination{'; side by side: ' + ', '.join(zipped_keys(spec)) if spec.zip else ''}): "
+             + "; ".join(f"`{k}` = {', '.join(map(str, v))}" for k, v in spec.grid),
+             f"- executor: {spec.executor}; {sum(r['status'] == 'done' for r in table)} of {len(table)} done", ""]
+    contrast_cols = [c for c in dict.fromkeys(k for r in table for k in r)
+                     if c.startswith("contrast ") and c.endswith(" I [sigma]")]
+    k_cols = [c.replace("[sigma]", "[K]") for c in contrast_cols]
+    head = ["variant", *keys, "status", *k_cols, *contrast_cols]
+    lines.append("| " + " | ".join(head) + " |")
+    lines.append("| " + " | ".join("---" for _ in head) + " |")
+    for r in table:
+        cells = []
+        for h in head:
+            v = r.get(h, "")
+            cells.append(f"{v:.3g}" if isinstance(v, float) and math.isfinite(v) else str(v))
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+    plots = _plots(out, spec, table, contrast_cols)
+    sheet = _contact_sheet(out, spec, table)
+    lines += [""] + [f"![{p.stem}]({p.name})" for p in plots + ([sheet] if sheet else [])]
+    return write_text_atomic(out / "report.md", "\n".join(lines) + "\n")
+
+
+def _plots(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list[str]) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pmmw_cli.io.atomic import atomic_path
+
+    keys = [k for k, _ in spec.grid]
+    grid = dict(spec.grid)
+    x_key = spec.axis.get("key") or next((k for k, v in spec.grid if _numeric(v) is not None and len(v) > 1), None)
+    if x_key is None or not contrast_cols:
+        return []
+    x_of = dict(zip((_label(spec, x_key, v) for v in grid[x_key]), spec.axis.get("values") or _numeric(grid[x_key])))
+    zipped = zipped_keys(spec)
+    line_keys = [k for k in keys if k != x_key and not (x_key in zipped and k in zipped) and len(grid[k]) > 1]
+    written = []
+    for col in contrast_cols:
+        fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+        groups = {}
+        for r in table:
+            if r["status"] == "done" and isinstance(r.get(col), float) and math.isfinite(r[col]):
+                groups.setdefault(", ".join(str(r[k]) for k in line_keys), []).append(r)
+        for label, rows in groups.items():
+            xs = [x_of[r[x_key]] for r in rows]
+            order = sorted(range(len(rows)), key=lambda i: xs[i])
+            ax.plot([xs[i] for i in order], [rows[i][col] for i in order], "o-", label=label or None)
+        ax.axhline(3.0, color="k", lw=0.8, ls="--")
+        ax.axhline(-3.0, color="k", lw=0.8, ls="--")
+        ax.set_xlabel(spec.axis.get("label") or x_key)
+        ax.set_ylabel(col.replace("contrast ", "").replace(" [sigma]", " contrast [noise sigma]"))
+        ax.set_title(f"{spec.scenario.stem}: {col.split(' I ')[0].replace('contrast ', '')} (I)")
+        ax.grid(True, alpha=0.3)
+        if line_keys:
+            ax.legend(fontsize=7, title=", ".join(line_keys), title_fontsize=7)
+        fig.tight_layout()
+        path = out / ("plot_" + re.sub(r"[^A-Za-z0-9]+", "_", col.split(" I ")[0].replace("contrast ", "")) + ".png")
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
+def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.image as mpimg
+    import matplotlib.pyplot as plt
+
+    from pmmw_cli.io.atomic import atomic_path
+
+    shots = []
+    for r in table:
+        if r["status"] != "done":
+            continue
+        pngs = sorted((out / r["variant"] / "previews").glob("*_I.png"))
+        if pngs:
+            shots.append((r, pngs[0]))
+    if not shots:
+        return None
+    cols = min(4, len(shots))
+    rows = math.ceil(len(shots) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.8 * rows), dpi=100, squeeze=False)
+    keys = [k for k, _ in spec.grid]
+    for ax in axes.ravel():
+        ax.axis("off")
+    for ax, (r, png) in zip(axes.ravel(), shots):
+        ax.imshow(mpimg.imread(png), cmap="gray", interpolation="nearest")
+        ax.set_title(f"{r['variant']}: " + ", ".join(f"{k.split('.')[-1]}={r[k]}" for k in keys), fontsize=7)
+    fig.tight_layout()
+    path = out / "contact_sheet.png"
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp)
+    plt.close(fig)
+    return path

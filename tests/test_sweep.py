@@ -1,0 +1,171 @@
+"""`pmmw sweep`: grids, zipped axes, the results table, executors (local and Dask), resume,
+failed variants and the batch-queue job script."""
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from pmmw_cli import pipeline
+from pmmw_cli.cli import app
+from pmmw_cli.errors import UserError
+from pmmw_cli.io.exr import read_exr
+from pmmw_cli.sweep import SweepSpec, linspace, parse_grid_options, variants
+
+runner = CliRunner()
+
+
+def _scene(tmp_path: Path) -> Path:
+    ground = trimesh.creation.box(extents=[40, 40, 1])
+    ground.apply_translation([0, 0, -0.5])
+    block = trimesh.creation.box(extents=[0.4, 0.2, 0.2])
+    block.apply_translation([0, 4, 0.1])
+    ground.export(tmp_path / "ground.obj")
+    block.export(tmp_path / "block.obj")
+    path = tmp_path / "tiny.yaml"
+    path.write_text("""
+name: tiny
+frequency: 35 GHz
+imager: {position: [0, 0, 1.5], look_at: [0, 4, 0.1], fov: 20 deg, resolution: [24, 16], noise: 1 K}
+scene:
+  - {mesh: ground.obj, material: concrete}
+  - {mesh: block.obj, material: metal}
+sky: {model: uniform, temperature: 40 K}
+render: {spp: 2, max_depth: 4, tile: 8, workers: 1}
+output:
+  regions:
+    block: {center: [0, 4, 0.1], radius: 2}
+    ground: {box: [0, 12, 6, 16]}
+""")
+    return path
+
+
+def test_product_zip_and_partial_zip():
+    grid = [("a", [1, 2]), ("b", ["x", "y"]), ("c", [10, 20])]
+    assert len(variants(SweepSpec(Path("s.yaml"), grid))) == 8
+    assert [tuple(v.values()) for v in variants(SweepSpec(Path("s.yaml"), grid, zip=True))] == [
+        (1, "x", 10), (2, "y", 20)]
+    part = variants(SweepSpec(Path("s.yaml"), grid, zip=["a", "c"]))  # a flight path x b
+    assert [(v["a"], v["b"], v["c"]) for v in part] == [(1, "x", 10), (1, "y", 10), (2, "x", 20), (2, "y", 20)]
+    with pytest.raises(UserError, match="one length"):
+        variants(SweepSpec(Path("s.yaml"), [("a", [1, 2]), ("b", [1])], zip=True))
+
+
+def test_linspace_with_and_without_units():
+    assert linspace("linspace(2000 m, 200 m, 4)", "g") == ["2000 m", "1400 m", "800 m", "200 m"]
+    assert linspace("linspace(0, 1, 3)", "g") == [0.0, 0.5, 1.0]
+    assert linspace("[1, 2]", "g") is None
+    with pytest.raises(UserError, match="share a unit"):
+        linspace("linspace(1 m, 2 km, 3)", "g")
+    assert parse_grid_options(["imager.noise=linspace(1 K, 4 K, 4)"]) == [("imager.noise", ["1 K", "2 K", "3 K", "4 K"])]
+
+
+def test_local_sweep_table_report_and_resume(tmp_path, monkeypatch):
+    scn = _scene(tmp_path)
+    out = tmp_path / "sw"
+    res = runner.invoke(app, ["sweep", str(scn), "--grid", "render.seed=[1, 2]", "--grid",
+                              "imager.noise=[0.5 K, 2 K]", "--out", str(out), "-q"])
+    assert res.exit_code == 0, res.output
+    with open(out / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["variant"] for r in rows] == ["v000", "v001", "v002", "v003"]
+    assert [(r["render.seed"], r["imager.noise"]) for r in rows] == [("1", "0.5 K"), ("1", "2 K"), ("2", "0.5 K"),
+                                                                      ("2", "2 K")]
+    assert all(r["status"] == "done" and (out / r["exr"]).is_file() for r in rows)
+    # the table carries the variant's report: the contrast in K and in noise sigmas
+    rep = json.loads((out / "v001" / "report.json").read_text())["regions"]["contrasts"]["block - ground"]["I"]
+    assert float(rows[1]["contrast block - ground I [K]"]) == pytest.approx(rep["K"])
+    assert float(rows[1]["contrast block - ground I [sigma]"]) == pytest.approx(rep["sigma"])
+    assert float(rows[0]["contrast block - ground I [sigma]"]) == pytest.approx(
+        4 * float(rows[1]["contrast block - ground I [sigma]"]), rel=0.2)  # a quarter of the noise
+    report = (out / "report.md").read_text()
+    assert "| v003 |" in report and (out / "contact_sheet.png").is_file()
+    assert any(out.glob("plot_*.png"))
+
+    def no_render(*a, **k):
+        raise AssertionError("--resume rendered a finished variant")
+
+    monkeypatch.setattr(pipeline, "render", no_render)
+    res = runner.invoke(app, ["sweep", str(scn), "--grid", "render.seed=[1, 2]", "--grid",
+                              "imager.noise=[0.5 K, 2 K]", "--out", str(out), "-q", "--resume"])
+    assert res.exit_code == 0, res.output
+
+
+def test_a_failed_variant_is_recorded_and_the_others_go_on(tmp_path):
+    scn = _scene(tmp_path)
+    out = tmp_path / "sw"
+    res = runner.invoke(app, ["sweep", str(scn), "--grid", "frequency=[35 GHz, 5000 GHz, 95 GHz]", "--out",
+                              str(out), "-q"])
+    assert res.exit_code == 1
+    with open(out / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["status"] for r in rows][0::2] == ["done", "done"]
+    assert rows[1]["status"].startswith("failed:") and "1-1000 GHz" in rows[1]["status"]
+    assert "v001" in res.output
+
+
+def test_dask_sweep_is_bit_identical_to_local(tmp_path):
+    """A LocalCluster of 2 worker processes renders the same images as the local executor."""
+    scn = _scene(tmp_path)
+    grid = ["--grid", "render.seed=[1, 7]", "--grid", "frequency=[35 GHz, 95 GHz]"]
+    for ex in ("local", "dask"):
+        res = runner.invoke(app, ["sweep", str(scn), *grid, "--out", str(tmp_path / ex), "--executor", ex,
+                                  "--workers", "2", "-q"])
+        assert res.exit_code == 0, res.output
+    for v in ("v000", "v001", "v002", "v003"):
+        a, _ = read_exr(tmp_path / "local" / v / "tiny.exr")
+        b, _ = read_exr(tmp_path / "dask" / v / "tiny.exr")
+        assert all(np.array_equal(a[c], b[c]) for c in a)
+
+
+def test_sweep_file_with_a_zipped_flight_path(tmp_path):
+    scn = _scene(tmp_path)
+    sweep = tmp_path / "trade.yaml"
+    sweep.write_text(f"""
+scenario: tiny.yaml
+grid:
+  imager.position: [[0, 0, 1.5], [0, 1, 1.5], [0, 2, 1.5]]
+  name: [p0, p1, p2]
+  frequency: [35 GHz, 95 GHz]
+zip: [imager.position, name]
+out: {tmp_path / 'trade'}
+""")
+    res = runner.invoke(app, ["sweep", str(sweep), "-q"])
+    assert res.exit_code == 0, res.output
+    with open(tmp_path / "trade" / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["name"], r["frequency"]) for r in rows] == [("p0", "35 GHz"), ("p0", "95 GHz"), ("p1", "35 GHz"),
+                                                          ("p1", "95 GHz"), ("p2", "35 GHz"), ("p2", "95 GHz")]
+    assert (tmp_path / "trade" / "v005" / "p2.exr").is_file()
+
+
+def test_the_slurm_job_script_of_a_cluster_file(tmp_path):
+    """No SLURM here: the script dask-jobqueue would submit, from the cluster file."""
+    cluster = tmp_path / "slurm.yaml"
+    cluster.write_text("kind: slurm\nqueue: normal\ncores: 8\nmemory: 16GB\nwalltime: '02:00:00'\njobs: 4\n")
+    res = runner.invoke(app, ["sweep", str(_scene(tmp_path)), "--grid", "render.seed=[1]", "--cluster",
+                              str(cluster), "--dry-run"])
+    assert res.exit_code == 0, res.output
+    assert "#SBATCH -p normal" in res.output and "#SBATCH --cpus-per-task=8" in res.output
+    assert "#SBATCH -t 02:00:00" in res.output and "--nworkers 8" in res.output and "--nthreads 1" in res.output
+    cluster.write_text("kind: condor\ncores: 8\nmemory: 16GB\n")
+    res = runner.invoke(app, ["sweep", str(_scene(tmp_path)), "--grid", "render.seed=[1]", "--cluster",
+                              str(cluster), "--dry-run"])
+    assert res.exit_code == 2 and "kind" in res.output
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--grid", "render.seed"], "KEY=LIST"),
+    (["--grid", "render.seed=[]"], "empty list"),
+    (["--grid", "a=[1]", "--grid", "a=[2]"], "swept twice"),
+    (["--executor", "spark", "--grid", "render.seed=[1]"], "--executor"),
+    ([], "--grid"),
+])
+def test_bad_sweep_options_are_one_line(tmp_path, args, words):
+    res = runner.invoke(app, ["sweep", str(_scene(tmp_path)), *args])
+    assert res.exit_code == 2, res.output
+    assert res.output.startswith("error:") and words in res.output
