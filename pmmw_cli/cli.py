@@ -399,6 +399,32 @@ def bench(
 
 
 @app.command()
+@_user_errors
+def view(
+    exr: Path = typer.Argument(..., help="An EXR written by pmmw render (or any EXR of temperatures)."),
+    channel: str = typer.Option("I", "--channel", "-c", help="Channel, e.g. Ey2, ideal.I, aux.depth."),
+    out: Optional[Path] = typer.Option(None, "--out", help="PNG to write (default: beside the EXR, "
+                                                           "<name>_<channel>.png)."),
+):
+    """Write any channel of an EXR as a preview with a colour bar and a title."""
+    from pmmw_cli.io.exr import read_exr
+    from pmmw_cli.io.preview import write_figure
+
+    if not exr.is_file():
+        raise UserError("file not found", exr)
+    chans, attrs = read_exr(exr)
+    if channel not in chans:
+        raise UserError(f"no channel {channel!r}; the file has {', '.join(sorted(chans))}", exr, "--channel")
+    f = attrs.get("pmmw:frequency_hz")
+    title = f"{exr.stem}: {channel}" + (f", {float(f) / 1e9:g} GHz" if f is not None else "")
+    units = ("m", "depth") if channel == "aux.depth" else (("-", "material index") if channel == "aux.material"
+                                                          else ("K", "brightness temperature"))
+    path = out or exr.with_name(f"{exr.stem}_{channel.replace('.', '_')}.png")
+    lo, hi = write_figure(path, [(None, chans[channel])], title=title, units=units[0], quantity=units[1])
+    typer.echo(f"wrote {path} (black {lo:.4g}, white {hi:.4g} {units[0]})")
+
+
+@app.command()
 def version():
     """Print the pmmw version."""
     typer.echo(f"pmmw {__version__}")

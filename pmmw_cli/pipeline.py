@@ -25,7 +25,7 @@ from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors, clear_war
 from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
 from pmmw_cli.io.atomic import write_text_atomic
 from pmmw_cli.io.exr import write_exr
-from pmmw_cli.io.preview import write_preview
+from pmmw_cli.io.preview import write_figure
 from pmmw_cli.io.report import write_report
 from pmmw_cli.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
 from pmmw_cli.physics.jones import stokes_images
@@ -477,6 +477,8 @@ def output_names(scn, f: float) -> dict:
     stem = _stem(scn, f)
     chans = scn.output.channels
     side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
+    if scn.imager.aperture_diameter <= 0 and scn.imager.noise <= 0:
+        side = ()  # the sensor image is the ideal one: no pair to compare
     suffix = "" if len(scn.frequencies) == 1 else f"_{f / 1e9:g}GHz"
     on = scn.output.previews
     return {
@@ -485,6 +487,13 @@ def output_names(scn, f: float) -> dict:
         "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
         "reports": [f"report{suffix}.json", f"report{suffix}.md"],
     }
+
+
+def _imager_words(scn) -> str:
+    im = scn.imager
+    parts = ([f"{im.aperture_diameter:g} m aperture"] if im.aperture_diameter > 0 else []) + (
+        [f"{im.noise:g} K noise"] if im.noise > 0 else [])
+    return ", ".join(parts) or "ideal"
 
 
 def _all_outputs(names: dict) -> list[str]:
@@ -723,14 +732,17 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     try:
         write_exr(staged.path(names["exr"]), channels, attrs)
         stats = {}
+        label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
         for c in scn.output.channels:
             chan = sensor[c]
             stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
             if c in names["previews"]:
-                lo, hi = write_preview(staged.path(names["previews"][c]), chan)
+                lo, hi = write_figure(staged.path(names["previews"][c]), [(None, chan)], title=label.format(c))
                 stats[c].update(display_low=lo, display_high=hi)
         for c, rel in names["side_by_side"].items():
-            write_preview(staged.path(rel), np.concatenate([ideal[c], sensor[c]], axis=1))
+            write_figure(staged.path(rel), [("ideal (before the imager)", ideal[c]),
+                                            (f"sensor ({_imager_words(scn)})", sensor[c])],
+                         title=label.format(c))
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
     regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else None

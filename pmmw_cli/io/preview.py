@@ -116,3 +116,56 @@ def write_preview(path: str | os.PathLike, img, clip_fraction: float = CLIP_FRAC
     low, high = display_range(img, clip_fraction)
     write_png(path, scale_to_u8(img, low, high))
     return low, high
+
+
+#: Previews narrower than this many pixels are scaled up (nearest neighbour) for reading.
+MIN_DISPLAY_WIDTH = 480
+
+
+def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: float = CLIP_FRACTION,
+                 units: str = "K", quantity: str = "brightness temperature") -> tuple[float, float]:
+    """A preview a person reads: the image(s) in grey on one display range, with a colour bar in
+    kelvin and a title; small images scaled up with nearest neighbour, pixels never smoothed.
+
+    Parameters
+    ----------
+    panels : list of (label, (H, W) array)
+        Images side by side (e.g. ``[("ideal", a), ("sensor", b)]``) sharing one display range
+        (`display_range` of them all, Murakowski 2014 sec. 3.2's clipping); one unlabelled panel
+        for a single channel (label None).
+    title : str
+        E.g. ``"landing_95ghz: Ey2, 95 GHz"``.
+
+    Returns
+    -------
+    (low, high) : the temperatures [K] shown as black and white.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    imgs = [np.asarray(img, dtype=np.float64) for _, img in panels]
+    low, high = display_range(np.concatenate([i.ravel() for i in imgs]), clip_fraction)
+    if not (np.isfinite(low) and np.isfinite(high) and high > low):
+        low, high = (low - 0.5, low + 0.5) if np.isfinite(low) else (0.0, 1.0)
+    h, w = imgs[0].shape
+    scale = max(1.0, MIN_DISPLAY_WIDTH / (w * len(imgs)))
+    dpi = 100
+    fig_w = max(4.0, (w * len(imgs) * scale) / dpi + 1.6)
+    fig_h = max(2.5, (h * scale) / dpi + 0.9)
+    fig, axes = plt.subplots(1, len(imgs), figsize=(fig_w, fig_h), dpi=dpi, squeeze=False)
+    for ax, (label, _), img in zip(axes[0], panels, imgs):
+        shown = ax.imshow(img, cmap="gray", vmin=low, vmax=high, interpolation="nearest")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        if label:
+            ax.set_title(label, fontsize=9)
+    bar = fig.colorbar(shown, ax=axes[0].tolist(), fraction=0.05, pad=0.02)
+    bar.set_label(f"{quantity} [{units}]", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
+    fig.suptitle(title, fontsize=10)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
+    return low, high

@@ -1,0 +1,77 @@
+"""Previews a person reads: a colour bar in kelvin, a title, the ideal|sensor pair labelled and
+only when the imager changes something, small images scaled up; `pmmw view` for any channel."""
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+from typer.testing import CliRunner
+
+from pmmw_cli.cli import app
+from pmmw_cli.io.exr import write_exr
+from pmmw_cli.io.preview import MIN_DISPLAY_WIDTH, display_range, write_figure
+
+runner = CliRunner()
+
+
+def _png(path):
+    inp = oiio.ImageInput.open(str(path))
+    spec = inp.spec()
+    pixels = inp.read_image("uint8")
+    inp.close()
+    return spec, pixels
+
+
+def test_a_small_image_is_scaled_up_with_its_own_display_range(tmp_path):
+    """A 20 x 12 image: the figure is wider than MIN_DISPLAY_WIDTH (scaled, not smoothed: a step
+    edge stays one step) and black/white are the thesis's clipped range of the pixels."""
+    img = np.full((12, 20), 280.0)
+    img[:, 10:] = 300.0
+    low, high = write_figure(tmp_path / "p.png", [(None, img)], title="t: I, 95 GHz")
+    assert (low, high) == display_range(img)
+    spec, px = _png(tmp_path / "p.png")
+    assert spec.width >= MIN_DISPLAY_WIDTH and spec.nchannels >= 3
+    # the colour bar adds grey levels between black and white: more than the image's two
+    greys = {tuple(p[:3]) for p in px.reshape(-1, spec.nchannels) if p[0] == p[1] == p[2]}
+    assert len(greys) > 20
+
+
+def test_a_pair_shares_one_range(tmp_path):
+    a, b = np.full((8, 8), 250.0), np.full((8, 8), 350.0)
+    low, high = write_figure(tmp_path / "pair.png", [("ideal", a), ("sensor", b)], title="pair")
+    assert (low, high) == (250.0, 350.0)
+
+
+def test_render_previews_are_figures_and_the_pair_only_with_an_imager(tmp_path):
+    import trimesh
+
+    ground = trimesh.creation.box(extents=[40, 40, 1])
+    ground.apply_translation([0, 0, -0.5])
+    ground.export(tmp_path / "ground.obj")
+    scn = tmp_path / "s.yaml"
+    scn.write_text("""
+name: s
+frequency: 35 GHz
+imager: {position: [0, 0, 1.5], look_at: [0, 4, 0], fov: 20 deg, resolution: [24, 16]}
+scene: [{mesh: ground.obj, material: concrete}]
+sky: {model: uniform, temperature: 40 K}
+render: {spp: 1, max_depth: 4, tile: 8, workers: 1}
+""")
+    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "a"), "-q"])
+    assert res.exit_code == 0, res.output
+    assert not list((tmp_path / "a" / "previews").glob("*_ideal_sensor.png"))  # ideal imager: no pair
+    spec, _ = _png(tmp_path / "a" / "previews" / "s_I.png")
+    assert spec.width >= MIN_DISPLAY_WIDTH
+    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "b"), "-q", "--set", "imager.noise=2 K"])
+    assert res.exit_code == 0, res.output
+    assert len(list((tmp_path / "b" / "previews").glob("*_ideal_sensor.png"))) == 2
+
+
+def test_view_writes_any_channel(tmp_path):
+    exr = tmp_path / "x.exr"
+    write_exr(exr, {"I": np.full((6, 9), 300.0, np.float32), "aux.depth": np.full((6, 9), 12.0, np.float32)},
+              {"pmmw:frequency_hz": 95e9})
+    res = runner.invoke(app, ["view", str(exr), "--channel", "aux.depth"])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "x_aux_depth.png").is_file() and "m)" in res.output
+    res = runner.invoke(app, ["view", str(exr), "--channel", "Q"])
+    assert res.exit_code == 2 and "no channel 'Q'" in res.output
