@@ -763,10 +763,18 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
 
 def validate(path, overrides=()) -> dict:
     """The ``pmmw validate`` job: the resolved scenario and, per frequency, the media."""
+    clear_warnings()
     res = resolve(path, overrides)
     scn, geom = res.scenario, res.geometry
+    per_object = {}
+    for i, (name, entry) in enumerate(zip(geom.objects, scn.scene)):
+        v = geom.vertices[np.unique(geom.faces[geom.face_object == i])]
+        up = entry.up_axis or ("y" if Path(entry.mesh).suffix.lower() in (".gltf", ".glb") else "z")
+        per_object[name] = {"bounds_m": [[round(float(x), 4) for x in v.min(axis=0)],
+                                         [round(float(x), 4) for x in v.max(axis=0)]],
+                            "file_up_axis": up}
     out = {"scenario": scenario_to_display(scn), "geometry": {
-        "triangles": int(geom.faces.shape[0]), "objects": list(geom.objects),
+        "triangles": int(geom.faces.shape[0]), "objects": per_object,
         "watertight": dict(zip(geom.objects, map(bool, geom.object_watertight))),
         "bounds_m": [list(map(float, geom.bounds[0])), list(map(float, geom.bounds[1]))],
     }, "media": {}}

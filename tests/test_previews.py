@@ -75,3 +75,22 @@ def test_view_writes_any_channel(tmp_path):
     assert (tmp_path / "x_aux_depth.png").is_file() and "m)" in res.output
     res = runner.invoke(app, ["view", str(exr), "--channel", "Q"])
     assert res.exit_code == 2 and "no channel 'Q'" in res.output
+
+
+def test_a_z_up_gltf_is_warned_about_and_validate_prints_bounds(tmp_path):
+    """trimesh writes its Z-up coordinates into glTF as they are: a flat ground then stands on its
+    edge. validate warns, naming up_axis: z, and prints each object's bounds and file up axis;
+    with up_axis: z the warning is gone and the ground lies flat."""
+    import trimesh
+    import yaml
+
+    trimesh.creation.box(extents=[40, 40, 1]).export(tmp_path / "ground.glb")
+    scn = tmp_path / "z.yaml"
+    scn.write_text("name: z\nfrequency: 35 GHz\nimager: {position: [0, -10, 5], look_at: [0, 0, 0], fov: 20 deg, "
+                   "resolution: [8, 8]}\nscene: [{mesh: ground.glb, material: concrete}]\n")
+    res = runner.invoke(app, ["validate", str(scn)])
+    assert res.exit_code == 0 and "up_axis: z" in res.output and "on its edge" in res.output, res.output
+    res = runner.invoke(app, ["validate", str(scn), "--set", "scene[0].up_axis=z"])
+    assert res.exit_code == 0 and "on its edge" not in res.output
+    obj = yaml.safe_load(res.output)["geometry"]["objects"]["scene[0]:ground.glb"]
+    assert obj["file_up_axis"] == "z" and obj["bounds_m"] == [[-20.0, -20.0, -0.5], [20.0, 20.0, 0.5]]

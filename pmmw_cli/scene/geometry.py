@@ -167,7 +167,30 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
         raise UserError(f"{what} not finite (NaN or infinite coordinates)", file=path)
     if not parts:
         raise UserError("the mesh has no triangles", file=path)
+    if fmt == "gltf" and up_axis is None:
+        _warn_if_z_up(path, parts)
     return parts
+
+
+FLAT_RATIO = 5.0  # a scene this many times wider than tall lies flat on its ground
+
+
+def _warn_if_z_up(path: Path, parts) -> None:
+    """glTF is Y-up by specification, but exporters that write their own Z-up coordinates as they
+    are (trimesh among them) make a flat scene stand on its edge. After the Y-up -> Z-up turn a
+    ground-like scene is wide in x and y and thin in z; thin in y instead means the file was Z-up."""
+    v = np.concatenate([np.asarray(m.vertices) for _, m in parts])
+    ext = np.ptp(v, axis=0)
+    try:
+        generator = str(_gltf_json(path).get("asset", {}).get("generator", ""))
+    except UserError:
+        generator = ""
+    flat_on_edge = ext[1] * FLAT_RATIO < min(ext[0], ext[2])
+    if flat_on_edge:
+        warn(f"{path.name}: the glTF is taken as Y-up (its specification) but lies on its edge, {ext[1]:.3g} m "
+             f"thick along y against {ext[0]:.3g} x {ext[2]:.3g} m"
+             + (f" (written by {generator.split()[0]!r}, which keeps Z-up coordinates)" if generator else "")
+             + ": if it is Z-up, set `up_axis: z` on its scene entry")
 
 
 def asset_files(mesh_path) -> list[Path]:
