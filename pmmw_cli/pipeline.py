@@ -53,21 +53,8 @@ class Resolved:
 def resolve(path, overrides=(), cli=None) -> Resolved:
     """Load and check the scenario and every asset it names; raise `UserErrors` on problems."""
     scn = load_scenario(path, list(overrides), cli=cli)
-    db = MaterialDB.load().with_overrides(dict(scn.materials), file=scn.source_file)
-    db.check()
-    errors = []
-    for i, entry in enumerate(scn.scene):
-        pairs = (
-            [(f"{entry.key}.material", entry.material)] if entry.material is not None
-            else [(f"{entry.key}.materials.{name}", mid) for name, mid in entry.materials.items()]
-        )
-        for key, mid in pairs:
-            try:
-                db.get(mid, file=scn.source_file, key=key)
-            except UserError as e:
-                errors.append(e)
-    if errors:
-        raise UserErrors(errors)
+    db = material_database(scn)
+    check_material_ids(scn.scene, db, scn.source_file)
     geom = build_geometry(scn.scene, scenario_file=scn.source_file)
     refracting = {m for m in geom.material_ids if db.get(m).kind == "dielectric"}
     for obj, tight in zip(geom.objects, geom.object_watertight):
@@ -80,11 +67,36 @@ def resolve(path, overrides=(), cli=None) -> Resolved:
     return Resolved(scn, db, geom)
 
 
-def build_media(db: MaterialDB, material_ids, f: float, scn) -> Media:
-    """Optical properties of the ambient medium and every scene material at frequency f [Hz]."""
+def material_database(scn) -> MaterialDB:
+    """The database with the scenario's ``materials:`` overrides, checked."""
+    db = MaterialDB.load().with_overrides(dict(scn.materials), file=scn.source_file)
+    db.check()
+    return db
+
+
+def check_material_ids(entries, db: MaterialDB, file) -> None:
+    """Every material id the scene entries (``material`` or ``materials``) name exists in ``db``;
+    all unknown ones are reported together, each by its key."""
+    errors = []
+    for entry in entries:
+        pairs = (
+            [(f"{entry.key}.material", entry.material)] if entry.material is not None
+            else [(f"{entry.key}.materials.{name}", mid) for name, mid in entry.materials.items()]
+        )
+        for key, mid in pairs:
+            try:
+                db.get(mid, file=file, key=key)
+            except UserError as e:
+                errors.append(e)
+    if errors:
+        raise UserErrors(errors)
+
+
+def build_media(db: MaterialDB, material_ids, f: float, t_default: float = 290.0, atm=None) -> Media:
+    """Optical properties of the ambient medium and every material at frequency f [Hz]:
+    ``t_default`` [K] for materials without a temperature, ``atm`` the scenario's atmosphere
+    (a uniform one fills the ambient medium; None or layered: lossless air)."""
     k0 = 2.0 * np.pi * f / C0
-    t_default = scn.render.default_temperature
-    atm = scn.atmosphere
     ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
     rough, bump, stacks = [None], [None], [()]
     uniform = atm is not None and atm.model == "uniform"  # the layered model lives on the job
@@ -137,15 +149,22 @@ def aux_channels(img, aux) -> dict:
     return channels
 
 
+def traced_settings(scn) -> dict:
+    """The resolved scenario without what leaves the traced tiles unchanged (output settings,
+    worker count): what `scenario_hash` hashes and a tile folder's manifest records."""
+    d = scenario_to_display(scn)
+    d.pop("output", None)
+    d["render"].pop("workers", None)
+    return d
+
+
 def scenario_hash(scn, db: MaterialDB | None = None) -> str:
     """Hash of everything that changes the traced tiles (not workers, not output settings): the
     scenario, the pmmw version, every byte of every file the trace reads (`input_files`: meshes
     with their glTF buffers, OBJ material libraries and textures, the sky texture) and, given the
     resolved database, every material in it (an edited ``materials/*.yaml`` must not reuse old
     tiles either)."""
-    d = scenario_to_display(scn)
-    d.pop("output", None)
-    d["render"].pop("workers", None)
+    d = traced_settings(scn)
     h = hashlib.sha256((json.dumps(d, sort_keys=True, default=str) + __version__).encode())
     if db is not None:
         h.update("".join(repr(db.get(m)) for m in db.ids()).encode())
@@ -204,7 +223,7 @@ def make_job(res: Resolved, f: float) -> TraceJob:
     return TraceJob(
         vertices=geom.vertices, faces=geom.faces, face_normals=geom.face_normals,
         face_medium=(geom.face_material + 1).astype(np.int32),
-        media=build_media(res.db, geom.material_ids, f, scn), camera=cam,
+        media=build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere), camera=cam,
         sky=make_sky(scn.sky, f, atmosphere_model=atm), frequency=f, settings=settings, atmosphere=atm,
     )
 
@@ -559,12 +578,9 @@ def _write_manifest(tile_dir: Path, scn, shash: str) -> None:
     """What the tiles in ``tile_dir`` were rendered from (compared by `other_tile_folders`)."""
     path = tile_dir / MANIFEST
     if not path.exists():
-        d = scenario_to_display(scn)
-        d.pop("output", None)
-        d["render"].pop("workers", None)
         tile_dir.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(path, json.dumps({"hash": shash, "version": __version__, "scenario": d}, indent=1,
-                                           default=str))
+        write_text_atomic(path, json.dumps({"hash": shash, "version": __version__, "scenario": traced_settings(scn)},
+                                           indent=1, default=str))
 
 
 def other_tile_folders(tile_root: Path, scn, shash: str) -> list[Path]:
@@ -602,9 +618,7 @@ def refuse_other_tiles(tile_root: Path, scn, shash: str, what: str) -> None:
             continue
         try:
             old = json.loads((d / MANIFEST).read_text())
-            now = scenario_to_display(scn)
-            now.pop("output", None)
-            now["render"].pop("workers", None)
+            now = traced_settings(scn)
             diff = _differences(json.loads(json.dumps(old["scenario"], default=str)),
                                 json.loads(json.dumps(now, default=str)))
             if old.get("version") != __version__:
@@ -779,7 +793,7 @@ def validate(path, overrides=()) -> dict:
         "bounds_m": [list(map(float, geom.bounds[0])), list(map(float, geom.bounds[1]))],
     }, "media": {}}
     for f in scn.frequencies:
-        media = build_media(res.db, geom.material_ids, f, scn)
+        media = build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere)
         kinds = {v: k for k, v in KIND_CODES.items()}
         out["media"][f"{f / 1e9:g} GHz"] = {
             mid: {

@@ -209,10 +209,12 @@ def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: i
 
 
 def _variant_hash(scenario: Path, overrides: list[str]) -> str:
-    from pmmw_cli.pipeline import resolve, scenario_hash
+    """The variant's `scenario_hash` (its scenario, database and input files; no mesh is built)."""
+    from pmmw_cli.config import load_scenario
+    from pmmw_cli.pipeline import material_database, scenario_hash
 
-    res = resolve(scenario, overrides)
-    return scenario_hash(res.scenario, res.db)
+    scn = load_scenario(scenario, overrides)
+    return scenario_hash(scn, material_database(scn))
 
 
 def _done(out_dir: Path, shash: str) -> bool:
@@ -287,7 +289,7 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
             continue
         vdir = out / name
         if resume and _done(vdir, shash):
-            rows[name] = {"status": "done", "exr": str(next(vdir.glob("*.exr"))), "wall_s": 0.0, "resumed": True}
+            rows[name] = {"status": "done", "exr": str(next(vdir.glob("*.exr"))), "wall_s": 0.0}
             continue
         plans.append((name, overrides, vdir, shash))
     log = _Log(len(combos), quiet)

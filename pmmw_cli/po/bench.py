@@ -27,15 +27,10 @@ DIRECT_SAMPLE = 900
 
 
 def _target(radius: float, subdivisions: int) -> solver.Target:
-    from types import SimpleNamespace
-
-    from pmmw_cli.pipeline import build_media
     from pmmw_cli.scene.materials import MaterialDB
 
     m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
-    scn = SimpleNamespace(render=SimpleNamespace(default_temperature=290.0), atmosphere=None)
-    media = build_media(MaterialDB.load(), ["metal"], FREQUENCY, scn)
-    return solver.Target(np.asarray(m.vertices), np.asarray(m.faces), np.ones(len(m.faces), int), media)
+    return solver.make_target(m.vertices, m.faces, np.zeros(len(m.faces), int), ["metal"], MaterialDB.load(), FREQUENCY)
 
 
 def _grid(n: int):

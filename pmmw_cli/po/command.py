@@ -11,7 +11,6 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -87,7 +86,6 @@ class Result:
 def load_target(mesh: Path, material: str | None, eps: str | None, f: float) -> solver.Target:
     """The mesh with one material: a database id or a permittivity."""
     from pmmw_cli.brdf import parse_complex
-    from pmmw_cli.pipeline import build_media
     from pmmw_cli.scene.geometry import load_entry_mesh
     from pmmw_cli.scene.materials import MaterialDB
 
@@ -112,10 +110,8 @@ def load_target(mesh: Path, material: str | None, eps: str | None, f: float) -> 
         verts.append(np.asarray(m.vertices, float))
         faces.append(np.asarray(m.faces, np.int64) + off)
         off += len(m.vertices)
-    scn = SimpleNamespace(render=SimpleNamespace(default_temperature=290.0), atmosphere=None)
-    media = build_media(db, [material], f, scn)
     faces_all = np.concatenate(faces)
-    return solver.Target(np.concatenate(verts), faces_all, np.ones(len(faces_all), int), media)
+    return solver.make_target(np.concatenate(verts), faces_all, np.zeros(len(faces_all), int), [material], db, f)
 
 
 MAX_BOUNCES = 16
@@ -158,19 +154,19 @@ def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=F
     t0 = time.perf_counter() if t0 is None else t0
     k0 = 2.0 * np.pi * frequency / solver.C0
     if monostatic:
-        s_t, s_p, n_lit = _tubes(solver.monostatic, target, k0, polarization, tt, pp, bounces, tube)
+        s_t, s_p, n_lit = solver.monostatic(target, k0, polarization, tt, pp, bounces, tube)
         back = None
         lit = int(n_lit.max(initial=0))
         if lit == 0:
             raise UserError("no facet is lit from any of the directions", "--theta")
     else:
-        s_t, s_p, lit = _tubes(solver.bistatic, target, k0, th_i, ph_i, polarization, tt, pp, bounces, tube,
-                               method)
+        # the backscatter direction rides along as one more observation direction
+        s_t, s_p, lit = solver.bistatic(target, k0, th_i, ph_i, polarization, np.append(tt, th_i),
+                                        np.append(pp, ph_i), bounces, tube, method)
         if lit == 0:
             raise UserError("no facet of the mesh is lit from this direction", "--incidence")
-        b_t, b_p, _ = _tubes(solver.bistatic, target, k0, th_i, ph_i, polarization, np.array([th_i]),
-                             np.array([ph_i]), bounces, tube)
-        back = float(b_t[0] + b_p[0])
+        back = float(s_t[-1] + s_p[-1])
+        s_t, s_p = s_t[:-1], s_p[:-1]
     total = s_t + s_p
     peak = int(np.argmax(total))
     summary = {
@@ -186,13 +182,6 @@ def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=F
     if monostatic:
         summary.pop("incidence_deg")
     return Result(tt, pp, s_t, s_p, summary)
-
-
-def _tubes(fn, *args):
-    try:
-        return fn(*args)
-    except ValueError as e:  # sbr.tube_grid: too many tubes for the target's size
-        raise UserError(f"{e}: the target is too large for this tube size; give a larger --tube", "--tube") from None
 
 
 def _dbsm(x):

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
@@ -115,25 +114,14 @@ def load_job(path: Path, out: Path | None = None) -> PoJob:
 
 
 def _targets(job: PoJob, f: float):
-    from pmmw_cli.pipeline import build_media
+    from pmmw_cli.pipeline import check_material_ids
     from pmmw_cli.scene.geometry import build_geometry
     from pmmw_cli.scene.materials import MaterialDB
 
     db = MaterialDB.load().with_overrides(dict(job.materials), file=job.source_file)
-    errors = []
-    for e in job.targets:
-        for key, mid in ([(f"{e.key}.material", e.material)] if e.material is not None
-                         else [(f"{e.key}.materials.{n}", m) for n, m in e.materials.items()]):
-            try:
-                db.get(mid, file=job.source_file, key=key)
-            except UserError as err:
-                errors.append(err)
-    if errors:
-        raise UserErrors(errors) if len(errors) > 1 else errors[0]
+    check_material_ids(job.targets, db, job.source_file)
     geom = build_geometry(job.targets, scenario_file=job.source_file)
-    scn = SimpleNamespace(render=SimpleNamespace(default_temperature=290.0), atmosphere=None)
-    media = build_media(db, geom.material_ids, f, scn)
-    return solver.Target(geom.vertices, geom.faces, (geom.face_material + 1).astype(int), media)
+    return solver.make_target(geom.vertices, geom.faces, geom.face_material, geom.material_ids, db, f)
 
 
 def _angles(value, option, theta: bool) -> np.ndarray:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pmmw_cli.errors import UserError
 from pmmw_cli.po import solver
 from pmmw_cli.trace.intersect import offset_origins
 
@@ -41,7 +42,8 @@ def tube_grid(target: solver.Target, d_inc: np.ndarray, tube: float):
     b_hat = np.cross(d_inc, a_hat)
     n = int(np.ceil(radius / tube))
     if (2 * n + 1) ** 2 > MAX_TUBES:
-        raise ValueError(f"{(2 * n + 1) ** 2} ray tubes > {MAX_TUBES}")
+        raise UserError(f"{(2 * n + 1) ** 2} ray tubes of {tube:.3g} m over a target {2 * radius:.3g} m across, "
+                        f"more than {MAX_TUBES}: give a larger --tube", "--tube")
     i, j = np.meshgrid(np.arange(-n, n + 1), np.arange(-n, n + 1), indexing="ij")
     keep = (i * i + j * j) * tube * tube <= radius * radius
     i, j = i[keep].astype(float), j[keep].astype(float)

@@ -111,6 +111,16 @@ class Target:
         return self._isect
 
 
+def make_target(vertices, faces, face_material, material_ids, db, f: float) -> Target:
+    """A `Target` of the given triangles, ``face_material`` (F,) indexing ``material_ids`` in the
+    material database ``db``, with the media at frequency f [Hz] (air around it)."""
+    from pmmw_cli.pipeline import build_media
+
+    media = build_media(db, material_ids, f)
+    return Target(np.asarray(vertices, float), np.asarray(faces, np.int64),
+                  np.asarray(face_material, int) + 1, media)
+
+
 def lit_facets(target: Target, d_inc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Facets the incidence direction ``d_inc`` (unit, toward the source) sees, and each facet's
     normal turned toward the source. A centroid-to-source shadow ray decides (Embree)."""
