@@ -158,17 +158,17 @@ def traced_settings(scn) -> dict:
     return d
 
 
-def scenario_hash(scn, db: MaterialDB | None = None) -> str:
+def scenario_hash(scn, db: MaterialDB | None = None, files=None) -> str:
     """Hash of everything that changes the traced tiles (not workers, not output settings): the
     scenario, the pmmw version, every byte of every file the trace reads (`input_files`: meshes
     with their glTF buffers, OBJ material libraries and textures, the sky texture) and, given the
     resolved database, every material in it (an edited ``materials/*.yaml`` must not reuse old
-    tiles either)."""
+    tiles either). ``files``: `input_files` when the caller has them already."""
     d = traced_settings(scn)
     h = hashlib.sha256((json.dumps(d, sort_keys=True, default=str) + __version__).encode())
     if db is not None:
         h.update("".join(repr(db.get(m)) for m in db.ids()).encode())
-    for path in input_files(scn):
+    for path in input_files(scn) if files is None else files:
         try:
             h.update(f"{path.stat().st_size}\0".encode())  # delimits one file's bytes from the next's
             with open(path, "rb") as f:
@@ -662,14 +662,15 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     n_workers = scn.render.workers or default_workers()
     est = estimate_resources(scn, int(res.geometry.faces.shape[0]), n_workers)
     names = {f: output_names(scn, f) for f in scn.frequencies}
+    inputs = input_files(scn)
     check_outputs(out_dir, [n for f in scn.frequencies for n in _all_outputs(names[f])],
-                  input_files(scn), key="output.dir" if out is None else "--out",
+                  inputs, key="output.dir" if out is None else "--out",
                   disk_bytes=est["disk_bytes"], force=force)
     _check_memory(est, scn.source_file, force)
     remove_stale_staging(out_dir)
     t_resolve = time.perf_counter() - t0
     written, renders, tile_dirs = [], [], []
-    shash = scenario_hash(scn, res.db)
+    shash = scenario_hash(scn, res.db, inputs)
     tile_root = out_dir / ".pmmw-tiles"
     if resume or shard is not None:
         refuse_other_tiles(tile_root, scn, shash, "--resume" if shard is None else f"--shard {shard[0]}/{shard[1]}")
