@@ -18,6 +18,7 @@ group: the parent alone reacts, and ends them. They die silently of SIGTERM (its
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import sys
@@ -142,6 +143,20 @@ def _unraisable(hook_args, default=sys.unraisablehook):
     default(hook_args)
 
 
+#: Compiled modules whose initialization must not be cut by a signal's exception: OpenImageIO's
+#: nanobind aborts the process (SIGABRT, a "Critical nanobind error") when an exception lands
+#: while it creates its enums; numpy turns it into an ImportError.
+NATIVE_MODULES = ("numpy", "OpenImageIO")
+
+
+def import_native() -> None:
+    """Import `NATIVE_MODULES` with SIGINT and SIGTERM held back (`deferred`): a signal that comes
+    meanwhile is raised as `Interrupted` right after, at a safe point."""
+    with deferred():
+        for name in NATIVE_MODULES:
+            importlib.import_module(name)
+
+
 def main() -> None:
     """The ``pmmw`` console entry point: the signal handlers first, then the typer app.
 
@@ -153,6 +168,7 @@ def main() -> None:
     sys.unraisablehook = _unraisable
     try:
         try:
+            import_native()
             from pmmw_cli.cli import app
 
             app()

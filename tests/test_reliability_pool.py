@@ -288,3 +288,28 @@ def test_a_saved_tile_is_loaded_only_when_every_array_is_plausible(tmp_path):
         assert _load_tile(tmp_path / "bad.npz", tile) is None, key
     (tmp_path / "cut.npz").write_bytes(path.read_bytes()[:500])
     assert _load_tile(tmp_path / "cut.npz", tile) is None
+
+
+def test_a_signal_during_the_native_imports_waits_for_them():
+    """SIGTERM while OpenImageIO initialized aborted the process (SIGABRT, "Critical nanobind
+    error", seen once in CI): the entry point imports the compiled modules with the signals held
+    back, and the signal is raised right after them."""
+    code = (
+        "import os, signal, sys\n"
+        "from pmmw_cli import interrupt\n"
+        "interrupt.install()\n"
+        "interrupt.NATIVE_MODULES = ('os',) + interrupt.NATIVE_MODULES\n"
+        "real = interrupt.importlib.import_module\n"
+        "def spy(name):\n"
+        "    if name == 'os':\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    return real(name)\n"
+        "interrupt.importlib.import_module = spy\n"
+        "try:\n"
+        "    interrupt.import_native()\n"
+        "except interrupt.Interrupted as e:\n"
+        "    print('interrupted', e.status, 'OpenImageIO' in sys.modules)\n"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split() == ["interrupted", "143", "True"]
