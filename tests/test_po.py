@@ -145,7 +145,7 @@ def test_the_po_command_csv_json_and_plot(plate, tmp_path):
                               "0,0", "--theta", "0:2:1", "--phi", "0,90", "--format", "csv", "--out",
                               str(tmp_path / "o"), "--plot", str(tmp_path / "p.png")])
     assert res.exit_code == 0, res.output
-    lines = res.output.strip().splitlines()
+    lines = res.stdout.strip().splitlines()  # "wrote ..." lines go to stderr
     assert lines[0] == CSV_HEADER and len(lines) == 1 + 6
     first = [float(v) for v in lines[1].split(",")]
     assert first[:2] == [0.0, 0.0] and first[2] == pytest.approx(4 * np.pi * (a * b) ** 2 / LAM**2, rel=1e-8)
@@ -155,6 +155,10 @@ def test_the_po_command_csv_json_and_plot(plate, tmp_path):
     assert summary["facets_lit"] == 2 and len(summary["rows"]) == 6
     assert summary["backscatter_rcs_m2"] == pytest.approx(first[2], rel=1e-8)
     assert (tmp_path / "p.png").stat().st_size > 10_000
+    # --out also holds the plot and a report naming the backscatter in dBsm
+    assert (tmp_path / "o" / "po.png").stat().st_size > 10_000
+    report = (tmp_path / "o" / "report.md").read_text()
+    assert f"{10 * np.log10(first[2]):.2f}" in report and "![po](po.png)" in report
 
 
 @pytest.mark.parametrize("args, option", [

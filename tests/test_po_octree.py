@@ -79,3 +79,15 @@ def test_nothing_lit_radiates_nothing(tmp_path):
     ft, fp = far_field_octree(sphere, lit, J, M, np.array([0.0, 0.0, -1.0]), K0,
                               np.zeros((2, 3)), np.zeros((2, 3)))
     assert ft.shape == fp.shape == (2, 3) and not ft.any() and not fp.any()
+
+
+def test_bench_po_writes_its_table(tmp_path):
+    """`pmmw bench --po` on one tiny cell: a table row with both times and an error below the
+    octree's 1e-3 tolerance."""
+    from pmmw_cli.po.bench import run
+
+    path = run(tmp_path / "b.md", cases=[(3.0, 2, 2000)])
+    row = [line for line in path.read_text().splitlines() if line.startswith("| 320 ")]
+    assert len(row) == 1
+    cells = [c.strip() for c in row[0].strip("|").split("|")]
+    assert float(cells[4].rstrip("*")) > 0 and float(cells[5]) > 0 and float(cells[7]) < 1e-3

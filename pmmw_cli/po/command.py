@@ -76,11 +76,12 @@ def parse_phi(text: str, option: str = "--phi") -> np.ndarray:
 
 @dataclass
 class Result:
-    theta: np.ndarray  # (D,) [rad]
+    theta: np.ndarray  # (D,) [rad], every direction of the grid
     phi: np.ndarray
     rcs_theta: np.ndarray  # [m^2]
     rcs_phi: np.ndarray
     summary: dict
+    axes: tuple | None = None  # (thetas, phis) [rad] of the grid, when the run knows them
 
 
 def load_target(mesh: Path, material: str | None, eps: str | None, f: float) -> solver.Target:
@@ -136,8 +137,10 @@ def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, p
     tt, pp = grid(thetas, phis)
     t0 = time.perf_counter()
     target = load_target(Path(mesh), material, eps, frequency)
-    return compute(target, frequency, th_i, ph_i, polarization, tt, pp, monostatic=monostatic, bounces=bounces,
-                   method=method, tube=tube, t0=t0)
+    res = compute(target, frequency, th_i, ph_i, polarization, tt, pp, monostatic=monostatic, bounces=bounces,
+                  method=method, tube=tube, t0=t0)
+    res.axes = (thetas, phis)
+    return res
 
 
 def grid(thetas, phis):
@@ -270,3 +273,44 @@ def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
         fig.savefig(tmp)
     plt.close(fig)
     return path
+
+
+def full_sphere(thetas, phis) -> bool:
+    """Whether the grid axes [rad] cover the whole sphere (then an EXR map is written)."""
+    return (thetas.size > 1 and phis.size > 1 and thetas.min() <= 1e-9 and thetas.max() >= math.pi - 1e-9
+            and phis.max() - phis.min() >= 2 * math.pi * (1 - 1.0 / phis.size) - 1e-9)
+
+
+def write_run(res: Result, out: Path, stem: str, name: str, thetas, phis, plot: bool = True) -> list[Path]:
+    """One run's files in ``out``: ``<stem>.csv``, ``.json``, the plot ``.png`` (when ``plot``)
+    and, for a grid over the whole sphere, the ``.exr`` map."""
+    written = write_outputs(res, out, stem)
+    if plot:
+        written.append(write_plot(res, out / f"{stem}.png", name))
+    if full_sphere(thetas, phis):
+        written.append(write_map(res, thetas, phis, out / f"{stem}.exr"))
+    return written
+
+
+def report(name: str, source: str, runs, observation: str, plots: bool) -> str:
+    """``report.md`` of runs [(stem, Result)]: settings, then each run's backscatter and peak."""
+    s0 = runs[0][1].summary
+    mode = "monostatic" if s0["monostatic"] else (
+        f"incidence theta {s0['incidence_deg'][0]:g} deg, phi {s0['incidence_deg'][1]:g} deg")
+    lines = [f"# {name}: physical optics", "",
+             f"- source: `{source}`", f"- {mode}; bounces {s0['bounces']}; method {s0['method']}",
+             f"- observation: {observation}", "",
+             "| run | frequency [GHz] | polarization | facets lit | backscatter [dBsm] | peak [dBsm] "
+             "| peak at (theta, phi) [deg] | time [s] |",
+             "| --- | ---: | --- | ---: | ---: | ---: | --- | ---: |"]
+    for stem, res in runs:
+        s = res.summary
+        back = "" if s["backscatter_rcs_m2"] is None else f"{_dbsm(s['backscatter_rcs_m2']):.2f}"
+        p = s["peak"]
+        lines.append(f"| {stem} | {s['frequency_hz'] / 1e9:g} | {s['polarization']} | {s['facets_lit']} / "
+                     f"{s['facets']} | {back} | {p['rcs_dBsm']:.2f} | ({p['theta_deg']:g}, {p['phi_deg']:g}) "
+                     f"| {s['time_s']:.2f} |")
+    if plots:
+        lines.append("")
+        lines += [f"![{stem}]({stem}.png)" for stem, _ in runs]
+    return "\n".join(lines) + "\n"

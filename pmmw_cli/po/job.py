@@ -147,36 +147,10 @@ def run_job(path: Path, out: Path | None = None) -> list[Path]:
             res = command.compute(target, f, th_i, ph_i, pol, tt, pp, monostatic=job.monostatic,
                                   bounces=job.bounces, method=job.method, tube=job.tube)
             stem = f"{job.name}_{f / 1e9:g}GHz_{pol}"
-            written += command.write_outputs(res, out_dir, stem)
-            if job.output.plot:
-                written.append(command.write_plot(res, out_dir / f"{stem}.png", job.name))
-            if _full_sphere(thetas, phis):
-                written.append(command.write_map(res, thetas, phis, out_dir / f"{stem}.exr"))
+            written += command.write_run(res, out_dir, stem, job.name, thetas, phis, job.output.plot)
             runs.append((stem, res))
-    written.append(write_text_atomic(out_dir / "report.md", _report(job, runs)))
+    observation = f"theta `{job.observation.theta}`, phi `{job.observation.phi}` (degrees)"
+    written.append(write_text_atomic(out_dir / "report.md",
+                                     command.report(job.name, str(job.source_file), runs, observation,
+                                                    job.output.plot)))
     return written
-
-
-def _full_sphere(thetas, phis) -> bool:
-    return (thetas.size > 1 and phis.size > 1 and thetas.min() <= 1e-9 and thetas.max() >= math.pi - 1e-9
-            and phis.max() - phis.min() >= 2 * math.pi * (1 - 1.0 / phis.size) - 1e-9)
-
-
-def _report(job: PoJob, runs) -> str:
-    mode = "monostatic" if job.monostatic else (
-        f"incidence theta {math.degrees(job.incidence[0]):g} deg, phi {math.degrees(job.incidence[1]):g} deg")
-    lines = [f"# {job.name}: physical optics", "",
-             f"- job: `{job.source_file}`", f"- {mode}; bounces {job.bounces}; method {job.method}",
-             f"- observation: theta `{job.observation.theta}`, phi `{job.observation.phi}` (degrees)", "",
-             "| run | facets lit | backscatter [dBsm] | peak [dBsm] | peak at (theta, phi) [deg] | time [s] |",
-             "| --- | ---: | ---: | ---: | --- | ---: |"]
-    for stem, res in runs:
-        s = res.summary
-        back = "" if s["backscatter_rcs_m2"] is None else f"{command._dbsm(s['backscatter_rcs_m2']):.2f}"
-        p = s["peak"]
-        lines.append(f"| {stem} | {s['facets_lit']} / {s['facets']} | {back} | {p['rcs_dBsm']:.2f} | "
-                     f"({p['theta_deg']:g}, {p['phi_deg']:g}) | {s['time_s']:.2f} |")
-    if job.output.plot:
-        lines.append("")
-        lines += [f"![{stem}]({stem}.png)" for stem, _ in runs]
-    return "\n".join(lines) + "\n"

@@ -2,8 +2,8 @@
 
 `far_field_octree` returns what `pmmw_cli.po.solver.far_field` returns (same conventions, stated
 in that module), to a relative accuracy ``tol`` of the pattern's peak. The direct sum costs
-O(F D); this costs O(F M_leaf^2 log M_leaf + (boxes x M^2 log M per level) + D), so it wins
-for D above a few thousand directions (the crossover hardly depends on F).
+O(F D); this costs O(F M_leaf^2 + (boxes x M^2 log M per level) + D), so it wins from about
+1e8 facet-directions on (docs/benchmarks_po.md).
 
 Both far-field components project one vector, V = eta N + L x r_hat: f_theta = theta_hat . V
 and f_phi = phi_hat . V (phi_hat . L = theta_hat . (L x r_hat), theta_hat . L = -phi_hat .
@@ -21,10 +21,9 @@ Algorithm
   L = k0 R + a (k0 R)^(1/3) (the excess-bandwidth rule behind Xia et al. 2023 eq. 6,
   M = k d + 6 (k d)^(1/3) with d = 2 R; a from ``tol``), so a uniform torus grid of
   M >= 2 L + 1 points per angle holds it exactly.
-* Each facet's own phase integral about its centroid is a scalar pattern of the same kind with
-  R its circumradius: it is computed exactly (`solver.triangle_integral`) on that small grid
-  (theta in [0, pi] only; the rest are the same directions relabelled), upsampled to the
-  leaf grid, translated to the leaf centre and summed with its currents as weights.
+* Each leaf's pattern is computed exactly: every facet's closed-form phase integral about the
+  leaf centre at the leaf grid's directions (theta in [0, pi] only; the rest are the same
+  directions relabelled), times its currents, summed (`kernels.box_patterns`, compiled).
 * Going up, each child's grid is upsampled to the parent's by zero-padding its 2-D FFT
   (trigonometric interpolation, exact for the band-limited pattern), multiplied by the
   translation exp(i q . (c_child - c_parent)) and summed into the parent.
@@ -37,11 +36,11 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.fft as sfft
-from scipy import sparse
 
-from pmmw_cli.po.solver import ETA0, direction, theta_phi_hats, triangle_integral
+from pmmw_cli.po import kernels
+from pmmw_cli.po.solver import ETA0, direction, theta_phi_hats
 
-_LEAF_WAVELENGTHS = 3.0  # leaf side [wavelengths]; 1.5-6 cost within 20 % (40-wavelength sphere)
+_LEAF_WAVELENGTHS = 1.5  # leaf side [wavelengths]; 1.5 is 7 % faster than 3 and 20 % than 1 (82k-facet sphere)
 _OVERSAMPLE = 2  # root grid upsampling before the local interpolation to the requested directions
 _LAGRANGE = 12  # points per angle of the final Lagrange stencil; with 2x oversampling ~1e-5
 _CHUNK = 1 << 21  # complex elements per block of work (memory ~ 16-100 B each)
@@ -116,43 +115,20 @@ def _unfold(half: np.ndarray) -> np.ndarray:
     return full
 
 
-def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n, tol):
-    """Patterns V (B, 3, n, n) of the leaves about their centres (B, 3).
+def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n):
+    """Patterns V (B, 3, n, n) of the leaves about their centres (B, 3): each facet's exact phase
+    integral at the leaf grid's directions theta in [0, pi] (`kernels.box_patterns`), unfolded.
 
-    Each facet's phase integral about its own centroid is a scalar pattern of small bandwidth
-    (its circumradius), so it is evaluated exactly on a coarse grid, upsampled to the leaf grid
-    and translated to the leaf centre; the currents, constant on the facet, multiply after.
-
-    tri : (F, 3, 3) [m]; area : (F,) [m^2]; src : (F, 6) complex, [J, M]; box : (F,) int.
+    tri : (F, 3, 3) [m]; area : (F,) [m^2]; src : (F, 6) complex, [J, M]; box : (F,) int,
+    non-decreasing (facets in Morton order, so a leaf's facets are contiguous).
     """
-    B, F = len(centres), len(area)
-    cen = tri.mean(axis=1)
-    local = tri - cen[:, None, :]
-    r_hat = direction(*_grid(n))  # (n, n, 3)
-    q = k0 * (k_hat[None, None, :] - r_hat)
-    # (6 B, F) sum of each box's currents, component by component
-    rows = (box[:, None] * 6 + np.arange(6)[None, :]).ravel()
-    cols = np.repeat(np.arange(F), 6)
-    S = sparse.csc_matrix((src.ravel(), (rows, cols)), shape=(6 * B, F))
-    out = np.zeros((6 * B, n * n), complex)
-    # facets grouped by their own grid, so a few large ones do not set every facet's
-    kr, which = np.unique(np.ceil(k0 * np.linalg.norm(local, axis=2).max(axis=1)),
-                          return_inverse=True)
-    n_of = np.array([min(n, _grid_size(r, tol)) for r in kr])[which]
-    step = max(1, _CHUNK // (n * n))
-    for n_f in np.unique(n_of):
-        q_f = k0 * (k_hat[None, :] - _half_grid(n_f).reshape(-1, 3))
-        group = np.flatnonzero(n_of == n_f)
-        for f0 in range(0, len(group), step):
-            sl = group[f0:f0 + step]
-            I = triangle_integral(local[sl], area[sl], q_f)
-            I = _upsample(_unfold(I.reshape(-1, n_f // 2 + 1, n_f)), n)
-            I *= np.exp(1j * np.einsum("ijc,fc->fij", q, cen[sl] - centres[box[sl]]))
-            out += S[:, sl] @ I.reshape(-1, n * n)
-    out = out.reshape(B, 6, n * n)
-    # V = eta N + L x r_hat, the one vector both far-field components project (module docstring)
-    out = ETA0 * out[:, :3] + np.cross(out[:, 3:], r_hat.reshape(-1, 3).T[None], axis=1)
-    return out.reshape(B, 3, n, n)
+    B = len(centres)
+    start = np.searchsorted(box, np.arange(B + 1)).astype(np.int64)
+    r_hat = np.ascontiguousarray(_half_grid(n).reshape(-1, 3))  # (n // 2 + 1) x n directions
+    q = np.ascontiguousarray(k0 * (k_hat[None, :] - r_hat))
+    half = kernels.box_patterns(np.ascontiguousarray(tri), np.ascontiguousarray(area), np.ascontiguousarray(src),
+                                start, np.ascontiguousarray(centres), q, r_hat, ETA0)
+    return _unfold(half.reshape(B, 3, n // 2 + 1, n))
 
 
 def _lagrange(u: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
@@ -245,7 +221,7 @@ def far_field_octree(target, lit, J, M, k_hat, k0, theta, phi, tol=1e-3):
         b["n"] = max(b["n"], a["n"])
 
     leaf = levels[0]
-    P = _leaf_patterns(tri, area, src, leaf["box"], leaf["centres"], k_hat, k0, leaf["n"], tol)
+    P = _leaf_patterns(tri, area, src, leaf["box"], leaf["centres"], k_hat, k0, leaf["n"])
     for child, parent in zip(levels[:-1], levels[1:]):
         n = parent["n"]
         pid = np.searchsorted(parent["keys"], child["keys"] >> 3)

@@ -44,7 +44,7 @@ constant times the incident phase, so each facet contributes J_k I_k(q) with the
     I(q) = integral_T exp(i q . r) dS,   q = k (k_hat - r_hat),
 
 in closed form: 2 A times the second divided difference of exp at i q . r_1, i q . r_2, i q . r_3
-(Hermite-Genocchi), evaluated without cancellation (`triangle_integral`). A flat plate of two
+(Hermite-Genocchi), evaluated without cancellation (`kernels.triangle_phase`, compiled). A flat plate of two
 triangles is therefore exact physical optics, at any size in wavelengths.
 """
 
@@ -55,13 +55,12 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from pmmw_cli.po import kernels
 from pmmw_cli.trace.integrator import surface_response
 from pmmw_cli.trace.intersect import make_intersector, offset_origins
 
 C0 = 299_792_458.0  # [m/s]
 ETA0 = 376.730313668  # [ohm] impedance of free space
-_TAYLOR = 1e-4  # |spread| of the facet's phases below which the divided difference is a series
-_CHUNK = 1 << 21  # facet x direction elements evaluated at once (memory ~100 B each)
 
 
 def direction(theta, phi) -> np.ndarray:
@@ -192,55 +191,22 @@ def surface_currents(media, medium, n, k_hat, e, k0):
     return np.cross(n, hi + h_r), -np.cross(n, e + e_r), e_r, k_r
 
 
-def _phi1_i(t):
-    """(exp(i t) - 1) / (i t) for real t, without cancellation: sin t / t + i 2 sin^2(t/2) / t."""
-    half = np.sinc(t / (2.0 * np.pi))  # sin(t/2) / (t/2)
-    return np.sinc(t / np.pi) + 1j * np.sin(t / 2.0) * half
-
-
 def triangle_integral(tri: np.ndarray, area: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """``integral_T exp(i q . r) dS`` over flat triangles, exactly.
+    """``integral_T exp(i q . r) dS`` over flat triangles, exactly (`kernels.triangle_phase`).
 
-    Parameters
-    ----------
-    tri : (F, 3, 3) vertices [m]; area : (F,) [m^2]; q : (D, 3) [1/m].
-
-    Returns
-    -------
-    (F, D) complex128
-
-    With a_j = q . r_j sorted into lo <= mid <= hi, the integral is 2 A exp(i a_mid) G(s, t),
-    s = lo - mid <= 0 <= t = hi - mid, G(s, t) = (phi1(t) - phi1(s)) / (i (t - s)) with
-    phi1(x) = (exp(i x) - 1) / (i x); |t - s| is the largest spread, so the difference loses at
-    most eps / |t - s| and below `_TAYLOR` the series 1/2 + i(s+t)/6 - (s^2+st+t^2)/24 takes over.
+    tri : (F, 3, 3) vertices [m]; area : (F,) [m^2]; q : (D, 3) [1/m]. Returns (F, D) complex128.
     """
-    a = np.einsum("fvc,dc->fdv", tri, q)
-    a.sort(axis=2)
-    lo, mid, hi = a[..., 0], a[..., 1], a[..., 2]
-    s, t = lo - mid, hi - mid
-    spread = t - s
-    big = spread > _TAYLOR
-    g = np.empty(spread.shape, complex)
-    g[big] = (_phi1_i(t[big]) - _phi1_i(s[big])) / (1j * spread[big])
-    sb, tb = s[~big], t[~big]
-    g[~big] = (0.5 + 1j * (sb + tb) / 6.0 - (sb * sb + sb * tb + tb * tb) / 24.0
-               - 1j * (sb**3 + sb * sb * tb + sb * tb * tb + tb**3) / 120.0)
-    return 2.0 * area[:, None] * np.exp(1j * mid) * g
+    return kernels.triangle_integrals(np.ascontiguousarray(tri, float), np.ascontiguousarray(area, float),
+                                      np.ascontiguousarray(q, float))
 
 
 def radiation_vectors(target: Target, lit, J, M, k_hat, k0, r_hat):
     """N and L (D, 3) of the lit facets' currents toward the unit directions ``r_hat`` (D, 3)."""
-    tri, area, Jl, Ml = target.tri[lit], target.area[lit], J[lit], M[lit]
-    D = r_hat.shape[0]
-    N = np.zeros((D, 3), complex)
-    L = np.zeros((D, 3), complex)
-    step = max(1, _CHUNK // max(1, len(area)))
-    for d0 in range(0, D, step):
-        q = k0 * (k_hat[None, :] - r_hat[d0:d0 + step])
-        I = triangle_integral(tri, area, q)
-        N[d0:d0 + step] = I.T @ Jl
-        L[d0:d0 + step] = I.T @ Ml
-    return N, L
+    src = np.ascontiguousarray(np.concatenate([J[lit], M[lit]], axis=1))
+    q = np.ascontiguousarray(k0 * (np.asarray(k_hat, float)[None, :] - r_hat))
+    NL = kernels.direction_sums(np.ascontiguousarray(target.tri[lit]), np.ascontiguousarray(target.area[lit]),
+                                src, q)
+    return NL[:, :3], NL[:, 3:]
 
 
 def components(N, L, theta, phi):
@@ -274,8 +240,10 @@ def incident(theta_i: float, phi_i: float, polarization: str):
     return d, (th if polarization == "theta" else ph)
 
 
-OCTREE_DIRECTIONS = 3000  # `method="auto"`: the octree from this many directions on (docs/benchmarks_po.md)
-OCTREE_FACETS = 1000  # ... and this many lit facets
+# `method="auto"` takes the octree from this many (lit facets x directions) on, and at least
+# OCTREE_DIRECTIONS directions: there it beats the compiled direct sum (docs/benchmarks_po.md)
+OCTREE_TERMS = 1e8
+OCTREE_DIRECTIONS = 1000
 
 
 def bistatic(target: Target, k0: float, theta_i: float, phi_i: float, polarization: str, theta, phi,
@@ -292,7 +260,8 @@ def bistatic(target: Target, k0: float, theta_i: float, phi_i: float, polarizati
     th, ph = theta.ravel(), phi.ravel()
     r_hat = direction(th, ph)
     if method == "auto":
-        method = "octree" if th.size >= OCTREE_DIRECTIONS and lit.sum() >= OCTREE_FACETS else "direct"
+        big = th.size >= OCTREE_DIRECTIONS and float(lit.sum()) * th.size >= OCTREE_TERMS
+        method = "octree" if big else "direct"
     if method == "octree":
         from pmmw_cli.po.octree import far_field_octree
 
