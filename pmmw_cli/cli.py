@@ -66,12 +66,20 @@ def render(
     shard: Optional[str] = typer.Option(None, "--shard", metavar="I/N",
                                         help="Render only tiles I mod N (cluster jobs); assemble later with --resume."),
     force: bool = typer.Option(False, "--force", help="Render even when memory or disk look too small for it."),
+    executor: str = typer.Option("local", "--executor", help="local (worker processes here) or dask (the tiles "
+                                                             "as tasks on a Dask cluster)."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", metavar="ADDRESS",
+                                            help="With dask: a running scheduler, e.g. tcp://host:8786 (default: a "
+                                                 "local cluster of --workers processes)."),
+    cluster: Optional[Path] = typer.Option(None, "--cluster", metavar="FILE.yaml",
+                                           help="With dask: a dask-jobqueue cluster file (as for pmmw sweep)."),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
     from pmmw_cli.pipeline import parse_shard, render as run
 
     run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
-        quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard), force=force)
+        quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard), force=force, executor=executor,
+        scheduler=scheduler, cluster=cluster)
 
 
 @app.command()
@@ -328,13 +336,14 @@ def po(
     tube: Optional[str] = typer.Option(None, "--tube", metavar="LENGTH",
                                        help="Ray-tube side for --bounces > 1 (default: a quarter wavelength)."),
     method: str = typer.Option("auto", "--method", help="Far-field sum: direct, octree (aggregated, 1e-3 of the "
-                                                        "peak) or auto (octree from 3000 directions)."),
+                                                        "peak) or auto (octree from 1e8 lit facets x directions)."),
     fmt: str = typer.Option("table", "--format", help="csv, json or table (to standard output)."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Also write po.csv and po.json in this folder."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Also write po.csv, po.json, po.png, report.md (and "
+                                                           "po.exr for a full-sphere grid) in this folder."),
     plot: Optional[Path] = typer.Option(None, "--plot", metavar="FILE.png", help="Write a plot of RCS against theta."),
 ):
     """Radar cross section of a mesh by physical optics (bistatic pattern or monostatic cuts)."""
-    from pmmw_cli.po.command import format_rows, run_po, write_outputs, write_plot
+    from pmmw_cli.po.command import format_rows, report, run_po, write_plot, write_run
     from pmmw_cli.units import parse_quantity
 
     if mesh.suffix.lower() in (".yaml", ".yml"):
@@ -352,7 +361,15 @@ def po(
                  method=method, tube=None if tube is None else parse_quantity(tube, "length", file="--tube"))
     typer.echo(format_rows(res, fmt))
     if out is not None:
-        write_outputs(res, out)
+        from pmmw_cli.io.atomic import write_text_atomic
+
+        runs = [("po", res)]
+        written = write_run(res, out, "po", Path(mesh).name, *res.axes)
+        observation = f"theta `{theta or '0:180:1'}`, phi `{phi or 'the incidence phi'}` (degrees)"
+        written.append(write_text_atomic(out / "report.md", report(Path(mesh).name, str(mesh), runs, observation,
+                                                                    True)))
+        for path in written:
+            typer.echo(f"wrote {path}", err=True)
     if plot is not None:
         write_plot(res, plot, Path(mesh).name)
 

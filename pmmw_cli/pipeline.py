@@ -431,11 +431,12 @@ def average_images(imgs):
 
 
 def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = None, shash: str = "",
-                    resume: bool = False, shard=None, quiet: bool = True):
+                    resume: bool = False, shard=None, quiet: bool = True, client=None):
     """Trace the image at frequency f [Hz], averaged over the imager's sub-bands.
 
     Tiles are kept in ``tile_root/<label>-<shash>/`` when a root is given (resumable), nowhere
     otherwise. With ``shard=(i, n)`` only that shard's tiles are rendered and no image is made.
+    With a Dask ``client`` the tiles are tasks on its cluster (`pool.render_tiles`).
 
     Returns
     -------
@@ -464,7 +465,7 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
                   f"already there, in {tile_dir}; assemble with `pmmw render ... --resume` once every shard is done")
             continue
         results = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=resume,
-                               progress=_Progress(label, quiet), counts=counts)
+                               progress=_Progress(label, quiet), counts=counts, client=client)
         if resume:
             print(f"{label}: --resume: {counts['reused']} tiles found, {counts['rendered']} rendered",
                   file=sys.stderr)
@@ -641,7 +642,8 @@ def remove_stale_tiles(tile_root: Path, scn, shash: str) -> int:
 
 
 def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
-           quiet=False, keep_tiles=False, shard=None, force=False) -> list[Path]:
+           quiet=False, keep_tiles=False, shard=None, force=False, executor="local", scheduler=None,
+           cluster=None) -> list[Path]:
     """The ``pmmw render`` job. Returns the EXR paths written.
 
     With ``shard=(i, n)`` only tiles whose index is i modulo n are rendered into the tile folder
@@ -652,7 +654,18 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     names that fit, room on the disk) and memory is estimated (`estimate_resources`); ``force``
     renders past the memory and disk estimates. Each frequency's EXR, previews and reports are
     staged and moved into place together (`Staging`), reports last.
+
+    ``executor="dask"`` renders the tiles as tasks on a Dask cluster (`distributed.connect`: the
+    job-queue cluster of the file ``cluster``, the scheduler at ``scheduler``, or a local one of
+    ``workers`` processes) and assembles the image here; the tiles are the same, so is the image.
     """
+    if executor not in ("local", "dask"):
+        raise UserError(f"expected local or dask, got {executor!r}", "--executor")
+    if executor == "local" and (scheduler or cluster):
+        executor = "dask"
+    if executor == "dask" and shard is not None:
+        raise UserError("--shard splits a render into separate jobs; with --executor dask the cluster renders "
+                        "every tile of one job: use one or the other", "--shard")
     clear_warnings()
     t0 = time.perf_counter()
     cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed), ("out", out)) if v is not None}
@@ -678,12 +691,21 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     if stale and not quiet:
         print(f"removed {stale} tile folder(s) of an earlier version of this scenario (other inputs: never resumable)",
               file=sys.stderr)
+    client = None
     with contextlib.ExitStack() as staging:  # staged outputs are deleted on the way out, committed or not
+        if executor == "dask":
+            from pmmw_cli.distributed import connect
+
+            client, dask_cluster = connect(scheduler, cluster, n_workers)
+            staging.callback(client.close)
+            if dask_cluster is not None:
+                staging.callback(dask_cluster.close)
         for f in scn.frequencies:
             t1 = time.perf_counter()
             try:
                 job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=tile_root,
-                                                 shash=shash, resume=resume, shard=shard, quiet=quiet)
+                                                 shash=shash, resume=resume, shard=shard, quiet=quiet,
+                                                 client=client)
             except OSError as e:  # saving tiles: disk full, quota, a folder gone read-only
                 raise os_problem(e, tile_root, "save the finished tiles") from None
             tile_dirs += dirs

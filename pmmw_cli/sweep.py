@@ -29,6 +29,7 @@ import math
 import re
 import sys
 import time
+import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -204,6 +205,11 @@ def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: i
         exrs = render(scenario, overrides, out=out, workers=workers, quiet=True)
     except _UserError as e:
         return {"status": f"failed: {e}", "exr": "", "wall_s": round(time.perf_counter() - t0, 3)}
+    except Exception as e:  # noqa: BLE001 - a bug or the machine: recorded as text; an exception object
+        # crossing Dask can hang its client when the traceback does not pickle
+        where = "".join(traceback.format_exception(e)[-3:])[-600:]
+        return {"status": f"failed: {type(e).__name__}: {str(e)[:300]} ({where.strip()})", "exr": "",
+                "wall_s": round(time.perf_counter() - t0, 3)}
     write_text_atomic(out / "variant.json", json.dumps({"hash": shash, "overrides": overrides}, indent=1))
     return {"status": "done", "exr": str(exrs[0]) if exrs else "", "wall_s": round(time.perf_counter() - t0, 3)}
 
@@ -224,46 +230,6 @@ def _done(out_dir: Path, shash: str) -> bool:
         return False
 
 
-def _client(spec: SweepSpec, n_tasks: int):
-    from dask.distributed import Client, LocalCluster
-
-    if spec.cluster is not None:
-        cluster = jobqueue_cluster(spec.cluster)
-        cluster.scale(jobs=int(read_yaml(spec.cluster, "cluster file").get("jobs", 1)))
-        return Client(cluster), cluster
-    if spec.scheduler:
-        return Client(spec.scheduler), None
-    from pmmw_cli.trace.pool import default_workers
-
-    n = max(1, min(spec.workers or default_workers(), n_tasks))
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
-    return Client(cluster), cluster
-
-
-CLUSTER_KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster"}
-
-
-def jobqueue_cluster(path: Path):
-    """A dask-jobqueue cluster from a YAML file: ``kind`` (slurm, pbs, sge, lsf), ``queue``,
-    ``cores``, ``memory``, ``walltime``, ``jobs``, and any other keyword of the cluster class."""
-    import dask_jobqueue
-
-    cfg = dict(read_yaml(path, "cluster file") or {})
-    kind = str(cfg.pop("kind", "slurm")).lower()
-    if kind not in CLUSTER_KINDS:
-        raise UserError(f"unknown kind {kind!r}; known: {', '.join(CLUSTER_KINDS)}", path, "kind")
-    cfg.pop("jobs", None)
-    cfg.setdefault("processes", cfg.get("cores"))  # one single-threaded process per core: a render per process
-    for key in ("cores", "memory"):
-        if key not in cfg:
-            raise UserError("required key missing", path, key)
-    cls = getattr(dask_jobqueue, CLUSTER_KINDS[kind])
-    try:
-        return cls(**cfg)
-    except (TypeError, ValueError) as e:
-        raise UserError(f"dask-jobqueue refused it: {e}", path) from None
-
-
 def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry_run: bool = False) -> int:
     """Render every variant, write ``sweep.csv`` and ``report.md``; returns the exit status
     (0 all done, 1 some failed)."""
@@ -272,6 +238,8 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
     if dry_run:
         if spec.cluster is None:
             raise UserError("--dry-run prints the batch job script of --cluster FILE", "--dry-run")
+        from pmmw_cli.distributed import jobqueue_cluster
+
         print(jobqueue_cluster(spec.cluster).job_script())
         return 0
     if not spec.scenario.is_file():
@@ -301,7 +269,11 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
     elif plans:
         from dask.distributed import as_completed
 
-        client, cluster = _client(spec, len(plans))
+        from pmmw_cli.distributed import connect
+        from pmmw_cli.trace.pool import default_workers
+
+        client, cluster = connect(spec.scheduler, spec.cluster,
+                                  min(spec.workers or default_workers(), len(plans)))
         try:
             futures = {client.submit(render_variant, str(spec.scenario), ov, str(vd), 1, sh, key=f"pmmw-{name}-{sh}",
                                      retries=1, pure=False): name for name, ov, vd, sh in plans}
@@ -318,6 +290,8 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
                 cluster.close()
     table = [_row(spec, out, name, params, rows[name]) for name, params in zip(names, combos)]
     write_table(out / "sweep.csv", table)
+    from pmmw_cli.sweep_report import write_report
+
     write_report(out, spec, table)
     failed = [r for r in table if r["status"] != "done"]
     print(f"sweep: {len(table) - len(failed)} of {len(table)} variants done -> {out / 'sweep.csv'}")
@@ -379,121 +353,3 @@ def write_table(path: Path, table: list[dict]) -> Path:
     for row in table:
         w.writerow({k: row.get(k, "") for k in cols})
     return write_text_atomic(path, buf.getvalue())
-
-
-def _numeric(values) -> list[float] | None:
-    """Plot positions of a grid key's values (numbers or numbers with a unit), or None."""
-    out = []
-    for v in values:
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            out.append(float(v))
-            continue
-        m = _NUMBER_UNIT.match(str(v))
-        if not m:
-            return None
-        out.append(float(m.group(1)))
-    return out
-
-
-def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
-    """``report.md``: the table, a plot per I contrast against the swept keys, a contact sheet."""
-    keys = [k for k, _ in spec.grid]
-    lines = [f"# Sweep of `{spec.scenario.name}`", "",
-             f"- grid (every combination{'; side by side: ' + ', '.join(zipped_keys(spec)) if spec.zip else ''}): "
-             + "; ".join(f"`{k}` = {', '.join(map(str, v))}" for k, v in spec.grid),
-             f"- executor: {spec.executor}; {sum(r['status'] == 'done' for r in table)} of {len(table)} done", ""]
-    contrast_cols = [c for c in dict.fromkeys(k for r in table for k in r)
-                     if c.startswith("contrast ") and c.endswith(" I [sigma]")]
-    k_cols = [c.replace("[sigma]", "[K]") for c in contrast_cols]
-    head = ["variant", *keys, "status", *k_cols, *contrast_cols]
-    lines.append("| " + " | ".join(head) + " |")
-    lines.append("| " + " | ".join("---" for _ in head) + " |")
-    for r in table:
-        cells = []
-        for h in head:
-            v = r.get(h, "")
-            cells.append(f"{v:.3g}" if isinstance(v, float) and math.isfinite(v) else str(v))
-        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
-    plots = _plots(out, spec, table, contrast_cols)
-    sheet = _contact_sheet(out, spec, table)
-    lines += [""] + [f"![{p.stem}]({p.name})" for p in plots + ([sheet] if sheet else [])]
-    return write_text_atomic(out / "report.md", "\n".join(lines) + "\n")
-
-
-def _plots(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list[str]) -> list[Path]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from pmmw_cli.io.atomic import atomic_path
-
-    keys = [k for k, _ in spec.grid]
-    grid = dict(spec.grid)
-    x_key = spec.axis.get("key") or next((k for k, v in spec.grid if _numeric(v) is not None and len(v) > 1), None)
-    if x_key is None or not contrast_cols:
-        return []
-    x_of = dict(zip((_label(spec, x_key, v) for v in grid[x_key]), spec.axis.get("values") or _numeric(grid[x_key])))
-    zipped = zipped_keys(spec)
-    line_keys = [k for k in keys if k != x_key and not (x_key in zipped and k in zipped) and len(grid[k]) > 1]
-    written = []
-    for col in contrast_cols:
-        fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
-        groups = {}
-        for r in table:
-            if r["status"] == "done" and isinstance(r.get(col), float) and math.isfinite(r[col]):
-                groups.setdefault(", ".join(str(r[k]) for k in line_keys), []).append(r)
-        for label, rows in groups.items():
-            xs = [x_of[r[x_key]] for r in rows]
-            order = sorted(range(len(rows)), key=lambda i: xs[i])
-            ax.plot([xs[i] for i in order], [rows[i][col] for i in order], "o-", label=label or None)
-        ax.axhline(3.0, color="k", lw=0.8, ls="--")
-        ax.axhline(-3.0, color="k", lw=0.8, ls="--")
-        ax.set_xlabel(spec.axis.get("label") or x_key)
-        ax.set_ylabel(col.replace("contrast ", "").replace(" [sigma]", " contrast [noise sigma]"))
-        ax.set_title(f"{spec.scenario.stem}: {col.split(' I ')[0].replace('contrast ', '')} (I)")
-        ax.grid(True, alpha=0.3)
-        if line_keys:
-            ax.legend(fontsize=7, title=", ".join(line_keys), title_fontsize=7)
-        fig.tight_layout()
-        path = out / ("plot_" + re.sub(r"[^A-Za-z0-9]+", "_", col.split(" I ")[0].replace("contrast ", "")) + ".png")
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp)
-        plt.close(fig)
-        written.append(path)
-    return written
-
-
-def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.image as mpimg
-    import matplotlib.pyplot as plt
-
-    from pmmw_cli.io.atomic import atomic_path
-
-    shots = []
-    for r in table:
-        if r["status"] != "done":
-            continue
-        pngs = sorted((out / r["variant"] / "previews").glob("*_I.png"))
-        if pngs:
-            shots.append((r, pngs[0]))
-    if not shots:
-        return None
-    cols = min(4, len(shots))
-    rows = math.ceil(len(shots) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.8 * rows), dpi=100, squeeze=False)
-    keys = [k for k, _ in spec.grid]
-    for ax in axes.ravel():
-        ax.axis("off")
-    for ax, (r, png) in zip(axes.ravel(), shots):
-        ax.imshow(mpimg.imread(png), cmap="gray", interpolation="nearest")
-        ax.set_title(f"{r['variant']}: " + ", ".join(f"{k.split('.')[-1]}={r[k]}" for k in keys), fontsize=7)
-    fig.tight_layout()
-    path = out / "contact_sheet.png"
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp)
-    plt.close(fig)
-    return path

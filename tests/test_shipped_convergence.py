@@ -8,8 +8,9 @@ blanket seen from 3 km), at full resolution and the shipped sampling:
   tests/test_truncation.py), is within a tenth of the imager's noise sigma (0.5 K without
   noise). The concealed-weapon scene at 35 GHz, where the holster is translucent and the paths
   are longest, is checked for truncation too, and against a render at `max_depth: 64`;
-* sampling: every region contrast of three seeds lies within a tenth of the noise sigma of their
-  mean (the noise itself is switched off, `imager.noise=0`, so that only the Monte Carlo error
+* sampling: every region contrast of two seeds lies within a tenth of the noise sigma of their
+  mean (a third seed cost 95 s of the suite's 10 minutes and added little: the standard-error
+  check below is the primary one, the seeds check that the error estimate is honest) (the noise itself is switched off, `imager.noise=0`, so that only the Monte Carlo error
   moves; the tolerance is the config's own sigma, times sqrt 2 for I, which carries sqrt 2 sigma
   of noise), and the report's standard error says so (twice it within the same tolerance).
 
@@ -63,13 +64,13 @@ def _assert_truncation_within(regions, limit):
 def test_region_contrasts_agree_across_seeds_and_are_not_truncated(tmp_path, case):
     config, extra = CASES[case]
     limit = region_limit(load_scenario(config, extra).imager.noise)
-    runs = [_regions(tmp_path, f"seed{s}", config, extra + [f"render.seed={s}", "imager.noise=0"]) for s in (1, 2, 3)]
+    runs = [_regions(tmp_path, f"seed{s}", config, extra + [f"render.seed={s}", "imager.noise=0"]) for s in (1, 2)]
     assert runs[0]["contrasts"], f"{config} declares fewer than two output.regions"
     _assert_truncation_within(runs[0], limit)
     for pair in runs[0]["contrasts"]:
         for c in runs[0]["contrasts"][pair]:
             values = [r["contrasts"][pair][c]["K"] for r in runs]
-            mean = sum(values) / 3.0
+            mean = sum(values) / len(values)
             assert max(abs(v - mean) for v in values) <= limit * _scale(c), (pair, c, values)
             assert 2.0 * runs[0]["contrasts"][pair][c]["stderr_K"] <= limit * _scale(c), (pair, c)
 

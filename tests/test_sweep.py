@@ -85,6 +85,8 @@ def test_local_sweep_table_report_and_resume(tmp_path, monkeypatch):
     report = (out / "report.md").read_text()
     assert "| v003 |" in report and (out / "contact_sheet.png").is_file()
     assert any(out.glob("plot_*.png"))
+    # two numeric axes (seed, noise): a heat map of each contrast over them, in the report
+    assert (out / "heatmap_block_ground.png").stat().st_size > 5_000 and "heatmap_block_ground.png" in report
 
     def no_render(*a, **k):
         raise AssertionError("--resume rendered a finished variant")
@@ -141,6 +143,15 @@ out: {tmp_path / 'trade'}
     assert [(r["name"], r["frequency"]) for r in rows] == [("p0", "35 GHz"), ("p0", "95 GHz"), ("p1", "35 GHz"),
                                                           ("p1", "95 GHz"), ("p2", "35 GHz"), ("p2", "95 GHz")]
     assert (tmp_path / "trade" / "v005" / "p2.exr").is_file()
+    # the flight path as an animation, one per frequency, a frame per pose in order
+    from PIL import Image
+
+    report = (tmp_path / "trade" / "report.md").read_text()
+    for f in ("35_GHz", "95_GHz"):
+        gif = tmp_path / "trade" / f"sequence_frequency_{f}.gif"
+        with Image.open(gif) as im:
+            assert im.n_frames == 3
+        assert gif.name in report
 
 
 def test_the_slurm_job_script_of_a_cluster_file(tmp_path):
@@ -169,3 +180,93 @@ def test_bad_sweep_options_are_one_line(tmp_path, args, words):
     res = runner.invoke(app, ["sweep", str(_scene(tmp_path)), *args])
     assert res.exit_code == 2, res.output
     assert res.output.startswith("error:") and words in res.output
+
+
+# A Dask worker preload (DASK_DISTRIBUTED__WORKER__PRELOAD) that SIGKILLs its worker process the first
+# time, over all workers, that it starts a variant ("sweep") or a tile ("tile"): a worker lost mid-task,
+# as to the OOM killer. The marks file is created atomically, so exactly one kill happens.
+_PRELOAD = """
+import os, signal
+import pmmw_cli.pipeline, pmmw_cli.trace.integrator
+
+def _kill_once():
+    try:
+        os.close(os.open(os.environ["PMMW_TEST_MARKS"], os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        return
+    os.kill(os.getpid(), signal.SIGKILL)
+
+if getattr(pmmw_cli.pipeline, "_test_killer", False):  # Dask may run a preload more than once
+    pass
+elif os.environ["PMMW_TEST_KILL"] == "sweep":
+    _render = pmmw_cli.pipeline.render
+    def render(*a, **k):
+        _kill_once()
+        return _render(*a, **k)
+    pmmw_cli.pipeline.render = render
+else:
+    _tile = pmmw_cli.trace.integrator.Integrator.render_tile
+    def render_tile(self, tile):
+        _kill_once()
+        return _tile(self, tile)
+    pmmw_cli.trace.integrator.Integrator.render_tile = render_tile
+pmmw_cli.pipeline._test_killer = True
+"""
+
+
+def _pmmw_with_a_worker_killed(tmp_path: Path, what: str, args: list[str]):
+    """Run the real `pmmw` (a subprocess, so a hang fails by timeout) with the killing preload."""
+    import os
+    import subprocess
+    import sys
+
+    preload = tmp_path / "killer_preload.py"
+    preload.write_text(_PRELOAD)
+    marks = tmp_path / f"kills-{what}"
+    env = dict(os.environ, DASK_DISTRIBUTED__WORKER__PRELOAD=f'["{preload}"]', PMMW_TEST_MARKS=str(marks),
+               PMMW_TEST_KILL=what)
+    proc = subprocess.run([str(Path(sys.executable).parent / "pmmw"), *args], env=env, capture_output=True, text=True,
+                          timeout=240)
+    return proc, marks.exists()
+
+
+def test_a_dask_worker_killed_mid_sweep_and_the_sweep_completes(tmp_path):
+    """One worker of the LocalCluster dies (SIGKILL) inside a variant; the scheduler reruns that
+    variant on a worker the nanny restarts, and every variant ends done with the same image as
+    an undisturbed local sweep."""
+    scn = _scene(tmp_path)
+    grid = ["--grid", "render.seed=[1, 7, 9]"]
+    proc, killed = _pmmw_with_a_worker_killed(tmp_path, "sweep", ["sweep", str(scn), *grid, "--out",
+                                                                   str(tmp_path / "dask"), "--executor", "dask",
+                                                                   "--workers", "2", "-q"])
+    assert killed, "the preload never killed a worker"
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    with open(tmp_path / "dask" / "sweep.csv") as f:
+        assert [r["status"] for r in csv.DictReader(f)] == ["done"] * 3
+    res = runner.invoke(app, ["sweep", str(scn), *grid, "--out", str(tmp_path / "local"), "-q"])
+    assert res.exit_code == 0, res.output
+    for v in ("v000", "v001", "v002"):
+        a, _ = read_exr(tmp_path / "local" / v / "tiny.exr")
+        b, _ = read_exr(tmp_path / "dask" / v / "tiny.exr")
+        assert all(np.array_equal(a[c], b[c]) for c in a)
+
+
+def test_render_on_dask_is_bit_identical_even_with_a_worker_killed(tmp_path):
+    """`pmmw render --executor dask` spreads the tiles of one image over a LocalCluster of 2
+    workers, one of which is killed inside a tile: the tile is rerun and the assembled image
+    equals the local render bit for bit."""
+    scn = _scene(tmp_path)
+    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "local"), "-q"])
+    assert res.exit_code == 0, res.output
+    proc, killed = _pmmw_with_a_worker_killed(tmp_path, "tile", ["render", str(scn), "--out",
+                                                                  str(tmp_path / "dask"), "--executor", "dask",
+                                                                  "--workers", "2", "-q"])
+    assert killed and proc.returncode == 0, proc.stderr[-2000:]
+    a, _ = read_exr(tmp_path / "local" / "tiny.exr")
+    b, _ = read_exr(tmp_path / "dask" / "tiny.exr")
+    assert all(np.array_equal(a[c], b[c]) for c in a)
+
+
+def test_dask_render_refuses_a_shard(tmp_path):
+    res = runner.invoke(app, ["render", str(_scene(tmp_path)), "--executor", "dask", "--shard", "1/2"])
+    assert res.exit_code == 2 and "--shard" in res.output

@@ -112,7 +112,7 @@ def default_workers() -> int:
 
 def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | None = None,
                  resume: bool = False, intersector: str = "embree", progress=None,
-                 tiles=None, counts: dict | None = None) -> list[TileResult]:
+                 tiles=None, counts: dict | None = None, client=None) -> list[TileResult]:
     """Render ``tiles`` (default: all of the job's tiles) and return their results.
 
     Parameters
@@ -125,6 +125,8 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     progress : callable(done, total, rays, elapsed), optional
     counts : dict, optional
         Filled with ``reused`` (tiles loaded from ``tile_dir``) and ``rendered``.
+    client : dask.distributed.Client, optional
+        Render the tiles as tasks on its cluster's workers instead (`_render_on_dask`).
 
     Raises
     ------
@@ -158,7 +160,9 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
         if progress is not None:
             progress(len(results), len(tiles), rays, time.perf_counter() - start)
 
-    if todo and workers == 1:
+    if todo and client is not None:
+        _render_on_dask(client, job, intersector, todo, _collect)
+    elif todo and workers == 1:
         _init_worker(job, intersector)
         for t in todo:
             _collect(_render(t))
@@ -302,6 +306,52 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                 w.process.kill()
             for w in live + retired:
                 w.process.join()
+
+
+_DASK_INTEGRATORS: dict = {}  # per Dask worker process: the job token -> its Integrator
+
+
+def _dask_tile(job: TraceJob, kind: str, token: str, tile) -> TileResult | str:
+    """One tile on a Dask worker (the worker builds the Embree scene once per job), or the
+    traceback's text if it raised: an exception object crossing Dask can hang its client when its
+    traceback does not pickle."""
+    try:
+        integ = _DASK_INTEGRATORS.get(token)
+        if integ is None:
+            _DASK_INTEGRATORS.clear()  # one job at a time: drop an earlier frequency's scene
+            integ = _DASK_INTEGRATORS[token] = Integrator(job, make_intersector(job.vertices, job.faces, kind=kind))
+        return integ.render_tile(tile)
+    except Exception as e:  # noqa: BLE001 - reported by the parent, with the tile
+        return "".join(traceback.format_exception(e)[-4:])[-1500:]
+
+
+def _render_on_dask(client, job: TraceJob, kind: str, todo: list, collect):
+    """Render ``todo`` as one Dask task per tile on ``client``'s workers, results to ``collect``
+    as they finish. The job is sent to every worker once. A task whose worker is lost is
+    rescheduled by the scheduler; a tile that raises, or whose workers keep dying, stops the
+    render with an `EnvironmentProblem` naming it (finished tiles are already saved)."""
+    import uuid
+
+    from dask.distributed import as_completed
+
+    token = uuid.uuid4().hex
+    [job_f] = client.scatter([job], broadcast=True, hash=False)
+    futures = {client.submit(_dask_tile, job_f, kind, token, t, key=f"pmmw-tile-{token}-{t[0]}", pure=False): t
+               for t in todo}
+    try:
+        for fut in as_completed(futures):
+            t = futures[fut]
+            try:
+                r = fut.result()
+            except Exception as e:  # KilledWorker: its workers were lost too often
+                r = f"{type(e).__name__}: {str(e)[:300]}"
+            if isinstance(r, str):
+                raise EnvironmentProblem(
+                    f"tile {t[0]} (pixels x {t[1]}..{t[3] - 1}, y {t[2]}..{t[4] - 1}) failed on the Dask cluster: "
+                    f"{r.strip()}; finished tiles are kept: run again with --resume")
+            collect(r)
+    finally:
+        client.cancel(list(futures))
 
 
 def assemble(job: TraceJob, results: list[TileResult]):
