@@ -148,7 +148,9 @@ def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, re
         "relative to the physical limit of this approach on this machine (1 would be pure Embree).\n\n"
         "Wall times are single runs: on a machine shared with other jobs they carry a few tens of percent "
         "of noise (compare the split and hybrid rows at 1 spp, which trace identical rays); the errors do "
-        "not depend on it.\n"
+        "not depend on it.\n\n"
+        "Physical optics (`pmmw po`: direct sum against octree, 1e3-1e6 facets x 1e2-1e5 directions) is "
+        "measured by `pmmw bench --po` in [benchmarks_po.md](benchmarks_po.md).\n"
     )
     if skip_configs:
         all_rows["skips"] = skips(skip_configs, workers=workers, cache_dir=cache_dir, ref_spp=ref_spp)

@@ -60,12 +60,12 @@ def render(
     spp: Optional[int] = typer.Option(None, "--spp", min=1, help="Samples per pixel (render.spp)."),
     workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Worker processes (default: all cores)."),
     seed: Optional[int] = typer.Option(None, "--seed", help="Random seed (render.seed)."),
-    resume: bool = typer.Option(False, "--resume", help="Reuse tiles finished by an interrupted run."),
-    keep_tiles: bool = typer.Option(False, "--keep-tiles", help="Keep per-tile files after the image is written."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar; one summary line per image."),
+    resume: bool = typer.Option(False, "--resume", metavar="", help="Reuse tiles finished by an interrupted run."),
+    keep_tiles: bool = typer.Option(False, "--keep-tiles", metavar="", help="Keep per-tile files after the image is written."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", metavar="", help="No progress bar; one summary line per image."),
     shard: Optional[str] = typer.Option(None, "--shard", metavar="I/N",
                                         help="Render only tiles I mod N (cluster jobs); assemble later with --resume."),
-    force: bool = typer.Option(False, "--force", help="Render even when memory or disk look too small for it."),
+    force: bool = typer.Option(False, "--force", metavar="", help="Render even when memory or disk look too small for it."),
     executor: str = typer.Option("local", "--executor", help="local (worker processes here) or dask (the tiles "
                                                              "as tasks on a Dask cluster)."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", metavar="ADDRESS",
@@ -246,14 +246,14 @@ def brdf(
     seed: int = typer.Option(0, "--seed", help="Random seed (same seed, same result)."),
     shadowing: str = typer.Option("smith", "--shadowing",
                                   help="G of the analytic single term: smith, ashikhmin, torrance_sparrow, none."),
-    double: bool = typer.Option(True, "--double/--no-double", help="Analytic double-reflection term."),
+    double: bool = typer.Option(True, "--double/--no-double", metavar="", help="Analytic double-reflection term."),
     double_samples: int = typer.Option(256, "--double-samples", help="Quadrature points of the analytic double term."),
-    mueller: bool = typer.Option(False, "--mueller", help="Also write the 16 Mueller elements M00..M33 to the EXR."),
+    mueller: bool = typer.Option(False, "--mueller", metavar="", help="Also write the 16 Mueller elements M00..M33 to the EXR."),
     threshold: float = typer.Option(1e-3, "--threshold",
                                     help="Russian roulette below this path power (unbiased), in [0, 1)."),
     out: Path = typer.Option(Path("out/brdf"), "--out", help="Output folder: brdf_<method>.exr, PNGs, brdf.json."),
-    plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the PNG maps and the in-plane plot."),
-    as_json: bool = typer.Option(False, "--json", help="Print the JSON summary (brdf.json) instead of the text one."),
+    plots: bool = typer.Option(True, "--plots/--no-plots", metavar="", help="Write the PNG maps and the in-plane plot."),
+    as_json: bool = typer.Option(False, "--json", metavar="", help="Print the JSON summary (brdf.json) instead of the text one."),
 ):
     """Polarized BRDF of a rough (layered) surface on Optics Express 2016's 1-degree hemispherical grid."""
     from pmmw_cli.brdf import run_brdf
@@ -278,7 +278,7 @@ def sweep(
                                              help="A key and its values, e.g. 'frequency=[35 GHz, 95 GHz]' or "
                                                   "'imager.noise=linspace(1 K, 4 K, 4)' (repeatable)."),
     out: Optional[Path] = typer.Option(None, "--out", help="Sweep folder (default ./out/<scenario>_sweep)."),
-    zip_: bool = typer.Option(False, "--zip", help="The lists side by side (a flight path) instead of every combination."),
+    zip_: bool = typer.Option(False, "--zip", metavar="", help="The lists side by side (a flight path) instead of every combination."),
     executor: Optional[str] = typer.Option(None, "--executor", help="local (default) or dask."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", metavar="ADDRESS",
                                             help="A running Dask scheduler, e.g. tcp://host:8786."),
@@ -287,9 +287,9 @@ def sweep(
                                                 "memory, walltime, jobs)."),
     workers: Optional[int] = typer.Option(None, "--workers", min=1,
                                           help="Local: processes per render; dask LocalCluster: workers."),
-    resume: bool = typer.Option(False, "--resume", help="Skip variants already rendered with the same inputs."),
-    dry_run: bool = typer.Option(False, "--dry-run", help="Print the batch job script of --cluster and stop."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress line."),
+    resume: bool = typer.Option(False, "--resume", metavar="", help="Skip variants already rendered with the same inputs."),
+    dry_run: bool = typer.Option(False, "--dry-run", metavar="", help="Print the batch job script of --cluster and stop."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", metavar="", help="No progress line."),
 ):
     """Render a grid of variants of a scenario; write sweep.csv and a trade-study report."""
     from pmmw_cli.io.yamlio import read_yaml
@@ -330,7 +330,7 @@ def po(
                                         help="Observation theta in degrees (default 0:180:1)."),
     phi: Optional[str] = typer.Option(None, "--phi", metavar="P1,P2,...",
                                       help="Observation phi cuts in degrees (default: the incidence's phi)."),
-    monostatic: bool = typer.Option(False, "--monostatic", help="Each observation direction is also the incidence."),
+    monostatic: bool = typer.Option(False, "--monostatic", metavar="", help="Each observation direction is also the incidence."),
     bounces: int = typer.Option(1, "--bounces", help="Reflections whose currents radiate (1: physical optics; "
                                                      "2+: ray tubes add the reflected waves' currents)."),
     tube: Optional[str] = typer.Option(None, "--tube", metavar="LENGTH",
@@ -385,10 +385,10 @@ def bench(
     set_: Optional[List[str]] = SetOpt,
     out: Path = typer.Option(Path("docs/benchmarks.md"), "--out", help="Markdown table (plots and JSON beside it)."),
     cache: Path = typer.Option(Path(".pmmw-cache"), "--cache", help="Where reference renders are cached."),
-    with_scaling: bool = typer.Option(False, "--scaling", help="Also measure cost against triangle count (1e3-1e6)."),
+    with_scaling: bool = typer.Option(False, "--scaling", metavar="", help="Also measure cost against triangle count (1e3-1e6)."),
     render_times: Optional[List[Path]] = typer.Option(None, "--render-times", help="Also time these configs as shipped (repeatable)."),
     skip_configs: Optional[List[Path]] = typer.Option(None, "--skips", help="Also measure what each skip saves on these configs (repeatable)."),
-    po: bool = typer.Option(False, "--po", help="Instead: physical optics, direct sum against octree "
+    po: bool = typer.Option(False, "--po", metavar="", help="Instead: physical optics, direct sum against octree "
                                                  "(docs/benchmarks_po.md)."),
 ):
     """Run time against error for each scenario and sampling strategy (docs/benchmarks.md)."""

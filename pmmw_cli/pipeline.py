@@ -25,7 +25,7 @@ from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors, clear_war
 from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
 from pmmw_cli.io.atomic import write_text_atomic
 from pmmw_cli.io.exr import write_exr
-from pmmw_cli.io.preview import write_figure
+from pmmw_cli.io.preview import write_depth_figure, write_figure, write_material_figure
 from pmmw_cli.io.report import write_report
 from pmmw_cli.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
 from pmmw_cli.physics.jones import stokes_images
@@ -50,9 +50,10 @@ class Resolved:
     geometry: object
 
 
-def resolve(path, overrides=(), cli=None) -> Resolved:
-    """Load and check the scenario and every asset it names; raise `UserErrors` on problems."""
-    scn = load_scenario(path, list(overrides), cli=cli)
+def resolve(path, overrides=(), cli=None, data=None, values=None) -> Resolved:
+    """Load and check the scenario and every asset it names; raise `UserErrors` on problems.
+    ``data``, ``values``: a scenario mapping and typed overrides (`config.load_scenario`)."""
+    scn = load_scenario(path, list(overrides), cli=cli, data=data, values=values)
     db = material_database(scn)
     check_material_ids(scn.scene, db, scn.source_file)
     geom = build_geometry(scn.scene, scenario_file=scn.source_file)
@@ -182,7 +183,8 @@ def scenario_hash(scn, db: MaterialDB | None = None, files=None) -> str:
 def input_files(scn) -> list[Path]:
     """Every file a render of ``scn`` reads besides the material database: the scenario, each
     mesh and the files it names (`asset_files`), the sky texture."""
-    files = [Path(scn.source_file)]
+    # a scenario given as a mapping (the Python API) has no file: its content is in the settings
+    files = [Path(scn.source_file)] if Path(scn.source_file).is_file() else []
     for e in scn.scene:
         files += asset_files(e.mesh)
     if scn.sky.file:
@@ -270,21 +272,29 @@ def atmosphere_model(scn, f: float):
 
 
 class _Progress:
-    """Progress on a terminal; silent otherwise (the summary line is printed by `render`)."""
+    """Progress of a render: a line rewritten on a terminal; a plain line every `LOG_EVERY` s
+    when standard error is a file (cluster logs): tiles done/total, rays per second, time left."""
+
+    LOG_EVERY = 5.0  # [s]
 
     def __init__(self, label: str, quiet: bool):
         self.label = label
-        self.enabled = not quiet and sys.stderr.isatty()
+        self.enabled = not quiet
+        self.tty = sys.stderr.isatty()
+        self.last = -1e9
 
     def __call__(self, done, total, rays, elapsed):
         if not self.enabled:
             return
         rate = rays / elapsed if elapsed > 0 else 0.0
         left = elapsed / done * (total - done) if done else 0.0
-        sys.stderr.write(f"\r{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left ")
-        if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+        msg = f"{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left"
+        if self.tty:
+            sys.stderr.write("\r" + msg + " " + ("\n" if done == total else ""))
+            sys.stderr.flush()
+        elif elapsed - self.last >= self.LOG_EVERY or done == total:
+            print(msg, file=sys.stderr, flush=True)
+            self.last = elapsed
 
 
 def region_masks(regions, cam) -> dict:
@@ -493,7 +503,8 @@ def _stem(scn, f: float) -> str:
 
 def output_names(scn, f: float) -> dict:
     """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``,
-    ``previews`` and ``side_by_side`` (channel -> PNG), ``reports`` (JSON, Markdown)."""
+    ``previews`` and ``side_by_side`` (channel -> PNG), ``aux_previews`` (``depth``, ``material``
+    -> PNG, when ``output.aux`` asks for them), ``reports`` (JSON, Markdown)."""
     stem = _stem(scn, f)
     chans = scn.output.channels
     side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
@@ -505,6 +516,8 @@ def output_names(scn, f: float) -> dict:
         "exr": f"{stem}.exr",
         "previews": {c: f"previews/{stem}_{c}.png" for c in chans} if on else {},
         "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
+        "aux_previews": {a: f"previews/{stem}_{a}.png" for a in ("depth", "material") if a in scn.output.aux}
+        if on else {},
         "reports": [f"report{suffix}.json", f"report{suffix}.md"],
     }
 
@@ -517,7 +530,8 @@ def _imager_words(scn) -> str:
 
 
 def _all_outputs(names: dict) -> list[str]:
-    return [names["exr"], *names["previews"].values(), *names["side_by_side"].values(), *names["reports"]]
+    return [names["exr"], *names["previews"].values(), *names["side_by_side"].values(),
+            *names["aux_previews"].values(), *names["reports"]]
 
 
 # [s] per camera path per core: the shipped landing scene on a 2-core laptop (docs/benchmarks.md);
@@ -643,7 +657,7 @@ def remove_stale_tiles(tile_root: Path, scn, shash: str) -> int:
 
 def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
            quiet=False, keep_tiles=False, shard=None, force=False, executor="local", scheduler=None,
-           cluster=None) -> list[Path]:
+           cluster=None, data=None, values=None) -> list[Path]:
     """The ``pmmw render`` job. Returns the EXR paths written.
 
     With ``shard=(i, n)`` only tiles whose index is i modulo n are rendered into the tile folder
@@ -669,7 +683,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     clear_warnings()
     t0 = time.perf_counter()
     cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed), ("out", out)) if v is not None}
-    res = resolve(path, overrides, cli=cli)
+    res = resolve(path, overrides, cli=cli, data=data, values=values)
     scn = res.scenario
     out_dir = Path(scn.output.dir) if scn.output.dir is not None else Path.cwd() / "out" / scn.name
     n_workers = scn.render.workers or default_workers()
@@ -741,10 +755,10 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     return written
 
 
-def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
-    """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
-    frequency's report entry (the caller adds the report and commits them together)."""
-    t1 = time.perf_counter()
+def frequency_images(scn, f, job, img, shash: str = "") -> dict:
+    """The images of one frequency from its traced ``img``: ``ideal`` and ``sensor`` (Stokes and
+    polarization channels [K], float64), the PSF ``kernel``, and what the EXR holds: ``channels``
+    (float32: the sensor's, ``ideal.*``, ``aux.*``) with its header ``attrs``."""
     ideal = stokes_images(img.mean)
     sensor, kernel = imager_model(scn, job, ideal)
     if not all(np.isfinite(sensor[c]).all() for c in scn.output.channels):
@@ -766,8 +780,18 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
         "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (Murakowski 2014 eq. 2.12)",
         "pmmw:materials": ",".join(job.media.ids),
     }
+    return {"ideal": ideal, "sensor": sensor, "kernel": kernel, "channels": channels, "attrs": attrs}
+
+
+def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
+    """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
+    frequency's report entry (the caller adds the report and commits them together)."""
+    t1 = time.perf_counter()
+    images = frequency_images(scn, f, job, img, shash)
+    ideal, sensor, kernel = images["ideal"], images["sensor"], images["kernel"]
+    cam = job.camera
     try:
-        write_exr(staged.path(names["exr"]), channels, attrs)
+        write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
         stats = {}
         label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
         for c in scn.output.channels:
@@ -780,6 +804,11 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
             write_figure(staged.path(rel), [("ideal (before the imager)", ideal[c]),
                                             (f"sensor ({_imager_words(scn)})", sensor[c])],
                          title=label.format(c))
+        if "depth" in names["aux_previews"]:
+            write_depth_figure(staged.path(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))
+        if "material" in names["aux_previews"]:
+            write_material_figure(staged.path(names["aux_previews"]["material"]), img.material, job.media.ids,
+                                  title=label.format("material of the first hit"))
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
     regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else None
@@ -790,7 +819,7 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
         **({"regions": regions} if regions else {}),
         **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
         "frequency_hz": f, "output_exr": str(staged.out_dir / names["exr"]), "channels": stats,
-        "previews": dict(names["previews"]),
+        "previews": {**names["previews"], **{f"aux.{a}": rel for a, rel in names["aux_previews"].items()}},
         "rays": img.rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),
                                      "frequency_total_s": round(t_total, 3)},
         "mean_samples_per_pixel": float(img.samples.mean()),
@@ -798,10 +827,11 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     }
 
 
-def validate(path, overrides=()) -> dict:
-    """The ``pmmw validate`` job: the resolved scenario and, per frequency, the media."""
+def validate(path, overrides=(), data=None, values=None) -> dict:
+    """The ``pmmw validate`` job: the resolved scenario and, per frequency, the media (and the slab
+    sky's opacity and brightness, defaults included), the geometry and the resources."""
     clear_warnings()
-    res = resolve(path, overrides)
+    res = resolve(path, overrides, data=data, values=values)
     scn, geom = res.scenario, res.geometry
     per_object = {}
     for i, (name, entry) in enumerate(zip(geom.objects, scn.scene)):
@@ -835,6 +865,18 @@ def validate(path, overrides=()) -> dict:
         }
     if scn.sky.model == "texture":  # read and check it now, as render would
         make_sky(scn.sky, scn.frequencies[0])
+    if scn.sky.model == "slab":  # the values the render takes, defaults included
+        out["sky"] = {}
+        for f in scn.frequencies:
+            sky = make_sky(scn.sky, f)
+            out["sky"][f"{f / 1e9:g} GHz"] = {
+                "model": "slab", "temperature_K": sky.temperature,
+                "zenith_opacity_Np": round(sky.tau, 5),
+                "zenith_opacity_from": "sky.zenith_opacity" if scn.sky.zenith_opacity is not None else
+                "default: clear US standard atmosphere (18.5 K at 35 GHz, 46 K at 95 GHz at the zenith)",
+                "zenith_K": round(float(sky.zenith_angle_temperature(np.pi / 2)), 2),
+                "elevation_10deg_K": round(float(sky.zenith_angle_temperature(np.radians(10.0))), 2),
+            }
     est = estimate_resources(scn, int(geom.faces.shape[0]), scn.render.workers or default_workers())
     free = available_memory()
     out["resources"] = {

@@ -40,11 +40,13 @@ def parse_layer(text: str):
     return {"kind": kind, "base": base, "top": top, "liquid_water": parts[3]}
 
 
-def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], ground_temperature, humidity):
-    """An `Atmosphere` record from a YAML file and/or command-line options (options win)."""
+def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], ground_temperature, humidity,
+                    data: dict | None = None):
+    """An `Atmosphere` record from a YAML file (or the mapping ``data``) and/or command-line
+    options (options win)."""
     from pmmw_cli.config.schema import Atmosphere
 
-    raw: dict = {}
+    raw: dict = dict(data) if data is not None else {}
     if file is not None:
         if not Path(file).is_file():
             raise UserError("file not found", file=file)

@@ -211,7 +211,14 @@ def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: i
         return {"status": f"failed: {type(e).__name__}: {str(e)[:300]} ({where.strip()})", "exr": "",
                 "wall_s": round(time.perf_counter() - t0, 3)}
     write_text_atomic(out / "variant.json", json.dumps({"hash": shash, "overrides": overrides}, indent=1))
-    return {"status": "done", "exr": str(exrs[0]) if exrs else "", "wall_s": round(time.perf_counter() - t0, 3)}
+    rays = 0
+    for path in out.glob("report*.json"):  # one report per frequency
+        try:
+            rays += int(json.loads(path.read_text()).get("rays", 0))
+        except (OSError, ValueError, TypeError):
+            pass
+    return {"status": "done", "exr": str(exrs[0]) if exrs else "", "wall_s": round(time.perf_counter() - t0, 3),
+            "rays": rays}
 
 
 def _variant_hash(scenario: Path, overrides: list[str]) -> str:
@@ -261,11 +268,11 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
             continue
         plans.append((name, overrides, vdir, shash))
     log = _Log(len(combos), quiet)
-    log.update(len(rows))
+    log.update(rows)
     if spec.executor == "local":
         for name, overrides, vdir, shash in plans:
             rows[name] = render_variant(str(spec.scenario), overrides, str(vdir), spec.workers, shash)
-            log.update(len(rows))
+            log.update(rows)
     elif plans:
         from dask.distributed import as_completed
 
@@ -283,7 +290,7 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
                     rows[name] = fut.result()
                 except Exception as e:  # a task that failed twice (a worker lost both times, a bug)
                     rows[name] = {"status": f"failed: {type(e).__name__}: {str(e)[:200]}", "exr": "", "wall_s": 0.0}
-                log.update(len(rows))
+                log.update(rows)
         finally:
             client.close()
             if cluster is not None:
@@ -301,21 +308,32 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
 
 
 class _Log:
-    """A progress line on a terminal; a plain line every few seconds into a log file."""
+    """Progress: a line rewritten on a terminal; a plain line every `LOG_EVERY` s into a log
+    file (cluster logs): variants done/total, rays per second of the variants rendered, time left."""
+
+    LOG_EVERY = 5.0  # [s]
 
     def __init__(self, total: int, quiet: bool):
-        self.total, self.quiet, self.t0, self.last = total, quiet, time.perf_counter(), 0.0
+        self.total, self.quiet = total, quiet
+        self.t0, self.last = time.perf_counter(), -1e9
+        self.skipped = None
 
-    def update(self, done: int):
+    def update(self, rows: dict):
+        if self.skipped is None:  # the first call: variants already done (--resume) or refused
+            self.skipped = len(rows)
         if self.quiet:
             return
+        done = len(rows)
         now = time.perf_counter() - self.t0
-        left = now / done * (self.total - done) if done else float("nan")
-        msg = f"sweep: {done}/{self.total} variants, {now:.0f} s, {left:.0f} s left"
+        rendered = done - self.skipped
+        left = f"{now / rendered * (self.total - done):.0f} s" if rendered else "?"
+        rays = sum(r.get("rays", 0) for r in rows.values())
+        msg = (f"sweep: {done}/{self.total} variants, {rays / max(now, 1e-9) / 1e6:.3g} Mrays/s, {now:.0f} s, "
+               f"{left} left")
         if sys.stderr.isatty():
             sys.stderr.write("\r" + msg + ("\n" if done == self.total else ""))
             sys.stderr.flush()
-        elif now - self.last >= 5.0 or done == self.total:
+        elif now - self.last >= self.LOG_EVERY or done == self.total:
             print(msg, file=sys.stderr, flush=True)
             self.last = now
 

@@ -77,6 +77,16 @@ _KINDS: dict[str, tuple[str, str | None, str, str]] = {
     "attenuation": (f"{_NEPER}/m", f"{_DECIBEL}/km", "'0.9 dB/km' or '0.2 Np/km'", "attenuation"),
 }
 
+# units a misspelt one is compared with, case-insensitively ('95 Ghz' -> did you mean 'GHz'?)
+_COMMON_UNITS = ("Hz", "kHz", "MHz", "GHz", "THz", "nm", "um", "mm", "cm", "m", "km", "deg", "rad", "mrad", "K",
+                 "mK", "degC", "degF", "g/m3", "kg/m3", "mm/h", "dB/km", "Np/km", "dB/m")
+
+
+def _case_hint(text: str) -> str:
+    """' (did you mean 'GHz'? ...)' when ``text`` is a common unit in the wrong case, else ''."""
+    near = [u for u in _COMMON_UNITS if u.lower() == text.replace(" ", "").lower() and u != text]
+    return f" (did you mean {near[0]!r}? units are case-sensitive: m is milli, M is mega)" if near else ""
+
 
 def _a(noun: str) -> str:
     return ("an " if noun[:1] in "aeiou" else "a ") + noun
@@ -137,7 +147,7 @@ def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit:
         try:
             units = reg.parse_units(_unit_text(text, kind))
         except Exception:  # pint raises several types for unknown or malformed units
-            raise fail(f"has an unknown unit {text!r}") from None
+            raise fail(f"has an unknown unit {text!r}{_case_hint(text)}") from None
     if not math.isfinite(number):
         raise UserError(f"{value!r} is not a finite {noun}", file, key)
 
@@ -152,6 +162,8 @@ def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit:
             hint = " (an angular frequency: give a frequency in Hz)"
         elif kind == "attenuation" and root == reg.get_root_units("1/m")[1]:
             hint = " (give the level unit, dB or Np, over a length)"
+        else:
+            hint = _case_hint(text)
         raise fail(f"is not {_a(noun)}{hint}")
     q = reg.Quantity(number, units)
     if kind == "temperature" and any(name.startswith("delta_") for name, _ in q.unit_items()):

@@ -108,3 +108,14 @@ def looking_down_at(theta_deg, height=1.0, width=1, height_px=1, fov_deg=0.01):
 
 
 __all__ = ["box", "hollow_box", "sphere", "material", "make_job", "render", "looking_down_at", "UniformSky"]
+
+
+def ground_and_block(folder):
+    """The tiny scene of the CLI, sweep and API tests: ``ground.obj`` (a 40 m x 40 m slab whose top
+    is z = 0) and ``block.obj`` (0.4 x 0.2 x 0.2 m, 4 m along +y) written into ``folder``."""
+    ground = trimesh.creation.box(extents=[40, 40, 1])
+    ground.apply_translation([0, 0, -0.5])
+    block = trimesh.creation.box(extents=[0.4, 0.2, 0.2])
+    block.apply_translation([0, 4, 0.1])
+    ground.export(folder / "ground.obj")
+    block.export(folder / "block.obj")

@@ -1,5 +1,6 @@
 """End to end, as a user runs it: `pmmw render`, `pmmw validate`, `pmmw materials`, and errors."""
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -9,6 +10,7 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
+from tests.scenes import ground_and_block
 from pmmw_cli.cli import app
 from pmmw_cli.io.exr import read_exr
 
@@ -16,12 +18,7 @@ runner = CliRunner()
 
 
 def _scene(tmp_path: Path, extra: str = "", render: str = "{spp: 2, max_depth: 4, tile: 8}") -> Path:
-    ground = trimesh.creation.box(extents=[40, 40, 1])
-    ground.apply_translation([0, 0, -0.5])
-    block = trimesh.creation.box(extents=[0.4, 0.2, 0.2])
-    block.apply_translation([0, 4, 0.1])
-    ground.export(tmp_path / "ground.obj")
-    block.export(tmp_path / "block.obj")
+    ground_and_block(tmp_path)
     yaml = f"""
 name: tiny
 frequency: 35 GHz
@@ -58,6 +55,12 @@ def test_render_writes_exr_report_and_previews(tmp_path):
     assert (out / "report.json").exists() and (out / "report.md").exists()
     assert (out / "previews" / "tiny_I.png").exists()
     assert not (out / ".pmmw-tiles").exists()
+    # the report states what the atmosphere does: dB/km at the ground and the path loss to the target
+    atm = json.loads((out / "report.json").read_text())["atmosphere"]
+    md = (out / "report.md").read_text()
+    assert "## Atmosphere" in md
+    assert f"{atm['specific_attenuation_at_ground_dB_per_km']:.3g} dB/km" in md
+    assert f"{atm['path_loss_imager_to_target_dB']:.3g} dB" in md
 
 
 def test_render_is_deterministic_whatever_the_worker_count(tmp_path):
@@ -268,3 +271,71 @@ def test_resume_does_not_reuse_tiles_of_a_changed_mesh(tmp_path):
     assert _run("render", scn, "--out", out, "--workers", "1").exit_code == 0
     after, _ = read_exr(out / "tiny.exr")
     assert np.abs(after["ideal.Ex2"] - before["ideal.Ex2"]).max() > 1.0
+
+
+@pytest.mark.parametrize("command", ["render", "sweep", "po", "validate", "brdf", "bench"])
+def test_flags_show_no_value_in_help(command):
+    """An on/off flag takes no value (`--resume`, not `--resume true`): the help must not show one."""
+    res = runner.invoke(app, [command, "--help"], env={"COLUMNS": "200"})
+    assert res.exit_code == 0
+    flag_lines = [line for line in res.output.splitlines() if "<bool>" in line and "--help" not in line]
+    assert flag_lines == []
+
+
+def test_validate_shows_the_slab_skys_default_opacity():
+    """`validate` states the opacity the slab sky takes when none is given, and the zenith
+    brightness it gives: 18.5 K at 35 GHz (the clear US standard atmosphere of PHYSICS.md)."""
+    from pmmw_cli.pipeline import validate
+
+    sky = validate("configs/cinderblocks_35ghz.yaml")["sky"]["35 GHz"]
+    assert sky["zenith_opacity_from"].startswith("default")
+    assert sky["zenith_K"] == pytest.approx(18.5, abs=0.01)
+    given = validate("configs/cinderblocks_35ghz.yaml", ["sky.zenith_opacity=0.2"])["sky"]["35 GHz"]
+    assert given["zenith_opacity_Np"] == pytest.approx(0.2) and given["zenith_opacity_from"] == "sky.zenith_opacity"
+
+
+def test_the_readme_lists_exactly_the_required_keys():
+    """README "Required keys" against the schema's required fields (source_file is set by the loader;
+    `frequency` is the file's spelling of `frequencies`; a scene entry's material is checked apart)."""
+    import re
+
+    import pydantic
+
+    from pmmw_cli.config import schema
+
+    def required(model, prefix):
+        out = []
+        for name, f in model.model_fields.items():
+            if f.is_required() and name != "source_file":
+                if isinstance(f.annotation, type) and issubclass(f.annotation, pydantic.BaseModel):
+                    out += required(f.annotation, prefix + name + ".")  # a section: its required keys
+                else:
+                    out.append(prefix + {"frequencies": "frequency"}.get(name, name))
+        return out
+
+    want = set(required(schema.Scenario, "")) | {"scene[i]." + k for k in required(schema.SceneEntry, "")}
+    want |= {"atmosphere.layers[i]." + k for k in required(schema.WeatherLayer, "")}
+    text = Path("README.md").read_text()
+    para = text[text.index("Required keys"):text.index("```yaml", text.index("Required keys"))]
+    listed = set(re.findall(r"`([a-z_.\[\]]+)`", para.replace("`.base`", "`atmosphere.layers[i].base`")
+                            .replace("`.top`", "`atmosphere.layers[i].top`")))
+    listed -= {"scene[i].material", "scene[i].materials", "# required"}
+    assert listed == want
+
+
+def test_depth_and_material_previews_with_their_legends(tmp_path):
+    """`output.aux: [depth, material]` gives two more previews, listed in the report: depth on a
+    scale in metres, materials in distinct colours with the database ids in a legend."""
+    scn = _scene(tmp_path, extra="output: {aux: [depth, material]}")
+    res = _run("render", scn, "--out", tmp_path / "o", "--workers", "1", "-q")
+    assert res.exit_code == 0, res.output
+    prev = tmp_path / "o" / "previews"
+    assert (prev / "tiny_depth.png").stat().st_size > 5_000 and (prev / "tiny_material.png").stat().st_size > 5_000
+    md = (tmp_path / "o" / "report.md").read_text()
+    assert "![aux.depth](previews/tiny_depth.png)" in md and "![aux.material](previews/tiny_material.png)" in md
+    # the legend's colours: the sky, concrete and metal are three distinct colours in the picture
+    import OpenImageIO as oiio
+
+    px = oiio.ImageBuf(str(prev / "tiny_material.png")).get_pixels(oiio.FLOAT)[..., :3]
+    colours = {tuple(np.round(c, 2)) for c in px.reshape(-1, 3)}
+    assert len(colours) >= 4  # sky, concrete, metal and the white page

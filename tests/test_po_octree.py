@@ -91,3 +91,4 @@ def test_bench_po_writes_its_table(tmp_path):
     assert len(row) == 1
     cells = [c.strip() for c in row[0].strip("|").split("|")]
     assert float(cells[4].rstrip("*")) > 0 and float(cells[5]) > 0 and float(cells[7]) < 1e-3
+    assert path.with_suffix(".png").stat().st_size > 10_000 and "b.png" in path.read_text()

@@ -12,6 +12,7 @@ another order, so anything beyond rounding is a bug (e.g. 0.5 rad read as 0.5 de
 """
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -448,3 +449,10 @@ def test_cli_validate_fov_in_radians():
     res = runner.invoke(app, ["validate", cfg, "--set", "imager.fov=3 m"])
     assert res.exit_code == 2 and "Traceback" not in res.output
     assert "imager.fov: '3 m' is not an angle; expected e.g. '10 deg'" in res.output
+
+
+@pytest.mark.parametrize("text, unit", [("95 Ghz", "GHz"), ("95 ghz", "GHz"), ("3 MM", "mm"), ("1.0 dB/Km", "dB/km")])
+def test_a_unit_in_the_wrong_case_is_suggested(text, unit):
+    kind = "attenuation" if "dB" in text else "frequency" if "hz" in text.lower() else "length"
+    with pytest.raises(UserError, match=f"did you mean '{re.escape(unit)}'"):
+        parse_quantity(text, kind, file="--x")

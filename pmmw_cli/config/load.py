@@ -17,13 +17,19 @@ from pmmw_cli.io.yamlio import MalformedYAML, load_yaml, read_yaml
 _INDEX = re.compile(r"^(.*?)\[(\d+)\]$")
 
 
-def load_scenario(path, overrides=(), *, cli: dict | None = None) -> Scenario:
+def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | None = None,
+                  values: dict | None = None) -> Scenario:
     """Read, override, validate and resolve a scenario file.
 
     Parameters
     ----------
     path : str or Path
-        The scenario YAML.
+        The scenario YAML; with ``data``, where that mapping stands (relative paths resolve
+        against its folder, errors name it), whether or not the file exists.
+    data : dict, optional
+        The scenario's mapping, instead of the file's (the Python API, `pmmw_cli.api`).
+    values : dict, optional
+        ``{key.path: value}`` overrides with Python values, applied after ``overrides``.
     overrides : list of str
         ``key.path=value`` items (``--set``), applied in order; values are YAML.
     cli : dict, optional
@@ -36,16 +42,23 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None) -> Scenario:
         Every problem, named by file and dotted key path.
     """
     path = Path(path)
-    if not path.exists():
-        raise UserError("scenario file not found", file=path)
-    if not path.is_file():
-        raise UserError("is not a file (expected a scenario YAML)", file=path)
-    raw = read_yaml(path, "scenario")
+    if data is not None:
+        import copy
+
+        raw = copy.deepcopy(data)
+    else:
+        if not path.exists():
+            raise UserError("scenario file not found", file=path)
+        if not path.is_file():
+            raise UserError("is not a file (expected a scenario YAML)", file=path)
+        raw = read_yaml(path, "scenario")
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):
         raise UserError(f"the top level must be a mapping of keys (name, frequency, imager, scene, ...), got a {type(raw).__name__}", file=path)
     raw = apply_overrides(raw, list(overrides))
+    if values:
+        raw = apply_overrides(raw, [], values=dict(values))
     for key, dotted in (("spp", "render.spp"), ("workers", "render.workers"), ("seed", "render.seed")):
         if cli and cli.get(key) is not None:
             raw = apply_overrides(raw, [], values={dotted: cli[key]})

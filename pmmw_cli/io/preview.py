@@ -149,12 +149,7 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
     low, high = display_range(np.concatenate([i.ravel() for i in imgs]), clip_fraction)
     if not (np.isfinite(low) and np.isfinite(high) and high > low):
         low, high = (low - 0.5, low + 0.5) if np.isfinite(low) else (0.0, 1.0)
-    h, w = imgs[0].shape
-    scale = max(1.0, MIN_DISPLAY_WIDTH / (w * len(imgs)))
-    dpi = 100
-    fig_w = max(4.0, (w * len(imgs) * scale) / dpi + 1.6)
-    fig_h = max(2.5, (h * scale) / dpi + 0.9)
-    fig, axes = plt.subplots(1, len(imgs), figsize=(fig_w, fig_h), dpi=dpi, squeeze=False)
+    fig, axes = _figure(plt, *imgs[0].shape, len(imgs))
     for ax, (label, _), img in zip(axes[0], panels, imgs):
         shown = ax.imshow(img, cmap="gray", vmin=low, vmax=high, interpolation="nearest")
         ax.set_xticks([])
@@ -169,3 +164,69 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
         fig.savefig(tmp, format="png")
     plt.close(fig)
     return low, high
+
+
+def _figure(plt, h: int, w: int, panels: int = 1, extra_w: float = 1.6):
+    """A figure for ``panels`` images of h x w pixels side by side, small ones scaled up."""
+    scale = max(1.0, MIN_DISPLAY_WIDTH / (w * panels))
+    dpi = 100
+    fig_w = max(4.0, (w * panels * scale) / dpi + extra_w)
+    fig_h = max(2.5, (h * scale) / dpi + 0.9)
+    return plt.subplots(1, panels, figsize=(fig_w, fig_h), dpi=dpi, squeeze=False)
+
+
+def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
+    """``aux.depth`` [m] as a picture: distance to the first hit on a colour scale in metres,
+    pixels whose every sample saw the sky in light blue."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    d = np.asarray(depth, dtype=np.float64)
+    fig, axes = _figure(plt, *d.shape)
+    ax = axes[0, 0]
+    cmap = matplotlib.colormaps["viridis"].with_extremes(bad="#bcd7ee")
+    finite = d[np.isfinite(d)]
+    lo, hi = (display_range(finite, 0.0) if finite.size else (0.0, 1.0))
+    shown = ax.imshow(np.where(np.isfinite(d), d, np.nan), cmap=cmap, vmin=lo, vmax=max(hi, lo + 1e-9),
+                      interpolation="nearest")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    bar = fig.colorbar(shown, ax=ax, fraction=0.05, pad=0.02)
+    bar.set_label("distance to the first hit [m] (light blue: sky)", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
+    fig.suptitle(title, fontsize=10)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
+
+
+def write_material_figure(path: str | os.PathLike, material, names, *, title: str) -> None:
+    """``aux.material`` as a picture: each material of the first hit in its own colour, with a
+    legend of the database ids (``names[i]`` for index i; -1 is the sky)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.patches as mpatches
+    import matplotlib.pyplot as plt
+
+    m = np.rint(np.asarray(material, dtype=np.float64)).astype(int)
+    present = [int(i) for i in np.unique(m)]
+    palette = matplotlib.colormaps["tab20"].colors
+    colours = {i: ((0.74, 0.84, 0.93) if i < 0 else palette[k % len(palette)]) for k, i in enumerate(present)}
+    rgb = np.zeros(m.shape + (3,))
+    for i, c in colours.items():
+        rgb[m == i] = c
+    fig, axes = _figure(plt, *m.shape, extra_w=2.6)
+    ax = axes[0, 0]
+    ax.imshow(rgb, interpolation="nearest")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    labels = [("sky" if i < 0 else (names[i] if 0 <= i < len(names) else f"medium {i}")) for i in present]
+    ax.legend(handles=[mpatches.Patch(color=colours[i], label=lab) for i, lab in zip(present, labels)],
+              loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=7, title="first hit", title_fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", bbox_inches="tight")
+    plt.close(fig)

@@ -3,7 +3,8 @@
 Expected report keys (any may be absent): ``name``, ``version``, ``frequency_hz``, ``output_exr``,
 ``channels`` {name: {min, mean, max, display_low, display_high}} [K], ``timing`` {step: seconds},
 ``rays``, ``pixels``, ``spp``, ``workers``, ``warnings`` [str], ``scenario`` (the resolved scenario
-as plain data). Other keys go into the JSON only.
+as plain data), ``atmosphere`` (`pipeline.atmosphere_summary`: dB/km at the ground, zenith opacity
+and sky, path loss to the target). Other keys go into the JSON only.
 """
 
 from __future__ import annotations
@@ -161,6 +162,17 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
                     f"{_num(cs[c]['K'])} ± {_pm(cs[c].get('stderr_K'))} | {_num(cs[c]['sigma'])}" for c in chans)
                     + f" | {_num(first.get('truncation_bound_K'), '.3g')} |")
             lines.append("")
+
+    atm = report.get("atmosphere") or {}
+    if atm:
+        rows = [("specific attenuation at the ground", "specific_attenuation_at_ground_dB_per_km", "dB/km", ".3g"),
+                ("zenith opacity", "zenith_opacity_Np", "Np", ".3g"),
+                ("zenith sky brightness", "zenith_sky_K", "K", ".1f"),
+                ("distance to the target (the view's centre on the scene)", "target_distance_m", "m", ".0f"),
+                ("path loss from the imager to the target", "path_loss_imager_to_target_dB", "dB", ".3g")]
+        lines += ["## Atmosphere", "", "| quantity | value |", "| --- | ---: |"]
+        lines += [f"| {label} | {_num(atm[key], fmt)} {unit} |" for label, key, unit, fmt in rows if key in atm]
+        lines.append("")
 
     trunc = report.get("truncation")
     if trunc:

@@ -94,4 +94,36 @@ def run(out_md: Path, cases=CASES, command: str = "pmmw bench --po") -> Path:
     for f, lit, rw, d, t_cur, t_dir, scaled, t_oct, err in rows:
         lines.append(f"| {f} ({lit}) | {rw:g} | {d} | {t_cur:.2f} | {t_dir:.2f}{'*' if scaled else ''} "
                      f"| {t_oct:.2f} | {t_dir / t_oct:.2f} | {err:.1e} |")
+    png = _plot(rows, out_md.with_suffix(".png"))
+    lines += ["", f"![time against directions]({png.name})"]
     return write_text_atomic(out_md, "\n".join(lines) + "\n")
+
+
+def _plot(rows, path: Path) -> Path:
+    """Time against directions, both methods, one colour per target."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pmmw_cli.io.atomic import atomic_path
+
+    fig, ax = plt.subplots(figsize=(6.8, 4.4), dpi=110)
+    targets = list(dict.fromkeys((f, rw) for f, _, rw, *_ in rows))
+    for i, (f, rw) in enumerate(targets):
+        sel = sorted((r for r in rows if (r[0], r[2]) == (f, rw)), key=lambda r: r[3])
+        d = [r[3] for r in sel]
+        label = f"{f:,} facets, {rw:g} wavelengths"
+        ax.loglog(d, [r[5] for r in sel], "--", color=f"C{i}", marker="o", label=f"direct: {label}")
+        ax.loglog(d, [r[7] for r in sel], "-", color=f"C{i}", marker="s", label=f"octree: {label}")
+    ax.axhline(60.0, color="k", lw=0.8, ls=":", label="1 minute")
+    ax.set_xlabel("observation directions")
+    ax.set_ylabel("far-field time [s] (2 cores)")
+    ax.set_title(f"Physical optics far field at {FREQUENCY / 1e9:g} GHz: direct sum against octree")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
+    return path

@@ -1,0 +1,15 @@
+"""pmmw: passive millimetre-wave imaging simulation, as a Python library.
+
+    import pmmw
+    scn = pmmw.Scenario.load("configs/landing_95ghz.yaml").set({"imager.noise": "2 K"})
+    ds = pmmw.render(scn, spp=4)          # xarray.Dataset of I, Q, U, V, Ex2, Ey2 [K]
+    ds["I"].sel(frequency=95e9).plot()
+
+See `pmmw_cli.api` (the functions' documentation) and the README's "Python API".
+"""
+
+from pmmw_cli import __version__
+from pmmw_cli.api import Scenario, po, render, sky, sweep, validate
+from pmmw_cli.errors import UserError, UserErrors
+
+__all__ = ["Scenario", "render", "validate", "sky", "po", "sweep", "UserError", "UserErrors", "__version__"]
