@@ -112,12 +112,23 @@ def materials_list(
 def materials_show(
     material_id: str = typer.Argument(..., metavar="ID"),
     frequency: Optional[str] = typer.Option(None, "--frequency", "-f", help="e.g. '95 GHz'."),
+    plot: Optional[Path] = typer.Option(None, "--plot", metavar="FILE.png",
+                                        help="Draw eps' and eps'' against frequency, 10-1000 GHz."),
+    compare: Optional[List[str]] = typer.Option(None, "--compare", metavar="ID",
+                                                help="With --plot: also mark this material's values (repeatable)."),
+    temperature: Optional[str] = typer.Option(None, "--temperature", help="With --plot: evaluate a model at this "
+                                                                          "temperature, e.g. '280 K'."),
 ):
     """Show one material: its permittivity table (or value at a frequency), coating, source."""
-    from pmmw_cli.scene.materials import MaterialDB, format_material
+    from pmmw_cli.scene.materials import MaterialDB, format_material, plot_materials
+    from pmmw_cli.units import parse_quantity
 
+    db = MaterialDB.load()
     f = _frequency(frequency) if frequency else None
-    typer.echo(format_material(MaterialDB.load(), material_id, f))
+    typer.echo(format_material(db, material_id, f))
+    if plot is not None:
+        t = parse_quantity(temperature, "temperature", file="--temperature") if temperature else None
+        typer.echo(f"wrote {plot_materials(db, [material_id, *(compare or [])], plot, temperature=t)}")
 
 
 @app.command()

@@ -107,7 +107,7 @@ def build_media(db: MaterialDB, material_ids, f: float, t_default: float = 290.0
         m = db.get(mid)
         code = KIND_CODES[m.kind]
         t_m = m.temperature if m.temperature is not None else t_default
-        e = m.eps_at(f) if m.eps else 1.0 + 0j
+        e = m.eps_at(f, t_m) if m.has_eps() else 1.0 + 0j
         ids.append(mid)
         kind.append(code)
         eps.append(complex(e))
@@ -119,7 +119,7 @@ def build_media(db: MaterialDB, material_ids, f: float, t_default: float = 290.0
         for layer in m.coating:
             lm = db.get(layer.material)
             t_l = layer.temperature if layer.temperature is not None else (lm.temperature if lm.temperature is not None else t_m)
-            layers.append((lm.eps_at(f), layer.thickness, t_l, layer.roughness))
+            layers.append((lm.eps_at(f, t_l), layer.thickness, t_l, layer.roughness))
         if code == THIN:
             layers.append((e, m.thickness or 0.0, t_m, None))
         rough_layers, films = split_coating(layers, k0)

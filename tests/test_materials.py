@@ -145,7 +145,9 @@ def test_shipped_database_is_consistent(db):
         assert m.id == mid and m.kind in KINDS and m.name and m.source and m.origin.endswith(".yaml")
         assert list(m.freqs) == sorted(m.freqs)
         assert all(e.imag >= 0 for e in m.eps)
-        assert (m.kind in ("metal", "blackbody")) == (len(m.eps) == 0)
+        assert (m.kind in ("metal", "blackbody")) == (not m.has_eps())
+        if m.model is not None:  # a model entry: lossy or lossless, never gain, across 35-300 GHz
+            assert not m.eps and all(m.eps_at(f * GHZ).imag >= 0 for f in (35, 95, 140, 220, 300))
 
 
 # --- interpolation -------------------------------------------------------------------------

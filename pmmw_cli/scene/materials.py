@@ -49,12 +49,14 @@ from pmmw_cli.errors import UserError, UserErrors, warn
 from pmmw_cli.io.yamlio import read_yaml
 from pmmw_cli.physics.roughness import make_model
 from pmmw_cli.scene.bump import make_bump
+from pmmw_cli.scene.dielectric import make_dielectric
 from pmmw_cli.units import parse_quantity
 
 KINDS = ("dielectric", "metal", "blackbody", "opaque", "thin")
 _NO_EPS_KINDS = ("metal", "blackbody")
 _ID_RE = re.compile(r"^[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
-_ENTRY_KEYS = ("name", "eps", "temperature", "kind", "source", "coating", "thickness", "roughness", "bump")
+_ENTRY_KEYS = ("name", "eps", "model", "temperature", "kind", "source", "coating", "thickness", "roughness",
+               "bump")
 _LAYER_KEYS = ("material", "thickness", "temperature", "roughness")
 _EPS_EXAMPLE = "[eps', eps''] or {35 GHz: [eps', eps''], 95 GHz: [eps', eps'']}"
 _LAYER_EXAMPLE = "{material: ID, thickness: '0.8 mm', temperature: '300 K'}"
@@ -114,6 +116,9 @@ class Material:
         Microfacet roughness of the surface (`pmmw_cli.physics.roughness`); None: smooth.
     bump : BumpMap or None
         Height map perturbing the surface's macro normal (`pmmw_cli.scene.bump`).
+    model : DielectricModel or None
+        A physical permittivity model (`pmmw_cli.scene.dielectric`) instead of a table: eps at
+        any frequency and at the material's temperature.
     source : str
         Where the numbers come from.
     origin : str
@@ -130,15 +135,22 @@ class Material:
     thickness: float | None = None
     roughness: object = None
     bump: object = None
+    model: object = None
     source: str = ""
     origin: str = ""
 
-    def eps_at(self, f: float) -> complex:
+    def has_eps(self) -> bool:
+        """Whether the entry gives a permittivity (a table, a constant or a model)."""
+        return bool(self.eps) or self.model is not None
+
+    def eps_at(self, f: float, temperature: float | None = None) -> complex:
         """Relative permittivity at frequency `f` [Hz].
 
         Linear interpolation of eps' and eps'' in frequency between tabulated points; outside
         the tabulated range the nearest tabulated value, with a warning (once per material)
         naming the material and its range. A frequency-independent entry returns its value.
+        A model entry (`model`) is evaluated at `temperature` [K] (default: the material's own,
+        else the model's reference temperature), with a warning outside the model's range.
 
         Raises
         ------
@@ -146,6 +158,13 @@ class Material:
             For ``metal`` and ``blackbody`` (no permittivity), or a frequency that is not
             finite and positive. Callers never ask in those cases.
         """
+        if self.model is not None:
+            t = temperature if temperature is not None else self.temperature
+            if not self.model.in_range(f, t):
+                t_used = self.model.spec.t_ref if t is None else t
+                warn(f"material {self.id!r}: {f / 1e9:g} GHz at {t_used:g} K is outside the {self.model.describe()}; "
+                     "the model is extrapolated")
+            return self.model.eps(f, t)
         value, clamped = self._lookup(f)
         if clamped:
             warn(
@@ -156,9 +175,11 @@ class Material:
 
     def _lookup(self, f: float) -> tuple[complex, bool]:
         """(eps at f, whether f lies outside the tabulated range) without warning."""
-        if self.kind in _NO_EPS_KINDS or not self.eps:
+        if self.kind in _NO_EPS_KINDS or not self.has_eps():
             raise ValueError(f"material {self.id!r} is of kind {self.kind!r} and has no permittivity")
         f = float(f)
+        if self.model is not None:
+            return self.model.eps(f, self.temperature), not self.model.in_range(f, self.temperature)
         if not (math.isfinite(f) and f > 0):
             raise ValueError(f"frequency must be finite and > 0 Hz, got {f!r}")
         if not self.freqs:
@@ -342,6 +363,7 @@ class _EntryIn(BaseModel):
     thickness: _Length = None
     roughness: Any = None  # checked by roughness.make_model
     bump: Any = None  # checked by bump.make_bump
+    model: Any = None  # checked by dielectric.make_dielectric
 
 
 def _suggest(word: str, choices: Iterable[str], n: int = 5) -> str:
@@ -414,6 +436,8 @@ def _parse_entry(mid, raw, file, base_key: str) -> tuple[dict | None, list[UserE
         fields["roughness"] = checked(make_model, m.roughness, _join(base_key, "roughness"))
     if "bump" in fields:
         fields["bump"] = checked(make_bump, m.bump, _join(base_key, "bump"))
+    if "model" in fields:
+        fields["model"] = checked(make_dielectric, m.model, _join(base_key, "model"))
     if "coating" in fields:
         fields["coating"] = tuple(
             CoatingLayer(layer.material, float(layer.thickness), layer.temperature,
@@ -436,9 +460,13 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
             errors.append(UserError(
                 f"a {kind} has no permittivity (Murakowski 2014 sec. 2.2.9): remove `eps`, or use kind dielectric or opaque",
                 origin, _join(base_key, "eps")))
-    elif eps is None:
-        errors.append(UserError(f"kind {kind} needs `eps`: {_EPS_EXAMPLE}", origin, base_key))
-    else:
+    elif eps is not None and fields.get("model") is not None:
+        errors.append(UserError("give `eps` (a table) or `model` (a physical model), not both", origin,
+                                _join(base_key, "model")))
+    elif eps is None and fields.get("model") is None:
+        errors.append(UserError(f"kind {kind} needs `eps` ({_EPS_EXAMPLE}) or `model` (e.g. {{name: water}})",
+                                origin, base_key))
+    elif eps is not None:
         freqs, values = eps
     if kind == "thin" and thickness is None:
         errors.append(UserError("kind thin needs `thickness` (the sheet's own thickness, e.g. 0.1 mm)", origin, base_key))
@@ -463,6 +491,7 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
         thickness=thickness,
         roughness=fields.get("roughness"),
         bump=fields.get("bump"),
+        model=fields.get("model"),
         source=fields.get("source") or "",
         origin=str(origin),
     )
@@ -742,6 +771,8 @@ def _eps_cell(mat: Material, f: float | None) -> tuple[str, bool]:
     if mat.kind == "blackbody":
         return "perfect absorber", False
     if f is None:
+        if mat.model is not None:
+            return f"model {mat.model.spec.name}", False
         if not mat.freqs:
             return f"{_fmt_eps(mat.eps[0], True)} (all f)", False
         return ", ".join(f"{f_ / 1e9:g} GHz: {_fmt_eps(e, True)}" for f_, e in zip(mat.freqs, mat.eps)), False
@@ -791,6 +822,12 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
         row("eps", "- (perfect conductor: r_s = -1, r_p = 1)")
     elif mat.kind == "blackbody":
         row("eps", "- (perfect absorber)")
+    elif mat.model is not None:
+        row("eps", mat.model.describe())
+        t = mat.temperature
+        for f_ in (35e9, 95e9, 140e9, 220e9, 300e9):
+            row("", f"{_fmt_f(f_):>8}  {_fmt_eps(mat.model.eps(f_, t))}"
+                    f"{'' if t is not None else f' (at {mat.model.spec.t_ref:g} K)'}")
     elif not mat.freqs:
         row("eps", f"{_fmt_eps(mat.eps[0])} at every frequency")
     else:
@@ -820,3 +857,65 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
     row("source", " ".join(mat.source.split()) or "-")
     row("file", mat.origin or "-")
     return "\n".join(lines)
+
+
+def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | None = None,
+                   f_range=(10e9, 1000e9)) -> Path:
+    """eps' and eps'' of materials against frequency [GHz] (log axes), 35-300 GHz shaded: a model
+    as a curve (at ``temperature`` [K], else the material's), a table as its points (circles)
+    joined by the interpolation, and the nearest-value extension outside the table dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pmmw_cli.io.atomic import atomic_path
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10.0, 4.2), dpi=110)
+    fs = np.geomspace(*f_range, 200)
+    for i, mid in enumerate(ids):
+        mat = db.get(mid, key="--compare" if i else "ID")
+        colour = f"C{i}"
+        if not mat.has_eps() or mat.kind in _NO_EPS_KINDS:
+            continue
+        if mat.model is not None:
+            t = temperature if temperature is not None else mat.temperature
+            e = np.array([mat.model.eps(f, t) for f in fs])
+            t_used = mat.model.spec.t_ref if t is None else t
+            label = f"{mid} (model {mat.model.spec.name}, {t_used:g} K)"
+            lo, hi = mat.model.spec.f_range
+            inside = (fs >= lo) & (fs <= hi)
+            for ax, part in ((a1, e.real), (a2, e.imag)):
+                ax.plot(fs[inside] / 1e9, part[inside], "-", color=colour, label=label)
+                ax.plot(fs[~inside] / 1e9, part[~inside], ":", color=colour)
+            continue
+        if not mat.freqs:
+            e0 = complex(mat.eps[0])
+            for ax, v in ((a1, e0.real), (a2, e0.imag)):
+                ax.axhline(v, color=colour, ls="--", label=f"{mid} (one value at every frequency)")
+            continue
+        e = np.array([mat._lookup(f)[0] for f in fs])
+        inside = (fs >= mat.freqs[0] * (1 - 1e-9)) & (fs <= mat.freqs[-1] * (1 + 1e-9))
+        tf = np.array(mat.freqs) / 1e9
+        te = np.array(mat.eps)
+        below, above = fs < mat.freqs[0], fs > mat.freqs[-1]
+        for ax, part, tp in ((a1, e.real, te.real), (a2, e.imag, te.imag)):
+            ax.plot(fs[inside] / 1e9, part[inside], "-", color=colour, lw=1)
+            for side in (below, above):
+                ax.plot(fs[side] / 1e9, part[side], "--", color=colour, lw=0.8)
+            ax.plot(tf, tp, "o", color=colour, label=f"{mid} (table; dashed: nearest value, warned)")
+    for ax, name in ((a1, "eps'"), (a2, "eps'' (loss)")):
+        ax.axvspan(35, 300, color="0.9", zorder=0)
+        ax.set_xscale("log")
+        ax.set_yscale("log" if ax is a2 else "linear")
+        ax.set_xlabel("frequency [GHz]")
+        ax.set_ylabel(name)
+        ax.grid(True, which="both", alpha=0.3)
+    a1.legend(fontsize=7)
+    fig.suptitle(f"Permittivity of {', '.join(ids)} (shaded: 35-300 GHz)", fontsize=10)
+    fig.tight_layout()
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
+    return path
