@@ -9,7 +9,7 @@ See `pmmw_cli.api` (the functions' documentation) and the README's "Python API".
 """
 
 from pmmw_cli import __version__
-from pmmw_cli.api import Scenario, po, render, sky, sweep, validate
+from pmmw_cli.api import Scenario, brdf, po, render, sky, sweep, validate
 from pmmw_cli.errors import UserError, UserErrors
 
-__all__ = ["Scenario", "render", "validate", "sky", "po", "sweep", "UserError", "UserErrors", "__version__"]
+__all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "UserError", "UserErrors", "__version__"]

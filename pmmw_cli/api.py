@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Scenario", "render", "validate", "sky", "po", "sweep"]
+__all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep"]
 
 
 @dataclass(frozen=True)
@@ -182,6 +182,34 @@ def _frequency(value) -> float:
     from pmmw_cli.units import parse_quantity
 
     return parse_quantity(value, "frequency", file="frequency") if isinstance(value, str) else float(value)
+
+
+def brdf(*, method: str = "mc", out=None, **options):
+    """The polarized BRDF of a rough (layered) surface, as ``pmmw brdf`` computes it; keyword
+    options as its flags (``n``, ``eps``, ``material``, ``stack``, ``frequency``, ``incidence``,
+    ``azimuth``, ``model``, ``ex``, ``alpha``, ``samples``, ``seed``, ...; docs/brdf.md).
+
+    Returns an `xarray.Dataset` per method in a dict ``{method: Dataset}``: ``mueller`` [1/sr]
+    over (zenith, azimuth, row, col) in 1-degree cells and ``stokes`` over (component: I, Q, U,
+    V; zenith; azimuth) [1/sr], with
+    the method's summary (total reflectance, ...) as attributes; files only with ``out``.
+    """
+    import xarray as xr
+
+    from pmmw_cli.brdf import grid_directions, run_brdf
+
+    res = run_brdf(method=method, out=out, **options)
+    theta, phi, _ = grid_directions()
+    zen, az = np.degrees(theta[:, 0]), np.degrees(phi[0, :])
+    out_ds = {}
+    for name, m in res.methods.items():
+        attrs = {k: v for k, v in m.summary.items() if isinstance(v, (int, float, str))}
+        out_ds[name] = xr.Dataset(
+            {"mueller": (("zenith", "azimuth", "row", "col"), m.mueller, {"units": "1/sr"}),
+             "stokes": (("component", "zenith", "azimuth"), m.stokes, {"units": "1/sr"})},
+            coords={"zenith": ("zenith", zen, {"units": "deg"}), "azimuth": ("azimuth", az, {"units": "deg"}),
+                    "component": ["I", "Q", "U", "V"]}, attrs=attrs)
+    return out_ds
 
 
 def po(mesh, *, frequency, material: str | None = None, eps: str | None = None, incidence="0,0",

@@ -74,3 +74,13 @@ def test_validate_sky_po_and_sweep_return_data(folder, tmp_path):
     assert rcs["rcs_theta"].sel(theta=0.0, phi=0.0).item() == pytest.approx(4 * np.pi * 0.01**2 / lam**2, rel=1e-6)
     table = pmmw.sweep(folder / "tiny.yaml", {"render.seed": [1, 2]}, out=tmp_path / "sw")
     assert list(table["status"]) == ["done", "done"] and "contrast block - ground I [sigma]" in table.columns
+
+
+def test_brdf_returns_mueller_maps():
+    """A smooth-ish copper-like surface by the analytic model: the Mueller maps on the 1-degree
+    grid, with the total reflectance of the summary."""
+    res = pmmw.brdf(method="analytic", eps="1+1e4j", frequency="95 GHz", incidence=30.0, model="beckmann", alpha=0.2,
+                    double=False)
+    ds = res["analytic"]
+    assert ds["mueller"].shape == (91, 360, 4, 4) and ds["stokes"].sel(component="I").shape == (91, 360)
+    assert 0.9 < ds.attrs["total_reflectance"] <= 1.0 + 1e-9
