@@ -7,7 +7,7 @@ BIN     = $(VENV)/bin
 SCENARIO ?= configs/landing_95ghz.yaml
 PYTEST_ARGS ?=
 
-.PHONY: render test install install-test clean
+.PHONY: render test test-full install install-test clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -29,6 +29,10 @@ render: install
 
 test: install-test
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
+
+# also the longest convergence renders of the shipped configs (about 2.5 minutes more)
+test-full: install-test
+	PMMW_TEST_FULL=1 $(BIN)/python -m pytest $(PYTEST_ARGS)
 
 clean:
 	rm -rf out .pytest_cache .hypothesis

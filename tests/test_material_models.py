@@ -111,3 +111,9 @@ def test_an_aluminium_plate_emits_what_hagen_rubens_says(db):
     excess = emiss * (300.0 - 40.0)
     assert img["Ex2"][0, 0] - 40.0 == pytest.approx(excess, rel=0.01)
     assert img["Ey2"][0, 0] - 40.0 == pytest.approx(excess, rel=0.01)
+
+
+def test_a_model_entry_hashes_the_same_in_every_process(db):
+    """The resume hash holds repr() of every material: a model's must not carry a memory address
+    (it did: --resume refused tiles of the same scenario rendered by another process)."""
+    assert "0x" not in "".join(repr(db.get(m)) for m in db.ids())

@@ -5,6 +5,7 @@ an overwritten input, a traceback) and checks the behaviour that replaced it."""
 import errno
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -31,7 +32,9 @@ def _run(*args):
 
 def _one_error_line(result, *words):
     """The CLI's contract for a refused input: one `error:` line naming what is wrong."""
-    lines = [line for line in result.output.splitlines() if line.strip() and not line.startswith("warning:")]
+    # progress lines (`name: tiles 1/6 ...`, printed as plain lines when stderr is not a terminal) aside
+    lines = [line for line in result.output.splitlines() if line.strip() and not line.startswith("warning:")
+             and not re.match(r"^\S+: tiles \d+/\d+ ", line)]
     assert len(lines) == 1 and lines[0].startswith("error:"), result.output
     assert "Traceback" not in result.output
     for w in words:

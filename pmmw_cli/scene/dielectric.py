@@ -35,7 +35,7 @@ class ModelSpec:
     """One registered model: its function eps(f [Hz], T [K], **params), ranges and source."""
 
     name: str
-    fn: object
+    fn: object = field(repr=False, compare=False)  # repr: the scenario hash holds repr(material), no address
     f_range: tuple[float, float]  # [Hz]
     t_range: tuple[float, float]  # [K]
     t_ref: float  # [K] temperature when the material gives none
