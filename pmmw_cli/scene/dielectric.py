@@ -50,15 +50,14 @@ class DielectricModel:
     spec: ModelSpec
     params: dict = field(default_factory=dict)
 
-    def eps(self, f: float, temperature: float | None) -> complex:
-        """eps' + i eps'' at f [Hz] and temperature [K] (the model's reference when None)."""
-        t = self.spec.t_ref if temperature is None else float(temperature)
-        return complex(self.spec.fn(float(f), t, **self.params))
+    def eps(self, f: float, temperature: float) -> complex:
+        """eps' + i eps'' at f [Hz] and temperature [K]."""
+        return complex(self.spec.fn(float(f), float(temperature), **self.params))
 
-    def in_range(self, f: float, temperature: float | None) -> bool:
-        t = self.spec.t_ref if temperature is None else float(temperature)
+    def in_range(self, f: float, temperature: float) -> bool:
+        """Whether f [Hz] and temperature [K] lie in the model's stated validity."""
         (f0, f1), (t0, t1) = self.spec.f_range, self.spec.t_range
-        return f0 <= f <= f1 and t0 <= t <= t1
+        return f0 <= f <= f1 and t0 <= temperature <= t1
 
     def describe(self) -> str:
         extra = ", ".join(f"{k} {v:g}" for k, v in self.params.items())

@@ -143,6 +143,11 @@ class Material:
         """Whether the entry gives a permittivity (a table, a constant or a model)."""
         return bool(self.eps) or self.model is not None
 
+    def model_temperature(self, temperature: float | None = None) -> float:
+        """The temperature [K] a model is evaluated at: the one asked, else the material's, else
+        the model's reference temperature."""
+        return next(t for t in (temperature, self.temperature, self.model.spec.t_ref) if t is not None)
+
     def eps_at(self, f: float, temperature: float | None = None) -> complex:
         """Relative permittivity at frequency `f` [Hz].
 
@@ -158,30 +163,28 @@ class Material:
             For ``metal`` and ``blackbody`` (no permittivity), or a frequency that is not
             finite and positive. Callers never ask in those cases.
         """
-        if self.model is not None:
-            t = temperature if temperature is not None else self.temperature
-            if not self.model.in_range(f, t):
-                t_used = self.model.spec.t_ref if t is None else t
-                warn(f"material {self.id!r}: {f / 1e9:g} GHz at {t_used:g} K is outside the {self.model.describe()}; "
-                     "the model is extrapolated")
-            return self.model.eps(f, t)
-        value, clamped = self._lookup(f)
-        if clamped:
+        value, outside = self._lookup(f, temperature)
+        if outside and self.model is not None:
+            warn(f"material {self.id!r}: {f / 1e9:g} GHz at {self.model_temperature(temperature):g} K is outside "
+                 f"the {self.model.describe()}; the model is extrapolated")
+        elif outside:
             warn(
                 f"material {self.id!r}: permittivity is tabulated only {_range_text(self.freqs)}; "
                 "the nearest tabulated value is used outside that range"
             )
         return value
 
-    def _lookup(self, f: float) -> tuple[complex, bool]:
-        """(eps at f, whether f lies outside the tabulated range) without warning."""
+    def _lookup(self, f: float, temperature: float | None = None) -> tuple[complex, bool]:
+        """(eps at f [Hz] and temperature [K] (a model's; default the material's), whether f or the
+        temperature lies outside the table's or the model's range) without warning."""
         if self.kind in _NO_EPS_KINDS or not self.has_eps():
             raise ValueError(f"material {self.id!r} is of kind {self.kind!r} and has no permittivity")
         f = float(f)
-        if self.model is not None:
-            return self.model.eps(f, self.temperature), not self.model.in_range(f, self.temperature)
         if not (math.isfinite(f) and f > 0):
             raise ValueError(f"frequency must be finite and > 0 Hz, got {f!r}")
+        if self.model is not None:
+            t = self.model_temperature(temperature)
+            return self.model.eps(f, t), not self.model.in_range(f, t)
         if not self.freqs:
             return complex(self.eps[0]), False
         fs = self.freqs
@@ -823,11 +826,9 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
     elif mat.kind == "blackbody":
         row("eps", "- (perfect absorber)")
     elif mat.model is not None:
-        row("eps", mat.model.describe())
-        t = mat.temperature
+        row("eps", f"{mat.model.describe()}; at {mat.model_temperature():g} K:")
         for f_ in (35e9, 95e9, 140e9, 220e9, 300e9):
-            row("", f"{_fmt_f(f_):>8}  {_fmt_eps(mat.model.eps(f_, t))}"
-                    f"{'' if t is not None else f' (at {mat.model.spec.t_ref:g} K)'}")
+            row("", f"{_fmt_f(f_):>8}  {_fmt_eps(mat._lookup(f_)[0])}")
     elif not mat.freqs:
         row("eps", f"{_fmt_eps(mat.eps[0])} at every frequency")
     else:
@@ -869,7 +870,7 @@ def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | No
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from pmmw_cli.io.atomic import atomic_path
+    from pmmw_cli.io.preview import save_figure
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10.0, 4.2), dpi=110)
     fs = np.geomspace(*f_range, 200)
@@ -879,9 +880,8 @@ def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | No
         if not mat.has_eps() or mat.kind in _NO_EPS_KINDS:
             continue
         if mat.model is not None:
-            t = temperature if temperature is not None else mat.temperature
-            e = np.array([mat.model.eps(f, t) for f in fs])
-            t_used = mat.model.spec.t_ref if t is None else t
+            e = np.array([mat._lookup(f, temperature)[0] for f in fs])
+            t_used = mat.model_temperature(temperature)
             label = f"{mid} (model {mat.model.spec.name}, {t_used:g} K)"
             lo, hi = mat.model.spec.f_range
             inside = (fs >= lo) & (fs <= hi)
@@ -914,8 +914,4 @@ def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | No
     a1.legend(fontsize=7)
     fig.suptitle(f"Permittivity of {', '.join(ids)} (shaded: 35-300 GHz)", fontsize=10)
     fig.tight_layout()
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
