@@ -131,10 +131,13 @@ def render(scenario, *, spp: int | None = None, workers: int | None = None, seed
     res = pipeline.resolve(s.path, (), cli={**cli}, **s._kw())
     scn = res.scenario
     n = scn.render.workers or pipeline.default_workers()
+    # the memory check of `pmmw render` (no disk check: nothing is written)
+    pipeline.check_memory(pipeline.estimate_resources(scn, int(res.geometry.faces.shape[0]), n), scn.source_file)
+    shash = pipeline.scenario_hash(scn, res.db)
     per_f, regions = [], {}
     for f in scn.frequencies:
         job, img, _ = pipeline.trace_frequency(res, f, workers=n, quiet=quiet)
-        images = pipeline.frequency_images(scn, f, job, img, pipeline.scenario_hash(scn, res.db))
+        images = pipeline.frequency_images(scn, f, job, img, shash)
         per_f.append((f, images["channels"], images["attrs"]))
         if scn.output.regions:
             regions[f"{f / 1e9:g} GHz"] = pipeline.region_stats(scn, job.camera, images["sensor"], img, images["kernel"])
@@ -150,8 +153,10 @@ def _dataset(per_f, regions):
     per_f = sorted(per_f, key=lambda t: t[0])
     names = list(per_f[0][1])
     h, w = per_f[0][1][names[0]].shape
+    from pmmw_cli.pipeline import channel_quantity
+
     data = {c: (("frequency", "y", "x"), np.stack([np.asarray(ch[c]) for _, ch, _ in per_f]),
-                {"units": "K" if not c.startswith("aux.") or "stderr" in c or "bound" in c else ""})
+                dict(zip(("units", "long_name"), channel_quantity(c))))
             for c in names}
     attrs = {k.removeprefix("pmmw:"): v for k, v in per_f[0][2].items() if k != "pmmw:frequency_hz"}
     if regions:
@@ -170,18 +175,13 @@ def sky(frequency, atmosphere: dict | None = None, elevations_deg=(5, 10, 15, 20
     import xarray as xr
 
     from pmmw_cli import skycmd
+    from pmmw_cli.config.schema import parse_frequency
 
-    f = _frequency(frequency)
+    f = parse_frequency(frequency, "frequency")
     atm = skycmd.load_atmosphere(None, None, [], None, None, data=atmosphere or {})
     rows = skycmd.sky_table(atm, f, list(elevations_deg))
     return xr.Dataset({"Tv": ("elevation", rows[:, 1], {"units": "K"}), "Th": ("elevation", rows[:, 2], {"units": "K"})},
                       coords={"elevation": ("elevation", rows[:, 0], {"units": "deg"})}, attrs={"frequency_hz": f})
-
-
-def _frequency(value) -> float:
-    from pmmw_cli.units import parse_quantity
-
-    return parse_quantity(value, "frequency", file="frequency") if isinstance(value, str) else float(value)
 
 
 def brdf(*, method: str = "mc", out=None, **options):
@@ -219,9 +219,11 @@ def po(mesh, *, frequency, material: str | None = None, eps: str | None = None, 
     the run's summary (backscatter, peak, lit facets) as attributes."""
     import xarray as xr
 
+    from pmmw_cli.config.schema import parse_frequency
     from pmmw_cli.po.command import run_po
 
-    res = run_po(mesh, material=material, eps=eps, frequency=_frequency(frequency), incidence=incidence, polarization=polarization,
+    res = run_po(mesh, material=material, eps=eps, frequency=parse_frequency(frequency, "frequency"),
+                 incidence=incidence, polarization=polarization,
                  theta=theta, phi=phi, monostatic=monostatic, bounces=bounces, method=method)
     thetas, phis = res.axes
     shape = (phis.size, thetas.size)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import platform
 import sys
 import time
@@ -24,6 +23,7 @@ import numpy as np
 from pmmw_cli import __version__
 from pmmw_cli.imaging.imager import blur, psf_kernel
 from pmmw_cli.io.atomic import save_npz_atomic, write_text_atomic
+from pmmw_cli.io.preview import save_figure
 from pmmw_cli.pipeline import aux_channels, make_job, resolve, scenario_hash
 from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
 
@@ -203,11 +203,7 @@ def _plot(rows, path: Path, name: str, noise: float):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    os.replace(tmp, path)
+    save_figure(fig, path)
 
 
 def scaling(levels=(2, 3, 4, 5, 6, 7, 8), resolution=(128, 128), spp=4, workers=None):

@@ -168,15 +168,9 @@ def sky(
 
 def _frequency(text: str, option: str = "--frequency") -> float:
     """A frequency option [Hz], within the range of pmmw's models."""
-    from pmmw_cli.config.schema import FREQUENCY_RANGE
-    from pmmw_cli.units import parse_quantity
+    from pmmw_cli.config.schema import parse_frequency
 
-    f = parse_quantity(text, "frequency", file=option)
-    lo, hi = FREQUENCY_RANGE
-    if not lo <= f <= hi:
-        raise UserError(f"{text!r} is outside the {lo / 1e9:g}-{hi / 1e9:g} GHz that pmmw's atmosphere and "
-                        "material models cover", option)
-    return f
+    return parse_frequency(text, option)
 
 
 def _count(text: str, option: str) -> int:
@@ -354,7 +348,7 @@ def po(
     plot: Optional[Path] = typer.Option(None, "--plot", metavar="FILE.png", help="Write a plot of RCS against theta."),
 ):
     """Radar cross section of a mesh by physical optics (bistatic pattern or monostatic cuts)."""
-    from pmmw_cli.po.command import format_rows, report, run_po, write_plot, write_run
+    from pmmw_cli.po.command import format_rows, run_po, write_plot, write_report, write_run
     from pmmw_cli.units import parse_quantity
 
     if mesh.suffix.lower() in (".yaml", ".yml"):
@@ -372,13 +366,9 @@ def po(
                  method=method, tube=None if tube is None else parse_quantity(tube, "length", file="--tube"))
     typer.echo(format_rows(res, fmt))
     if out is not None:
-        from pmmw_cli.io.atomic import write_text_atomic
-
-        runs = [("po", res)]
         written = write_run(res, out, "po", Path(mesh).name, *res.axes)
         observation = f"theta `{theta or '0:180:1'}`, phi `{phi or 'the incidence phi'}` (degrees)"
-        written.append(write_text_atomic(out / "report.md", report(Path(mesh).name, str(mesh), runs, observation,
-                                                                    True)))
+        written.append(write_report(out, Path(mesh).name, str(mesh), [("po", res)], observation, True))
         for path in written:
             typer.echo(f"wrote {path}", err=True)
     if plot is not None:
@@ -445,8 +435,9 @@ def view(
         raise UserError(f"no channel {channel!r}; the file has {', '.join(sorted(chans))}", exr, "--channel")
     f = attrs.get("pmmw:frequency_hz")
     title = f"{exr.stem}: {channel}" + (f", {float(f) / 1e9:g} GHz" if f is not None else "")
-    units = ("m", "depth") if channel == "aux.depth" else (("-", "material index") if channel == "aux.material"
-                                                          else ("K", "brightness temperature"))
+    from pmmw_cli.pipeline import channel_quantity
+
+    units = channel_quantity(channel)
     path = out or exr.with_name(f"{exr.stem}_{channel.replace('.', '_')}.png")
     lo, hi = write_figure(path, [(None, chans[channel])], title=title, units=units[0], quantity=units[1])
     typer.echo(f"wrote {path} (black {lo:.4g}, white {hi:.4g} {units[0]})")

@@ -15,6 +15,7 @@ from pathlib import Path
 from pmmw_cli.errors import UserError
 from pmmw_cli.io.yamlio import read_yaml
 
+EXECUTORS = ("local", "dask")  # where `pmmw render` and `pmmw sweep` run their work
 CLUSTER_KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster"}
 
 

@@ -79,3 +79,11 @@ def collected_warnings() -> list[str]:
 
 def clear_warnings() -> None:
     _WARNINGS.clear()
+
+
+def exception_text(e: BaseException, limit: int = 1500) -> str:
+    """The end of ``e``'s traceback as text, at most ``limit`` characters: what a Dask task returns
+    instead of raising (an exception object whose traceback does not pickle hangs the client)."""
+    import traceback
+
+    return "".join(traceback.format_exception(e)[-4:])[-limit:].strip()

@@ -26,11 +26,12 @@ from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint,
 from pmmw_cli.io.atomic import write_text_atomic
 from pmmw_cli.io.exr import write_exr
 from pmmw_cli.io.preview import write_depth_figure, write_figure, write_material_figure
+from pmmw_cli.io.progress import StatusLine
 from pmmw_cli.io.report import write_report
 from pmmw_cli.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
 from pmmw_cli.physics.jones import stokes_images
 from pmmw_cli.scene.camera import Camera
-from pmmw_cli.scene.geometry import asset_files, build_geometry
+from pmmw_cli.scene.geometry import asset_files, build_geometry, file_up_axis
 from pmmw_cli.scene.materials import MaterialDB
 from pmmw_cli.scene.sky import make_sky
 from pmmw_cli.trace.job import (
@@ -148,6 +149,22 @@ def aux_channels(img, aux) -> dict:
         channels["aux.truncated"] = img.truncated[..., 0].astype(np.float32)
         channels["aux.truncation_bound"] = img.truncated[..., 1].astype(np.float32)
     return channels
+
+
+_AUX_QUANTITIES = {
+    "aux.depth": ("m", "distance to the first hit"),
+    "aux.material": ("-", "material index of the first hit"),
+    "aux.samples": ("-", "samples per pixel"),
+    "aux.truncated": ("-", "fraction of power ended by max_depth"),
+    "aux.truncation_bound": ("K", "truncation bound"),
+}
+
+
+def channel_quantity(name: str) -> tuple[str, str]:
+    """(units, quantity) of an EXR channel of pmmw's (`aux_channels` and the Stokes channels)."""
+    if name.startswith("aux.stderr."):
+        return "K", "Monte Carlo standard error"
+    return _AUX_QUANTITIES.get(name, ("K", "brightness temperature"))
 
 
 def traced_settings(scn) -> dict:
@@ -272,29 +289,19 @@ def atmosphere_model(scn, f: float):
 
 
 class _Progress:
-    """Progress of a render: a line rewritten on a terminal; a plain line every `LOG_EVERY` s
-    when standard error is a file (cluster logs): tiles done/total, rays per second, time left."""
-
-    LOG_EVERY = 5.0  # [s]
+    """Progress of a render (`io.progress.StatusLine`): tiles done/total, rays per second, time left."""
 
     def __init__(self, label: str, quiet: bool):
         self.label = label
-        self.enabled = not quiet
-        self.tty = sys.stderr.isatty()
-        self.last = -1e9
+        self.line = None if quiet else StatusLine()
 
     def __call__(self, done, total, rays, elapsed):
-        if not self.enabled:
+        if self.line is None:
             return
         rate = rays / elapsed if elapsed > 0 else 0.0
         left = elapsed / done * (total - done) if done else 0.0
-        msg = f"{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left"
-        if self.tty:
-            sys.stderr.write("\r" + msg + " " + ("\n" if done == total else ""))
-            sys.stderr.flush()
-        elif elapsed - self.last >= self.LOG_EVERY or done == total:
-            print(msg, file=sys.stderr, flush=True)
-            self.last = elapsed
+        self.line.show(f"{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left", elapsed,
+                       done == total)
 
 
 def region_masks(regions, cam) -> dict:
@@ -464,7 +471,6 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
         tile_dir = None if tile_root is None else tile_root / f"{label}-{shash}"
         if tile_dir is not None:
             dirs.append(tile_dir)
-        if tile_dir is not None:
             _write_manifest(tile_dir, res.scenario, shash)
         counts: dict = {}
         if shard is not None:
@@ -578,7 +584,9 @@ def available_memory() -> float | None:
     return None
 
 
-def _check_memory(est: dict, source, force: bool) -> None:
+def check_memory(est: dict, source, force: bool = False) -> None:
+    """Refuse (`EnvironmentProblem`) a render whose estimate `est` exceeds the available memory,
+    unless ``force``."""
     free = available_memory()
     if free is not None and est["memory_bytes"] > free and not force:
         raise EnvironmentProblem(
@@ -673,8 +681,10 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     job-queue cluster of the file ``cluster``, the scheduler at ``scheduler``, or a local one of
     ``workers`` processes) and assembles the image here; the tiles are the same, so is the image.
     """
-    if executor not in ("local", "dask"):
-        raise UserError(f"expected local or dask, got {executor!r}", "--executor")
+    from pmmw_cli.distributed import EXECUTORS
+
+    if executor not in EXECUTORS:
+        raise UserError(f"expected one of {', '.join(EXECUTORS)}, got {executor!r}", "--executor")
     if executor == "local" and (scheduler or cluster):
         executor = "dask"
     if executor == "dask" and shard is not None:
@@ -693,7 +703,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     check_outputs(out_dir, [n for f in scn.frequencies for n in _all_outputs(names[f])],
                   inputs, key="output.dir" if out is None else "--out",
                   disk_bytes=est["disk_bytes"], force=force)
-    _check_memory(est, scn.source_file, force)
+    check_memory(est, scn.source_file, force)
     remove_stale_staging(out_dir)
     t_resolve = time.perf_counter() - t0
     written, renders, tile_dirs = [], [], []
@@ -836,10 +846,9 @@ def validate(path, overrides=(), data=None, values=None) -> dict:
     per_object = {}
     for i, (name, entry) in enumerate(zip(geom.objects, scn.scene)):
         v = geom.vertices[np.unique(geom.faces[geom.face_object == i])]
-        up = entry.up_axis or ("y" if Path(entry.mesh).suffix.lower() in (".gltf", ".glb") else "z")
         per_object[name] = {"bounds_m": [[round(float(x), 4) for x in v.min(axis=0)],
                                          [round(float(x), 4) for x in v.max(axis=0)]],
-                            "file_up_axis": up}
+                            "file_up_axis": file_up_axis(entry.mesh, entry.up_axis)}
     out = {"scenario": scenario_to_display(scn), "geometry": {
         "triangles": int(geom.faces.shape[0]), "objects": per_object,
         "watertight": dict(zip(geom.objects, map(bool, geom.object_watertight))),

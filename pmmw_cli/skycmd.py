@@ -7,7 +7,6 @@ atmosphere with the weathers of Murakowski 2014 chapter 3 at the same frequency.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ from pmmw_cli.io.yamlio import read_yaml
 from pydantic import ValidationError
 
 from pmmw_cli.errors import UserError
+from pmmw_cli.io.preview import save_figure
 from pmmw_cli.units import parse_quantity
 
 # Weathers of Murakowski 2014 ch. 3 (Tables 3.2, 3.5): fog 0-600 m, cloud 1-2 km, rain 0-3 km.
@@ -129,8 +129,4 @@ def write_plot(path: Path, atm, f: float):
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}.png")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(tmp)
-    plt.close(fig)
-    os.replace(tmp, path)
+    save_figure(fig, path)

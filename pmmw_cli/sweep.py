@@ -25,21 +25,20 @@ import csv
 import io
 import itertools
 import json
-import math
 import re
 import sys
 import time
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
-from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.distributed import EXECUTORS
+from pmmw_cli.errors import UserError, UserErrors, exception_text
 from pmmw_cli.io.atomic import write_text_atomic
+from pmmw_cli.io.progress import StatusLine
 from pmmw_cli.io.yamlio import load_yaml, read_yaml
 
-EXECUTORS = ("local", "dask")
 MAX_VARIANTS = 10_000
 _LINSPACE = re.compile(r"^\s*linspace\(\s*([^,]+?)\s*,\s*([^,]+?)\s*,\s*(\d+)\s*\)\s*$")
 _NUMBER_UNIT = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)$")
@@ -207,8 +206,7 @@ def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: i
         return {"status": f"failed: {e}", "exr": "", "wall_s": round(time.perf_counter() - t0, 3)}
     except Exception as e:  # noqa: BLE001 - a bug or the machine: recorded as text; an exception object
         # crossing Dask can hang its client when the traceback does not pickle
-        where = "".join(traceback.format_exception(e)[-3:])[-600:]
-        return {"status": f"failed: {type(e).__name__}: {str(e)[:300]} ({where.strip()})", "exr": "",
+        return {"status": f"failed: {type(e).__name__}: {str(e)[:300]} ({exception_text(e, 600)})", "exr": "",
                 "wall_s": round(time.perf_counter() - t0, 3)}
     write_text_atomic(out / "variant.json", json.dumps({"hash": shash, "overrides": overrides}, indent=1))
     rays = 0
@@ -282,13 +280,14 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
         client, cluster = connect(spec.scheduler, spec.cluster,
                                   min(spec.workers or default_workers(), len(plans)))
         try:
+            # render_variant returns its errors; a lost worker's task is rescheduled (`distributed`)
             futures = {client.submit(render_variant, str(spec.scenario), ov, str(vd), 1, sh, key=f"pmmw-{name}-{sh}",
-                                     retries=1, pure=False): name for name, ov, vd, sh in plans}
+                                     pure=False): name for name, ov, vd, sh in plans}
             for fut in as_completed(futures):
                 name = futures[fut]
                 try:
                     rows[name] = fut.result()
-                except Exception as e:  # a task that failed twice (a worker lost both times, a bug)
+                except Exception as e:  # KilledWorker: the workers running it were lost too often
                     rows[name] = {"status": f"failed: {type(e).__name__}: {str(e)[:200]}", "exr": "", "wall_s": 0.0}
                 log.update(rows)
         finally:
@@ -308,34 +307,27 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
 
 
 class _Log:
-    """Progress: a line rewritten on a terminal; a plain line every `LOG_EVERY` s into a log
-    file (cluster logs): variants done/total, rays per second of the variants rendered, time left."""
-
-    LOG_EVERY = 5.0  # [s]
+    """Progress of a sweep (`io.progress.StatusLine`): variants done/total, rays per second of the
+    variants rendered, time left."""
 
     def __init__(self, total: int, quiet: bool):
-        self.total, self.quiet = total, quiet
-        self.t0, self.last = time.perf_counter(), -1e9
+        self.total = total
+        self.line = None if quiet else StatusLine()
+        self.t0 = time.perf_counter()
         self.skipped = None
 
     def update(self, rows: dict):
         if self.skipped is None:  # the first call: variants already done (--resume) or refused
             self.skipped = len(rows)
-        if self.quiet:
+        if self.line is None:
             return
         done = len(rows)
         now = time.perf_counter() - self.t0
         rendered = done - self.skipped
         left = f"{now / rendered * (self.total - done):.0f} s" if rendered else "?"
         rays = sum(r.get("rays", 0) for r in rows.values())
-        msg = (f"sweep: {done}/{self.total} variants, {rays / max(now, 1e-9) / 1e6:.3g} Mrays/s, {now:.0f} s, "
-               f"{left} left")
-        if sys.stderr.isatty():
-            sys.stderr.write("\r" + msg + ("\n" if done == self.total else ""))
-            sys.stderr.flush()
-        elif now - self.last >= self.LOG_EVERY or done == self.total:
-            print(msg, file=sys.stderr, flush=True)
-            self.last = now
+        self.line.show(f"sweep: {done}/{self.total} variants, {rays / max(now, 1e-9) / 1e6:.3g} Mrays/s, {now:.0f} s, "
+                       f"{left} left", now, done == self.total)
 
 
 def _row(spec, out: Path, name: str, params: dict, result: dict) -> dict:

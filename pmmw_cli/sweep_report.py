@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from pmmw_cli.io.atomic import atomic_path, write_text_atomic
+from pmmw_cli.io.preview import save_figure
 from pmmw_cli.sweep import _NUMBER_UNIT, SweepSpec, _label, zipped_keys
 
 MAX_ANIMATIONS = 12  # GIFs per sweep (one per combination of the keys not side by side)
@@ -68,14 +69,11 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list[st
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    keys = [k for k, _ in spec.grid]
-    grid = dict(spec.grid)
     axes = _numeric_axes(spec)
     if not axes or not contrast_cols:
         return []
     x_key, x_of = axes[0]
-    zipped = zipped_keys(spec)
-    line_keys = [k for k in keys if k != x_key and not (x_key in zipped and k in zipped) and len(grid[k]) > 1]
+    line_keys = _other_keys(spec, [x_key])
     written = []
     for col in contrast_cols:
         fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
@@ -97,9 +95,7 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list[st
             ax.legend(fontsize=7, title=", ".join(line_keys), title_fontsize=7)
         fig.tight_layout()
         path = out / ("plot_" + re.sub(r"[^A-Za-z0-9]+", "_", col.split(" I ")[0].replace("contrast ", "")) + ".png")
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp)
-        plt.close(fig)
+        save_figure(fig, path)
         written.append(path)
     return written
 
@@ -131,9 +127,7 @@ def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None
         ax.set_title(f"{r['variant']}: " + ", ".join(f"{k.split('.')[-1]}={r[k]}" for k in keys), fontsize=7)
     fig.tight_layout()
     path = out / "contact_sheet.png"
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp)
-    plt.close(fig)
+    save_figure(fig, path)
     return path
 
 
@@ -172,11 +166,12 @@ def _axis_label(spec: SweepSpec, key: str) -> str:
     return f"{key} [{units.pop()}]" if len(units) == 1 and "" not in units else key
 
 
-def _varying(spec: SweepSpec) -> list[str]:
-    """Keys with more than one value, the keys side by side counted once (their first)."""
+def _other_keys(spec: SweepSpec, used) -> list[str]:
+    """The keys with more than one value that are neither in ``used`` nor side by side with one
+    of them (what the lines, panels or sequences of a figure are per)."""
     zipped = zipped_keys(spec)
-    keys = [k for k, v in spec.grid if len(v) > 1 and k not in zipped]
-    return ([zipped[0]] if zipped and len(dict(spec.grid)[zipped[0]]) > 1 else []) + keys
+    taken = set(used) | (set(zipped) if set(used) & set(zipped) else set())
+    return [k for k, v in spec.grid if len(v) > 1 and k not in taken]
 
 
 def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list[str]) -> list[Path]:
@@ -191,9 +186,7 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list
     import matplotlib.pyplot as plt
 
     (x_key, x_pos), (y_key, y_pos) = axes[:2]
-    zipped = zipped_keys(spec)
-    panel_keys = [k for k in _varying(spec) if k not in (x_key, y_key) and not (k in zipped and x_key in zipped)
-                  and not (k in zipped and y_key in zipped)]
+    panel_keys = _other_keys(spec, [x_key, y_key])
     xs, ys = sorted(set(x_pos.values())), sorted(set(y_pos.values()))
     written = []
     for col in contrast_cols:
@@ -228,9 +221,7 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list
         pair = col.split(" I ")[0].replace("contrast ", "")
         fig.suptitle(f"{spec.scenario.stem}: {pair} (I)", fontsize=9)
         path = out / ("heatmap_" + re.sub(r"[^A-Za-z0-9]+", "_", pair) + ".png")
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp)
-        plt.close(fig)
+        save_figure(fig, path)
         written.append(path)
     return written
 
@@ -249,9 +240,9 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
     from PIL import Image
 
     from pmmw_cli.io.exr import read_exr
-    from pmmw_cli.io.preview import display_range
+    from pmmw_cli.io.preview import figure_for, usable_range
 
-    others = [k for k, v in spec.grid if k not in zipped and len(v) > 1]
+    others = _other_keys(spec, zipped)
     groups: dict[str, list[dict]] = {}
     for r in table:
         if r["status"] == "done" and r.get("exr"):
@@ -261,12 +252,10 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
         if len(rows) < 2:
             continue
         imgs = [np.asarray(read_exr(out / r["exr"])[0]["I"], float) for r in rows]
-        low, high = display_range(np.concatenate([i.ravel() for i in imgs]))
-        if not (np.isfinite(low) and np.isfinite(high) and high > low):
-            low, high = low - 0.5, low + 0.5
+        low, high = usable_range(np.concatenate([i.ravel() for i in imgs]))
         h, w = imgs[0].shape
-        scale = max(1.0, 480.0 / w)
-        fig, ax = plt.subplots(figsize=(w * scale / 100 + 1.4, h * scale / 100 + 0.8), dpi=100)
+        fig, axes = figure_for(plt, h, w)
+        ax = axes[0, 0]
         shown = ax.imshow(imgs[0], cmap="gray", vmin=low, vmax=high, interpolation="nearest")
         ax.set_xticks([])
         ax.set_yticks([])

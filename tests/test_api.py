@@ -1,7 +1,6 @@
 """The Python API (`import pmmw`): scenarios from YAML or dicts, overrides, renders to arrays that
 equal the files the command writes, and the other commands' data."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -3,7 +3,6 @@ only when the imager changes something, small images scaled up; `pmmw view` for 
 
 import numpy as np
 import OpenImageIO as oiio
-import pytest
 from typer.testing import CliRunner
 
 from pmmw_cli.cli import app

@@ -20,7 +20,7 @@ from pmmw_cli import pipeline
 from pmmw_cli.cli import app
 from pmmw_cli.config import load_scenario
 from pmmw_cli.errors import UserError
-from pmmw_cli.io.exr import read_exr, write_exr
+from pmmw_cli.io.exr import write_exr
 from pmmw_cli.io.yamlio import MAX_NODES, load_yaml
 
 runner = CliRunner()

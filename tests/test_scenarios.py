@@ -2,7 +2,6 @@
 phenomenology of Murakowski 2014 sec. 2.3.2 and chapter 3 (checked on the ideal image, with the
 thesis's materials); their weathers reproduce the thesis's attenuations and path losses."""
 
-import re
 from pathlib import Path
 
 import numpy as np

@@ -123,7 +123,7 @@ def test_a_failed_variant_is_recorded_and_the_others_go_on(tmp_path):
 
 
 def test_sweep_file_with_a_zipped_flight_path(tmp_path):
-    scn = _scene(tmp_path)
+    _scene(tmp_path)  # the meshes and tiny.yaml the sweep file names
     sweep = tmp_path / "trade.yaml"
     sweep.write_text(f"""
 scenario: tiny.yaml

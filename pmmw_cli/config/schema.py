@@ -117,6 +117,24 @@ MAX_SEED = (1 << 63) - 1
 FREQUENCY_RANGE = (F_MIN, F_MAX)  # [Hz] the ITU-R atmosphere models' range
 
 
+def frequency_problem(f: float) -> str | None:
+    """Why a frequency [Hz] is refused (outside `FREQUENCY_RANGE`), or None."""
+    lo, hi = FREQUENCY_RANGE
+    if lo <= f <= hi:
+        return None
+    return f"{f / 1e9:g} GHz is outside the {lo / 1e9:g}-{hi / 1e9:g} GHz that pmmw's atmosphere and material models cover"
+
+
+def parse_frequency(value, option: str = "--frequency") -> float:
+    """A frequency given on the command line or to the Python API ('95 GHz', or a number [Hz]),
+    checked against `FREQUENCY_RANGE`; errors name ``option``."""
+    f = parse_quantity(value, "frequency", file=option) if isinstance(value, str) else float(value)
+    why = frequency_problem(f)
+    if why:
+        raise UserError(why, option)
+    return f
+
+
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True)
 
@@ -531,11 +549,9 @@ class Scenario(_Model):
     def _freqs(cls, out):
         if not out:
             raise ConfigValueError("give at least one frequency")
-        lo, hi = FREQUENCY_RANGE
-        bad = [f for f in out if not lo <= f <= hi]
-        if bad:
-            raise ConfigValueError(f"{bad[0] / 1e9:g} GHz is outside the {lo / 1e9:g}-{hi / 1e9:g} GHz that pmmw's "
-                                   "atmosphere and material models cover")
+        why = next(filter(None, map(frequency_problem, out)), None)
+        if why:
+            raise ConfigValueError(why)
         if len(set(out)) != len(out):
             raise ConfigValueError("a frequency is listed twice")
         return out

@@ -7,6 +7,7 @@ black and white, and the range between is mapped linearly onto 256 grey levels.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
@@ -150,10 +151,8 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
     import matplotlib.pyplot as plt
 
     imgs = [np.asarray(img, dtype=np.float64) for _, img in panels]
-    low, high = display_range(np.concatenate([i.ravel() for i in imgs]), clip_fraction)
-    if not (np.isfinite(low) and np.isfinite(high) and high > low):
-        low, high = (low - 0.5, low + 0.5) if np.isfinite(low) else (0.0, 1.0)
-    fig, axes = _figure(plt, *imgs[0].shape, len(imgs))
+    low, high = usable_range(np.concatenate([i.ravel() for i in imgs]), clip_fraction)
+    fig, axes = figure_for(plt, *imgs[0].shape, len(imgs))
     for ax, (label, _), img in zip(axes[0], panels, imgs):
         shown = ax.imshow(img, cmap="gray", vmin=low, vmax=high, interpolation="nearest")
         ax.set_xticks([])
@@ -164,13 +163,30 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
     bar.set_label(f"{quantity} [{units}]", fontsize=8)
     bar.ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, **_PNG)
-    plt.close(fig)
+    save_figure(fig, path)
     return low, high
 
 
-def _figure(plt, h: int, w: int, panels: int = 1, extra_w: float = 1.6):
+def save_figure(fig, path: str | os.PathLike, **savefig) -> Path:
+    """Write a matplotlib figure as PNG (`_PNG`) to ``path`` atomically and close it."""
+    import matplotlib.pyplot as plt
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, **{**_PNG, **savefig})
+    plt.close(fig)
+    return Path(path)
+
+
+def usable_range(values, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+    """`display_range`, widened to 1 K around a constant image (and 0-1 K with no finite pixel),
+    so that a colour scale can always be drawn."""
+    low, high = display_range(values, clip_fraction)
+    if not (np.isfinite(low) and np.isfinite(high) and high > low):
+        low, high = (low - 0.5, low + 0.5) if np.isfinite(low) else (0.0, 1.0)
+    return low, high
+
+
+def figure_for(plt, h: int, w: int, panels: int = 1, extra_w: float = 1.6):
     """A figure for ``panels`` images of h x w pixels side by side, small ones scaled up."""
     scale = max(1.0, MIN_DISPLAY_WIDTH / (w * panels))
     dpi = 100
@@ -188,7 +204,7 @@ def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
     import matplotlib.pyplot as plt
 
     d = np.asarray(depth, dtype=np.float64)
-    fig, axes = _figure(plt, *d.shape)
+    fig, axes = figure_for(plt, *d.shape)
     ax = axes[0, 0]
     cmap = matplotlib.colormaps["viridis"].with_extremes(bad="#bcd7ee")
     finite = d[np.isfinite(d)]
@@ -201,9 +217,7 @@ def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
     bar.set_label("distance to the first hit [m] (light blue: sky)", fontsize=8)
     bar.ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, **_PNG)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def write_material_figure(path: str | os.PathLike, material, names, *, title: str) -> None:
@@ -222,7 +236,7 @@ def write_material_figure(path: str | os.PathLike, material, names, *, title: st
     rgb = np.zeros(m.shape + (3,))
     for i, c in colours.items():
         rgb[m == i] = c
-    fig, axes = _figure(plt, *m.shape, extra_w=2.6)
+    fig, axes = figure_for(plt, *m.shape, extra_w=2.6)
     ax = axes[0, 0]
     ax.imshow(rgb, interpolation="nearest")
     ax.set_xticks([])
@@ -231,6 +245,4 @@ def write_material_figure(path: str | os.PathLike, material, names, *, title: st
     ax.legend(handles=[mpatches.Patch(color=colours[i], label=lab) for i, lab in zip(present, labels)],
               loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=7, title="first hit", title_fontsize=8)
     fig.suptitle(title, fontsize=10)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, bbox_inches="tight", **_PNG)
-    plt.close(fig)
+    save_figure(fig, path, bbox_inches="tight")

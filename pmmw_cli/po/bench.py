@@ -106,7 +106,7 @@ def _plot(rows, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from pmmw_cli.io.atomic import atomic_path
+    from pmmw_cli.io.preview import save_figure
 
     fig, ax = plt.subplots(figsize=(6.8, 4.4), dpi=110)
     targets = list(dict.fromkeys((f, rw) for f, _, rw, *_ in rows))
@@ -123,7 +123,5 @@ def _plot(rows, path: Path) -> Path:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=6)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
     return path

@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from pmmw_cli.errors import UserError
-from pmmw_cli.io.atomic import atomic_path, write_text_atomic
+from pmmw_cli.io.atomic import write_text_atomic
+from pmmw_cli.io.preview import save_figure
 from pmmw_cli.po import solver
 
 CSV_HEADER = "theta_deg,phi_deg,rcs_theta_m2,rcs_phi_m2"
@@ -269,9 +270,7 @@ def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp)
-    plt.close(fig)
+    save_figure(fig, path)
     return path
 
 
@@ -292,8 +291,8 @@ def write_run(res: Result, out: Path, stem: str, name: str, thetas, phis, plot: 
     return written
 
 
-def report(name: str, source: str, runs, observation: str, plots: bool) -> str:
-    """``report.md`` of runs [(stem, Result)]: settings, then each run's backscatter and peak."""
+def write_report(out: Path, name: str, source: str, runs, observation: str, plots: bool) -> Path:
+    """``out/report.md`` of runs [(stem, Result)]: settings, then each run's backscatter and peak."""
     s0 = runs[0][1].summary
     mode = "monostatic" if s0["monostatic"] else (
         f"incidence theta {s0['incidence_deg'][0]:g} deg, phi {s0['incidence_deg'][1]:g} deg")
@@ -313,4 +312,4 @@ def report(name: str, source: str, runs, observation: str, plots: bool) -> str:
     if plots:
         lines.append("")
         lines += [f"![{stem}]({stem}.png)" for stem, _ in runs]
-    return "\n".join(lines) + "\n"
+    return write_text_atomic(out / "report.md", "\n".join(lines) + "\n")

@@ -21,16 +21,14 @@ whole sphere, and ``report.md`` with every run's backscatter and peak.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from pmmw_cli.config.schema import FREQUENCY_RANGE, Quantity, SceneEntry, _Model
+from pmmw_cli.config.schema import Quantity, SceneEntry, _Model, frequency_problem
 from pmmw_cli.errors import UserError, UserErrors
-from pmmw_cli.io.atomic import write_text_atomic
 from pmmw_cli.io.yamlio import read_yaml
 from pmmw_cli.po import command, solver
 
@@ -68,10 +66,11 @@ class PoJob(_Model):
     @field_validator("frequencies")
     @classmethod
     def _freqs(cls, out):
-        lo, hi = FREQUENCY_RANGE
-        bad = [f for f in out if not lo <= f <= hi]
-        if not out or bad:
-            raise ValueError(f"give frequencies within {lo / 1e9:g}-{hi / 1e9:g} GHz")
+        if not out:
+            raise ValueError("give at least one frequency")
+        why = next(filter(None, map(frequency_problem, out)), None)
+        if why:
+            raise ValueError(why)
         return out
 
     @model_validator(mode="after")
@@ -150,7 +149,6 @@ def run_job(path: Path, out: Path | None = None) -> list[Path]:
             written += command.write_run(res, out_dir, stem, job.name, thetas, phis, job.output.plot)
             runs.append((stem, res))
     observation = f"theta `{job.observation.theta}`, phi `{job.observation.phi}` (degrees)"
-    written.append(write_text_atomic(out_dir / "report.md",
-                                     command.report(job.name, str(job.source_file), runs, observation,
-                                                    job.output.plot)))
+    written.append(command.write_report(out_dir, job.name, str(job.source_file), runs, observation,
+                                        job.output.plot))
     return written

@@ -141,7 +141,7 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
             why = f"an index past the end of its data, a truncated file? {why}"
         raise UserError(f"not a valid {_FORMAT_NAMES[fmt]} file ({why})", file=path) from e
 
-    rotate = Y_UP_TO_Z_UP if (up_axis or ("y" if fmt == "gltf" else "z")) == "y" else None
+    rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis) == "y" else None
     parts = []
     n_not_finite = 0
     for node in sorted(scene.graph.nodes_geometry):
@@ -231,6 +231,12 @@ def asset_files(mesh_path) -> list[Path]:
     elif fmt == "obj":
         files += _obj_external_files(path)
     return list(dict.fromkeys(files))
+
+
+def file_up_axis(path, up_axis: str | None = None) -> str:
+    """The up axis a mesh file is read with: the entry's ``up_axis``, else glTF's Y (its spec)
+    and Z for every other format."""
+    return up_axis or ("y" if _mesh_format(Path(path)) == "gltf" else "z")
 
 
 def _mesh_format(path: Path) -> str:

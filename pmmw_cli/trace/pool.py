@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from pmmw_cli import interrupt
-from pmmw_cli.errors import EnvironmentProblem
+from pmmw_cli.errors import EnvironmentProblem, exception_text
 from pmmw_cli.io.atomic import save_npz_atomic
 from pmmw_cli.trace.integrator import Integrator, TileResult
 from pmmw_cli.trace.intersect import make_intersector
@@ -324,7 +324,7 @@ def _dask_tile(job: TraceJob, kind: str, token: str, tile) -> TileResult | str:
             integ = _DASK_INTEGRATORS[token] = Integrator(job, make_intersector(job.vertices, job.faces, kind=kind))
         return integ.render_tile(tile)
     except Exception as e:  # noqa: BLE001 - reported by the parent, with the tile
-        return "".join(traceback.format_exception(e)[-4:])[-1500:]
+        return exception_text(e)
 
 
 def _render_on_dask(client, job: TraceJob, kind: str, todo: list, collect):
