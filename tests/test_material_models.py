@@ -1,6 +1,6 @@
 """Permittivity models of material entries (`model:`), each against a reference that shares no
 code with it: ITU-R P.840's liquid-water attenuation as the `itur` package computes it, the
-Hagen-Rubens emissivity of a metal, and the thesis's tabulated ice; plus the entry rules, the
+Hagen-Rubens emissivity of a metal, the SMRT package's ice and the thesis's tabulated ice; plus the entry rules, the
 out-of-range warning and `pmmw materials show --plot`."""
 
 import math
@@ -49,6 +49,19 @@ def test_conductor_emissivity_is_hagen_rubens(db, mid, sigma, f_ghz):
     emissivity = 1.0 - float(fr.Rs)
     assert emissivity == pytest.approx(math.sqrt(8.0 * EPS0 * 2.0 * math.pi * f / sigma), rel=0.01)
     assert float(fr.Rp) == pytest.approx(float(fr.Rs), rel=1e-12)  # normal incidence: no polarization
+
+
+@pytest.mark.parametrize("f_ghz", [1, 35, 95, 140, 220, 300, 1000])
+@pytest.mark.parametrize("t_k", [200.0, 253.15, 263.15, 273.15])
+def test_ice_model_against_smrt(db, f_ghz, t_k):
+    """Maetzler 2006 as the SMRT snow radiative-transfer package implements it
+    (`smrt.permittivity.ice.ice_permittivity_maetzler06`, its own code): 1e-12 relative (the same
+    published formula in double precision)."""
+    from smrt.permittivity.ice import ice_permittivity_maetzler06
+
+    theirs = complex(ice_permittivity_maetzler06(f_ghz * 1e9, t_k))
+    ours = db.get("ice_matzler").eps_at(f_ghz * 1e9, t_k)
+    assert ours.real == pytest.approx(theirs.real, rel=1e-12) and ours.imag == pytest.approx(theirs.imag, rel=1e-12)
 
 
 def test_ice_model_against_the_thesis_table(db):
