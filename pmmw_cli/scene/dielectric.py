@@ -18,6 +18,14 @@ Registry (`MODELS`, chosen by ``model.name``):
   e = sqrt(8 eps0 omega / sigma) at normal incidence) instead of a perfect mirror's zero. Valid
   while omega is far below the metal's collision frequency (~1e13 /s): to 1000 GHz. Use it with
   ``kind: opaque`` (reflection, the rest absorbed within a skin depth).
+* ``skin_dry``, ``skin_wet``: human skin, the four-term Cole-Cole model of Gabriel, Lau and
+  Gabriel (1996) with the 'skin (dry)' and 'skin (wet)' parameters of their Table 1
+  (`GABRIEL_1996`): eps = eps_inf + sum_n d_eps_n / (1 + (i omega tau_n)^(1 - alpha_n)) +
+  sigma_i / (i eps0 omega), in their exp(+i w t) form, conjugated here. Stated for 10 Hz-100 GHz;
+  above 20 GHz the fit rests on survey data (their own measurements stop at 20 GHz), and Sasaki,
+  Wake and Watanabe (2014) measured epidermis and dermis above it at 20-100 GHz. The tissue is at
+  body temperature (37 C): eps does not follow the material's temperature, which only sets its
+  emission; 298-313 K (living skin) is the stated range.
 
 Time dependence exp(-i w t) as everywhere in pmmw: eps'' >= 0 is loss.
 """
@@ -62,8 +70,9 @@ class DielectricModel:
     def describe(self) -> str:
         extra = ", ".join(f"{k} {v:g}" for k, v in self.params.items())
         (f0, f1), (t0, t1) = self.spec.f_range, self.spec.t_range
+        f_text = f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e9 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
         return (f"model {self.spec.name}{' (' + extra + ')' if extra else ''}: {self.spec.source}; valid "
-                f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz, {t0:g}-{t1:g} K")
+                f"{f_text}, {t0:g}-{t1:g} K")
 
 
 def _water(f, T):
@@ -86,6 +95,34 @@ def _conductor(f, T, conductivity):
     return complex(1.0, conductivity / (EPS0 * 2.0 * math.pi * f))
 
 
+# Gabriel, Lau and Gabriel 1996, Table 1 (digits as the IFAC-CNR tabulation of it gives them):
+# eps_inf, then (d_eps [1], tau [s], alpha [1]) of the four dispersions, then sigma_i [S/m].
+GABRIEL_1996 = {
+    "skin_dry": (4.0, ((32.0, 7.234e-12, 0.0), (1100.0, 32.481e-9, 0.20), (0.0, 159.155e-6, 0.20),
+                       (0.0, 15.915e-3, 0.20)), 0.0002),
+    "skin_wet": (4.0, ((39.0, 7.958e-12, 0.10), (280.0, 79.577e-9, 0.0), (3.0e4, 1.592e-6, 0.16),
+                       (3.0e4, 1.592e-3, 0.20)), 0.0004),
+}
+
+
+def _cole_cole(f, eps_inf, terms, sigma_i):
+    """Gabriel et al. 1996's sum of Cole-Cole dispersions plus ionic conduction, written for
+    exp(+i w t) (eps' - i eps''), returned conjugated to pmmw's exp(-i w t) (eps' + i eps'')."""
+    omega = 2.0 * math.pi * f
+    eps = complex(eps_inf) + sigma_i / (1j * omega * EPS0)
+    for d_eps, tau, alpha in terms:
+        eps += d_eps / (1.0 + (1j * omega * tau) ** (1.0 - alpha))
+    return eps.conjugate()
+
+
+def _skin_dry(f, T):
+    return _cole_cole(f, *GABRIEL_1996["skin_dry"])
+
+
+def _skin_wet(f, T):
+    return _cole_cole(f, *GABRIEL_1996["skin_wet"])
+
+
 MODELS = {
     "water": ModelSpec("water", _water, (1e9, 1e12), (263.0, 373.0), 293.15, (),
                        "Liebe, Hufford and Manabe 1991 double-Debye model as ITU-R P.840-8 eqs. 4-10"),
@@ -93,6 +130,10 @@ MODELS = {
                      "Maetzler 2006 (Hufford 1991, Mishima et al. 1983)"),
     "conductor": ModelSpec("conductor", _conductor, (1e6, 1e12), (0.0, 1e4), 293.15, ("conductivity",),
                            "eps = 1 + i sigma / (eps0 omega) (Drude metal well below its collision frequency)"),
+    "skin_dry": ModelSpec("skin_dry", _skin_dry, (10.0, 100e9), (298.15, 313.15), 310.15, (),
+                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (dry)', at 37 C"),
+    "skin_wet": ModelSpec("skin_wet", _skin_wet, (10.0, 100e9), (298.15, 313.15), 310.15, (),
+                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (wet)', at 37 C"),
 }
 
 

@@ -828,7 +828,8 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
     elif mat.model is not None:
         row("eps", f"{mat.model.describe()}; at {mat.model_temperature():g} K:")
         for f_ in (35e9, 95e9, 140e9, 220e9, 300e9):
-            row("", f"{_fmt_f(f_):>8}  {_fmt_eps(mat._lookup(f_)[0])}")
+            value, outside = mat._lookup(f_)
+            row("", f"{_fmt_f(f_):>8}  {_fmt_eps(value)}{'  (outside the range: extrapolated)' if outside else ''}")
     elif not mat.freqs:
         row("eps", f"{_fmt_eps(mat.eps[0])} at every frequency")
     else:
