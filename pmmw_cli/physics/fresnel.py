@@ -30,6 +30,10 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import cmath
+import math
+
+import numba
 import numpy as np
 
 __all__ = ["Fresnel", "normal_component", "interface"]
@@ -108,21 +112,57 @@ def normal_component(eps, kpar2, branch="decaying"):
     return _root(eps - kpar2, np.abs(eps) + np.abs(kpar2), branch)
 
 
-def _root(z, scale, branch):
-    """``sqrt(z)`` on ``branch`` (see `normal_component`); ``scale`` bounds |terms| of z [-]."""
+# The per-ray arithmetic below is compiled (numba, cached on disk; ``NUMBA_DISABLE_JIT=1`` runs it as
+# Python): scalar functions, and loops over flat arrays that the vectorized helpers call.
+_jit = numba.njit(cache=True, error_model="numpy")
+
+
+@_jit
+def _root1(z, scale, decaying):
+    """``sqrt(z)`` of one value on a branch (see `normal_component`); ``scale`` bounds |terms| of z."""
+    zi = z.imag
     # A slightly negative (or -0.0) Im z from rounding an exactly real argument would put z just
     # below the branch cut: under TIR the principal root would then be -i sqrt (growing), and
     # the "decaying" flip would make a propagating wave run backwards. Snap it to +0.0.
-    noise = np.signbit(z.imag) & (z.imag >= -_ROUNDING * scale)
-    zz = np.empty_like(z)
-    zz.real = z.real
-    zz.imag = np.where(noise, 0.0, z.imag)
-    q = np.sqrt(zz)  # principal root: Re q >= 0, Im q has the sign of Im zz, +i sqrt on the cut
-    if branch == "decaying":
-        # Im zz < 0 remains only under a lossy incident medium (complex kpar2): take Im q >= 0
+    if math.copysign(1.0, zi) < 0.0 and zi >= -_ROUNDING * scale:
+        zi = 0.0
+    q = cmath.sqrt(complex(z.real, zi))  # principal root: Re q >= 0, +i sqrt on the cut
+    if decaying and q.imag < 0.0:
+        # Im z < 0 remains only under a lossy incident medium (complex kpar2): take Im q >= 0
         # (Re q may then be negative).
-        q = np.where(q.imag < 0.0, -q, q)
-    return q + 0.0  # turns -0.0 parts into +0.0
+        q = -q
+    return complex(q.real + 0.0, q.imag + 0.0)  # no negative zeros
+
+
+@_jit
+def _root_loop(z, scale, decaying, out):
+    for i in range(z.shape[0]):
+        out[i] = _root1(z[i], scale[i], decaying)
+
+
+def _root(z, scale, branch):
+    """``sqrt(z)`` on ``branch`` (see `normal_component`); ``scale`` bounds |terms| of z [-]."""
+    z, scale = np.broadcast_arrays(np.asarray(z, np.complex128), np.asarray(scale, np.float64))
+    out = np.empty(z.shape, np.complex128)
+    _root_loop(np.ascontiguousarray(z).ravel(), np.ascontiguousarray(scale).ravel(), branch == "decaying",
+               out.reshape(-1))
+    return out
+
+
+@_jit
+def _incident1(eps1, cos1):
+    """`_incident` of one ray: (q1, q1sq)."""
+    c = min(max(cos1, 0.0), 1.0)
+    if c < _TINY_COS:
+        c = 0.0
+    n1 = _root1(eps1, abs(eps1), True)
+    return n1 * c, eps1 * (c * c)
+
+
+@_jit
+def _incident_loop(eps1, cos1, q1, q1sq):
+    for i in range(eps1.shape[0]):
+        q1[i], q1sq[i] = _incident1(eps1[i], cos1[i])
 
 
 def _incident(eps1, cos1):
@@ -143,10 +183,16 @@ def _incident(eps1, cos1):
     q1sq : ndarray, complex128
         ``eps1 cos1^2`` [-]; other media have ``q_j^2 = (eps_j - eps1) + q1sq``.
     """
-    c = np.clip(np.asarray(cos1, dtype=np.float64), 0.0, 1.0)
-    c = np.where(c < _TINY_COS, 0.0, c)
-    n1 = normal_component(eps1, 0.0)
-    return n1 * c, eps1 * (c * c)
+    eps1, cos1 = np.broadcast_arrays(np.asarray(eps1, np.complex128), np.asarray(cos1, np.float64))
+    q1, q1sq = np.empty(eps1.shape, np.complex128), np.empty(eps1.shape, np.complex128)
+    _incident_loop(np.ascontiguousarray(eps1).ravel(), np.ascontiguousarray(cos1).ravel(), q1.reshape(-1),
+                   q1sq.reshape(-1))
+    return q1, q1sq
+
+
+@_jit
+def _normal_below1(eps, eps1, q1sq, decaying):
+    return _root1((eps - eps1) + q1sq, abs(eps) + abs(eps1), decaying)
 
 
 def _normal_below(eps, eps1, q1sq, branch):
@@ -166,7 +212,95 @@ def _normal_below(eps, eps1, q1sq, branch):
     -------
     ndarray, complex128
     """
+    eps, eps1, q1sq = np.broadcast_arrays(*(np.asarray(a, np.complex128) for a in (eps, eps1, q1sq)))
     return _root((eps - eps1) + q1sq, np.abs(eps) + np.abs(eps1), branch)
+
+
+@_jit
+def _yp1(q, eps):
+    """Re(q / eps): the p admittance's real part (NaN for eps = 0)."""
+    return (q / eps).real if eps != 0.0 else np.nan
+
+
+@_jit
+def _yp_loop(q, eps, out):
+    for i in range(q.shape[0]):
+        out[i] = _yp1(q[i], eps[i])
+
+
+def _admittance_p(q, eps):
+    """``Re(q / eps)`` [-] of arrays (the exit medium's p admittance), as `interface` computes it."""
+    q, eps = np.broadcast_arrays(np.asarray(q, np.complex128), np.asarray(eps, np.complex128))
+    out = np.empty(q.shape)
+    _yp_loop(np.ascontiguousarray(q).ravel(), np.ascontiguousarray(eps).ravel(), out.reshape(-1))
+    return out
+
+
+@_jit
+def _powers1(r, t, y1, y2, opaque):
+    """R, T, A of one polarization (Murakowski 2014 eq. 2.34, sec. 2.2.4), each in [0, 1] with
+    ``R + T + A == 1`` to rounding; ``y1``, ``y2`` are Re of the incident and exit admittances."""
+    R = r.real * r.real + r.imag * r.imag
+    T = 0.0
+    if not opaque:
+        if y1 > 0.0:
+            T = (t.real * t.real + t.imag * t.imag) * y2 / y1
+        else:
+            # Exactly grazing (Re Y1 = 0) the flux ratio is 0/0; its limit from a lossless
+            # medium 1 is 1 - R (R = 1 unless the exit is index-matched, then everything continues).
+            T = 1.0 - R
+        # Re Y2 < 0 is possible only under a lossy incident medium (p: Re(q2/eps2) with q2 in
+        # the fourth quadrant): the homogeneous-wave flux is then meaningless, count none.
+        T = max(T, 0.0)
+    total = R + T
+    if total > 1.0:  # Murakowski 2014 sec. 2.2.4: "if it occurs, we scale R and T such that R + T = 1"
+        R, T = R / total, T / total
+    return R, T, max(1.0 - R - T, 0.0)
+
+
+@_jit
+def _amplitudes1(q1, y1eps, b, c, amp, opaque, metal_r):
+    """r and t of one polarization from the input admittance C / B below (`_close`);
+    ``y1eps`` is Y1 times the factor that makes Y1 B - C polynomial (1 for s, eps1 for p)."""
+    num, den = q1 * b - y1eps * c, q1 * b + y1eps * c
+    if den == 0.0:
+        # the 0/0 of an exactly matched grazing configuration: its limit
+        if opaque:
+            return complex(metal_r, 0.0), 0j
+        return 0j, (amp / b if b != 0.0 else 1.0 + 0j)
+    if q1 == 0.0:
+        # Exactly grazing (q1 = 0): r = -C/C, which complex division may round to 0.999...; the
+        # limit is r = -1, t = 0 (R = 1, T = 0). Passive media give den != 0 everywhere else.
+        return -1.0 + 0j, 0j
+    return num / den, 2.0 * q1 * amp / den
+
+
+@_jit
+def _close1(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
+    """`_close` of one ray: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap)."""
+    # s: Y1 = q1; r = (Y1 B - C)/(Y1 B + C), t = 2 Y1 amp/(Y1 B + C) (Murakowski 2014 eq. 2.24a, 2.25a)
+    rs, ts = _amplitudes1(q1, 1.0 + 0j, bs, cs, amp_s, opaque, -1.0)
+    # p: Y1 = q1/eps1, numerator and denominator multiplied by eps1 (Murakowski 2014 eq. 2.24b, 2.25b)
+    rp, tp = _amplitudes1(q1, eps1, bp, cp, amp_p, opaque, 1.0)
+    Rs, Ts, As = _powers1(rs, ts, q1.real, yexit_s, opaque)
+    y1p = _yp1(q1, eps1)
+    Rp, Tp, Ap = _powers1(rp, tp, y1p, yexit_p, opaque)
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap
+
+
+@_jit
+def _close_loop(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque, amp, power):
+    for i in range(q1.shape[0]):
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = _close1(q1[i], eps1[i], bs[i], cs[i], bp[i], cp[i], amp_s[i],
+                                                         amp_p[i], yexit_s[i], yexit_p[i], opaque)
+        amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
+        power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
+
+
+def _as_fresnel(amp, power, shape):
+    """`Fresnel` of the columns of (n, 4) amplitudes and (n, 6) powers, reshaped to ``shape``."""
+    cols = [amp[:, k].reshape(shape) for k in range(4)] + [power[:, k].reshape(shape) for k in range(6)]
+    return Fresnel(*cols)
 
 
 def _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
@@ -197,85 +331,28 @@ def _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
     -------
     Fresnel
     """
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        # s: Y1 = q1; r = (Y1 B - C)/(Y1 B + C), t = 2 Y1 amp/(Y1 B + C) (Murakowski 2014 eq. 2.24a, 2.25a)
-        num_s, den_s = q1 * bs - cs, q1 * bs + cs
-        # p: Y1 = q1/eps1, numerator and denominator multiplied by eps1 (Murakowski 2014 eq. 2.24b, 2.25b)
-        num_p, den_p = q1 * bp - eps1 * cp, q1 * bp + eps1 * cp
-        rs, ts = num_s / den_s, 2.0 * q1 * amp_s / den_s
-        rp, tp = num_p / den_p, 2.0 * q1 * amp_p / den_p
-    # Exactly grazing (q1 = 0): r = -C/C, which complex division may round to 0.999...; the
-    # limit is r = -1, t = 0 (R = 1, T = 0), unless den = 0 too: Y_in = 0, i.e. everything below
-    # is index-matched to the incident medium at grazing (or, for p only, a metal under such
-    # layers). Passive media give den != 0 everywhere else.
-    flat = q1 == 0.0
-    rs, ts = _grazing(flat & (den_s != 0.0), rs, ts)
-    rp, tp = _grazing(flat & (den_p != 0.0), rp, tp)
-    rs, ts = _degenerate(den_s, rs, ts, amp_s, bs, opaque, metal_r=-1.0)
-    rp, tp = _degenerate(den_p, rp, tp, amp_p, bp, opaque, metal_r=1.0)
-    Rs, Ts, As = _powers(rs, ts, q1.real, yexit_s, opaque)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        y1p = (q1 / eps1).real
-    Rp, Tp, Ap = _powers(rp, tp, y1p, yexit_p, opaque)
-    return Fresnel(rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap)
+    cplx = np.broadcast_arrays(*(np.asarray(a, np.complex128) for a in (q1, eps1, bs, cs, bp, cp, amp_s, amp_p)))
+    shape = cplx[0].shape
+    real = [np.broadcast_to(np.asarray(a, np.float64), shape) for a in (yexit_s, yexit_p)]
+    flat = [np.ascontiguousarray(a).ravel() for a in (*cplx, *real)]
+    n = flat[0].shape[0]
+    amp, power = np.empty((n, 4), np.complex128), np.empty((n, 6))
+    _close_loop(*flat, bool(opaque), amp, power)
+    return _as_fresnel(amp, power, shape)
 
 
-def _grazing(mask, r, t):
-    """r = -1, t = 0 where ``mask`` (exactly grazing incidence, not index-matched)."""
-    if not np.any(mask):
-        return r, t
-    return np.where(mask, -1.0 + 0j, r), np.where(mask, 0j, t)
-
-
-def _degenerate(den, r, t, amp, b, opaque, metal_r):
-    """Replace the 0/0 of an exactly matched grazing configuration by its limit."""
-    bad = den == 0.0
-    if not np.any(bad):
-        return r, t
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_matched = np.where(b != 0.0, amp / np.where(b != 0.0, b, 1.0), 1.0)
-    r = np.where(bad, metal_r if opaque else 0.0, r)
-    t = np.where(bad, 0.0 if opaque else t_matched, t)
-    return r + 0j, t + 0j
-
-
-def _powers(r, t, y1, y2, opaque):
-    """R, T, A for one polarization (Murakowski 2014 eq. 2.34, sec. 2.2.4).
-
-    Parameters
-    ----------
-    r, t : ndarray, complex128
-        Amplitudes (same field quantity, see `Fresnel`).
-    y1, y2 : ndarray, float64
-        Re of the incident and exit admittances [-].
-    opaque : bool
-        Nothing is transmitted (perfect-conductor exit).
-
-    Returns
-    -------
-    R, T, A : ndarray, float64
-        Each in [0, 1], ``R + T + A == 1`` to rounding.
-    """
-    R = r.real**2 + r.imag**2
-    if opaque:
-        T = np.zeros_like(R)
-    else:
-        grazing = ~(y1 > 0.0)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            T = (t.real**2 + t.imag**2) * y2 / np.where(grazing, 1.0, y1)
-        # Exactly grazing (Re Y1 = 0) the flux ratio is 0/0; its limit from a lossless medium
-        # 1 is 1 - R (R = 1 unless the exit is index-matched, then everything continues).
-        T = np.where(grazing, 1.0 - R, T)
-        # Re Y2 < 0 is possible only under a lossy incident medium (p: Re(q2/eps2) with q2 in
-        # the fourth quadrant): the homogeneous-wave flux is then meaningless, count none.
-        T = np.maximum(T, 0.0)
-    total = R + T
-    over = total > 1.0
-    # Murakowski 2014 sec. 2.2.4: "if it occurs, we scale R and T such that R + T = 1"
-    scale = np.where(over, total, 1.0)
-    R, T = R / scale, T / scale
-    A = np.maximum(1.0 - R - T, 0.0)
-    return R, T, A
+@_jit
+def _interface_loop(eps1, eps2, cos1, amp, power, q2):
+    one = 1.0 + 0j
+    for i in range(eps1.shape[0]):
+        e1, e2 = eps1[i], eps2[i]
+        q1, q1sq = _incident1(e1, cos1[i])
+        q = _normal_below1(e2, e1, q1sq, False)  # outgoing branch, see `interface`
+        q2[i] = q
+        y2p = _yp1(q, e2)
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = _close1(q1, e1, one, q, e2, q, one, e2, q.real, y2p, False)
+        amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
+        power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 
 
 def interface(eps1, eps2, cos1, with_q2=False):
@@ -302,20 +379,16 @@ def interface(eps1, eps2, cos1, with_q2=False):
         Only with ``with_q2``: the exit medium's normal component (outgoing branch), which
         refraction reuses.
     """
-    eps1 = np.asarray(eps1, dtype=np.complex128)
-    eps2 = np.asarray(eps2, dtype=np.complex128)
-    cos1 = np.asarray(cos1, dtype=np.float64)
-    shape = np.broadcast_shapes(eps1.shape, eps2.shape, cos1.shape)
-    eps1, eps2, cos1 = (np.broadcast_to(a, shape) for a in (eps1, eps2, cos1))
-    q1, q1sq = _incident(eps1, cos1)
+    eps1, eps2, cos1 = np.broadcast_arrays(np.asarray(eps1, np.complex128), np.asarray(eps2, np.complex128),
+                                           np.asarray(cos1, np.float64))
+    shape = eps1.shape
+    n = eps1.size
+    amp, power, q2 = np.empty((n, 4), np.complex128), np.empty((n, 6)), np.empty(n, np.complex128)
     # q2^2 = eps2 - eps1 sin^2 (Murakowski 2014 eq. 2.20), the transmitted wave runs forward. Under a
     # lossy incident medium the decaying root can run backwards (Re q2 < 0: negative flux, R > 1
     # and a jump to total reflection just off normal incidence); "outgoing" is continuous with
-    # the lossless case.
-    q2 = _normal_below(eps2, eps1, q1sq, branch="outgoing")
-    one = np.ones(shape, dtype=np.complex128)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        y2p = (q2 / eps2).real
-    # (B, C) of a bare half-space: Y_in = q2 (s), q2/eps2 (p); t = 1 + r (Murakowski 2014 eq. 2.25)
-    coeffs = _close(q1, eps1, one, q2, eps2, q2, one, eps2, q2.real, y2p, opaque=False)
-    return (coeffs, q2) if with_q2 else coeffs
+    # the lossless case. (B, C) of a bare half-space: Y_in = q2 (s), q2/eps2 (p); t = 1 + r
+    # (Murakowski 2014 eq. 2.25).
+    _interface_loop(*(np.ascontiguousarray(a).ravel() for a in (eps1, eps2, cos1)), amp, power, q2)
+    coeffs = _as_fresnel(amp, power, shape)
+    return (coeffs, q2.reshape(shape)) if with_q2 else coeffs

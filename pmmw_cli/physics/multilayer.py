@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pmmw_cli.physics.fresnel import _close, _incident, _normal_below
+from pmmw_cli.physics.fresnel import _admittance_p, _close, _incident, _normal_below
 
 __all__ = ["stack"]
 
@@ -166,8 +166,7 @@ def stack(eps, thickness, cos1, k0, substrate="dielectric"):
         bs, cs, bp, cp = one, q_exit, eps_exit, q_exit
         amp_s, amp_p = one, eps_exit
         ys_exit = q_exit.real
-        with np.errstate(divide="ignore", invalid="ignore"):
-            yp_exit = (q_exit / eps_exit).real
+        yp_exit = _admittance_p(q_exit, eps_exit)
 
     if n_media > 2:
         exps_s = np.zeros(shape, dtype=np.int64)

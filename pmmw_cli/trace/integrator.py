@@ -33,10 +33,11 @@ import numpy as np
 from scipy.ndimage import binary_dilation
 
 from pmmw_cli.physics import fresnel, multilayer
-from pmmw_cli.physics.jones import rebase, row_power, stokes_terms
+from pmmw_cli.physics.jones import rebase
 from pmmw_cli.physics.roughness import MAX_REHITS
 from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import REPLICATES, pixel_samples
+from pmmw_cli.trace import kernels
 from pmmw_cli.trace.intersect import offset_along
 from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
 
@@ -44,6 +45,7 @@ _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
 _A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
+_NO_RANDOM = np.zeros(0)  # the kernels' "no uniforms drawn"
 _MAX_WALK = 1000  # facet events of one walk through rough coating layers (never reached in tests)
 MAX_WAVE = 1 << 16  # camera rays traced at once: a tile's pass of more is split, so memory is flat in spp
 
@@ -124,6 +126,21 @@ class _Wave:
     def __len__(self):
         return self.o.shape[0]
 
+    def arrays(self):
+        """The fields as the tuple the compiled kernels take (`pmmw_cli.trace.kernels`)."""
+        return tuple(getattr(self, k) for k in self.__slots__)
+
+    @staticmethod
+    def empty(n, stack_size):
+        """Room for ``n`` rays (filled by `kernels.scatter`)."""
+        return _Wave(o=np.empty((n, 3)), d=np.empty((n, 3)), s=np.empty((n, 3)), p=np.empty((n, 3)),
+                     m=np.empty((n, 2, 2), complex), sid=np.empty(n, np.int64), depth=np.empty(n, np.int32),
+                     stack=np.empty((n, stack_size), np.int16), top=np.empty(n, np.int32), last_t=np.empty(n))
+
+    def head(self, n):
+        """The first ``n`` rays (views)."""
+        return _Wave(**{k: getattr(self, k)[:n] for k in self.__slots__})
+
 
 def _stderr(s1, s2, count):
     """Standard error of the mean from shifted sums of values and squares; 0 for one sample."""
@@ -152,14 +169,23 @@ def _amplitude(amp, power):
 
 
 def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
-    """Interface coefficients for a group of rays with the same media and orientation.
+    """`surface_coefficients` for a group of rays with the same media and orientation (scalars
+    ``cur``, ``face_med``, ``other``, ``leaving``); ``t_coat`` is then one temperature."""
+    n = cos1.shape[0]
+    c, t_coat, q2 = surface_coefficients(job, np.full(n, cur), np.full(n, face_med), np.full(n, other),
+                                         np.full(n, bool(leaving)), cos1)
+    return c, (float(t_coat[0]) if n else 0.0), (q2 if n and not np.isnan(q2[0]) else None)
+
+
+def surface_coefficients(job: TraceJob, cur, face_med, other, leaving, cos1):
+    """Interface coefficients of rays meeting faces, each with its own media and orientation.
 
     Parameters
     ----------
     job : TraceJob
-    cur, face_med, other : int
+    cur, face_med, other : ndarray, shape (n,), int
         Medium of the incident side, medium of the face's object, medium on the far side.
-    leaving : bool
+    leaving : ndarray, shape (n,), bool
         The ray leaves ``face_med`` (coating layers are then met innermost first).
     cos1 : ndarray, shape (n,), float64
         Cosine of the incidence angle in the incident medium.
@@ -168,26 +194,54 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
     -------
     coeffs : fresnel.Fresnel
         Amplitudes and powers, arrays of shape (n,).
-    t_coat : float
-        Temperature at which the coating's absorption emits [K]. For a bare interface the
+    t_coat : ndarray, shape (n,), float64
+        Temperature at which the absorbed part emits [K]: the coating's; for a bare interface the
         absorbed remainder only exists when the incident medium is lossy (homogeneous-wave
         approximation, PHYSICS.md) and is emitted at the incident medium's temperature.
-    q2 : ndarray, shape (n,), complex128, or None
-        The exit medium's normal component for a bare interface (refraction reuses it).
+    q2 : ndarray, shape (n,), complex128
+        The exit medium's normal component for a bare interface (refraction reuses it); NaN
+        under films.
     """
     media = job.media
+    n = cos1.shape[0]
     kind = media.kind[face_med]
     eps1 = media.eps[cur]
-    coat = media.coating[face_med]
-    if kind == THIN:
-        eps2 = eps1  # the sheet keeps the incident medium on both sides
-    elif kind == BLACKBODY:
-        # index-matched body: nothing reflects at its own surface, all that enters is absorbed
-        eps2 = coat.eps[-1] if coat is not None else eps1
-    else:
-        eps2 = media.eps[other]
-    return interface_response(cos1, eps1, eps2, coat, leaving, kind == METAL, job.k0,
-                              float(media.temperature[cur]), float(media.temperature[face_med]))
+    # a thin sheet keeps the incident medium on both sides; a blackbody is index-matched (nothing
+    # reflects at its own surface, all that enters is absorbed): to its coating's last layer
+    eps2 = np.where((kind == THIN) | (kind == BLACKBODY), eps1, media.eps[other])
+    coats = media.coating
+    coated = np.array([coats[k] is not None for k in range(len(coats))])[face_med]
+    metal = kind == METAL
+    t_in, t_body = media.temperature[cur], media.temperature[face_med]
+    out = {k: np.empty(n, complex) for k in ("rs", "rp", "ts", "tp")}
+    out.update({k: np.empty(n) for k in ("Rs", "Rp", "Ts", "Tp", "As", "Ap")})
+    t_coat = np.empty(n)
+    q2 = np.full(n, np.nan + 0j)
+
+    def fill(g, c, t):
+        for name in out:
+            out[name][g] = getattr(c, name)
+        t_coat[g] = t
+
+    for is_metal in (False, True):
+        g = np.flatnonzero(~coated & (metal == is_metal))
+        if g.size:
+            c, t, q = interface_response(cos1[g], eps1[g], eps2[g], None, False, is_metal, job.k0, t_in[g], t_body[g])
+            fill(g, c, t)
+            if q is not None:
+                q2[g] = q
+    if coated.any():
+        idx = np.flatnonzero(coated)
+        key = face_med[idx] * 2 + leaving[idx]
+        for kv in np.unique(key):
+            g = idx[key == kv]
+            k = int(face_med[g[0]])
+            films = coats[k]
+            e2 = np.full(g.size, films.eps[-1]) if media.kind[k] == BLACKBODY else eps2[g]
+            c, t, _ = interface_response(cos1[g], eps1[g], e2, films, bool(leaving[g[0]]), media.kind[k] == METAL,
+                                         job.k0, t_in[g], t_body[g])
+            fill(g, c, t)
+    return fresnel.Fresnel(**out), t_coat, q2
 
 
 def interface_response(cos1, eps1, eps2, films, reverse, metal, k0, t_incident, t_body):
@@ -197,7 +251,7 @@ def interface_response(cos1, eps1, eps2, films, reverse, metal, k0, t_incident, 
     Parameters
     ----------
     cos1 : ndarray, shape (n,), float64
-    eps1, eps2 : complex
+    eps1, eps2 : complex, or ndarray of shape (n,)
         Incident medium and far medium (ignored for a metal).
     films : Coating or None
         Coherent films between them, listed from the ``eps1`` side unless ``reverse``.
@@ -205,30 +259,32 @@ def interface_response(cos1, eps1, eps2, films, reverse, metal, k0, t_incident, 
         The far side is a perfect conductor.
     k0 : float
         Free-space wavenumber [1/m] (films only).
-    t_incident, t_body : float
+    t_incident, t_body : float or ndarray of shape (n,)
         Temperatures of the incident medium and of the body [K].
 
     Returns
     -------
     coeffs : fresnel.Fresnel
-    t_emit : float
+    t_emit : float or ndarray
         Where the absorbed part emits: the films' temperature, the body's for a bare metal, the
         incident medium's for a bare interface (a lossy incident medium's homogeneous-wave
         remainder, PHYSICS.md).
     q2 : ndarray or None
         The far medium's normal component for a bare interface (refraction reuses it).
     """
+    n = cos1.shape[0]
     if metal and films is None:
-        n = cos1.shape[0]
         one, zero = np.ones(n), np.zeros(n)
         c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
         return c, t_body, None
+    eps1 = np.broadcast_to(np.asarray(eps1, complex), (n,))
+    eps2 = np.broadcast_to(np.asarray(eps2, complex), (n,))
     if films is None:
-        c, q2 = fresnel.interface(np.full(cos1.shape, eps1), np.full(cos1.shape, eps2), cos1, with_q2=True)
+        c, q2 = fresnel.interface(eps1, eps2, cos1, with_q2=True)
         return c, t_incident, q2
     f_eps, f_d = (films.eps[::-1], films.thickness[::-1]) if reverse else (films.eps, films.thickness)
-    eps = np.concatenate([[eps1], f_eps, [eps2]])
-    c = multilayer.stack(eps[None, :], f_d[None, :], cos1, k0, substrate="metal" if metal else "dielectric")
+    eps = np.concatenate([eps1[:, None], np.broadcast_to(f_eps, (n, f_eps.size)), eps2[:, None]], axis=1)
+    c = multilayer.stack(eps, f_d[None, :], cos1, k0, substrate="metal" if metal else "dielectric")
     return c, films.temperature, None
 
 
@@ -298,7 +354,7 @@ def atmosphere_skip_length(job: TraceJob) -> float:
 class Integrator:
     """Renders tiles of one `TraceJob` with one intersector (built once per worker)."""
 
-    def __init__(self, job: TraceJob, intersector):
+    def __init__(self, job: TraceJob, intersector, compiled: bool | None = None):
         self.job = job
         self.isect = intersector
         media = job.media
@@ -310,6 +366,18 @@ class Integrator:
         # what a path ended on a guessed temperature could have brought instead (truncation bound)
         bounds = brightness_bounds(job, atmosphere_source_range(job))
         self.t_bounds = bounds if bounds is not None else (-np.inf, np.inf)
+        st = job.settings
+        self._limits = (int(st.max_depth), float(st.threshold), st.termination == "roulette",
+                        float(self.t_bounds[0]), float(self.t_bounds[1]))
+        self._choice = (kernels.STRATEGIES[st.strategy], int(st.split_depth))
+        # the compiled bounce (`_bounce_compiled`) serves smooth scenes; rough surfaces, bump maps
+        # and rough layers take the vectorized one (`_bounce`)
+        self.compiled = not self.rough_scene if compiled is None else bool(compiled and not self.rough_scene)
+        self._faces = (np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
+                       np.ascontiguousarray(intersector.face_offset, float))
+        self._media = (np.ascontiguousarray(media.kind, np.int8), np.ascontiguousarray(media.alpha, float),
+                       np.ascontiguousarray(media.temperature, float), np.sqrt(media.eps.astype(complex)).real.copy(),
+                       np.array([c is not None for c in media.coating]))
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:
@@ -411,35 +479,41 @@ class Integrator:
             top=np.zeros(n, np.int32), last_t=np.full(n, np.nan),
         )
         first = True
+        bounce = self._bounce_compiled if self.compiled else self._bounce
         while wave is not None and len(wave) > 0:
-            wave = self._bounce(wave, first)
+            wave = bounce(wave, first)
             first = False
         return self.acc, self.first_t, self.first_m, self.cut
 
     # -- one bounce -----------------------------------------------------------------------
     def _emit(self, sid, m, ta, tb=None):
         """Add incoherent emission seen through N = m (already scaled by emission amplitudes)."""
-        if sid.size == 0:
+        n = sid.size
+        if n == 0:
             return
-        terms = stokes_terms(m, ta, ta if tb is None else tb)
-        nsamp = self.acc.shape[0]
-        for c in range(4):
-            self.acc[:, c] += np.bincount(sid, weights=terms[:, c], minlength=nsamp)
+        ta = np.ascontiguousarray(np.broadcast_to(np.asarray(ta, float), (n,)))
+        tb = ta if tb is None else np.ascontiguousarray(np.broadcast_to(np.asarray(tb, float), (n,)))
+        kernels.emit(self.acc, np.ascontiguousarray(sid, np.int64), np.ascontiguousarray(m, complex), ta, tb)
+
+    def _intersect(self, wave: _Wave, first: bool):
+        """Intersect a wave (counting rays and Embree's time), note the first hits, and send the
+        rays that miss to the sky. Returns (t, prim, miss)."""
+        t0 = time.perf_counter()
+        t, prim = self.isect.intersect(wave.o, wave.d)
+        self.t_isect += time.perf_counter() - t0
+        self.rays += len(wave)
+        miss = prim < 0
+        if first:
+            self.first_t[wave.sid] = t
+            self.first_m[wave.sid[~miss]] = self.job.face_medium[prim[~miss]]
+        if miss.any():
+            self._sky(wave.take(miss))
+        return t, prim, miss
 
     def _bounce(self, wave: _Wave, first: bool):
         job = self.job
         media = job.media
-        n = len(wave)
-        t0 = time.perf_counter()
-        t, prim = self.isect.intersect(wave.o, wave.d)
-        self.t_isect += time.perf_counter() - t0
-        self.rays += n
-        miss = prim < 0
-        if first:
-            self.first_t[wave.sid] = t
-            self.first_m[wave.sid[~miss]] = job.face_medium[prim[~miss]]
-        if miss.any():
-            self._sky(wave.take(miss))
+        t, prim, miss = self._intersect(wave, first)
         hit = ~miss
         if not hit.any():
             return None
@@ -508,6 +582,50 @@ class Integrator:
                 out.append(self._terminate(children))
         return _Wave.concat(out)
 
+    def _bounce_compiled(self, wave: _Wave, first: bool):
+        """`_bounce` for smooth scenes: the per-ray work in two compiled passes (`kernels.arrive`,
+        `kernels.scatter`) around the interface coefficients (`surface_coefficients`)."""
+        job = self.job
+        n = len(wave)
+        t, prim, miss = self._intersect(wave, first)
+        if miss.all():
+            return None
+        atm = (_NO_RANDOM, _NO_RANDOM)
+        if job.atmosphere is not None:
+            # the layered atmosphere along ambient segments (shorter ones: below the error budget)
+            amb = ~miss & (wave.stack[np.arange(n), wave.top] == 0) & (t > self.atm_skip_length)
+            if amb.any():
+                trans, emission = np.ones(n), np.zeros(n)
+                trans[amb], emission[amb] = job.atmosphere.path(wave.o[amb, 2], wave.o[amb, 2] + t[amb] * wave.d[amb, 2],
+                                                                t[amb])
+                atm = (trans, emission)
+        hit = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n, np.int64), np.empty(n, np.int64),
+               np.empty(n, np.int64), np.empty(n, bool), np.empty(n, np.int8))
+        arrays = wave.arrays()
+        kernels.arrive(arrays, t, prim, atm, self._faces, self._media, self.acc, hit)
+        code = hit[7]
+        rows = np.flatnonzero(code == 2)
+        passing = np.flatnonzero(code == 1)
+        out = [wave.take(passing)] if passing.size else []
+        if rows.size:
+            cur, fm, other, leaving = hit[3][rows], hit[4][rows], hit[5][rows], hit[6][rows]
+            c, t_coat, q2 = surface_coefficients(job, cur, fm, other, leaving, hit[2][rows])
+            missing = np.isnan(q2) & (job.media.kind[fm] == DIELECTRIC)
+            if missing.any():  # under films: the far medium's normal component for refraction
+                cos1 = hit[2][rows][missing]
+                eps1, eps2 = job.media.eps[cur[missing]], job.media.eps[other[missing]]
+                q2[missing] = fresnel.normal_component(eps2, eps1 * (1.0 - cos1 * cos1), branch="outgoing")
+            coeff = (np.stack([c.rs, c.rp, c.ts, c.tp], axis=1), np.stack([c.Rs, c.Rp, c.Ts, c.Tp, c.As, c.Ap], axis=1),
+                     t_coat, q2)
+            st = job.settings
+            u_choose = self.rng.random(rows.size) if st.strategy != "split" else _NO_RANDOM
+            u_roul = self.rng.random(2 * rows.size) if self._limits[2] else _NO_RANDOM
+            kids = _Wave.empty(2 * rows.size, wave.stack.shape[1])
+            count = kernels.scatter(rows, arrays, hit, coeff, prim, self._faces, self._media, self._choice, u_choose,
+                                    u_roul, self._limits, self.acc, self.cut, kids.arrays())
+            out.append(kids.head(count))
+        return _Wave.concat(out)
+
     def _bumped(self, pos, d, n_in, face_med):
         """Macro normals tilted by the bump maps of the faces' materials (the face normal elsewhere).
 
@@ -570,7 +688,6 @@ class Integrator:
         job = self.job
         step = self.isect.face_offset[prim]
         media = job.media
-        nr = len(wv)
         kind = media.kind[face_med]
         t_body = media.temperature[face_med]
         n_fac, tangent, rough = n_mac, None, None
@@ -578,24 +695,10 @@ class Integrator:
             n_fac, tangent, rough = self._facets(wv, n_mac, face_med)
         cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_fac), 0.0, 1.0)
 
-        # Coefficients per group of equal (cur, face medium, other, leaving).
-        coeff = {k: np.empty(nr, complex) for k in ("rs", "rp", "ts", "tp")}
-        coeff.update({k: np.empty(nr) for k in ("Rs", "Rp", "Ts", "Tp", "As", "Ap")})
-        t_coat = np.zeros(nr)
-        q2 = None  # the exit medium's normal component from Fresnel, reused by refraction
-        key = ((cur * 4096 + face_med) * 4096 + other) * 2 + leaving
-        for kv in np.unique(key):
-            g = key == kv
-            i0 = np.argmax(g)
-            c, tc, q2g = surface_response(job, int(cur[i0]), int(face_med[i0]), int(other[i0]), bool(leaving[i0]),
-                                          cos1[g])
-            for name in coeff:
-                coeff[name][g] = getattr(c, name)
-            t_coat[g] = tc
-            if q2g is not None:
-                if q2 is None:
-                    q2 = np.full(nr, np.nan + 0j)
-                q2[g] = q2g
+        c, t_coat, q2 = surface_coefficients(job, cur, face_med, other, leaving, cos1)
+        coeff = c._asdict()
+        if np.isnan(q2).all():
+            q2 = None
 
         s, ml = _local_basis(wv, n_fac)
 
@@ -975,43 +1078,15 @@ class Integrator:
         keep = self._survivors(wv)
         return wv.take(keep) if not keep.all() else wv
 
-    def _end_on_temperature(self, wv: _Wave, sel):
-        """End the selected paths on the last object's temperature (Murakowski 2014 sec. 2.2.9) and
-        count what that may have cost: the ended power per row times the largest difference
-        between that temperature and any brightness the path could have gone on to see."""
-        m, t_last, sid = wv.m[sel], wv.last_t[sel], wv.sid[sel]
-        self._emit(sid, m, t_last)
-        p = m.real**2 + m.imag**2
-        rows = p[:, 0, 0] + p[:, 0, 1], p[:, 1, 0] + p[:, 1, 1]
-        t_lo, t_hi = self.t_bounds
-        span = np.maximum(t_hi - t_last, t_last - t_lo)
-        nsamp = self.cut.shape[0]
-        self.cut[:, 0] += np.bincount(sid, weights=0.5 * (rows[0] + rows[1]), minlength=nsamp)
-        bound = np.maximum(rows[0], rows[1]) * span
-        self.cut[:, 1] += np.bincount(sid, weights=bound, minlength=nsamp)
-
     def _survivors(self, wv: _Wave):
-        """Which rays go on after the depth cut-off and the weight threshold; the others' power
-        is emitted (at the last object's temperature) or, by Russian roulette, dropped with the
-        survivors scaled up. Returns a boolean mask."""
-        st = self.job.settings
-        weight = row_power(wv.m)
-        dead = weight <= 0.0
-        at_depth = (wv.depth >= st.max_depth) & ~dead
-        if at_depth.any():
-            self._end_on_temperature(wv, at_depth)
-        low = (weight < st.threshold) & ~at_depth & ~dead
-        if low.any():
-            if st.termination == "temperature":
-                self._end_on_temperature(wv, low)
-                dead |= low
-            else:
-                q = weight[low] / st.threshold
-                survive = self.rng.random(q.shape[0]) < q
-                idx = np.nonzero(low)[0]
-                wv.m[idx[survive]] /= np.sqrt(q[survive])[:, None, None]
-                dead[idx[~survive]] = True
-        return ~(dead | at_depth)
+        """Which rays go on after the depth cut-off and the weight threshold (`kernels.survive`:
+        the others' power is emitted at the last object's temperature or, by Russian roulette,
+        dropped with the survivors scaled up). Returns a boolean mask."""
+        n = len(wv)
+        u = self.rng.random(n) if self._limits[2] else _NO_RANDOM
+        keep = np.empty(n, bool)
+        kernels.survivors(wv.arrays(), u, self._limits, self.acc, self.cut, keep)
+        return keep
 
 
 class _Pile:

@@ -16,6 +16,7 @@ coordinates (``face_scale``); `offset_origins` steps over it.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 EMBREE_DTYPE = np.float32  # precision at the Embree boundary; shading is float64
@@ -145,16 +146,7 @@ class EmbreeIntersector(_TriangleSoup):
     def _plane_distance(self, o, d, t, prim):
         """Distance of each hit in float64 from the plane of the face hit; at grazing incidence,
         where the plane equation amplifies rounding, Embree's own float32 distance."""
-        idx = np.nonzero(prim >= 0)[0]
-        if idx.size == 0:
-            return
-        f = prim[idx]
-        nrm = self._normals[f]
-        cos = np.einsum("ij,ij->i", d[idx], nrm)
-        ok = np.abs(cos) > _REFINE_MIN_COS
-        t_plane = np.einsum("ij,ij->i", self._v0[f[ok]] - o[idx[ok]], nrm[ok]) / cos[ok]
-        t[idx[ok]] = np.maximum(t_plane, 0.0)
-        grazing = idx[~ok]
+        grazing = np.flatnonzero(_plane_distance(o, d, self._v0, self._normals, prim, t))
         if grazing.size:
             res = self._scene.run(
                 np.ascontiguousarray(o[grazing], dtype=EMBREE_DTYPE),
@@ -164,6 +156,26 @@ class EmbreeIntersector(_TriangleSoup):
             hit = res["primID"] >= 0
             t[grazing] = np.where(hit, res["tfar"].astype(np.float64), np.inf)
             prim[grazing] = np.where(hit, res["primID"], -1)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _plane_distance(o, d, v0, normals, prim, t):
+    """``t`` of each hit (``prim >= 0``) from the plane of its face, in float64 and at least 0;
+    returns the rays at grazing incidence (left unchanged), where the plane equation amplifies
+    rounding."""
+    grazing = np.zeros(prim.shape[0], np.bool_)
+    for i in range(prim.shape[0]):
+        f = prim[i]
+        if f < 0:
+            continue
+        cos = d[i, 0] * normals[f, 0] + d[i, 1] * normals[f, 1] + d[i, 2] * normals[f, 2]
+        if abs(cos) > _REFINE_MIN_COS:
+            num = ((v0[f, 0] - o[i, 0]) * normals[f, 0] + (v0[f, 1] - o[i, 1]) * normals[f, 1]
+                   + (v0[f, 2] - o[i, 2]) * normals[f, 2])
+            t[i] = max(num / cos, 0.0)
+        else:
+            grazing[i] = True
+    return grazing
 
 
 class NumpyIntersector(_TriangleSoup):

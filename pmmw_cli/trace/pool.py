@@ -36,6 +36,7 @@ import numpy as np
 from pmmw_cli import interrupt
 from pmmw_cli.errors import EnvironmentProblem, exception_text
 from pmmw_cli.io.atomic import save_npz_atomic
+from pmmw_cli.trace import kernels
 from pmmw_cli.trace.integrator import Integrator, TileResult
 from pmmw_cli.trace.intersect import make_intersector
 from pmmw_cli.trace.job import TraceJob
@@ -236,6 +237,8 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
     """Render the tiles ``todo`` on ``n`` worker processes, calling ``collect`` with each result."""
     ctx = mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
     forked = ctx.get_start_method() == "fork"
+    if forked:
+        kernels.warm(job.settings.stack_size)  # compiled or loaded once here, inherited by every worker
     queue = deque(todo)
     deaths = dict.fromkeys((t[0] for t in todo), 0)
     idle_deaths = 0
