@@ -72,8 +72,10 @@ mu = (z0 - z1) / L.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy.linalg import solve_banded
 
@@ -632,61 +634,9 @@ class AtmosphereModel:
             ``emission + transmittance * T_far``.
         """
         shape, z0, z1, L = self._segments(z0, z1, length)
-        trans = np.ones_like(z0)
-        emission = np.zeros_like(z0)
-        dz = z1 - z0
-        horizontal = np.abs(dz) <= HORIZONTAL_SLOPE * L
-
-        h = np.flatnonzero(horizontal)
-        j = self._cell(0.5 * (z0[h] + z1[h]))
-        tau = self.alpha[j] * L[h]
-        trans[h] = np.exp(-tau)
-        emission[h] = self.source[j] * -np.expm1(-tau)
-
-        # sloped segments: walk the cells from the observer outward, dropping finished segments
-        s = np.flatnonzero(~horizontal)
-        up = dz[s] > 0.0
-        e = self.edges
-        last = self.alpha.size - 1
-        i_start = np.where(
-            up,
-            np.searchsorted(e, z0[s], side="right") - 1,
-            np.searchsorted(e, z0[s], side="left") - 1,
-        ).clip(0, last)
-        i_end = np.where(
-            up,
-            np.searchsorted(e, z1[s], side="left") - 1,
-            np.searchsorted(e, z1[s], side="right") - 1,
-        ).clip(0, last)
-        j = i_start
-        step = np.where(up, 1, -1)
-        left = np.abs(i_end - i_start) + 1  # cells still to cross
-        # vertical optical depth at the segment's ends; the cells' own are self.depth
-        d_lo = np.interp(np.minimum(z0[s], z1[s]), e, self.depth)
-        d_hi = np.interp(np.maximum(z0[s], z1[s]), e, self.depth)
-        stretch = L[s] / np.abs(dz[s])
-        # direction of the radiation, toward the observer (only rain's source depends on it)
-        mu = -dz[s] / L[s] if np.any(self.source_mu) else None
-        t = np.ones(s.size)
-        em = np.zeros(s.size)
-        while s.size:
-            tau_v = np.minimum(self.depth[j + 1], d_hi) - np.maximum(self.depth[j], d_lo)
-            x = np.expm1(-np.maximum(tau_v, 0.0) * stretch)  # exp(-tau) - 1
-            src = self.source[j] if mu is None else self.source[j] + self.source_mu[j] * mu
-            em -= src * x * t
-            t *= 1.0 + x
-            left -= 1
-            done = left == 0
-            if done.any():
-                trans[s[done]] = t[done]
-                emission[s[done]] = em[done]
-                keep = ~done
-                s, j, step, left, d_lo, d_hi, stretch, t, em = (
-                    a[keep] for a in (s, j, step, left, d_lo, d_hi, stretch, t, em)
-                )
-                if mu is not None:
-                    mu = mu[keep]
-            j = j + step
+        trans, emission = np.empty_like(z0), np.empty_like(z0)
+        _path_loop(np.ascontiguousarray(z0), np.ascontiguousarray(z1), np.ascontiguousarray(L), self.edges, self.alpha,
+                   self.depth, self.source, self.source_mu, bool(np.any(self.source_mu)), trans, emission)
         return trans.reshape(shape), emission.reshape(shape)
 
     def extremes(self, z_lo: float, z_hi: float) -> tuple[float, float, float]:
@@ -718,3 +668,38 @@ class AtmosphereModel:
         """Attenuation of straight segments, 10 log10(1/transmittance) [dB]; arguments as `path`."""
         shape, z0, z1, L = self._segments(z0, z1, length)
         return (self._tau(z0, z1, L) * (10.0 / np.log(10.0))).reshape(shape)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _path_loop(z0, z1, length, edges, alpha, depth, source, source_mu, with_mu, trans, emission):
+    """`AtmosphereModel.path` per segment, compiled: a horizontal segment stays in one cell; a
+    sloped one walks the cells from the observer outward, each cell's optical depth from the
+    cumulative vertical depth stretched by L / |dz|, its source seen through the cells before it."""
+    last = alpha.size - 1
+    for i in range(z0.shape[0]):
+        a, b, L = z0[i], z1[i], length[i]
+        dz = b - a
+        if abs(dz) <= HORIZONTAL_SLOPE * L:
+            j = min(max(np.searchsorted(edges, 0.5 * (a + b), side="right") - 1, 0), last)
+            tau = alpha[j] * L
+            trans[i] = math.exp(-tau)
+            emission[i] = source[j] * -math.expm1(-tau)
+            continue
+        if dz > 0.0:
+            j, end, step = np.searchsorted(edges, a, side="right") - 1, np.searchsorted(edges, b, side="left") - 1, 1
+        else:
+            j, end, step = np.searchsorted(edges, a, side="left") - 1, np.searchsorted(edges, b, side="right") - 1, -1
+        j, end = min(max(j, 0), last), min(max(end, 0), last)
+        # vertical optical depth at the segment's ends; the cells' own are `depth`
+        d_lo = np.interp(min(a, b), edges, depth)
+        d_hi = np.interp(max(a, b), edges, depth)
+        stretch = L / abs(dz)
+        mu = -dz / L  # direction of the radiation, toward the observer (only rain's source depends on it)
+        t, em = 1.0, 0.0
+        for _ in range(abs(end - j) + 1):
+            x = math.expm1(-max(min(depth[j + 1], d_hi) - max(depth[j], d_lo), 0.0) * stretch)  # exp(-tau) - 1
+            src = source[j] + source_mu[j] * mu if with_mu else source[j]
+            em -= src * x * t
+            t *= 1.0 + x
+            j += step
+        trans[i], emission[i] = t, em

@@ -342,15 +342,32 @@ def _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
 
 
 @_jit
-def _interface_loop(eps1, eps2, cos1, amp, power, q2):
+def interface1(eps1, eps2, cos1):
+    """`interface` of one ray, compiled: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2)."""
     one = 1.0 + 0j
+    q1, q1sq = _incident1(eps1, cos1)
+    q = _normal_below1(eps2, eps1, q1sq, False)  # outgoing branch, see `interface`
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = _close1(q1, eps1, one, q, eps2, q, one, eps2, q.real, _yp1(q, eps2), False)
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q
+
+
+@_jit
+def conductor1():
+    """A perfect conductor's coefficients (one ray, any angle): rs = -1, rp = +1 (the E-field
+    and H-field ratios, module docstring), nothing transmitted or absorbed; same tuple as
+    `interface1` with q2 = NaN."""
+    return (-1.0 + 0j, 1.0 + 0j, 0j, 0j, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, complex(np.nan, 0.0))
+
+
+def perfect_conductor(n):
+    """`conductor1` for n rays, as a `Fresnel` of arrays of shape (n,)."""
+    return Fresnel(*(np.full(n, v) for v in conductor1()[:10]))
+
+
+@_jit
+def _interface_loop(eps1, eps2, cos1, amp, power, q2):
     for i in range(eps1.shape[0]):
-        e1, e2 = eps1[i], eps2[i]
-        q1, q1sq = _incident1(e1, cos1[i])
-        q = _normal_below1(e2, e1, q1sq, False)  # outgoing branch, see `interface`
-        q2[i] = q
-        y2p = _yp1(q, e2)
-        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = _close1(q1, e1, one, q, e2, q, one, e2, q.real, y2p, False)
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2[i] = interface1(eps1[i], eps2[i], cos1[i])
         amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
         power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 

@@ -46,6 +46,7 @@ _TINY = 1e-12
 _A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
 _NO_RANDOM = np.zeros(0)  # the kernels' "no uniforms drawn"
+_NO_FILMS = (np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0), np.zeros(0, complex))  # no coefficients given
 _MAX_WALK = 1000  # facet events of one walk through rough coating layers (never reached in tests)
 MAX_WAVE = 1 << 16  # camera rays traced at once: a tile's pass of more is split, so memory is flat in spp
 
@@ -206,9 +207,7 @@ def surface_coefficients(job: TraceJob, cur, face_med, other, leaving, cos1):
     n = cos1.shape[0]
     kind = media.kind[face_med]
     eps1 = media.eps[cur]
-    # a thin sheet keeps the incident medium on both sides; a blackbody is index-matched (nothing
-    # reflects at its own surface, all that enters is absorbed): to its coating's last layer
-    eps2 = np.where((kind == THIN) | (kind == BLACKBODY), eps1, media.eps[other])
+    eps2 = kernels.far_eps(kind, eps1, media.eps[other])
     coats = media.coating
     coated = np.array([coats[k] is not None for k in range(len(coats))])[face_med]
     metal = kind == METAL
@@ -274,9 +273,7 @@ def interface_response(cos1, eps1, eps2, films, reverse, metal, k0, t_incident, 
     """
     n = cos1.shape[0]
     if metal and films is None:
-        one, zero = np.ones(n), np.zeros(n)
-        c = fresnel.Fresnel(-one + 0j, one + 0j, zero + 0j, zero + 0j, one, one, zero, zero, zero, zero)
-        return c, t_body, None
+        return fresnel.perfect_conductor(n), t_body, None
     eps1 = np.broadcast_to(np.asarray(eps1, complex), (n,))
     eps2 = np.broadcast_to(np.asarray(eps2, complex), (n,))
     if films is None:
@@ -377,7 +374,7 @@ class Integrator:
                        np.ascontiguousarray(intersector.face_offset, float))
         self._media = (np.ascontiguousarray(media.kind, np.int8), np.ascontiguousarray(media.alpha, float),
                        np.ascontiguousarray(media.temperature, float), np.sqrt(media.eps.astype(complex)).real.copy(),
-                       np.array([c is not None for c in media.coating]))
+                       np.array([c is not None for c in media.coating]), np.ascontiguousarray(media.eps, complex))
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:
@@ -584,7 +581,7 @@ class Integrator:
 
     def _bounce_compiled(self, wave: _Wave, first: bool):
         """`_bounce` for smooth scenes: the per-ray work in two compiled passes (`kernels.arrive`,
-        `kernels.scatter`) around the interface coefficients (`surface_coefficients`)."""
+        `kernels.scatter`), with numpy for the faces under coherent films (`_film_coefficients`)."""
         job = self.job
         n = len(wave)
         t, prim, miss = self._intersect(wave, first)
@@ -608,15 +605,7 @@ class Integrator:
         passing = np.flatnonzero(code == 1)
         out = [wave.take(passing)] if passing.size else []
         if rows.size:
-            cur, fm, other, leaving = hit[3][rows], hit[4][rows], hit[5][rows], hit[6][rows]
-            c, t_coat, q2 = surface_coefficients(job, cur, fm, other, leaving, hit[2][rows])
-            missing = np.isnan(q2) & (job.media.kind[fm] == DIELECTRIC)
-            if missing.any():  # under films: the far medium's normal component for refraction
-                cos1 = hit[2][rows][missing]
-                eps1, eps2 = job.media.eps[cur[missing]], job.media.eps[other[missing]]
-                q2[missing] = fresnel.normal_component(eps2, eps1 * (1.0 - cos1 * cos1), branch="outgoing")
-            coeff = (np.stack([c.rs, c.rp, c.ts, c.tp], axis=1), np.stack([c.Rs, c.Rp, c.Ts, c.Tp, c.As, c.Ap], axis=1),
-                     t_coat, q2)
+            coeff = self._film_coefficients(rows, hit)
             st = job.settings
             u_choose = self.rng.random(rows.size) if st.strategy != "split" else _NO_RANDOM
             u_roul = self.rng.random(2 * rows.size) if self._limits[2] else _NO_RANDOM
@@ -625,6 +614,26 @@ class Integrator:
                                     u_roul, self._limits, self.acc, self.cut, kids.arrays())
             out.append(kids.head(count))
         return _Wave.concat(out)
+
+    def _film_coefficients(self, rows, hit):
+        """`kernels.scatter`'s ``coeff``: the coefficients of the rays ``rows`` that meet faces
+        under coherent films (`surface_coefficients`, numpy over the layers); the others' are
+        computed in the kernel."""
+        fm = hit[4][rows]
+        films = np.flatnonzero(self._media[4][fm])
+        at = np.full(rows.size, -1, np.int64)
+        if not films.size:
+            return _NO_FILMS + (at,)
+        at[films] = np.arange(films.size)
+        r = rows[films]
+        cur, other, cos1 = hit[3][r], hit[5][r], hit[2][r]
+        c, t_coat, q2 = surface_coefficients(self.job, cur, fm[films], other, hit[6][r], cos1)
+        missing = np.isnan(q2) & (self.job.media.kind[fm[films]] == DIELECTRIC)
+        if missing.any():  # under films: the far medium's normal component for refraction
+            eps1, eps2 = self.job.media.eps[cur[missing]], self.job.media.eps[other[missing]]
+            q2[missing] = fresnel.normal_component(eps2, eps1 * (1.0 - cos1[missing] ** 2), branch="outgoing")
+        return (np.stack([c.rs, c.rp, c.ts, c.tp], axis=1), np.stack([c.Rs, c.Rp, c.Ts, c.Tp, c.As, c.Ap], axis=1),
+                t_coat, q2, at)
 
     def _bumped(self, pos, d, n_in, face_med):
         """Macro normals tilted by the bump maps of the faces' materials (the face normal elsewhere).

@@ -32,7 +32,7 @@ import numpy as np
 
 from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.trace.intersect import _plane_distance
-from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, OPAQUE, THIN
+from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
 
 A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _TINY = 1e-12
@@ -132,7 +132,7 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit):
         The layered atmosphere's power transmittance and emission [K] along each segment (empty:
         no atmosphere work).
     faces : tuple (face_medium, face_normals, face_offset)
-    media : tuple (kind, alpha, temperature, n1_real, has_coat)
+    media : tuple (kind, alpha, temperature, n1_real, has_coat, eps)
     acc : ndarray, shape (samples, 4)
     hit : tuple (pos, n_in, cos1, cur, face_med, other, leaving, code), each of length n
         Filled: the hit point, the face normal facing the incident side, the cosine of incidence,
@@ -208,6 +208,23 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit):
 
 
 @_inline
+def _far_eps1(kind, eps1, eps_other):
+    """Permittivity beyond a face: a thin sheet keeps the incident medium on both sides; a
+    blackbody is index-matched (nothing reflects at its own surface, all that enters is absorbed;
+    under a coating, to the coating's last layer)."""
+    return eps1 if kind == THIN or kind == BLACKBODY else eps_other
+
+
+@_jit
+def far_eps(kind, eps1, eps_other):
+    """`_far_eps1` of arrays of rays."""
+    out = np.empty(eps1.shape[0], np.complex128)
+    for i in range(eps1.shape[0]):
+        out[i] = _far_eps1(kind[i], eps1[i], eps_other[i])
+    return out
+
+
+@_inline
 def _amplitude(amp, power):
     """An amplitude with the phase of ``amp`` and the magnitude sqrt(power) (renormalized R, T)."""
     mag = abs(amp)
@@ -256,19 +273,22 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
 
     Parameters
     ----------
-    coeff : tuple (amp, power, t_absorb, q2), arrays indexed like ``rows``
-        Amplitudes (rs, rp, ts, tp), powers (Rs, Rp, Ts, Tp, As, Ap), the temperature at which A
-        emits [K], and the far medium's normal component (outgoing branch) for refraction.
+    coeff : tuple (amp, power, t_absorb, q2, at)
+        Interface coefficients the caller computed (faces under coherent films): amplitudes
+        (rs, rp, ts, tp), powers (Rs, Rp, Ts, Tp, As, Ap), the temperature at which A emits [K],
+        and the far medium's normal component (outgoing branch) for refraction, at row ``at[j]``
+        for ``rows[j]``; ``at[j] = -1``: a bare interface or a perfect conductor, computed here
+        (`fresnel.interface1`, `fresnel.conductor1`).
     choice : tuple (strategy code, split_depth)
     u_choose, u_roul : ndarray
         Uniforms for the branch choice (one per row; empty with ``split``) and Russian roulette
         (two per row; empty without roulette).
     """
     d, s_old, p_old, m, sid, depth, stack, top = wave[1], wave[2], wave[3], wave[4], wave[5], wave[6], wave[7], wave[8]
-    pos, n_in, cur_a, fm_a, leaving_a = hit[0], hit[1], hit[3], hit[4], hit[6]
-    amp, power, t_absorb, q2 = coeff
+    pos, n_in, cos1, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[2], hit[3], hit[4], hit[5], hit[6]
+    amp, power, t_absorb, q2, at = coeff
     face_offset = faces[2]
-    kind, temperature, n1_real = media[0], media[2], media[3]
+    kind, temperature, n1_real, eps = media[0], media[2], media[3], media[5]
     strategy, split_depth = choice
     roulette = u_roul.shape[0] > 0
     ml = np.empty((2, 2), np.complex128)
@@ -305,12 +325,23 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
         for a in range(2):
             ml[a, 0] = m[i, a, 0] * b00 + m[i, a, 1] * b10
             ml[a, 1] = m[i, a, 0] * b01 + m[i, a, 1] * b11
-        Rs, Rp, Ts, Tp, As, Ap = power[j, 0], power[j, 1], power[j, 2], power[j, 3], power[j, 4], power[j, 5]
+        c = at[j]
+        if c >= 0:  # computed by the caller (coherent films: `multilayer`)
+            rs, rp, ts, tp = amp[c, 0], amp[c, 1], amp[c, 2], amp[c, 3]
+            Rs, Rp, Ts, Tp, As, Ap = power[c, 0], power[c, 1], power[c, 2], power[c, 3], power[c, 4], power[c, 5]
+            t_abs, q2c = t_absorb[c], q2[c]
+        elif kd == METAL:
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c = fresnel.conductor1()
+            t_abs = t_body
+        else:  # a bare interface; a lossy incident medium's remainder emits at its temperature
+            e1 = eps[cur_a[i]]
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c = fresnel.interface1(e1, _far_eps1(kd, e1, eps[other_a[i]]),
+                                                                             cos1[i])
+            t_abs = temperature[cur_a[i]]
         # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
         if As > A_ROUNDING or Ap > A_ROUNDING:
             ea, eb = math.sqrt(As), math.sqrt(Ap)
-            ta = t_absorb[j]
-            _add(acc, k, ml[0, 0] * ea, ml[0, 1] * eb, ml[1, 0] * ea, ml[1, 1] * eb, ta, ta)
+            _add(acc, k, ml[0, 0] * ea, ml[0, 1] * eb, ml[1, 0] * ea, ml[1, 1] * eb, t_abs, t_abs)
         if kd == BLACKBODY or kd == OPAQUE:
             ea, eb = math.sqrt(Ts), math.sqrt(Tp)
             _add(acc, k, ml[0, 0] * ea, ml[0, 1] * eb, ml[1, 0] * ea, ml[1, 1] * eb, t_body, t_body)
@@ -326,8 +357,8 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
         step = face_offset[prim[i]]
         dn = dx * nx + dy * ny + dz * nz
         if keep_r:  # reflected (eq. 2.21, 2.39): stays on the incident side
-            a_s = gain_r * _amplitude(amp[j, 0], Rs)
-            a_p = gain_r * _amplitude(amp[j, 1], Rp)
+            a_s = gain_r * _amplitude(rs, Rs)
+            a_p = gain_r * _amplitude(rp, Rp)
             for a in range(2):
                 mc[0, a, 0] = ml[a, 0] * a_s
                 mc[0, a, 1] = ml[a, 1] * a_p
@@ -339,8 +370,8 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
                 _child(out, n_out, pos[i], dv, sv, mc[0], k, depth[i] + 1, stack[i], top[i], t_body, g, step)
                 n_out += 1
         if keep_t:  # transmitted (eq. 2.19, 2.40): refracted into the other medium, or straight through a sheet
-            a_s = gain_t * _amplitude(amp[j, 2], Ts)
-            a_p = gain_t * _amplitude(amp[j, 3], Tp)
+            a_s = gain_t * _amplitude(ts, Ts)
+            a_p = gain_t * _amplitude(tp, Tp)
             for a in range(2):
                 mc[0, a, 0] = ml[a, 0] * a_s
                 mc[0, a, 1] = ml[a, 1] * a_p
@@ -352,7 +383,7 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
                     # Re q2 of the outgoing root (eq. 2.20); Snell's law for lossless media
                     c1 = -dn
                     n1 = n1_real[cur_a[i]]
-                    qr = q2[j].real
+                    qr = q2c.real
                     tx, ty, tz = n1 * (dx + c1 * nx) - qr * nx, n1 * (dy + c1 * ny) - qr * ny, n1 * (dz + c1 * nz) - qr * nz
                     tn = math.sqrt(tx * tx + ty * ty + tz * tz)
                     dv[0], dv[1], dv[2] = tx / tn, ty / tn, tz / tn
@@ -387,13 +418,13 @@ def warm(stack_size: int = 8) -> None:
     acc, cut = np.zeros((n, 4)), np.zeros((n, 2))
     t, prim = np.ones(n), np.full(n, -1, np.int64)
     faces = (np.zeros(1, np.int32), np.zeros((1, 3)), np.zeros(1))
-    media = (np.zeros(1, np.int8), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1, bool))
+    media = (np.zeros(1, np.int8), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1, bool), np.ones(1, complex))
     hit = (np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), np.zeros(n, np.int64), np.zeros(n, np.int64),
            np.zeros(n, np.int64), np.zeros(n, bool), np.zeros(n, np.int8))
     empty = np.zeros(0)
     arrive(wave, t, prim, (empty, empty), faces, media, acc, hit)
     limits = (32, 1e-3, True, 0.0, 300.0)
-    coeff = (np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0), np.zeros(0, complex))
+    coeff = (np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0), np.zeros(0, complex), np.zeros(0, np.int64))
     scatter(np.zeros(0, np.int64), wave, hit, coeff, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave)
     survivors(wave, empty, limits, acc, cut, np.zeros(n, bool))
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
