@@ -39,13 +39,14 @@ from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import REPLICATES, pixel_samples
 from pmmw_cli.trace import kernels
 from pmmw_cli.trace.intersect import offset_along
-from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, THIN, TraceJob
+from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, TraceJob
 
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
 _A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
 _NO_RANDOM = np.zeros(0)  # the kernels' "no uniforms drawn"
+_NO_CODE = np.zeros(0, np.int8)  # `kernels.scatter` does not read the codes of `kernels.arrive`
 _NO_FILMS = (np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0), np.zeros(0, complex))  # no coefficients given
 _MAX_WALK = 1000  # facet events of one walk through rough coating layers (never reached in tests)
 MAX_WAVE = 1 << 16  # camera rays traced at once: a tile's pass of more is split, so memory is flat in spp
@@ -367,8 +368,8 @@ class Integrator:
         self._limits = (int(st.max_depth), float(st.threshold), st.termination == "roulette",
                         float(self.t_bounds[0]), float(self.t_bounds[1]))
         self._choice = (kernels.STRATEGIES[st.strategy], int(st.split_depth))
-        # the compiled bounce (`_bounce_compiled`) serves smooth scenes; rough surfaces, bump maps
-        # and rough layers take the vectorized one (`_bounce`)
+        # smooth scenes interact in one compiled pass (`kernels.scatter`); rough surfaces, bump
+        # maps and rough layers in numpy around it (`_interact`, `_walk_layers`)
         self.compiled = not self.rough_scene if compiled is None else bool(compiled and not self.rough_scene)
         self._faces = (np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
                        np.ascontiguousarray(intersector.face_offset, float))
@@ -476,9 +477,8 @@ class Integrator:
             top=np.zeros(n, np.int32), last_t=np.full(n, np.nan),
         )
         first = True
-        bounce = self._bounce_compiled if self.compiled else self._bounce
         while wave is not None and len(wave) > 0:
-            wave = bounce(wave, first)
+            wave = self._bounce(wave, first)
             first = False
         return self.acc, self.first_t, self.first_m, self.cut
 
@@ -508,80 +508,10 @@ class Integrator:
         return t, prim, miss
 
     def _bounce(self, wave: _Wave, first: bool):
-        job = self.job
-        media = job.media
-        t, prim, miss = self._intersect(wave, first)
-        hit = ~miss
-        if not hit.any():
-            return None
-        if miss.any():
-            wv = wave.take(hit)
-            t, prim = t[hit], prim[hit]
-        else:
-            wv = wave
-        rows = np.arange(len(wv))
-        cur = wv.stack[rows, wv.top].astype(np.int64)
-
-        # The layered atmosphere along ambient segments: transmittance and own emission of the
-        # layers crossed, seen from the segment's near end (exact for straight segments).
-        if job.atmosphere is not None:
-            amb = (cur == 0) & (t > self.atm_skip_length)  # shorter ones: below the error budget
-            if amb.any():
-                trans, emission = job.atmosphere.path(wv.o[amb, 2], wv.o[amb, 2] + t[amb] * wv.d[amb, 2], t[amb])
-                self._emit(wv.sid[amb], wv.m[amb], emission)
-                wv.m[amb] *= np.sqrt(trans)[:, None, None]
-
-        # Absorption and emission along the segment just travelled (eq. 2.37, 2.38).
-        alpha = media.alpha[cur]
-        lossy = alpha > 0.0
-        if lossy.any():
-            tau = np.exp(-alpha[lossy] * t[lossy])
-            e = np.sqrt(1.0 - tau)
-            self._emit(wv.sid[lossy], wv.m[lossy] * e[:, None, None], media.temperature[cur[lossy]])
-            wv.m[lossy] *= np.sqrt(tau)[:, None, None]
-
-        pos = wv.o + t[:, None] * wv.d
-        face_med = job.face_medium[prim].astype(np.int64)
-        nf = job.face_normals[prim]
-        cosf = np.einsum("ij,ij->i", wv.d, nf)
-        kind = media.kind[face_med]
-        entering = cosf < 0.0
-        below = wv.stack[rows, np.maximum(wv.top - 1, 0)].astype(np.int64)
-        below = np.where(wv.top > 0, below, 0)
-        dielectric = kind == DIELECTRIC
-        leaving_cur = dielectric & ~entering & (face_med == cur)
-        full = wv.top >= wv.stack.shape[1] - 1
-        enter_ok = dielectric & entering & ~full
-        interact = (~dielectric | enter_ok | leaving_cur) & (cosf != 0.0)
-
-        out = []
-        passing = ~interact
-        if passing.any():
-            out.append(self._pass_through(wv.take(passing), pos[passing], face_med[passing], prim[passing]))
-        if interact.any():
-            idx = np.nonzero(interact)[0]
-            other = np.where(kind[idx] != DIELECTRIC, face_med[idx], np.where(entering[idx], face_med[idx], below[idx]))
-            n_in = np.where(cosf[idx, None] < 0.0, nf[idx], -nf[idx])  # normal facing the incident side
-            n_mac = self._bumped(pos[idx], wv.d[idx], n_in, face_med[idx]) if self.rough_scene else n_in
-            leaving = ~entering[idx] & dielectric[idx]
-            layered = self.layered[face_med[idx]] if self.layered is not None else None
-            if layered is None or not layered.any():
-                kids = self._interact(wv.take(idx), pos[idx], n_in, n_mac, cur[idx], face_med[idx], other, leaving,
-                                      prim[idx])
-            else:
-                a, b = np.nonzero(~layered)[0], np.nonzero(layered)[0]
-                kids = self._interact(wv.take(idx[a]), pos[idx[a]], n_in[a], n_mac[a], cur[idx[a]], face_med[idx[a]],
-                                      other[a], leaving[a], prim[idx[a]]) if a.size else []
-                kids += self._walk_layers(wv.take(idx[b]), pos[idx[b]], n_in[b], n_mac[b], cur[idx[b]],
-                                          face_med[idx[b]], other[b], leaving[b], prim[idx[b]])
-            children = _Wave.concat(kids)
-            if children is not None:
-                out.append(self._terminate(children))
-        return _Wave.concat(out)
-
-    def _bounce_compiled(self, wave: _Wave, first: bool):
-        """`_bounce` for smooth scenes: the per-ray work in two compiled passes (`kernels.arrive`,
-        `kernels.scatter`), with numpy for the faces under coherent films (`_film_coefficients`)."""
+        """One bounce of a wave: intersect; the sky for the rays that miss; for the others the
+        segment just travelled and the face they hit (`kernels.arrive`); the interactions:
+        compiled for smooth scenes (`kernels.scatter`), `_interact` / `_walk_layers` about
+        facets, bumps and rough layers otherwise. Returns the next wave (None: empty)."""
         job = self.job
         n = len(wave)
         t, prim, miss = self._intersect(wave, first)
@@ -600,19 +530,36 @@ class Integrator:
                np.empty(n, np.int64), np.empty(n, bool), np.empty(n, np.int8))
         arrays = wave.arrays()
         kernels.arrive(arrays, t, prim, atm, self._faces, self._media, self.acc, hit)
-        code = hit[7]
-        rows = np.flatnonzero(code == 2)
-        passing = np.flatnonzero(code == 1)
+        rows = np.flatnonzero(hit[7] == 2)
+        passing = np.flatnonzero(hit[7] == 1)
         out = [wave.take(passing)] if passing.size else []
-        if rows.size:
+        if not rows.size:
+            return _Wave.concat(out)
+        if self.compiled:
             coeff = self._film_coefficients(rows, hit)
-            st = job.settings
-            u_choose = self.rng.random(rows.size) if st.strategy != "split" else _NO_RANDOM
+            u_choose = self.rng.random(rows.size) if job.settings.strategy != "split" else _NO_RANDOM
             u_roul = self.rng.random(2 * rows.size) if self._limits[2] else _NO_RANDOM
             kids = _Wave.empty(2 * rows.size, wave.stack.shape[1])
             count = kernels.scatter(rows, arrays, hit, coeff, prim, self._faces, self._media, self._choice, u_choose,
-                                    u_roul, self._limits, self.acc, self.cut, kids.arrays())
+                                    u_roul, self._limits, self.acc, self.cut, kids.arrays(), kernels.NO_SETTLE)
             out.append(kids.head(count))
+            return _Wave.concat(out)
+        wv = wave.take(rows)
+        pos, n_in, cur, face_med, other, leaving = (hit[k][rows] for k in (0, 1, 3, 4, 5, 6))
+        prim = prim[rows]
+        n_mac = self._bumped(pos, wv.d, n_in, face_med)
+        layered = self.layered[face_med] if self.layered is not None else None
+        if layered is None or not layered.any():
+            kids = self._interact(wv, pos, n_in, n_mac, cur, face_med, other, leaving, prim)
+        else:
+            a, b = np.nonzero(~layered)[0], np.nonzero(layered)[0]
+            kids = self._interact(wv.take(a), pos[a], n_in[a], n_mac[a], cur[a], face_med[a], other[a], leaving[a],
+                                  prim[a]) if a.size else []
+            kids += self._walk_layers(wv.take(b), pos[b], n_in[b], n_mac[b], cur[b], face_med[b], other[b],
+                                      leaving[b], prim[b])
+        children = _Wave.concat(kids)
+        if children is not None:
+            out.append(self._terminate(children))
         return _Wave.concat(out)
 
     def _film_coefficients(self, rows, hit):
@@ -669,21 +616,6 @@ class Integrator:
         m = rebase(wv.m, wv.s, wv.p, hvec, vvec)
         self._emit(wv.sid, m, np.asarray(tb, float), np.asarray(ta, float))  # columns (h, v) = (Th, Tv)
 
-    def _pass_through(self, wv: _Wave, pos, face_med, prim):
-        """Cross a face without interacting; drop its medium from the stack if it is there."""
-        wv.o = offset_along(pos, self.job.face_normals[prim], wv.d, self.isect.face_offset[prim])
-        depth_idx = np.arange(wv.stack.shape[1])[None, :]
-        in_stack = (wv.stack == face_med[:, None]) & (depth_idx <= wv.top[:, None]) & (depth_idx > 0)
-        has = in_stack.any(axis=1)
-        if has.any():
-            rows = np.nonzero(has)[0]
-            pos_k = np.argmax(in_stack[rows], axis=1)
-            for r, kpos in zip(rows, pos_k):  # rare: only at interpenetrating objects
-                top = wv.top[r]
-                wv.stack[r, kpos:top] = wv.stack[r, kpos + 1 : top + 1]
-                wv.top[r] = top - 1
-        return wv
-
     def _interact(self, wv: _Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit=0):
         """Interaction of rays with one face: emission of what it absorbs, reflected and
         transmitted children.
@@ -694,74 +626,31 @@ class Integrator:
         renderer uses this") and the smooth-surface code below runs about that facet; children
         masked by the microsurface re-hit the same point at once (``rehit`` counts the chain).
         """
-        job = self.job
+        media = self.job.media
         step = self.isect.face_offset[prim]
-        media = job.media
-        kind = media.kind[face_med]
-        t_body = media.temperature[face_med]
         n_fac, tangent, rough = n_mac, None, None
         if self.rough_scene:
             n_fac, tangent, rough = self._facets(wv, n_mac, face_med)
+        nr = len(wv)
         cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_fac), 0.0, 1.0)
-
-        c, t_coat, q2 = surface_coefficients(job, cur, face_med, other, leaving, cos1)
-        coeff = c._asdict()
-        if np.isnan(q2).all():
-            q2 = None
-
-        s, ml = _local_basis(wv, n_fac)
-
-        self._emit_absorbed(wv.sid, ml, coeff, t_coat, (kind == BLACKBODY) | (kind == OPAQUE), t_body)
-
-        trans = ((kind == DIELECTRIC) | (kind == THIN)) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
-        keep_r, keep_t, gain_r, gain_t = self._choose_branches(wv, coeff, trans)
-        out, rehits = [], []
-
-        # Reflected child (eq. 2.21, 2.39): stays on the incident side.
-        if keep_r.any():
-            i = np.nonzero(keep_r)[0]
-            d_r = _reflect(wv.d[i], n_fac[i])
-            m_r = _scale_columns(ml[i], gain_r[i] * _amplitude(coeff["rs"][i], coeff["Rs"][i]),
-                                 gain_r[i] * _amplitude(coeff["rp"][i], coeff["Rp"][i]))
-            child = _Wave(
-                o=pos[i], d=d_r, s=s[i], p=cross(-d_r, s[i]), m=m_r, sid=wv.sid[i], depth=wv.depth[i] + 1,
-                stack=wv.stack[i].copy(), top=wv.top[i].copy(), last_t=t_body[i],
-            )
-            side = (cur[i], other[i], leaving[i])
-            leave, back = self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, 1.0,
-                                       rehit)
-            out.append(leave)
-            rehits.append(back)
-
-        # Transmitted child (eq. 2.19, 2.40): dielectrics refract into the other medium, thin
-        # sheets pass straight through.
-        if keep_t.any():
-            i = np.nonzero(keep_t)[0]
-            d_t = wv.d[i].copy()
-            diel = kind[i] == DIELECTRIC
-            if diel.any():
-                j = i[diel]
-                d_t[diel] = _refract(wv.d[j], n_fac[j], media.eps[cur[j]], media.eps[other[j]],
-                                     None if q2 is None else q2[j])
-            m_t = _scale_columns(ml[i], gain_t[i] * _amplitude(coeff["ts"][i], coeff["Ts"][i]),
-                                 gain_t[i] * _amplitude(coeff["tp"][i], coeff["Tp"][i]))
-            stack, top = wv.stack[i].copy(), wv.top[i].copy()
-            enter = diel & ~leaving[i]
-            top[enter] += 1
-            stack[np.nonzero(enter)[0], top[enter]] = face_med[i][enter]
-            leave = diel & leaving[i]
-            top[leave] -= 1
-            child = _Wave(
-                o=pos[i], d=d_t, s=s[i], p=cross(-d_t, s[i]), m=m_t, sid=wv.sid[i], depth=wv.depth[i] + 1,
-                stack=stack, top=top, last_t=t_body[i],
-            )
-            # seen from the far side: a refracted child swaps the media, a thin sheet keeps them
-            side = (np.where(diel, other[i], cur[i]), np.where(diel, cur[i], other[i]),
-                    np.where(diel, ~leaving[i], leaving[i]))
-            leave, back = self._settle(child, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, -1.0,
-                                       rehit)
-            out.append(leave)
-            rehits.append(back)
+        # the smooth code about the facets (`kernels.scatter`), its children left at the hit
+        # points for the masking test
+        hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
+        rows = np.arange(nr)
+        coeff = self._film_coefficients(rows, hit)
+        u_choose = self.rng.random(nr) if self.job.settings.strategy != "split" else _NO_RANDOM
+        kids = _Wave.empty(2 * nr, wv.stack.shape[1])
+        src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
+        count = kernels.scatter(rows, wv.arrays(), hit, coeff, prim, self._faces, self._media, self._choice, u_choose,
+                                _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), (False, src, branch))
+        kids, i, sign = kids.head(count), src[:count], branch[:count]
+        # the side each child is on, seen from there: a reflected child keeps the media, a refracted
+        # one swaps them, a thin sheet's transmitted child keeps them
+        swap = (sign < 0) & (media.kind[face_med[i]] == DIELECTRIC)
+        side = (np.where(swap, other[i], cur[i]), np.where(swap, cur[i], other[i]), leaving[i] ^ swap)
+        leave, back = self._settle(kids, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side,
+                                   sign[:, None].astype(float), rehit)
+        out, rehits = [leave], [back]
 
         # masked children of both branches hit the same points again, as one group
         # (with the weight threshold applied first: both children of a facet may be masked, so a
@@ -837,7 +726,8 @@ class Integrator:
         a metal-like body swallows what it transmits (as `pmmw_cli.brdf` does with a lossy
         substrate), a clear one lets it walk on. A child on the wrong side of the *geometric*
         face (a bump map's tilt) is mirrored through the face's plane, keeping its power. ``sign``
-        is +1 for reflected children (incident side), -1 for transmitted ones (far side).
+        (per child, shape (n, 1)) is +1 for reflected children (incident side), -1 for
+        transmitted ones (far side).
         """
         n_g = sign * n_geo[i]
         n_x = sign * n_mac[i]

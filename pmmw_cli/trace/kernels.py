@@ -39,6 +39,7 @@ _TINY = 1e-12
 _NORMAL = 1e-9  # |n x k| below this: normal incidence, the ray keeps its own s
 
 STRATEGIES = {"split": 0, "stochastic": 1, "hybrid": 2}
+NO_SETTLE = (True, np.zeros(0, np.int64), np.zeros(0, np.int8))  # `scatter`'s children leave at once
 
 _jit = numba.njit(cache=True, error_model="numpy")
 _inline = numba.njit(cache=True, error_model="numpy", inline="always")
@@ -233,19 +234,21 @@ def _amplitude(amp, power):
 
 
 @_inline
-def _child(out, n, o_pos, dv, sv, mm, sid, depth, stack_row, top, last_t, g, step):
+def _child(out, n, o_pos, dv, sv, mm, sid, depth, stack_row, top, last_t, g, step, finish):
     """Write one child at row n of ``out``: direction ``dv`` with basis vector ``sv``, off the
     surface at ``o_pos`` along the side normal ``g`` (mirrored through the face's plane first if
-    it points to the wrong side, keeping its power)."""
+    it points to the wrong side, keeping its power); at ``o_pos`` itself unless ``finish``."""
     oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
-    dg = dv[0] * g[0] + dv[1] * g[1] + dv[2] * g[2]
-    if dg <= 0.0:
-        sg = sv[0] * g[0] + sv[1] * g[1] + sv[2] * g[2]
-        for c in range(3):
-            dv[c] -= 2.0 * dg * g[c]
-            sv[c] -= 2.0 * sg * g[c]
-        dg = -dg
-    side = -step if dg < 0.0 else step
+    side = 0.0
+    if finish:
+        dg = dv[0] * g[0] + dv[1] * g[1] + dv[2] * g[2]
+        if dg <= 0.0:
+            sg = sv[0] * g[0] + sv[1] * g[1] + sv[2] * g[2]
+            for c in range(3):
+                dv[c] -= 2.0 * dg * g[c]
+                sv[c] -= 2.0 * sg * g[c]
+            dg = -dg
+        side = -step if dg < 0.0 else step
     for c in range(3):
         oo[n, c] = o_pos[c] + side * g[c]
         od[n, c] = dv[c]
@@ -266,13 +269,16 @@ def _child(out, n, o_pos, dv, sv, mm, sid, depth, stack_row, top, last_t, g, ste
 
 
 @_jit
-def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out):
+def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, settle):
     """Interactions of the rays ``rows`` of a wave with the faces they hit (`arrive` filled
     ``hit``); their surviving children are written to ``out`` (room for two per row). Returns
     how many.
 
     Parameters
     ----------
+    hit : tuple (pos, n, cos1, cur, face_med, other, leaving, code)
+        As `arrive` fills it; on a rough face ``n`` is the facet normal drawn for the ray and
+        ``cos1`` the cosine about it.
     coeff : tuple (amp, power, t_absorb, q2, at)
         Interface coefficients the caller computed (faces under coherent films): amplitudes
         (rs, rp, ts, tp), powers (Rs, Rp, Ts, Tp, As, Ap), the temperature at which A emits [K],
@@ -283,7 +289,13 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
     u_choose, u_roul : ndarray
         Uniforms for the branch choice (one per row; empty with ``split``) and Russian roulette
         (two per row; empty without roulette).
+    settle : tuple (finish, src, branch)
+        ``finish``: the children leave the surface here (offset along the side normal, then
+        `survive`). Otherwise (rough faces: masking decides first) they stay at the hit point,
+        unterminated, and ``src``/``branch`` receive each child's row in the wave and +1
+        (reflected) or -1 (transmitted).
     """
+    finish, src, branch = settle
     d, s_old, p_old, m, sid, depth, stack, top = wave[1], wave[2], wave[3], wave[4], wave[5], wave[6], wave[7], wave[8]
     pos, n_in, cos1, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[2], hit[3], hit[4], hit[5], hit[6]
     amp, power, t_absorb, q2, at = coeff
@@ -363,11 +375,13 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
                 mc[0, a, 0] = ml[a, 0] * a_s
                 mc[0, a, 1] = ml[a, 1] * a_p
             u = u_roul[2 * j] if roulette else 1.0
-            if survive(acc, cut, k, mc, 0, depth[i] + 1, t_body, u, limits):
+            if not finish or survive(acc, cut, k, mc, 0, depth[i] + 1, t_body, u, limits):
                 dv[0], dv[1], dv[2] = dx - 2.0 * dn * nx, dy - 2.0 * dn * ny, dz - 2.0 * dn * nz
                 sv[:] = s_new
                 g[0], g[1], g[2] = nx, ny, nz
-                _child(out, n_out, pos[i], dv, sv, mc[0], k, depth[i] + 1, stack[i], top[i], t_body, g, step)
+                _child(out, n_out, pos[i], dv, sv, mc[0], k, depth[i] + 1, stack[i], top[i], t_body, g, step, finish)
+                if not finish:
+                    src[n_out], branch[n_out] = i, 1
                 n_out += 1
         if keep_t:  # transmitted (eq. 2.19, 2.40): refracted into the other medium, or straight through a sheet
             a_s = gain_t * _amplitude(ts, Ts)
@@ -376,7 +390,7 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
                 mc[0, a, 0] = ml[a, 0] * a_s
                 mc[0, a, 1] = ml[a, 1] * a_p
             u = u_roul[2 * j + 1] if roulette else 1.0
-            if survive(acc, cut, k, mc, 0, depth[i] + 1, t_body, u, limits):
+            if not finish or survive(acc, cut, k, mc, 0, depth[i] + 1, t_body, u, limits):
                 diel = kd == DIELECTRIC
                 if diel:
                     # homogeneous wave (sec. 2.2.4): tangential part kept (eq. 2.18), normal part
@@ -392,7 +406,9 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
                 sv[:] = s_new
                 g[0], g[1], g[2] = -nx, -ny, -nz
                 tp = top[i]
-                _child(out, n_out, pos[i], dv, sv, mc[0], k, depth[i] + 1, stack[i], tp, t_body, g, step)
+                _child(out, n_out, pos[i], dv, sv, mc[0], k, depth[i] + 1, stack[i], tp, t_body, g, step, finish)
+                if not finish:
+                    src[n_out], branch[n_out] = i, -1
                 if diel and not leaving_a[i]:
                     out[8][n_out] = tp + 1
                     out[7][n_out, tp + 1] = fm
@@ -425,6 +441,7 @@ def warm(stack_size: int = 8) -> None:
     arrive(wave, t, prim, (empty, empty), faces, media, acc, hit)
     limits = (32, 1e-3, True, 0.0, 300.0)
     coeff = (np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0), np.zeros(0, complex), np.zeros(0, np.int64))
-    scatter(np.zeros(0, np.int64), wave, hit, coeff, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave)
+    scatter(np.zeros(0, np.int64), wave, hit, coeff, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave,
+            NO_SETTLE)
     survivors(wave, empty, limits, acc, cut, np.zeros(n, bool))
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
