@@ -25,6 +25,7 @@ from pmmw_cli.imaging.imager import blur, psf_kernel
 from pmmw_cli.io.atomic import save_npz_atomic, write_text_atomic
 from pmmw_cli.io.preview import save_figure
 from pmmw_cli.pipeline import aux_channels, make_job, resolve, scenario_hash
+from pmmw_cli.trace import kernels
 from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
 
 STRATEGIES = ("split", "stochastic", "hybrid")
@@ -33,6 +34,7 @@ REFERENCE_EXTRA_DEPTH = 4
 
 
 def _render(job, workers):
+    kernels.warm(job.settings.stack_size)  # the first render would otherwise time numba's start (~0.4 s)
     t0 = time.perf_counter()
     img = assemble(job, render_tiles(job, workers=workers))
     return img, time.perf_counter() - t0
@@ -150,7 +152,8 @@ def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, re
         "of noise (compare the split and hybrid rows at 1 spp, which trace identical rays); the errors do "
         "not depend on it.\n\n"
         "Physical optics (`pmmw po`: direct sum against octree, 1e3-1e6 facets x 1e2-1e5 directions) is "
-        "measured by `pmmw bench --po` in [benchmarks_po.md](benchmarks_po.md).\n"
+        "measured by `pmmw bench --po` in [benchmarks_po.md](benchmarks_po.md). Paths per second against "
+        "Mitsuba 3 on the same scene (the speed anchor, run by hand): [benchmarks_anchor.md](benchmarks_anchor.md).\n"
     )
     if skip_configs:
         all_rows["skips"] = skips(skip_configs, workers=workers, cache_dir=cache_dir, ref_spp=ref_spp)
