@@ -139,7 +139,7 @@ import numpy as np
 from scipy import special
 
 from pmmw_cli.errors import UserError, UserErrors
-from pmmw_cli.physics.vec import cross
+from pmmw_cli.physics.vec import cross, dot, unit
 
 __all__ = [
     "GGX",
@@ -193,15 +193,6 @@ class MicrofacetModel(Protocol):
 # ----------------------------------------------------------------------------------------------
 
 
-def _dot(a, b):
-    return np.einsum("ij,ij->i", a, b)
-
-
-def _unit(v):
-    norm = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.where(norm > 0.0, norm, 1.0)
-
-
 def local_frame(n_macro, tangent, orientation=0.0):
     """Orthonormal frame (x, y, z = n) with x the tangent rotated by ``orientation`` about n.
 
@@ -221,7 +212,7 @@ def local_frame(n_macro, tangent, orientation=0.0):
     """
     z = np.asarray(n_macro, dtype=np.float64)
     t = np.broadcast_to(np.asarray(tangent, dtype=np.float64), z.shape)
-    x = t - _dot(t, z)[:, None] * z
+    x = t - dot(t, z)[:, None] * z
     norm = np.linalg.norm(x, axis=1)
     bad = norm < 1e-9
     if np.any(bad):
@@ -243,7 +234,7 @@ def _to_local(v, frame):
     x, y, z = frame
     if x.ndim == 1:
         return v @ np.stack([x, y, z], axis=1)
-    return np.stack([_dot(v, x), _dot(v, y), _dot(v, z)], axis=1)
+    return np.stack([dot(v, x), dot(v, y), dot(v, z)], axis=1)
 
 
 def _to_world(v, frame):
@@ -296,7 +287,7 @@ def _ggx_vndf_local(wo, ax, ay, u1, u2):
     In the stretched space (alpha = 1, D uniform over the upper hemisphere) the visible normals
     of ``v`` are the half vectors between ``v`` and directions uniform on the cap z >= -v.z.
     """
-    v = _unit(np.stack([ax * wo[:, 0], ay * wo[:, 1], wo[:, 2]], axis=1))
+    v = unit(np.stack([ax * wo[:, 0], ay * wo[:, 1], wo[:, 2]], axis=1))
     phi = 2.0 * np.pi * u1
     z = (1.0 - u2) * (1.0 + v[:, 2]) - v[:, 2]
     sin_t = np.sqrt(np.clip(1.0 - z * z, 0.0, 1.0))
@@ -455,7 +446,7 @@ class _Microfacet:
         see the facet (``wi.m > 0`` and ``wo.m > 0``), else 0. Shapes (N, 3) -> (N,), in [0, 1]."""
         m = np.asarray(m, dtype=np.float64)
         g = self.masking(n_macro, tangent, wi) * self.masking(n_macro, tangent, wo)
-        return np.where((_dot(np.asarray(wi, float), m) > 0.0) & (_dot(np.asarray(wo, float), m) > 0.0), g, 0.0)
+        return np.where((dot(np.asarray(wi, float), m) > 0.0) & (dot(np.asarray(wo, float), m) > 0.0), g, 0.0)
 
     def pdf(self, n_macro, tangent, wo, m):
         """Density of `sample_normals`, the visible normals ``D_wo(m) = (wo.m)+ D(m)/A(wo)``
@@ -465,7 +456,7 @@ class _Microfacet:
         ml = _to_local(np.asarray(m, dtype=np.float64), frame)
         a = _area_any(self._a_up_local, wl)
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(a > 0.0, np.maximum(_dot(wl, ml), 0.0) * self._d_local(ml) / np.where(a > 0.0, a, 1.0), 0.0)
+            return np.where(a > 0.0, np.maximum(dot(wl, ml), 0.0) * self._d_local(ml) / np.where(a > 0.0, a, 1.0), 0.0)
 
     def sample_normals(self, n_macro, tangent, wo, u1, u2):
         """Draw microfacet normals visible from ``wo`` (exact; weight 1 but in the rare fallback).
@@ -498,7 +489,7 @@ class _Microfacet:
         u1 = np.asarray(u1, dtype=np.float64)
         u2 = np.asarray(u2, dtype=np.float64)
         ml, weight = self._vndf_local(wl, u1, u2)
-        return _to_world(ml, frame), np.where(_dot(ml, wl) > 0.0, weight, 0.0)
+        return _to_world(ml, frame), np.where(dot(ml, wl) > 0.0, weight, 0.0)
 
     def sample_dcos(self, n_macro, tangent, u1, u2):
         """Normals drawn from ``D(m) (m.n)`` (Optics Express 2016's sampling formula generalized), with
@@ -946,27 +937,27 @@ class BlenderGloss(_Microfacet):
 
     def _sample(self, wo, u1, u2):
         px, py = self._perturbation(u1, u2)
-        m = _unit(np.stack([px, py, np.ones_like(px)], axis=1))
-        back = _dot(m, wo) <= 0.0
+        m = unit(np.stack([px, py, np.ones_like(px)], axis=1))
+        back = dot(m, wo) <= 0.0
         if np.any(back):
-            m[back] = _unit(np.stack([-px[back], -py[back], np.ones(int(back.sum()))], axis=1))
+            m[back] = unit(np.stack([-px[back], -py[back], np.ones(int(back.sum()))], axis=1))
         return m
 
     def sample_normals(self, n_macro, tangent, wo, u1, u2):
         frame = self._frame(n_macro, tangent)
         wl = _to_local(np.asarray(wo, dtype=np.float64), frame)
         ml = self._sample(wl, np.asarray(u1, dtype=np.float64), np.asarray(u2, dtype=np.float64))
-        return _to_world(ml, frame), (_dot(ml, wl) > 0.0).astype(np.float64)
+        return _to_world(ml, frame), (dot(ml, wl) > 0.0).astype(np.float64)
 
     def masking(self, n_macro, tangent, w):
         """No masking in the thesis's recipe: 1 above the macro surface, 0 on the wrong side."""
         w = np.asarray(w, dtype=np.float64)
         n = np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)
-        return (_dot(w, n) > 0.0).astype(np.float64)
+        return (dot(w, n) > 0.0).astype(np.float64)
 
     def projected_area(self, n_macro, tangent, w):
         w = np.asarray(w, dtype=np.float64)
-        return np.maximum(_dot(w, np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)), 0.0)
+        return np.maximum(dot(w, np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)), 0.0)
 
     def pdf(self, n_macro, tangent, wo, m):
         """Density of the literal recipe with the mirror replacement of back-facing draws."""
@@ -975,8 +966,8 @@ class BlenderGloss(_Microfacet):
         ml = _to_local(np.asarray(m, dtype=np.float64), frame)
         p = self._literal_pdf_local(ml)
         mirror = ml * np.array([-1.0, -1.0, 1.0])
-        factor = 1.0 + (_dot(mirror, wl) <= 0.0)
-        return np.where(_dot(ml, wl) > 0.0, p * factor, 0.0)
+        factor = 1.0 + (dot(mirror, wl) <= 0.0)
+        return np.where(dot(ml, wl) > 0.0, p * factor, 0.0)
 
     def _dcos_local(self, u1, u2):
         raise NotImplementedError("blender_gloss has no D(m) cos sampler")
@@ -1003,11 +994,11 @@ def torrance_sparrow(n_macro, m, wi, wo):
     -------
     ndarray, shape (N,), float64 in [0, 1]
     """
-    nm = _dot(n_macro, m)
-    wim, wom = _dot(wi, m), _dot(wo, m)
+    nm = dot(n_macro, m)
+    wim, wom = dot(wi, m), dot(wo, m)
     with np.errstate(divide="ignore", invalid="ignore"):
-        gi = np.where(wim > 0.0, 2.0 * nm * _dot(n_macro, wi) / np.where(wim > 0.0, wim, 1.0), 0.0)
-        go = np.where(wom > 0.0, 2.0 * nm * _dot(n_macro, wo) / np.where(wom > 0.0, wom, 1.0), 0.0)
+        gi = np.where(wim > 0.0, 2.0 * nm * dot(n_macro, wi) / np.where(wim > 0.0, wim, 1.0), 0.0)
+        go = np.where(wom > 0.0, 2.0 * nm * dot(n_macro, wo) / np.where(wom > 0.0, wom, 1.0), 0.0)
     return np.clip(np.minimum(1.0, np.minimum(gi, go)), 0.0, 1.0)
 
 
@@ -1026,11 +1017,11 @@ def ashikhmin_pair(g1_i, g1_o, n_macro, wi, wo):
     -------
     ndarray, shape (N,), float64 in [0, 1]
     """
-    pi_ = wi - _dot(wi, n_macro)[:, None] * n_macro
-    po = wo - _dot(wo, n_macro)[:, None] * n_macro
+    pi_ = wi - dot(wi, n_macro)[:, None] * n_macro
+    po = wo - dot(wo, n_macro)[:, None] * n_macro
     ni, no = np.linalg.norm(pi_, axis=1), np.linalg.norm(po, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        cphi = np.where((ni > 0) & (no > 0), _dot(pi_, po) / np.where((ni > 0) & (no > 0), ni * no, 1.0), 1.0)
+        cphi = np.where((ni > 0) & (no > 0), dot(pi_, po) / np.where((ni > 0) & (no > 0), ni * no, 1.0), 1.0)
     f = np.sqrt(np.clip(0.5 * (1.0 + cphi), 0.0, 1.0))  # cos(phi/2)
     return (1.0 - f) * g1_i * g1_o + f * np.minimum(g1_i, g1_o)
 

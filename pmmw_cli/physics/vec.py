@@ -1,14 +1,15 @@
 """Small vector helpers for arrays of 3-vectors, shape (n, 3) (or broadcastable, e.g. (3,)).
 
 `numpy.cross` moves axes and checks shapes on every call, which costs tens of microseconds per
-call on the renderer's wavefronts; these write the components out.
+call on the renderer's wavefronts; these write the components out. `dot` and `unit` are the
+row-wise dot product and normalization that the microfacet models and `pmmw brdf` share.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["cross"]
+__all__ = ["cross", "dot", "unit"]
 
 
 def cross(a, b):
@@ -31,3 +32,33 @@ def cross(a, b):
     out[..., 1] = a2 * b0 - a0 * b2
     out[..., 2] = a0 * b1 - a1 * b0
     return out
+
+
+def dot(a, b):
+    """Row-wise dot product ``a . b`` over the last axis.
+
+    Parameters
+    ----------
+    a, b : ndarray, shape (..., 3), float64
+        Vectors; the leading axes broadcast.
+
+    Returns
+    -------
+    ndarray, shape (...), float64
+    """
+    return np.einsum("...i,...i->...", a, b)
+
+
+def unit(v):
+    """``v / |v|`` over the last axis; zero vectors are returned unchanged (no NaN).
+
+    Parameters
+    ----------
+    v : ndarray, shape (..., 3), float64
+
+    Returns
+    -------
+    ndarray, shape (..., 3), float64
+    """
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(n > 0.0, n, 1.0)
