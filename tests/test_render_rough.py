@@ -252,6 +252,25 @@ def test_bump_texture_file_gives_its_slopes(tmp_path):
     assert n_up[0] == pytest.approx(np.array([-slope, 0.0, 1.0]) / math.hypot(slope, 1.0), abs=1e-9)
 
 
+def test_bump_tilts_walls_and_both_orientations_alike():
+    """On a wall (normal along x: u = y, v = z) a ramp h = a u tilts the normal to
+    unit(n - a e_y) (closed form); the face's other orientation sees the same bump, so its
+    normal is exactly the mirror image; a normal on a diagonal (a tie of the dominant axis) takes
+    the first axis."""
+    a, n_pts, size = 0.3, 64, 4.0
+    u = np.arange(n_pts) * size / n_pts
+    bump = BumpMap(np.tile(a * ((u + size / 2) % size), (n_pts, 1)), size)  # ramp along columns (u)
+    pos = np.array([[0.0, 0.1, 0.2], [0.0, 0.1, 0.2]])
+    out = bump.perturb(pos, np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]))
+    expect = np.array([1.0, -a, 0.0]) / math.hypot(1.0, a)
+    np.testing.assert_allclose(out[0], expect, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[1], -expect, rtol=0, atol=1e-12)
+    diag = np.array([[1.0, 1.0, 0.0]]) / math.sqrt(2.0)  # x dominant (first of the tie): u = y
+    t_u = np.array([0.0, 1.0, 0.0]) - diag[0, 1] * diag[0]
+    expect = diag[0] - a * t_u
+    np.testing.assert_allclose(bump.perturb(pos[:1], diag)[0], expect / np.linalg.norm(expect), rtol=0, atol=1e-12)
+
+
 def test_rough_cinderblocks_config_resolves_its_rough_bumpy_sand():
     """The shipped rough variant of the thesis's cinderblock scene: `pmmw validate` reports the
     sand's GGX roughness and its Gaussian bump map (RMS slope sqrt(2) 2 cm / 25 cm = 0.113, one

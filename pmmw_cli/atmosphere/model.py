@@ -75,12 +75,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from scipy.linalg import solve_banded
 
 from pmmw_cli.atmosphere import itu
 from pmmw_cli.atmosphere.itu import NP_M_PER_DB_KM, PROFILES
+from pmmw_cli.jit import njit
 
 T_CMB = 2.725  # cosmic microwave background [K]
 R_EARTH = 6371.0e3  # mean earth radius [m]
@@ -670,7 +670,7 @@ class AtmosphereModel:
         return (self._tau(z0, z1, L) * (10.0 / np.log(10.0))).reshape(shape)
 
 
-@numba.njit(cache=True, error_model="numpy")
+@njit()
 def _path_loop(z0, z1, length, edges, alpha, depth, source, source_mu, with_mu, trans, emission):
     """`AtmosphereModel.path` per segment, compiled: a horizontal segment stays in one cell; a
     sloped one walks the cells from the observer outward, each cell's optical depth from the

@@ -33,8 +33,10 @@ from typing import NamedTuple
 import cmath
 import math
 
-import numba
 import numpy as np
+
+from pmmw_cli.jit import njit
+
 
 __all__ = ["Fresnel", "normal_component", "interface"]
 
@@ -114,7 +116,7 @@ def normal_component(eps, kpar2, branch="decaying"):
 
 # The per-ray arithmetic below is compiled (numba, cached on disk; ``NUMBA_DISABLE_JIT=1`` runs it as
 # Python): scalar functions, and loops over flat arrays that the vectorized helpers call.
-_jit = numba.njit(cache=True, error_model="numpy")
+_jit = njit()
 
 
 @_jit

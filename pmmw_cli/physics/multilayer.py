@@ -1,4 +1,4 @@
-"""Coherent thin-film stacks (coatings) without overflow, vectorized over rays (Murakowski 2014 2.2.3).
+"""Coherent thin-film stacks (coatings) without overflow, per ray and compiled (Murakowski 2014 2.2.3).
 
 Method
 ------
@@ -31,61 +31,116 @@ C)``; the product only decays. (B, C) are rescaled by exact powers of two at eac
 
 from __future__ import annotations
 
+import cmath
+import math
+
 import numpy as np
 
-from pmmw_cli.physics.fresnel import _admittance_p, _close, _incident, _normal_below
+from pmmw_cli.jit import inline, njit
+from pmmw_cli.physics.fresnel import _as_fresnel, _close1, _incident1, _normal_below1, _yp1
 
-__all__ = ["stack"]
+__all__ = ["stack", "stack1"]
 
 _SUBSTRATES = ("dielectric", "metal")
+# The stack is reduced per ray, compiled (numba, cached on disk): `stack` loops over rays, and the
+# tracer's kernels call `stack1` for faces under coherent films.
 
 
+@inline()
 def _expm1(z):
-    """``exp(z) - 1`` for complex z, accurate for small |z| (no cancellation).
-
-    Parameters
-    ----------
-    z : ndarray, complex128, Re z <= 0 here
-
-    Returns
-    -------
-    ndarray, complex128
-    """
+    """``exp(z) - 1`` for complex z (Re z <= 0 here), accurate for small |z| (no cancellation):
+    ``e^x cos y - 1 = expm1(x) cos y - 2 sin^2(y/2)``, ``Im = e^x sin y``."""
     x, y = z.real, z.imag
-    s = np.sin(0.5 * y)
-    # e^x cos y - 1 = expm1(x) cos y - 2 sin^2(y/2), e^x sin y
-    return (np.expm1(x) * np.cos(y) - 2.0 * s * s) + 1j * (np.exp(x) * np.sin(y))
+    s = math.sin(0.5 * y)
+    return complex(math.expm1(x) * math.cos(y) - 2.0 * s * s, math.exp(x) * math.sin(y))
 
 
+@inline()
 def _phi1(z, em1):
-    """``phi1(z) = (exp(z) - 1)/z`` (1 at z = 0); |phi1| <= 1 for Re z <= 0.
-
-    Parameters
-    ----------
-    z, em1 : ndarray, complex128
-        Argument and ``expm1(z)``.
-    """
-    # Small |z|: two terms of the series (error |z|^2/6 < 1e-16); also avoids dividing tiny
-    # (subnormal) numbers, which can overflow.
-    small = np.abs(z) < 1e-8
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        return np.where(small, 1.0 + 0.5 * z, em1 / np.where(small, 1.0, z))
+    """``phi1(z) = (exp(z) - 1)/z`` (1 at z = 0) from ``em1 = expm1(z)``; |phi1| <= 1 for Re z <= 0.
+    Small |z|: two terms of the series (error |z|^2/6 < 1e-16), which also avoids dividing tiny
+    (subnormal) numbers."""
+    if abs(z) < 1e-8:
+        return 1.0 + 0.5 * z
+    return em1 / z
 
 
-def _rescale(b, c, exps):
-    """Scale (B, C) by a power of two (exact) to max(|B|, |C|) in [0.5, 1); add up the exponents."""
-    m = np.maximum(np.abs(b), np.abs(c))
-    _, e = np.frexp(np.where(m > 0.0, m, 1.0))
-    f = np.ldexp(1.0, -e)
-    return b * f, c * f, exps + e
+@inline()
+def _rescale(b, c, e):
+    """Scale (B, C) by a power of two (exact) to max(|B|, |C|) in [0.5, 1); add the exponent to e."""
+    m = max(abs(b), abs(c))
+    k = math.frexp(m if m > 0.0 else 1.0)[1]
+    f = math.ldexp(1.0, -k)
+    return b * f, c * f, e + k
 
 
+@inline()
 def _ldexp_c(z, e):
     """``z * 2**e`` for complex z and integer e, exact (no intermediate 2**e overflow)."""
-    out = np.empty(np.broadcast_shapes(np.shape(z), np.shape(e)), dtype=np.complex128)
-    out.real = np.ldexp(z.real, e)
-    out.imag = np.ldexp(z.imag, e)
-    return out
+    return complex(math.ldexp(z.real, e), math.ldexp(z.imag, e))
+
+
+@njit()
+def stack1(eps, thickness, cos1, k0, metal):
+    """`stack` of one ray: ``eps`` (L,) complex128 from the incident medium to the exit medium,
+    ``thickness`` (L-2,) [m], ``metal`` a perfect-conductor bottom. Returns (rs, rp, ts, tp, Rs,
+    Rp, Ts, Tp, As, Ap)."""
+    n_media = eps.shape[0]
+    eps1 = eps[0]
+    q1, q1sq = _incident1(eps1, cos1)
+    # Murakowski 2014 eq. 2.20. Layers: decaying root, so that |exp(i beta)| <= 1 (a layer's matrix
+    # is even in q_j, the sign does not change r or t). Exit half-space: outgoing root, as in
+    # `interface` (they differ only under a lossy incident medium).
+    # Bottom: (B, C) of the exit half-space, Y_in = C/B (Y = q for s, q/eps for p), and the
+    # exit-side U amplitude in the same units.
+    if metal:
+        # perfect conductor: E_tan = 0, i.e. U = 0 for s (rs = -1) and V = 0 for p (rp = +1)
+        bs, cs, bp, cp = 0j, 1.0 + 0j, 1.0 + 0j, 0j
+        amp_s, amp_p = 0j, 0j
+        ys_exit, yp_exit = 0.0, 0.0
+    else:
+        eps_exit = eps[n_media - 1]
+        q_exit = _normal_below1(eps_exit, eps1, q1sq, False)
+        bs, cs, bp, cp = 1.0 + 0j, q_exit, eps_exit, q_exit
+        amp_s, amp_p = 1.0 + 0j, eps_exit
+        ys_exit, yp_exit = q_exit.real, _yp1(q_exit, eps_exit)
+    if n_media > 2:
+        exps_s, exps_p = 0, 0
+        phase = 0j  # sum of i beta_j; Re <= 0
+        for j in range(n_media - 2, 0, -1):  # layers from the bottom up
+            epsj, dj = eps[j], thickness[j - 1]
+            qj = _normal_below1(epsj, eps1, q1sq, True)
+            beta = k0 * qj * dj  # Im beta >= 0 since Im q >= 0 and d >= 0
+            z = 2j * beta
+            em1 = _expm1(z)  # E - 1, |E| <= 1
+            half_1pe = 1.0 + 0.5 * em1  # (1 + E)/2
+            # (1 - E)/(2 Y) = -i k0 d w phi1(2 i beta) with w = 1 (s), eps_j (p): finite at q = 0
+            g_s = -1j * k0 * dj * _phi1(z, em1)
+            g_p = g_s * epsj
+            # Y (1 - E)/2 = -Y expm1/2 with Y = q (s), q/eps (p)
+            h_s = -0.5 * qj * em1
+            h_p = h_s / epsj
+            bs, cs = half_1pe * bs + g_s * cs, h_s * bs + half_1pe * cs
+            bp, cp = half_1pe * bp + g_p * cp, h_p * bp + half_1pe * cp
+            bs, cs, exps_s = _rescale(bs, cs, exps_s)
+            bp, cp, exps_p = _rescale(bp, cp, exps_p)
+            phase += 1j * beta
+        if not metal:
+            # t carries prod exp(i beta_j) (|.| <= 1, only decays) and undoes the power-of-two
+            # rescaling of (B, C) exactly (ldexp, no 2**e is formed): t = 2 Y1 amp / (Y1 B + C)
+            # with (B, C) divided by 2**sum(e), so amp is divided by it too.
+            prop = cmath.exp(phase)
+            amp_s = _ldexp_c(amp_s * prop, -exps_s)
+            amp_p = _ldexp_c(amp_p * prop, -exps_p)
+    return _close1(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, ys_exit, yp_exit, metal)
+
+
+@njit()
+def _stack_loop(eps, thickness, cos1, k0, metal, amp, power):
+    for i in range(eps.shape[0]):
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = stack1(eps[i], thickness[i], cos1[i], k0, metal)
+        amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
+        power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 
 
 def stack(eps, thickness, cos1, k0, substrate="dielectric"):
@@ -144,58 +199,8 @@ def stack(eps, thickness, cos1, k0, substrate="dielectric"):
     cos1 = np.broadcast_to(cos1, shape)
     metal = substrate == "metal"
 
-    eps1 = eps[..., 0]
-    q1, q1sq = _incident(eps1, cos1)
-    # Murakowski 2014 eq. 2.20. Layers: decaying root, so that |exp(i beta)| <= 1 (a layer's matrix is
-    # even in q_j, the sign does not change r or t). Exit half-space: outgoing root, as in
-    # `interface` (they differ only under a lossy incident medium).
-    q = _normal_below(eps[..., 1:], eps1[..., None], q1sq[..., None], branch="decaying")
-    q[..., -1] = _normal_below(eps[..., -1], eps1, q1sq, branch="outgoing")
-
-    # Bottom: (B, C) of the exit half-space, Y_in = C/B (Y = q for s, q/eps for p), and the
-    # exit-side U amplitude in the same units.
-    q_exit, eps_exit = q[..., -1], eps[..., -1]
-    one = np.ones(shape, dtype=np.complex128)
-    zero = np.zeros(shape, dtype=np.complex128)
-    if metal:
-        # perfect conductor: E_tan = 0, i.e. U = 0 for s (rs = -1) and V = 0 for p (rp = +1)
-        bs, cs, bp, cp = zero, one, one, zero
-        amp_s, amp_p = zero, zero
-        ys_exit = yp_exit = np.zeros(shape)
-    else:
-        bs, cs, bp, cp = one, q_exit, eps_exit, q_exit
-        amp_s, amp_p = one, eps_exit
-        ys_exit = q_exit.real
-        yp_exit = _admittance_p(q_exit, eps_exit)
-
-    if n_media > 2:
-        exps_s = np.zeros(shape, dtype=np.int64)
-        exps_p = np.zeros(shape, dtype=np.int64)
-        phase = np.zeros(shape, dtype=np.complex128)  # sum of i beta_j; Re <= 0
-        for j in range(n_media - 2, 0, -1):  # layers from the bottom up (few: loop over layers)
-            qj, epsj, dj = q[..., j - 1], eps[..., j], thickness[..., j - 1]
-            beta = k0 * qj * dj  # Im beta >= 0 since Im q >= 0 and d >= 0
-            z = 2j * beta
-            em1 = _expm1(z)  # E - 1, |E| <= 1
-            half_1pe = 1.0 + 0.5 * em1  # (1 + E)/2
-            ph = _phi1(z, em1)
-            # (1 - E)/(2 Y) = -i k0 d w phi1(2 i beta) with w = 1 (s), eps_j (p): finite at q = 0
-            g_s = -1j * k0 * dj * ph
-            g_p = g_s * epsj
-            # Y (1 - E)/2 = -Y expm1/2 with Y = q (s), q/eps (p)
-            h_s = -0.5 * qj * em1
-            h_p = h_s / epsj
-            bs, cs = half_1pe * bs + g_s * cs, h_s * bs + half_1pe * cs
-            bp, cp = half_1pe * bp + g_p * cp, h_p * bp + half_1pe * cp
-            bs, cs, exps_s = _rescale(bs, cs, exps_s)
-            bp, cp, exps_p = _rescale(bp, cp, exps_p)
-            phase = phase + 1j * beta
-        if not metal:
-            # t carries prod exp(i beta_j) (|.| <= 1, only decays) and undoes the power-of-two
-            # rescaling of (B, C) exactly (ldexp, no 2**e is formed): t = 2 Y1 amp / (Y1 B + C)
-            # with (B, C) divided by 2**sum(e), so amp is divided by it too.
-            prop = np.exp(phase)
-            amp_s = _ldexp_c(amp_s * prop, -exps_s)
-            amp_p = _ldexp_c(amp_p * prop, -exps_p)
-
-    return _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, ys_exit, yp_exit, opaque=metal)
+    n = int(np.prod(shape, dtype=np.int64))
+    amp, power = np.empty((n, 4), np.complex128), np.empty((n, 6))
+    _stack_loop(np.ascontiguousarray(eps).reshape(n, n_media), np.ascontiguousarray(thickness).reshape(n, n_media - 2),
+                np.ascontiguousarray(cos1).reshape(n), float(k0), metal, amp, power)
+    return _as_fresnel(amp, power, shape)

@@ -139,6 +139,7 @@ import numpy as np
 from scipy import special
 
 from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.jit import inline, njit
 from pmmw_cli.physics.vec import cross, dot, unit
 
 __all__ = [
@@ -363,6 +364,118 @@ def _area_any(a_up_fn, w):
 
 
 # ----------------------------------------------------------------------------------------------
+# GGX and Beckmann per ray, compiled (the renderer's facet draw and masking test)
+# ----------------------------------------------------------------------------------------------
+# The same arithmetic as `local_frame`, `_ggx_vndf_local` and the projected areas above, written
+# per ray in one pass (numba, cached on disk): these run once per rough interaction and re-hit.
+# tests/test_roughness.py checks them against the array code to rounding.
+
+_jit = njit()
+
+
+_inline = inline()
+
+# compiled model codes (`smith_g1`); other models are evaluated by their array code
+NOT_ROUGH, GGX_CODE, BECKMANN_CODE, OTHER_CODE = 0, 1, 2, 3
+
+
+@_inline
+def _frame1(z0, z1, z2, t0, t1, t2, orientation):
+    """`local_frame` of one ray: x and y as two 3-tuples (z is the normal)."""
+    tn = t0 * z0 + t1 * z1 + t2 * z2
+    x0, x1, x2 = t0 - tn * z0, t1 - tn * z1, t2 - tn * z2
+    norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    if norm < 1e-9:  # any perpendicular: the axis least aligned with n, crossed with n
+        a0, a1, a2 = abs(z0), abs(z1), abs(z2)
+        if a0 <= a1 and a0 <= a2:
+            x0, x1, x2 = 0.0, -z2, z1
+        elif a1 <= a2:
+            x0, x1, x2 = z2, 0.0, -z0
+        else:
+            x0, x1, x2 = -z1, z0, 0.0
+        norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    x0, x1, x2 = x0 / norm, x1 / norm, x2 / norm
+    y0, y1, y2 = z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0
+    if orientation != 0.0:
+        co, so = math.cos(orientation), math.sin(orientation)
+        x0, x1, x2, y0, y1, y2 = (co * x0 + so * y0, co * x1 + so * y1, co * x2 + so * y2,
+                                  -so * x0 + co * y0, -so * x1 + co * y1, -so * x2 + co * y2)
+    return (x0, x1, x2), (y0, y1, y2)
+
+
+@_inline
+def smith_g1(n, t, w, code, ax, ay, orientation):
+    """Smith masking ``G1(w) = w.z / A(w)`` of one ray (3-tuples n, t, w: macro normal, tangent,
+    direction) for GGX (``code`` `GGX_CODE`) or Beckmann, as `_Microfacet.masking` with
+    `_ggx_a_up` / `_beckmann_a_up`; 0 below the macro surface."""
+    c = w[0] * n[0] + w[1] * n[1] + w[2] * n[2]
+    if not c > 0.0:
+        return 0.0
+    x, y = _frame1(n[0], n[1], n[2], t[0], t[1], t[2], orientation)
+    wx = w[0] * x[0] + w[1] * x[1] + w[2] * x[2]
+    wy = w[0] * y[0] + w[1] * y[1] + w[2] * y[2]
+    r2 = wx * wx + wy * wy
+    c2 = wx * wx / r2 if r2 > 0.0 else 1.0
+    alpha2 = ax * ax * c2 + ay * ay * (1.0 - c2)
+    if code == BECKMANN_CODE:
+        sa = math.sqrt(alpha2 * r2)
+        if sa > 0.0:
+            a = c / sa
+            area = c * 0.5 * (1.0 + math.erf(a)) + sa * math.exp(-min(a * a, 745.0)) / (2.0 * _SQRT_PI)
+        else:
+            area = c
+    else:
+        area = 0.5 * (c + math.sqrt(c * c + alpha2 * r2))
+    return min(max(c / area, 0.0), 1.0)
+
+
+@_jit
+def _ggx_sample_rows(n, t, wo, u1, u2, ax, ay, orientation, m_out, w_out):
+    """`GGX.sample_normals` per ray: the spherical-cap draw (`_ggx_vndf_local`) in each ray's
+    `local_frame`; arrays of shape (N, 3) and (N,), filled in ``m_out`` and ``w_out``."""
+    for i in range(n.shape[0]):
+        x, y = _frame1(n[i, 0], n[i, 1], n[i, 2], t[i, 0], t[i, 1], t[i, 2], orientation)
+        wx = wo[i, 0] * x[0] + wo[i, 1] * x[1] + wo[i, 2] * x[2]
+        wy = wo[i, 0] * y[0] + wo[i, 1] * y[1] + wo[i, 2] * y[2]
+        wz = wo[i, 0] * n[i, 0] + wo[i, 1] * n[i, 1] + wo[i, 2] * n[i, 2]
+        vx, vy, vz = ax * wx, ay * wy, wz
+        nv = math.sqrt(vx * vx + vy * vy + vz * vz)
+        if nv > 0.0:
+            vx, vy, vz = vx / nv, vy / nv, vz / nv
+        phi = 2.0 * math.pi * u1[i]
+        zc = (1.0 - u2[i]) * (1.0 + vz) - vz
+        sin_t = math.sqrt(min(max(1.0 - zc * zc, 0.0), 1.0))
+        mx, my, mz = ax * (sin_t * math.cos(phi) + vx), ay * (sin_t * math.sin(phi) + vy), max(zc + vz, 0.0)
+        nm = math.sqrt(mx * mx + my * my + mz * mz)
+        if nm <= 0.0:  # c = -v exactly (measure zero)
+            mx, my, mz = 0.0, 0.0, 1.0
+        else:
+            mx, my, mz = mx / nm, my / nm, mz / nm
+        w_out[i] = 1.0 if mx * wx + my * wy + mz * wz > 0.0 else 0.0
+        for c in range(3):
+            m_out[i, c] = mx * x[c] + my * y[c] + mz * n[i, c]
+
+
+@_jit
+def _smith_masking_rows(n, t, w, code, ax, ay, orientation, out):
+    """`smith_g1` of arrays of rays, shape (N, 3) -> ``out`` (N,)."""
+    for i in range(n.shape[0]):
+        out[i] = smith_g1((n[i, 0], n[i, 1], n[i, 2]), (t[i, 0], t[i, 1], t[i, 2]), (w[i, 0], w[i, 1], w[i, 2]),
+                          code, ax, ay, orientation)
+
+
+def _rows(n_macro, tangent, v):
+    """Per-ray (N, 3) float64 arrays of macro normals and tangents (broadcast from (3,)) for
+    the compiled routines, with ``v`` (N, 3) setting N; tangent None: world X."""
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    shape = v.shape
+    n = np.ascontiguousarray(np.broadcast_to(np.asarray(n_macro, dtype=np.float64), shape))
+    t = np.array([1.0, 0.0, 0.0]) if tangent is None else tangent
+    t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), shape))
+    return n, t, v
+
+
+# ----------------------------------------------------------------------------------------------
 # Models
 # ----------------------------------------------------------------------------------------------
 
@@ -372,6 +485,7 @@ class _Microfacet:
 
     name = "microfacet"
     anisotropic = False
+    code = OTHER_CODE  # masking by the array code (`smith_g1` covers GGX and Beckmann)
 
     def __init__(self, orientation_deg=0.0):
         self.orientation = math.radians(float(orientation_deg))
@@ -815,6 +929,7 @@ class GGX(_Microfacet):
     """GGX / Trowbridge-Reitz distribution, roughness ``alpha`` (or ``alpha_x``, ``alpha_y``) > 0."""
 
     name = "ggx"
+    code = GGX_CODE  # compiled masking (`smith_g1`)
 
     def __init__(self, alpha=None, alpha_x=None, alpha_y=None, orientation_deg=0.0):
         super().__init__(orientation_deg)
@@ -843,6 +958,24 @@ class GGX(_Microfacet):
     def _vndf_local(self, wo, u1, u2):
         return _ggx_vndf_local(wo, self.ax, self.ay, u1, u2), np.ones(wo.shape[0])
 
+    def sample_normals(self, n_macro, tangent, wo, u1, u2):
+        # the compiled per-ray draw (the same arithmetic as the array code of the base class)
+        if self.anisotropic and tangent is None:
+            raise ValueError(f"{self.name}: an anisotropic model needs the tangent")
+        n, t, wo = _rows(n_macro, tangent, wo)
+        m, weight = np.empty_like(wo), np.empty(wo.shape[0])
+        _ggx_sample_rows(n, t, wo, np.ascontiguousarray(u1, dtype=np.float64),
+                         np.ascontiguousarray(u2, dtype=np.float64), self.ax, self.ay, self.orientation, m, weight)
+        return m, weight
+
+    def masking(self, n_macro, tangent, w):
+        if self.anisotropic and tangent is None:
+            raise ValueError(f"{self.name}: an anisotropic model needs the tangent")
+        n, t, w = _rows(n_macro, tangent, w)
+        out = np.empty(w.shape[0])
+        _smith_masking_rows(n, t, w, self.code, self.ax, self.ay, self.orientation, out)
+        return out
+
     def _dcos_local(self, u1, u2):
         # tan^2 theta = alpha_phi^2 u/(1-u); tan phi = (ay/ax) tan(2 pi u1)
         phi = np.arctan2(self.ay * np.sin(2.0 * np.pi * u1), self.ax * np.cos(2.0 * np.pi * u1))
@@ -857,6 +990,7 @@ class Beckmann(GGX):
     """Beckmann distribution, roughness ``alpha`` (RMS slope times sqrt 2) or ``alpha_x``, ``alpha_y``."""
 
     name = "beckmann"
+    code = BECKMANN_CODE
 
     def _d_local(self, m):
         cz = m[:, 2]
@@ -878,6 +1012,9 @@ class Beckmann(GGX):
 
     def _vndf_local(self, wo, u1, u2):
         return self._rejection_vndf(wo, u1, u2, self.ax, self.ay, self._log_accept, 4.0 / math.e)
+
+    def sample_normals(self, n_macro, tangent, wo, u1, u2):
+        return _Microfacet.sample_normals(self, n_macro, tangent, wo, u1, u2)  # by rejection (array code)
 
     def _dcos_local(self, u1, u2):
         phi = np.arctan2(self.ay * np.sin(2.0 * np.pi * u1), self.ax * np.cos(2.0 * np.pi * u1))

@@ -24,10 +24,12 @@ import math
 import numba
 import numpy as np
 
+from pmmw_cli.jit import inline, njit
+
 TAYLOR = 1e-4  # |spread| of a facet's phases below which the divided difference is a series
 
 
-@numba.njit(cache=True, inline="always")
+@inline(error_model="python")
 def _phi1(x):
     """(exp(i x) - 1) / (i x) for real x."""
     if x == 0.0:
@@ -37,7 +39,7 @@ def _phi1(x):
     return complex(2.0 * sh * ch / x, 2.0 * sh * sh / x)
 
 
-@numba.njit(cache=True)
+@njit(error_model="python")
 def triangle_phase(a0, a1, a2, area):
     """``integral_T exp(i q . r) dS`` of a triangle of ``area`` [m^2] whose vertices have the
     phases a_j = q . r_j [rad] (module docstring)."""
@@ -58,7 +60,7 @@ def triangle_phase(a0, a1, a2, area):
     return 2.0 * area * complex(math.cos(mid), math.sin(mid)) * g
 
 
-@numba.njit(cache=True, parallel=True)
+@njit(parallel=True, error_model="python")
 def triangle_integrals(tri, area, q):
     """(F, D) complex128 integrals of the triangles tri (F, 3, 3) [m], area (F,) [m^2] at the
     wave vectors q (D, 3) [1/m]."""
@@ -73,7 +75,7 @@ def triangle_integrals(tri, area, q):
     return out
 
 
-@numba.njit(cache=True, parallel=True)
+@njit(parallel=True, error_model="python")
 def direction_sums(tri, area, src, q):
     """(D, C) complex128: ``sum_f src[f, c] integral_{T_f} exp(i q_d . r) dS`` for triangles tri
     (F, 3, 3) [m], area (F,) [m^2], weights src (F, C) complex128 and wave vectors q (D, 3)."""
@@ -91,7 +93,7 @@ def direction_sums(tri, area, src, q):
     return out
 
 
-@numba.njit(cache=True, parallel=True)
+@njit(parallel=True, error_model="python")
 def box_patterns(tri, area, src, start, centres, q, r_hat, eta):
     """(B, 3, D) complex128: for each box b, the facets start[b]:start[b+1] (contiguous), the
     vector V = eta N + L x r_hat of their currents about the box centre, N and L being

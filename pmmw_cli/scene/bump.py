@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.jit import inline, njit
 
 __all__ = ["BumpMap", "make_bump"]
 
@@ -75,17 +76,6 @@ class BumpMap:
     def __repr__(self):
         return f"BumpMap({self.description}, RMS slope {self.rms_slope:.3g}, heights {self.digest})"
 
-    def _sample(self, grid, u, v):
-        """Bilinear, periodic interpolation of a grid at (u, v) [m]."""
-        nv, nu = grid.shape
-        x, y = u / self.du, v / self.dv
-        x0, y0 = np.floor(x), np.floor(y)
-        fx, fy = x - x0, y - y0
-        i0, j0 = np.mod(x0, nu).astype(np.int64), np.mod(y0, nv).astype(np.int64)
-        i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
-        return ((1 - fx) * (1 - fy) * grid[j0, i0] + fx * (1 - fy) * grid[j0, i1]
-                + (1 - fx) * fy * grid[j1, i0] + fx * fy * grid[j1, i1])
-
     def perturb(self, pos, normals):
         """Shading normals at hit points.
 
@@ -101,23 +91,54 @@ class BumpMap:
         ndarray, shape (n, 3), float64
             Unit shading normals, on the same side of the face as ``normals``.
         """
-        axis = np.argmax(np.abs(normals), axis=1)
+        normals = np.ascontiguousarray(normals, dtype=np.float64)
+        out = np.empty_like(normals)
+        _perturb_rows(np.ascontiguousarray(pos, dtype=np.float64), normals, self.gu, self.gv, self.du, self.dv, out)
+        return out
+
+
+@inline()
+def _bilinear(grid, x, y):
+    """Bilinear, periodic interpolation of a grid at (x, y) in grid steps."""
+    nv, nu = grid.shape
+    x0, y0 = math.floor(x), math.floor(y)
+    fx, fy = x - x0, y - y0
+    i0, j0 = int(x0 % nu), int(y0 % nv)
+    i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
+    return ((1 - fx) * (1 - fy) * grid[j0, i0] + fx * (1 - fy) * grid[j0, i1]
+            + (1 - fx) * fy * grid[j1, i0] + fx * fy * grid[j1, i1])
+
+
+@njit()
+def _perturb_rows(pos, normals, grad_u, grad_v, du, dv, out):
+    """`BumpMap.perturb` per hit point (compiled: it runs at every bumped interaction).
+
+    ``(u, v)`` are the two world coordinates after the dominant axis of the normal; the slopes
+    are flipped with the normal so that both orientations of a face see the same bumps; the
+    shading normal is ``unit(n - dh/du t_u - dh/dv t_v)`` with ``t_u``, ``t_v`` the world u and v
+    axes projected onto the face's plane (module docstring).
+    """
+    for i in range(pos.shape[0]):
+        n = normals[i]
+        axis = 0
+        if abs(n[1]) > abs(n[axis]):
+            axis = 1
+        if abs(n[2]) > abs(n[axis]):
+            axis = 2
         iu, iv = (axis + 1) % 3, (axis + 2) % 3
-        rows = np.arange(pos.shape[0])
-        u, v = pos[rows, iu], pos[rows, iv]
-        # the field is attached to the outward-or-not normal's side: flip slopes with the normal
-        # so that both orientations of one face see the same bumps
-        sign = np.sign(normals[rows, axis])
-        gu = self._sample(self.gu, u, v) * sign
-        gv = self._sample(self.gv, u, v) * sign
-        e_u = np.zeros_like(normals)
-        e_v = np.zeros_like(normals)
-        e_u[rows, iu] = 1.0
-        e_v[rows, iv] = 1.0
-        t_u = e_u - normals[rows, iu][:, None] * normals
-        t_v = e_v - normals[rows, iv][:, None] * normals
-        out = normals - gu[:, None] * t_u - gv[:, None] * t_v
-        return out / np.linalg.norm(out, axis=1, keepdims=True)
+        x, y = pos[i, iu] / du, pos[i, iv] / dv
+        sign = 1.0 if n[axis] > 0.0 else (-1.0 if n[axis] < 0.0 else 0.0)
+        gu = _bilinear(grad_u, x, y) * sign
+        gv = _bilinear(grad_v, x, y) * sign
+        norm2 = 0.0
+        for c in range(3):
+            t_u = (1.0 if c == iu else 0.0) - n[iu] * n[c]
+            t_v = (1.0 if c == iv else 0.0) - n[iv] * n[c]
+            out[i, c] = n[c] - gu * t_u - gv * t_v
+            norm2 += out[i, c] * out[i, c]
+        norm = math.sqrt(norm2)
+        for c in range(3):
+            out[i, c] /= norm
 
 
 def gaussian_surface(rms: float, correlation: float, size: float, seed: int = 0) -> np.ndarray:

@@ -34,12 +34,12 @@ from scipy.ndimage import binary_dilation
 
 from pmmw_cli.physics import fresnel, multilayer
 from pmmw_cli.physics.jones import rebase
-from pmmw_cli.physics.roughness import MAX_REHITS
+from pmmw_cli.physics.roughness import MAX_REHITS, NOT_ROUGH, OTHER_CODE
 from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import REPLICATES, pixel_samples
 from pmmw_cli.trace import kernels
 from pmmw_cli.trace.intersect import offset_along
-from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, OPAQUE, TraceJob
+from pmmw_cli.trace.job import BLACKBODY, C0, METAL, OPAQUE, TraceJob
 
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
@@ -47,7 +47,6 @@ _A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless in
 _NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
 _NO_RANDOM = np.zeros(0)  # the kernels' "no uniforms drawn"
 _NO_CODE = np.zeros(0, np.int8)  # `kernels.scatter` does not read the codes of `kernels.arrive`
-_NO_FILMS = (np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0), np.zeros(0, complex))  # no coefficients given
 _MAX_WALK = 1000  # facet events of one walk through rough coating layers (never reached in tests)
 MAX_WAVE = 1 << 16  # camera rays traced at once: a tile's pass of more is split, so memory is flat in spp
 
@@ -368,14 +367,32 @@ class Integrator:
         self._limits = (int(st.max_depth), float(st.threshold), st.termination == "roulette",
                         float(self.t_bounds[0]), float(self.t_bounds[1]))
         self._choice = (kernels.STRATEGIES[st.strategy], int(st.split_depth))
-        # smooth scenes interact in one compiled pass (`kernels.scatter`); rough surfaces, bump
-        # maps and rough layers in numpy around it (`_interact`, `_walk_layers`)
+        # smooth scenes interact in one compiled pass (`kernels.scatter`); rough surfaces and bump
+        # maps run the same kernel about drawn facets, then `kernels.settle` (`_interact`), rough
+        # layers a numpy walk around it (`_walk_layers`); ``compiled=False`` sends smooth scenes
+        # through `_interact` too (the reference of tests/test_compiled_tracer.py)
         self.compiled = not self.rough_scene if compiled is None else bool(compiled and not self.rough_scene)
         self._faces = (np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
                        np.ascontiguousarray(intersector.face_offset, float))
         self._media = (np.ascontiguousarray(media.kind, np.int8), np.ascontiguousarray(media.alpha, float),
                        np.ascontiguousarray(media.temperature, float), np.sqrt(media.eps.astype(complex)).real.copy(),
                        np.array([c is not None for c in media.coating]), np.ascontiguousarray(media.eps, complex))
+        # the media's coherent films for `kernels.scatter` (flattened, outermost first)
+        coats = [c for c in media.coating if c is not None]
+        self._films = (np.cumsum([0] + [0 if c is None else c.eps.size for c in media.coating[:-1]]).astype(np.int64),
+                       np.array([0 if c is None else c.eps.size for c in media.coating], np.int64),
+                       np.concatenate([c.eps for c in coats] + [np.ones(1)]).astype(complex),
+                       np.concatenate([c.thickness for c in coats] + [np.zeros(1)]).astype(float),
+                       np.array([0.0 if c is None else c.temperature for c in media.coating], float),
+                       float(job.k0))
+        # the media's roughness models for `kernels.settle`'s masking test: GGX and Beckmann there,
+        # others (``OTHER_CODE``) by their array code
+        models = [media.rough(k) for k in range(len(media.ids))]
+        self._rough = (np.array([NOT_ROUGH if r is None else getattr(r, "code", OTHER_CODE) for r in models], np.int8),
+                       np.array([getattr(r, "ax", 1.0) for r in models], float),
+                       np.array([getattr(r, "ay", 1.0) for r in models], float),
+                       np.array([getattr(r, "orientation", 0.0) for r in models], float))
+        self._rough_other = bool((self._rough[0] == OTHER_CODE).any())
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:
@@ -536,11 +553,10 @@ class Integrator:
         if not rows.size:
             return _Wave.concat(out)
         if self.compiled:
-            coeff = self._film_coefficients(rows, hit)
             u_choose = self.rng.random(rows.size) if job.settings.strategy != "split" else _NO_RANDOM
             u_roul = self.rng.random(2 * rows.size) if self._limits[2] else _NO_RANDOM
             kids = _Wave.empty(2 * rows.size, wave.stack.shape[1])
-            count = kernels.scatter(rows, arrays, hit, coeff, prim, self._faces, self._media, self._choice, u_choose,
+            count = kernels.scatter(rows, arrays, hit, self._films, prim, self._faces, self._media, self._choice, u_choose,
                                     u_roul, self._limits, self.acc, self.cut, kids.arrays(), kernels.NO_SETTLE)
             out.append(kids.head(count))
             return _Wave.concat(out)
@@ -562,26 +578,6 @@ class Integrator:
             out.append(self._terminate(children))
         return _Wave.concat(out)
 
-    def _film_coefficients(self, rows, hit):
-        """`kernels.scatter`'s ``coeff``: the coefficients of the rays ``rows`` that meet faces
-        under coherent films (`surface_coefficients`, numpy over the layers); the others' are
-        computed in the kernel."""
-        fm = hit[4][rows]
-        films = np.flatnonzero(self._media[4][fm])
-        at = np.full(rows.size, -1, np.int64)
-        if not films.size:
-            return _NO_FILMS + (at,)
-        at[films] = np.arange(films.size)
-        r = rows[films]
-        cur, other, cos1 = hit[3][r], hit[5][r], hit[2][r]
-        c, t_coat, q2 = surface_coefficients(self.job, cur, fm[films], other, hit[6][r], cos1)
-        missing = np.isnan(q2) & (self.job.media.kind[fm[films]] == DIELECTRIC)
-        if missing.any():  # under films: the far medium's normal component for refraction
-            eps1, eps2 = self.job.media.eps[cur[missing]], self.job.media.eps[other[missing]]
-            q2[missing] = fresnel.normal_component(eps2, eps1 * (1.0 - cos1[missing] ** 2), branch="outgoing")
-        return (np.stack([c.rs, c.rp, c.ts, c.tp], axis=1), np.stack([c.Rs, c.Rp, c.Ts, c.Tp, c.As, c.Ap], axis=1),
-                t_coat, q2, at)
-
     def _bumped(self, pos, d, n_in, face_med):
         """Macro normals tilted by the bump maps of the faces' materials (the face normal elsewhere).
 
@@ -590,7 +586,7 @@ class Integrator:
         """
         media = self.job.media
         out = n_in
-        for k in np.unique(face_med):
+        for k in _values(face_med):
             bump = media.bump_map(int(k))
             if bump is None:
                 continue
@@ -626,7 +622,6 @@ class Integrator:
         renderer uses this") and the smooth-surface code below runs about that facet; children
         masked by the microsurface re-hit the same point at once (``rehit`` counts the chain).
         """
-        media = self.job.media
         step = self.isect.face_offset[prim]
         n_fac, tangent, rough = n_mac, None, None
         if self.rough_scene:
@@ -637,31 +632,22 @@ class Integrator:
         # points for the masking test
         hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
         rows = np.arange(nr)
-        coeff = self._film_coefficients(rows, hit)
         u_choose = self.rng.random(nr) if self.job.settings.strategy != "split" else _NO_RANDOM
         kids = _Wave.empty(2 * nr, wv.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
-        count = kernels.scatter(rows, wv.arrays(), hit, coeff, prim, self._faces, self._media, self._choice, u_choose,
+        count = kernels.scatter(rows, wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice, u_choose,
                                 _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), (False, src, branch))
-        kids, i, sign = kids.head(count), src[:count], branch[:count]
-        # the side each child is on, seen from there: a reflected child keeps the media, a refracted
-        # one swaps them, a thin sheet's transmitted child keeps them
-        swap = (sign < 0) & (media.kind[face_med[i]] == DIELECTRIC)
-        side = (np.where(swap, other[i], cur[i]), np.where(swap, cur[i], other[i]), leaving[i] ^ swap)
-        leave, back = self._settle(kids, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side,
-                                   sign[:, None].astype(float), rehit)
-        out, rehits = [leave], [back]
-
-        # masked children of both branches hit the same points again, as one group
-        # (with the weight threshold applied first: both children of a facet may be masked, so a
-        # chain could otherwise double its rays at every step)
-        rehits = [b for b in rehits if b is not None]
-        if rehits:
-            back = _Wave.concat([b[0] for b in rehits])
-            args = [np.concatenate([b[k] for b in rehits]) for k in range(1, 9)]
+        leave, back = self._settle(kids.head(count), src[:count], branch[:count], pos, n_geo, n_mac, tangent, rough,
+                                   face_med, prim, step, cur, other, leaving, rehit)
+        out = [leave]
+        if back is not None:
+            # masked children of both branches hit the same points again, as one group (with the
+            # weight threshold applied first: both children of a facet may be masked, so a chain
+            # could otherwise double its rays at every step)
+            back, args = back[0], list(back[1:])
             keep = self._survivors(back)
             if not keep.all():
-                back, args = back.take(keep), [a[keep] for a in args]
+                back, args = back.head(kernels.compact(back.arrays(), keep)), [a[keep] for a in args]
             if len(back):
                 out += self._interact(back, *args, rehit + 1)
         return [w for w in out if w is not None and len(w)]
@@ -679,7 +665,7 @@ class Integrator:
         rough : ndarray, shape (n,), bool or None
         """
         media = self.job.media
-        models = {k: media.rough(int(k)) for k in np.unique(face_med)}
+        models = {k: media.rough(int(k)) for k in _values(face_med)}
         models = {k: mdl for k, mdl in models.items() if mdl is not None}
         if not models:
             return n_mac, None, None
@@ -712,7 +698,8 @@ class Integrator:
             wv.m[rows[scaled]] *= np.sqrt(w[scaled])[:, None, None]
         return np.where(w[:, None] > 0.0, m, n)
 
-    def _settle(self, child: _Wave, i, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, side, sign, rehit):
+    def _settle(self, child: _Wave, i, branch, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, cur, other,
+                leaving, rehit):
         """Send children off the surface, or back onto it.
 
         Returns the children that leave and, for those that do not, the arguments of their
@@ -725,43 +712,37 @@ class Integrator:
         facet a re-hitting child crosses one wavelength of its side's medium (`_cross_wavelength`):
         a metal-like body swallows what it transmits (as `pmmw_cli.brdf` does with a lossy
         substrate), a clear one lets it walk on. A child on the wrong side of the *geometric*
-        face (a bump map's tilt) is mirrored through the face's plane, keeping its power. ``sign``
-        (per child, shape (n, 1)) is +1 for reflected children (incident side), -1 for
-        transmitted ones (far side).
+        face (a bump map's tilt) is mirrored through the face's plane, keeping its power.
+        ``branch`` (per child) is +1 for reflected children (incident side), -1 for transmitted
+        ones (far side); ``i`` their rows in the interaction's arrays. The masking probability
+        comes from each face's model; the rest is one pass of `kernels.settle`.
         """
-        n_g = sign * n_geo[i]
-        n_x = sign * n_mac[i]
-        stay = np.zeros(len(child), bool)
-        if rough is not None and rough[i].any():
-            r = np.nonzero(rough[i])[0]
-            fm = face_med[i][r]
-            p_leave = np.empty(r.size)
-            for k in np.unique(fm):
-                g = fm == k
-                p_leave[g] = self.job.media.rough(int(k)).masking(n_x[r[g]], tangent[i][r[g]], child.d[r[g]])
-            stay[r] = self.rng.random(r.size) >= p_leave
-        go = ~stay
-        _mirror_wrong_side(child, n_g, go)
-        child.o = offset_along(child.o, n_g, child.d, step[i])
-        if not stay.any():
-            return child, None
-        leave = child.take(go)
-        back = child.take(stay)
-        j = i[stay]
-        cur, other, leaving = (np.asarray(a)[stay] for a in side)
-        if rehit + 1 > MAX_REHITS:
-            self._emit(back.sid, back.m, self.job.media.temperature[face_med[j]])
-            return leave, None
-        media = self.job.media
-        alive = self._cross_wavelength(back, media.alpha[cur], media.temperature[cur])
-        if not alive.any():
-            return leave, None
-        a = np.nonzero(alive)[0]
-        back = back.take(a) if not alive.all() else back
-        back.o = pos[j[a]]
-        back.depth -= 1  # the chain of facets at one point counts as one interaction
-        return leave, (back, pos[j[a]], n_g[stay][a], n_x[stay][a], cur[a], face_med[j[a]], other[a], leaving[a],
-                       prim[j[a]])
+        n = len(child)
+        u, p_leave = np.zeros(n), _NO_RANDOM
+        if rough is not None:
+            rk = rough[i]
+            u[rk] = self.rng.random(np.count_nonzero(rk))
+            if self._rough_other:  # models without compiled masking
+                r = np.flatnonzero(self._rough[0][face_med[i]] == OTHER_CODE)
+                fm, ir = face_med[i][r], i[r]
+                n_x = branch[r][:, None] * n_mac[ir]
+                p_leave = np.zeros(n)
+                for k in _values(fm):
+                    g = fm == k
+                    p_leave[r[g]] = self.job.media.rough(int(k)).masking(n_x[g], tangent[ir[g]], child.d[r[g]])
+        else:
+            tangent = n_mac  # not read
+        leave, back = _Wave.empty(n, child.stack.shape[1]), _Wave.empty(n, child.stack.shape[1])
+        side = (np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, bool), np.empty(n))
+        hit = (pos, n_geo, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
+        nl, nb = kernels.settle(child.arrays(), i, branch, u, p_leave, hit, n_mac, tangent, step, rehit + 1 > MAX_REHITS,
+                                self._media, self._rough, C0 / self.job.frequency, self.acc, leave.arrays(),
+                                back.arrays(), side)
+        if not nb:
+            return leave.head(nl), None
+        j, cur, other, leaving, sign = (a[:nb] for a in side)
+        return leave.head(nl), (back.head(nb), pos[j], sign[:, None] * n_geo[j], sign[:, None] * n_mac[j], cur,
+                                face_med[j], other, leaving, prim[j])
 
     # -- rough coating layers (Optics Express 2016) ----------------------------------------------------------
     def _walk_layers(self, wv: _Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim):
@@ -975,7 +956,7 @@ class Integrator:
     def _terminate(self, wv: _Wave):
         """Depth cut-off and weight threshold (Murakowski 2014 sec. 2.2.5, 2.2.9)."""
         keep = self._survivors(wv)
-        return wv.take(keep) if not keep.all() else wv
+        return wv.head(kernels.compact(wv.arrays(), keep)) if not keep.all() else wv
 
     def _survivors(self, wv: _Wave):
         """Which rays go on after the depth cut-off and the weight threshold (`kernels.survive`:
@@ -1068,6 +1049,14 @@ def _merge_walk(parts):
     if not parts:
         return None
     return (_Wave.concat([p[0] for p in parts]),) + tuple(np.concatenate([p[i] for p in parts]) for i in range(1, 5))
+
+
+def _values(a):
+    """The distinct values of a small integer array (`numpy.unique`), without its sort for the
+    usual case of one value (a wave on one material)."""
+    if a.size and a.min() == a.max():
+        return a[:1]
+    return np.unique(a)
 
 
 def _tangents(n):

@@ -16,8 +16,10 @@ coordinates (``face_scale``); `offset_origins` steps over it.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from pmmw_cli.jit import njit
+
 
 EMBREE_DTYPE = np.float32  # precision at the Embree boundary; shading is float64
 
@@ -158,7 +160,7 @@ class EmbreeIntersector(_TriangleSoup):
             prim[grazing] = np.where(hit, res["primID"], -1)
 
 
-@numba.njit(cache=True, error_model="numpy")
+@njit()
 def _plane_distance(o, d, v0, normals, prim, t):
     """``t`` of each hit (``prim >= 0``) from the plane of its face, in float64 and at least 0;
     returns the rays at grazing incidence (left unchanged), where the plane equation amplifies

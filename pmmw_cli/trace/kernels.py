@@ -27,10 +27,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from pmmw_cli.physics import fresnel, multilayer
+from pmmw_cli.jit import inline, njit
+from pmmw_cli.physics import fresnel, multilayer, roughness
 from pmmw_cli.trace.intersect import _plane_distance
 from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
 
@@ -41,8 +41,8 @@ _NORMAL = 1e-9  # |n x k| below this: normal incidence, the ray keeps its own s
 STRATEGIES = {"split": 0, "stochastic": 1, "hybrid": 2}
 NO_SETTLE = (True, np.zeros(0, np.int64), np.zeros(0, np.int8))  # `scatter`'s children leave at once
 
-_jit = numba.njit(cache=True, error_model="numpy")
-_inline = numba.njit(cache=True, error_model="numpy", inline="always")
+_jit = njit()
+_inline = inline()
 
 
 @_inline
@@ -268,8 +268,62 @@ def _child(out, n, o_pos, dv, sv, mm, sid, depth, stack_row, top, last_t, g, ste
     olast[n] = last_t
 
 
+@_inline
+def _film_buffers(films):
+    """Room for one ray's stack of media (`_coefficients1`)."""
+    n = films[1].max() + 2 if films[1].shape[0] else 2
+    return np.empty(n, np.complex128), np.empty(n, np.float64)
+
+
+@_inline
+def _coefficients1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
+    """Coefficients of one ray meeting a face of medium ``fm`` from medium ``cur`` (``other``
+    beyond; ``leaving`` ``fm``) at cosine ``cos1``: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2,
+    t_absorb), as `integrator.surface_coefficients` gives them. Under coherent films (eq.
+    2.27-2.34) the stack from ``cur`` through them (innermost first when leaving) to the far
+    medium, its absorption emitting at the films' temperature; a perfect conductor; or a bare
+    interface, a lossy incident medium's remainder emitting at that medium's temperature. ``q2``:
+    the far medium's normal component for refraction (outgoing root; NaN for a conductor)."""
+    kind, temperature, has_coat, eps = media[0], media[2], media[4], media[5]
+    f_start, f_count, f_eps, f_d, f_temp, k0 = films
+    kd = kind[fm]
+    e1 = eps[cur]
+    if has_coat[fm]:
+        nf, st = f_count[fm], f_start[fm]
+        buf_eps[0] = e1
+        for q in range(nf):
+            f = st + (nf - 1 - q if leaving else q)
+            buf_eps[1 + q], buf_d[q] = f_eps[f], f_d[f]
+        # a blackbody is index-matched to the films' innermost layer
+        buf_eps[nf + 1] = f_eps[st + nf - 1] if kd == BLACKBODY else _far_eps1(kd, e1, eps[other])
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(buf_eps[:nf + 2], buf_d[:nf], cos1, k0, kd == METAL)
+        q2 = complex(np.nan, 0.0)
+        if kd == DIELECTRIC:
+            eo = eps[other]
+            kpar2 = e1 * (1.0 - cos1 ** 2)
+            q2 = fresnel._root1(eo - kpar2, abs(eo) + abs(kpar2), False)
+        return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, f_temp[fm]
+    if kd == METAL:
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.conductor1()
+        return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, temperature[fm]
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.interface1(e1, _far_eps1(kd, e1, eps[other]), cos1)
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, temperature[cur]
+
+
 @_jit
-def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, settle):
+def coefficients(cur, face_med, other, leaving, cos1, media, films, amp, power, q2, t_absorb):
+    """`_coefficients1` of arrays of rays (shape (n,)): amplitudes (rs, rp, ts, tp) in ``amp``
+    (n, 4), powers (Rs, Rp, Ts, Tp, As, Ap) in ``power`` (n, 6), ``q2`` and ``t_absorb`` (n,)."""
+    buf_eps, buf_d = _film_buffers(films)
+    for i in range(cos1.shape[0]):
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2[i], t_absorb[i] = _coefficients1(
+            face_med[i], cur[i], other[i], leaving[i], cos1[i], media, films, buf_eps, buf_d)
+        amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
+        power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
+
+
+@_jit
+def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, settle):
     """Interactions of the rays ``rows`` of a wave with the faces they hit (`arrive` filled
     ``hit``); their surviving children are written to ``out`` (room for two per row). Returns
     how many.
@@ -279,12 +333,13 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
     hit : tuple (pos, n, cos1, cur, face_med, other, leaving, code)
         As `arrive` fills it; on a rough face ``n`` is the facet normal drawn for the ray and
         ``cos1`` the cosine about it.
-    coeff : tuple (amp, power, t_absorb, q2, at)
-        Interface coefficients the caller computed (faces under coherent films): amplitudes
-        (rs, rp, ts, tp), powers (Rs, Rp, Ts, Tp, As, Ap), the temperature at which A emits [K],
-        and the far medium's normal component (outgoing branch) for refraction, at row ``at[j]``
-        for ``rows[j]``; ``at[j] = -1``: a bare interface or a perfect conductor, computed here
-        (`fresnel.interface1`, `fresnel.conductor1`).
+    films : tuple (start, count, eps, thickness, temperature, k0)
+        The media's coherent films (`job.Coating`, outermost first), flattened: medium k's are
+        ``eps[start[k]:start[k] + count[k]]`` and ``thickness[...]`` [m], their absorption emits at
+        ``temperature[k]`` [K]; ``k0`` [1/m]. A face under films is the stack from the incident
+        medium through them (innermost first for a ray leaving the body) to the far medium
+        (`multilayer.stack1`); a bare interface `fresnel.interface1`, a perfect conductor
+        `fresnel.conductor1`.
     choice : tuple (strategy code, split_depth)
     u_choose, u_roul : ndarray
         Uniforms for the branch choice (one per row; empty with ``split``) and Russian roulette
@@ -298,9 +353,9 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
     finish, src, branch = settle
     d, s_old, p_old, m, sid, depth, stack, top = wave[1], wave[2], wave[3], wave[4], wave[5], wave[6], wave[7], wave[8]
     pos, n_in, cos1, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[2], hit[3], hit[4], hit[5], hit[6]
-    amp, power, t_absorb, q2, at = coeff
+    buf_eps, buf_d = _film_buffers(films)
     face_offset = faces[2]
-    kind, temperature, n1_real, eps = media[0], media[2], media[3], media[5]
+    kind, temperature, n1_real = media[0], media[2], media[3]
     strategy, split_depth = choice
     roulette = u_roul.shape[0] > 0
     ml = np.empty((2, 2), np.complex128)
@@ -337,19 +392,8 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
         for a in range(2):
             ml[a, 0] = m[i, a, 0] * b00 + m[i, a, 1] * b10
             ml[a, 1] = m[i, a, 0] * b01 + m[i, a, 1] * b11
-        c = at[j]
-        if c >= 0:  # computed by the caller (coherent films: `multilayer`)
-            rs, rp, ts, tp = amp[c, 0], amp[c, 1], amp[c, 2], amp[c, 3]
-            Rs, Rp, Ts, Tp, As, Ap = power[c, 0], power[c, 1], power[c, 2], power[c, 3], power[c, 4], power[c, 5]
-            t_abs, q2c = t_absorb[c], q2[c]
-        elif kd == METAL:
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c = fresnel.conductor1()
-            t_abs = t_body
-        else:  # a bare interface; a lossy incident medium's remainder emits at its temperature
-            e1 = eps[cur_a[i]]
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c = fresnel.interface1(e1, _far_eps1(kd, e1, eps[other_a[i]]),
-                                                                             cos1[i])
-            t_abs = temperature[cur_a[i]]
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coefficients1(fm, cur_a[i], other_a[i], leaving_a[i],
+                                                                            cos1[i], media, films, buf_eps, buf_d)
         # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
         if As > A_ROUNDING or Ap > A_ROUNDING:
             ea, eb = math.sqrt(As), math.sqrt(Ap)
@@ -418,6 +462,141 @@ def scatter(rows, wave, hit, coeff, prim, faces, media, choice, u_choose, u_roul
     return n_out
 
 
+@_inline
+def _copy_row(src, c, dst, n):
+    """Row c of wave ``src`` to row n of wave ``dst``."""
+    for a in range(3):
+        dst[0][n, a], dst[1][n, a], dst[2][n, a], dst[3][n, a] = src[0][c, a], src[1][c, a], src[2][c, a], src[3][c, a]
+    for a in range(2):
+        for b in range(2):
+            dst[4][n, a, b] = src[4][c, a, b]
+    dst[5][n], dst[6][n], dst[8][n], dst[9][n] = src[5][c], src[6][c], src[8][c], src[9][c]
+    for a in range(src[7].shape[1]):
+        dst[7][n, a] = src[7][c, a]
+
+
+@_jit
+def compact(wave, keep):
+    """Move the rows of a wave with ``keep`` to its front, in order (in place: the wave's arrays
+    must not be shared); returns how many."""
+    n = 0
+    for c in range(keep.shape[0]):
+        if keep[c]:
+            if n != c:
+                _copy_row(wave, c, wave, n)
+            n += 1
+    return n
+
+
+@_jit
+def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, rehit_over, media, rough, wavelength, acc,
+           leave, back, back_side):
+    """Children of a rough surface's facets (`scatter` with ``finish`` False) sent off the
+    surface or back onto it (`Integrator._settle`, which describes the rule).
+
+    Parameters
+    ----------
+    kids : tuple of arrays (a wave)
+        The children, at their hit points; ``src`` their row in ``hit`` and ``branch`` +1
+        (reflected) or -1 (transmitted).
+    u_leave : ndarray, shape (n,)
+        Uniforms of the children of rough faces: a child leaves unless ``u_leave >= G1``,
+        Smith's masking probability about the macro normal of its side.
+    p_leave : ndarray, shape (n,)
+        G1 of the children of faces whose roughness model is not compiled
+        (`roughness.OTHER_CODE`), computed by the caller; read for those only.
+    hit : tuple (pos, n_geo, cos1, cur, face_med, other, leaving, code)
+        The interacting rows (``n_geo``: the face normal facing the incident side).
+    n_mac, tangent : ndarray, shape (rows, 3)
+        Macro normals facing the incident side, and the anisotropy tangents (`roughness.local_frame`).
+    step : ndarray, shape (rows,)
+        Offset off the face [m].
+    rehit_over : bool
+        The re-hit chain is at its end: a masked child's power is emitted at the face's
+        temperature.
+    media : tuple (kind, alpha, temperature, ...)
+    rough : tuple (code, alpha_x, alpha_y, orientation) of arrays, one entry per medium
+        The media's roughness models (`roughness.smith_g1`'s codes; `roughness.NOT_ROUGH`: smooth).
+    wavelength : float
+        [m]: the way a masked child crosses in its medium to the next facet.
+    leave, back : tuple of arrays (waves)
+        Filled with the children that leave (off the surface, a wrong-side child mirrored
+        through the face's plane) and those that re-hit (at the hit point, one wavelength's
+        absorption applied and emitted, depth back by one).
+    back_side : tuple (src, cur, other, leaving, sign)
+        Filled for each re-hitting child: its row in ``hit``, the media of its side seen from
+        there, and its branch.
+
+    Returns
+    -------
+    (int, int)
+        How many children leave and how many re-hit.
+    """
+    pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[3], hit[4], hit[5], hit[6]
+    kind, alpha, temperature = media[0], media[1], media[2]
+    b_src, b_cur, b_other, b_leaving, b_sign = back_side
+    r_code, r_ax, r_ay, r_orient = rough
+    o, d, s, p, m, sid = kids[0], kids[1], kids[2], kids[3], kids[4], kids[5]
+    nl, nb = 0, 0
+    for c in range(src.shape[0]):
+        i = src[c]
+        sg = float(branch[c])
+        gx, gy, gz = sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2]
+        fm = fm_a[i]
+        code = r_code[fm]
+        if code == roughness.OTHER_CODE:
+            g1 = p_leave[c]
+        elif code != roughness.NOT_ROUGH:
+            g1 = roughness.smith_g1((sg * n_mac[i, 0], sg * n_mac[i, 1], sg * n_mac[i, 2]),
+                                    (tangent[i, 0], tangent[i, 1], tangent[i, 2]), (d[c, 0], d[c, 1], d[c, 2]),
+                                    code, r_ax[fm], r_ay[fm], r_orient[fm])
+        if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
+            # off the surface; a child on the wrong side of the geometric face (a bump's tilt)
+            # is mirrored through its plane (d and s reflected, p follows: power kept)
+            dg = d[c, 0] * gx + d[c, 1] * gy + d[c, 2] * gz
+            if dg <= 0.0:
+                sgg = s[c, 0] * gx + s[c, 1] * gy + s[c, 2] * gz
+                d[c, 0], d[c, 1], d[c, 2] = d[c, 0] - 2.0 * dg * gx, d[c, 1] - 2.0 * dg * gy, d[c, 2] - 2.0 * dg * gz
+                s[c, 0], s[c, 1], s[c, 2] = s[c, 0] - 2.0 * sgg * gx, s[c, 1] - 2.0 * sgg * gy, s[c, 2] - 2.0 * sgg * gz
+                p[c, 0] = -(d[c, 1] * s[c, 2] - d[c, 2] * s[c, 1])
+                p[c, 1] = -(d[c, 2] * s[c, 0] - d[c, 0] * s[c, 2])
+                p[c, 2] = -(d[c, 0] * s[c, 1] - d[c, 1] * s[c, 0])
+                dg = d[c, 0] * gx + d[c, 1] * gy + d[c, 2] * gz
+            side = -step[i] if dg < 0.0 else step[i]
+            o[c, 0], o[c, 1], o[c, 2] = o[c, 0] + side * gx, o[c, 1] + side * gy, o[c, 2] + side * gz
+            _copy_row(kids, c, leave, nl)
+            nl += 1
+            continue
+        k = sid[c]
+        if rehit_over:  # the chain's end: its power emitted at the surface temperature
+            t_face = temperature[fm_a[i]]
+            _add(acc, k, m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], t_face, t_face)
+            continue
+        # the side the child is on, seen from there: a reflected child keeps the media, a
+        # refracted one swaps them, a thin sheet's transmitted child keeps them
+        swap = sg < 0.0 and kind[fm_a[i]] == DIELECTRIC
+        cur = other_a[i] if swap else cur_a[i]
+        # one wavelength of that medium on the way to the next facet (`Integrator._cross_wavelength`)
+        tau = math.exp(-alpha[cur] * wavelength)
+        if tau < 1.0:
+            e, g = math.sqrt(1.0 - tau), math.sqrt(tau)
+            tc = temperature[cur]
+            _add(acc, k, m[c, 0, 0] * e, m[c, 0, 1] * e, m[c, 1, 0] * e, m[c, 1, 1] * e, tc, tc)
+            for a in range(2):
+                for b in range(2):
+                    m[c, a, b] *= g
+        if not tau > A_ROUNDING:
+            continue
+        _copy_row(kids, c, back, nb)
+        back[0][nb, 0], back[0][nb, 1], back[0][nb, 2] = pos[i, 0], pos[i, 1], pos[i, 2]
+        back[6][nb] -= 1  # the chain of facets at one point counts as one interaction
+        b_src[nb], b_cur[nb], b_sign[nb] = i, cur, sg
+        b_other[nb] = cur_a[i] if swap else other_a[i]
+        b_leaving[nb] = leaving_a[i] != swap
+        nb += 1
+    return nl, nb
+
+
 def warm(stack_size: int = 8) -> None:
     """Compile (first time after an install) or load the bounce loop's compiled code with the
     integrator's types (these kernels, the Fresnel and coating arithmetic, the intersector's
@@ -440,8 +619,15 @@ def warm(stack_size: int = 8) -> None:
     empty = np.zeros(0)
     arrive(wave, t, prim, (empty, empty), faces, media, acc, hit)
     limits = (32, 1e-3, True, 0.0, 300.0)
-    coeff = (np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0), np.zeros(0, complex), np.zeros(0, np.int64))
-    scatter(np.zeros(0, np.int64), wave, hit, coeff, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave,
+    films = (np.zeros(1, np.int64), np.zeros(1, np.int64), np.ones(1, complex), np.zeros(1), np.zeros(1), 1.0)
+    coefficients(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool), empty, media,
+                 films, np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0, complex), empty)
+    scatter(np.zeros(0, np.int64), wave, hit, films, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave,
             NO_SETTLE)
     survivors(wave, empty, limits, acc, cut, np.zeros(n, bool))
+    ints = np.zeros(0, np.int64)
+    compact(wave, np.zeros(n, bool))
+    rough = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
+    settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), False,
+           media, rough, 1e-3, acc, wave, wave, (ints, ints, ints, np.zeros(0, bool), empty))
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
