@@ -468,11 +468,12 @@ def _rows(n_macro, tangent, v):
     """Per-ray (N, 3) float64 arrays of macro normals and tangents (broadcast from (3,)) for
     the compiled routines, with ``v`` (N, 3) setting N; tangent None: world X."""
     v = np.ascontiguousarray(v, dtype=np.float64)
-    shape = v.shape
-    n = np.ascontiguousarray(np.broadcast_to(np.asarray(n_macro, dtype=np.float64), shape))
-    t = np.array([1.0, 0.0, 0.0]) if tangent is None else tangent
-    t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), shape))
-    return n, t, v
+
+    def rows(a):  # writable and contiguous: the array types `kernels.warm` compiles for
+        a = np.asarray(a, dtype=np.float64)
+        return np.ascontiguousarray(a if a.shape == v.shape else np.broadcast_to(a, v.shape))
+
+    return rows(n_macro), rows(np.array([1.0, 0.0, 0.0]) if tangent is None else tangent), v
 
 
 # ----------------------------------------------------------------------------------------------

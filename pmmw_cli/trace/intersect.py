@@ -63,7 +63,7 @@ class _TriangleSoup:
         self.vertices = v
         self.faces = f
         tri = v[f]  # (F, 3, 3)
-        self._v0 = tri[:, 0]
+        self._v0 = np.ascontiguousarray(tri[:, 0])  # the layout `kernels.warm` compiles for
         self._e1 = tri[:, 1] - tri[:, 0]
         self._e2 = tri[:, 2] - tri[:, 0]
         cross = np.cross(self._e1, self._e2)

@@ -1,26 +1,30 @@
 """Compiled per-ray steps of the bounce loop (numba), one pass over a wave each, no temporaries.
 
 The integrator (`pmmw_cli.trace.integrator`) keeps what is vectorized well or happens once per
-wave: the Embree call, the sky and atmosphere models, and the interface coefficients (Fresnel and
-coherent films, `Integrator._coefficients`). Everything per ray between them runs here:
+wave: the Embree call, the sky and atmosphere models, and on rough faces the draw of facets by
+models without compiled code. Everything per ray between them runs here:
 
 * `arrive`: for each ray that hit a face, the atmosphere's and the medium's absorption and
   emission along the segment (Murakowski 2014 eq. 2.37, 2.38), the medium stack (sec. 2.2.9),
   and whether it interacts with the face or passes through it (then moved across it here);
-* `scatter`: for each interacting ray, the local (s, p) basis (eq. 2.23, 2.35), the emission of
-  what the interface absorbs (eq. 2.36) or a sink swallows, the choice of branches
-  (``render.strategy``), the reflected and transmitted children (eq. 2.19-2.21, 2.39, 2.40) off
-  the surface, and their termination (`survive`);
+* `scatter`: for each interacting ray, the interface's coefficients (`coefficients`: Fresnel, a
+  perfect conductor, or the stack of its coherent films), the local (s, p) basis (eq. 2.23,
+  2.35), the emission of what the interface absorbs (eq. 2.36) or a sink swallows, the choice of
+  branches (``render.strategy``), the reflected and transmitted children (eq. 2.19-2.21, 2.39,
+  2.40) off the surface, and their termination (`survive`);
+* `settle`: on rough faces, each child of a facet off the surface or back onto it for a re-hit
+  (Smith masking, `pmmw_cli.physics.roughness.smith_g1`);
 * `emit`: incoherent emission seen through Jones matrices, added to the per-sample sums
   (`pmmw_cli.physics.jones`, "Stokes from an emission event");
 * `survivors`: the depth cut-off, weight threshold and Russian roulette for a wave (the
-  rough-surface code's children; `scatter` applies the same `survive` to its own).
+  rough-surface code's children; `scatter` applies the same `survive` to its own), and
+  `compact` to drop the ended rays in place.
 
 A wave is passed as a tuple ``(o, d, s, p, m, sid, depth, stack, top, last_t)`` of arrays (the
 fields of `integrator._Wave`). Random numbers are drawn by the caller (one per ray that may need
 one), so the kernels are deterministic functions of their inputs. The compiled code is cached on
-disk next to this file (or in numba's user cache): the first render after an install compiles it
-(`warm`), later ones load it; ``NUMBA_DISABLE_JIT=1`` runs the same code as Python.
+disk (`pmmw_cli.jit`): the first render after an install compiles it (`warm`), later ones load
+it; ``NUMBA_DISABLE_JIT=1`` runs the same code as Python.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ import numpy as np
 
 from pmmw_cli.jit import inline, njit
 from pmmw_cli.physics import fresnel, multilayer, roughness
+from pmmw_cli.scene import bump
 from pmmw_cli.trace.intersect import _plane_distance
 from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
 
@@ -631,3 +636,16 @@ def warm(stack_size: int = 8) -> None:
     settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), False,
            media, rough, 1e-3, acc, wave, wave, (ints, ints, ints, np.zeros(0, bool), empty))
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
+    frozen = np.zeros(0)
+    frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
+    emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), frozen, frozen)
+    # rough faces and bump maps (`Integrator._facets`, `_bumped`)
+    v3 = np.zeros((n, 3))
+    roughness._ggx_sample_rows(v3, v3, v3, empty, empty, 1.0, 1.0, 0.0, v3, empty)
+    roughness._smith_masking_rows(v3, v3, v3, roughness.GGX_CODE, 1.0, 1.0, 0.0, empty)
+    bump._perturb_rows(v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
+    # the layered atmosphere's cell walk (`AtmosphereModel.path`)
+    from pmmw_cli.atmosphere.model import _path_loop
+
+    cells = np.array([0.0, 1.0])
+    _path_loop(empty, empty, empty, cells, cells, cells, cells, cells, False, empty, empty)
