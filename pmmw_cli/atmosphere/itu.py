@@ -5,6 +5,9 @@
   vapour, 1-1000 GHz. Its Tables 1 and 2 are unchanged since P.676-11; `itur` 0.4 ("P.676-12")
   uses the same tables and equations.
 * P.840-8: specific attenuation of cloud and fog liquid water (Rayleigh, double-Debye water).
+* P.527-6 sec. 5.1: the permittivity of pure and sea water (the same double-Debye family with the
+  temperature-dependent eps_inf of Liebe et al. 1991, and Meissner and Wentz's salinity terms),
+  used by the soil and leaf models of `pmmw_cli.scene.dielectric`.
 * P.838-3: rain specific attenuation gamma_R = k R^alpha, and the Mie single-scattering albedo of
   rain (`pmmw_cli.atmosphere.data.rain_albedo`) that splits it into absorption and scattering,
   with the asymmetry parameter of its scattering (`pmmw_cli.atmosphere.data.rain_asymmetry`).
@@ -137,6 +140,17 @@ def gas_specific_attenuation_db_km(f, p_dry, rho, T):
     ) + water_vapour_specific_attenuation_db_km(f, p_dry, rho, T)
 
 
+def double_debye(f_ghz, eps_s, eps_1, eps_inf, f_1, f_2):
+    """eps' + i eps'' (eps'' >= 0) of two Debye relaxations, P.840-8 eqs. 4-5 and P.527-6
+    eqs. (6)-(7): eps_s static, eps_1 between them, eps_inf high-frequency, relaxation
+    frequencies f_1, f_2 [GHz]; f_ghz [GHz]. Arrays broadcast."""
+    eps_r = (eps_s - eps_1) / (1.0 + (f_ghz / f_1) ** 2) + (eps_1 - eps_inf) / (1.0 + (f_ghz / f_2) ** 2) + eps_inf
+    eps_i = f_ghz * (eps_s - eps_1) / (f_1 * (1.0 + (f_ghz / f_1) ** 2)) + f_ghz * (eps_1 - eps_inf) / (
+        f_2 * (1.0 + (f_ghz / f_2) ** 2)
+    )
+    return eps_r + 1j * eps_i
+
+
 def water_permittivity(f, T):
     """Relative permittivity of liquid water eps' + i eps'' (eps'' >= 0), P.840-8 eqs. 4-10.
 
@@ -156,11 +170,49 @@ def water_permittivity(f, T):
     eps2 = 3.52  # eq. 8
     fp = 20.20 - 146.0 * (theta - 1.0) + 316.0 * (theta - 1.0) ** 2  # eq. 10 [GHz]
     fs = 39.8 * fp  # eq. 11 [GHz]
-    eps_r = (eps0 - eps1) / (1.0 + (f / fp) ** 2) + (eps1 - eps2) / (1.0 + (f / fs) ** 2) + eps2
-    eps_i = f * (eps0 - eps1) / (fp * (1.0 + (f / fp) ** 2)) + f * (eps1 - eps2) / (
-        fs * (1.0 + (f / fs) ** 2)
-    )
-    return eps_r + 1j * eps_i
+    return double_debye(f, eps0, eps1, eps2, fp, fs)
+
+
+def p527_water_permittivity(f, T, salinity=0.0):
+    """Relative permittivity eps' + i eps'' (eps'' >= 0) of pure or saline water, P.527-6 sec. 5.1.
+
+    Pure water (sec. 5.1.1, eqs. (6)-(13)) is Liebe et al. (1991)'s double Debye as P.840's, but
+    with eps_inf = 3.52 - 7.52 theta (P.840-8 holds it at 3.52) and 146.4 for 146.0 in f_1; sea
+    water (sec. 5.1.2, eqs. (14)-(27)) scales its parameters by Meissner and Wentz's salinity terms
+    and adds the ionic conductivity of Stogryn et al. (1995), 18 sigma / f. Salinity 0 gives pure
+    water exactly. The Recommendation states -4 to 40 C, salinity to 40 g/kg, to 1000 GHz.
+
+    Parameters
+    ----------
+    f : array_like
+        Frequency [Hz].
+    T : array_like
+        Water temperature [K].
+    salinity : array_like
+        Salinity [g/kg] (per mil).
+    """
+    f = np.asarray(f, dtype=np.float64) / 1e9
+    t = np.asarray(T, dtype=np.float64) - 273.15  # [C]
+    s = np.asarray(salinity, dtype=np.float64)
+    theta = 300.0 / (t + 273.15) - 1.0  # eq. (11)
+    eps_s = 77.66 + 103.3 * theta  # eq. (8)
+    eps_1 = 0.0671 * eps_s  # eq. (9)
+    eps_inf = 3.52 - 7.52 * theta  # eq. (10)
+    f_1 = 20.20 - 146.4 * theta + 316.0 * theta**2  # eq. (12) [GHz]
+    f_2 = 39.8 * f_1  # eq. (13) [GHz]
+    eps_ss = eps_s * np.exp(-3.33330e-3 * s + 4.74868e-6 * s**2)  # eq. (17)
+    f_1s = f_1 * (1.0 + s * (2.3232e-3 - 7.9208e-5 * t + 3.6764e-6 * t**2 + 3.5594e-7 * t**3
+                             + 8.9795e-9 * t**4))  # eq. (18)
+    eps_1s = eps_1 * np.exp(-6.28908e-3 * s + 1.76032e-4 * s**2 - 9.22144e-5 * t * s)  # eq. (19)
+    f_2s = f_2 * (1.0 + s * (-1.99723e-2 + 1.81176e-4 * t))  # eq. (20)
+    eps_infs = eps_inf * (1.0 + s * (-2.04265e-3 + 1.57883e-4 * t))  # eq. (21)
+    sigma_35 = 2.903602 + 8.607e-2 * t + 4.738817e-4 * t**2 - 2.991e-6 * t**3 + 4.3047e-9 * t**4  # eq. (23)
+    r_15 = s * (37.5109 + 5.45216 * s + 1.4409e-2 * s**2) / (1004.75 + 182.283 * s + s**2)  # eq. (24)
+    alpha_0 = (6.9431 + 3.2841 * s - 9.9486e-2 * s**2) / (84.850 + 69.024 * s + s**2)  # eq. (26)
+    alpha_1 = 49.843 - 0.2276 * s + 0.198e-2 * s**2  # eq. (27)
+    r_t15 = 1.0 + alpha_0 * (t - 15.0) / (alpha_1 + t)  # eq. (25)
+    sigma_sw = sigma_35 * r_15 * r_t15  # eq. (22) [S/m]
+    return double_debye(f, eps_ss, eps_1s, eps_infs, f_1s, f_2s) + 1j * 18.0 * sigma_sw / f  # eqs. (15)-(16)
 
 
 def liquid_water_kl(f, T):

@@ -26,6 +26,18 @@ Registry (`MODELS`, chosen by ``model.name``):
   Wake and Watanabe (2014) measured epidermis and dermis above it at 20-100 GHz. The tissue is at
   body temperature (37 C): eps does not follow the material's temperature, which only sets its
   emission; 298-313 K (living skin) is the stated range.
+* ``leaves``: fresh leaves, Maetzler (1994): eps = 0.522 (1 - 1.32 md) eps_sw + 0.51 + 3.84 md,
+  md the dry-matter mass fraction (``dry_matter``; gravimetric moisture 1 - md), eps_sw the leaf
+  sap as saline water (``salinity`` [g/kg], default 10) at the leaf's temperature, here by ITU-R
+  P.527-6 sec. 5.1.2 (`pmmw_cli.atmosphere.itu.p527_water_permittivity`). Stated for 1-100 GHz
+  (Maetzler's measurements); extrapolated above, with a warning. The formula's water term
+  changes sign at md = 1/1.32, so md is limited to 0-0.75.
+* ``soil``: mineral soil, ITU-R P.527-6 sec. 5.2 (`_soil`): the Dobson et al. (1985) mixing model
+  with Peplinski et al. (1995)'s conductivities, free water by P.527-6's pure water; ``sand``,
+  ``clay`` [%] (silt the rest), volumetric ``moisture`` [1], ``bulk_density`` [g/cm^3] (default
+  P.527-6 eq. (57)), ``particle_density`` [g/cm^3] (default 2.66). The mixing exponents were
+  fitted at 1.4-18 GHz (Dobson et al.) and the conductivities at 0.3-1.3 GHz (Peplinski et al.):
+  stated 0.3-18 GHz, so at 35-300 GHz the model is extrapolated, with a warning.
 
 Time dependence exp(-i w t) as everywhere in pmmw: eps'' >= 0 is loss.
 """
@@ -49,6 +61,10 @@ class ModelSpec:
     t_ref: float  # [K] temperature when the material gives none
     params: tuple[str, ...]
     source: str
+    optional: tuple[str, ...] = ()  # parameters with defaults in `fn`
+    parsers: dict = field(default_factory=dict, repr=False, compare=False)  # name -> parse(v, file, key)
+    example: str = ""  # a complete ``model:`` mapping, for error messages
+    check: object = field(default=None, repr=False, compare=False)  # check(params, file, key): cross-parameter rules
 
 
 @dataclass(frozen=True)
@@ -70,7 +86,7 @@ class DielectricModel:
     def describe(self) -> str:
         extra = ", ".join(f"{k} {v:g}" for k, v in self.params.items())
         (f0, f1), (t0, t1) = self.spec.f_range, self.spec.t_range
-        f_text = f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e9 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
+        f_text = f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e8 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
         return (f"model {self.spec.name}{' (' + extra + ')' if extra else ''}: {self.spec.source}; valid "
                 f"{f_text}, {t0:g}-{t1:g} K")
 
@@ -123,18 +139,65 @@ def _skin_wet(f, T):
     return _cole_cole(f, *GABRIEL_1996["skin_wet"])
 
 
-MODELS = {
-    "water": ModelSpec("water", _water, (1e9, 1e12), (263.0, 373.0), 293.15, (),
-                       "Liebe, Hufford and Manabe 1991 double-Debye model as ITU-R P.840-8 eqs. 4-10"),
-    "ice": ModelSpec("ice", _ice, (1e7, 3e12), (20.0, 273.15), 263.15, (),
-                     "Maetzler 2006 (Hufford 1991, Mishima et al. 1983)"),
-    "conductor": ModelSpec("conductor", _conductor, (1e6, 1e12), (0.0, 1e4), 293.15, ("conductivity",),
-                           "eps = 1 + i sigma / (eps0 omega) (Drude metal well below its collision frequency)"),
-    "skin_dry": ModelSpec("skin_dry", _skin_dry, (10.0, 100e9), (298.15, 313.15), 310.15, (),
-                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (dry)', at 37 C"),
-    "skin_wet": ModelSpec("skin_wet", _skin_wet, (10.0, 100e9), (298.15, 313.15), 310.15, (),
-                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (wet)', at 37 C"),
-}
+def _leaves(f, T, dry_matter, salinity=10.0):
+    """Maetzler (1994): fresh leaves of dry-matter fraction md from their sap, saline water."""
+    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+
+    eps_sw = complex(p527_water_permittivity(f, T, salinity))
+    return 0.522 * (1.0 - 1.32 * dry_matter) * eps_sw + 0.51 + 3.84 * dry_matter
+
+
+def p527_bulk_density(sand, clay):
+    """Soil bulk density [g/cm^3] from its texture [%], ITU-R P.527-6 eq. (57). A constituent under
+    1 % is left out (its logarithm would diverge); silt is the rest."""
+    silt = 100.0 - sand - clay
+    return 1.07256 + sum(c * math.log(p) for c, p in ((0.078886, sand), (0.038753, clay), (0.032732, silt)) if p >= 1.0)
+
+
+def p527_conductivities(sand, clay, rho_b):
+    """The effective conductivities [S/m] of P.527-6 sec. 5.2: sigma_1 (Peplinski et al. 1995,
+    fitted at 0.3-1.3 GHz) and sigma_2 (Dobson et al. 1985, 1.4-18 GHz, as refitted by Peplinski
+    et al.); sand, clay [%], rho_b [g/cm^3]."""
+    sigma_1 = 0.0467 + 0.2204 * rho_b - 0.004111 * sand - 0.006614 * clay
+    sigma_2 = -1.645 + 1.939 * rho_b - 0.0225622 * sand + 0.01594 * clay
+    return sigma_1, sigma_2
+
+
+def _soil(f, T, sand, clay, moisture, bulk_density=None, particle_density=2.66):
+    """ITU-R P.527-6 sec. 5.2, eqs. (58)-(70), in P.527's eps' - i eps'' written as eps' + i eps''.
+
+    The Recommendation's conductivity terms can leave free water unphysical where they dominate:
+    a negative loss conductivity sigma_eff'' (the regression's sigma_2 is negative for sandy,
+    loose soils; `make_dielectric` warns) is taken as 0, and eps_fw' is kept >= 1 (dry soils below
+    a few GHz). The sign of sigma_eff' in eps_fw' is the Recommendation's, as MathWorks' and an
+    independent P.527-4 implementation transcribe it; it falls as 1/f^2, to -0.12 in eps_fw' (about
+    20) at 35 GHz for a loam at mv 0.05.
+    """
+    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+
+    f_ghz = f / 1e9
+    rho_s = particle_density
+    rho_b = p527_bulk_density(sand, clay) if bulk_density is None else bulk_density
+    mv = moisture
+    alpha = 0.65  # eq. (59)
+    beta_r = 1.2748 - 0.00519 * sand - 0.00152 * clay  # eq. (60)
+    beta_i = 1.33797 - 0.00603 * sand - 0.00166 * clay  # eq. (61)
+    eps_sm = (1.01 + 0.44 * rho_s) ** 2 - 0.062  # eq. (62): the solid particles
+    dry = 1.0 + (rho_b / rho_s) * (eps_sm**alpha - 1.0)
+    sigma_1, sigma_2 = p527_conductivities(sand, clay, rho_b)
+    x = f_ghz / 1.35
+    sigma_eff_r = x * (sigma_1 - sigma_2) / (1.0 + x**2)  # eq. (67)
+    sigma_eff_i = max(sigma_2 + (sigma_1 - sigma_2) / (1.0 + x**2), 0.0)  # eq. (68)
+    eps_pw = complex(p527_water_permittivity(f, T))
+    # eqs. (69)-(70), eps_fw = eps_pw + 18 (rho_s - rho_b) / (f rho_s mv) sigma_eff, enter eqs. (63)-(64)
+    # as mv^(beta/alpha) eps_fw: written so, nothing divides by mv (beta/alpha > 1 for every texture)
+    c = 18.0 * (rho_s - rho_b) / (f_ghz * rho_s)
+    a_r, a_i = mv ** (beta_r / alpha), mv ** (beta_i / alpha)
+    w_r = max(a_r * eps_pw.real + c * sigma_eff_r * mv ** (beta_r / alpha - 1.0), a_r)  # mv^(beta'/alpha) max(eps_fw', 1)
+    w_i = a_i * eps_pw.imag + c * sigma_eff_i * mv ** (beta_i / alpha - 1.0)  # mv^(beta''/alpha) eps_fw''
+    eps_r = (dry + w_r**alpha - mv) ** (1.0 / alpha)  # eq. (63)
+    eps_i = w_i  # eq. (64): (mv^beta'' eps_fw''^alpha)^(1/alpha)
+    return complex(eps_r, eps_i)
 
 
 def _siemens_per_metre(v, file, key) -> float:
@@ -155,9 +218,84 @@ def _siemens_per_metre(v, file, key) -> float:
     return x
 
 
+def _number(lo, hi, unit, example):
+    """A parser of a number in [lo, hi], given bare or with its unit ('40 %', '1.5 g/cm3')."""
+
+    def parse(v, file, key):
+        from pmmw_cli.errors import UserError
+
+        x = None
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            x = float(v)
+        elif isinstance(v, str) and unit:
+            try:
+                x = float(v.strip().removesuffix(unit).strip())
+            except ValueError:
+                x = None
+        if x is None or not (math.isfinite(x) and lo <= x <= hi):
+            u = f" {unit}" if unit else ""
+            raise UserError(f"expected a number from {lo:g} to {hi:g}{u}, e.g. {example}, got {v!r}", file, key)
+        return x
+
+    return parse
+
+
+def _check_soil(params, file, key):
+    from pmmw_cli.errors import UserError, warn
+
+    sand, clay = params["sand"], params["clay"]
+    if sand + clay > 100.0:
+        raise UserError(f"sand {sand:g} % and clay {clay:g} % add up to more than 100 %", file, key)
+    rho_s = params.get("particle_density", 2.66)
+    rho_b = params.get("bulk_density", p527_bulk_density(sand, clay))
+    if rho_b >= rho_s:
+        raise UserError(f"bulk density {rho_b:g} g/cm3 must be below the particle density {rho_s:g} g/cm3 "
+                        "(no pore space left)", file, key)
+    sigma_2 = p527_conductivities(sand, clay, rho_b)[1]
+    if sigma_2 < 0.0:
+        where = f"{file}: {key}: " if file else ""
+        warn(f"{where}ITU-R P.527-6's effective conductivity sigma_2 of soil with sand {sand:g} %, clay {clay:g} %, "
+             f"bulk density {rho_b:.3g} g/cm3 is negative ({sigma_2:.3g} S/m: Dobson's regression outside its "
+             "data); above a few GHz the soil's conduction loss is taken as 0")
+
+
+_PERCENT = _number(0.0, 100.0, "%", "'40 %'")
+_DENSITY = _number(0.5, 3.0, "g/cm3", "'1.5 g/cm3'")
+
+
+MODELS = {
+    "water": ModelSpec("water", _water, (1e9, 1e12), (263.0, 373.0), 293.15, (),
+                       "Liebe, Hufford and Manabe 1991 double-Debye model as ITU-R P.840-8 eqs. 4-10"),
+    "ice": ModelSpec("ice", _ice, (1e7, 3e12), (20.0, 273.15), 263.15, (),
+                     "Maetzler 2006 (Hufford 1991, Mishima et al. 1983)"),
+    "conductor": ModelSpec("conductor", _conductor, (1e6, 1e12), (0.0, 1e4), 293.15, ("conductivity",),
+                           "eps = 1 + i sigma / (eps0 omega) (Drude metal well below its collision frequency)",
+                           parsers={"conductivity": _siemens_per_metre},
+                           example="{name: conductor, conductivity: 3.5e7 S/m} for aluminium"),
+    "skin_dry": ModelSpec("skin_dry", _skin_dry, (10.0, 100e9), (298.15, 313.15), 310.15, (),
+                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (dry)', at 37 C"),
+    "skin_wet": ModelSpec("skin_wet", _skin_wet, (10.0, 100e9), (298.15, 313.15), 310.15, (),
+                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (wet)', at 37 C"),
+    "leaves": ModelSpec("leaves", _leaves, (1e9, 100e9), (273.15, 313.15), 293.15, ("dry_matter",),
+                        "Maetzler 1994 leaf model with ITU-R P.527-6 saline water as the sap",
+                        optional=("salinity",),
+                        parsers={"dry_matter": _number(0.0, 0.75, "", "0.35"),
+                                 "salinity": _number(0.0, 40.0, "g/kg", "'10 g/kg'")},
+                        example="{name: leaves, dry_matter: 0.35, salinity: 10}"),
+    "soil": ModelSpec("soil", _soil, (0.3e9, 18e9), (273.15, 313.15), 293.15, ("sand", "clay", "moisture"),
+                      "ITU-R P.527-6 sec. 5.2 (Dobson et al. 1985 mixing, Peplinski et al. 1995 conductivities), "
+                      "fitted at 0.3-18 GHz",
+                      optional=("bulk_density", "particle_density"),
+                      parsers={"sand": _PERCENT, "clay": _PERCENT, "moisture": _number(0.0, 0.6, "", "0.2"),
+                               "bulk_density": _DENSITY, "particle_density": _DENSITY},
+                      example="{name: soil, sand: 40, clay: 20, moisture: 0.2}", check=_check_soil),
+}
+
+
 def make_dielectric(spec, *, file=None, key=None) -> DielectricModel:
     """A `DielectricModel` from a material's ``model:`` mapping, e.g. ``{name: conductor,
-    conductivity: 3.5e7}`` (conductivity in S/m); errors name the key."""
+    conductivity: 3.5e7}`` (conductivity in S/m) or ``{name: soil, sand: 40, clay: 20, moisture:
+    0.2}``; errors name the key."""
     from pmmw_cli.errors import UserError
 
     if isinstance(spec, str):
@@ -172,12 +310,13 @@ def make_dielectric(spec, *, file=None, key=None) -> DielectricModel:
     for k, v in spec.items():
         if k == "name":
             continue
-        if k not in ms.params:
-            allowed = ", ".join(ms.params) or "none"
+        if k not in ms.params + ms.optional:
+            allowed = ", ".join(ms.params + ms.optional) or "none"
             raise UserError(f"unknown parameter {k!r} of model {name} (parameters: {allowed})", file, f"{key}.{k}")
-        params[k] = _siemens_per_metre(v, file, f"{key}.{k}")
+        params[k] = ms.parsers[k](v, file, f"{key}.{k}")
     missing = [p for p in ms.params if p not in params]
     if missing:
-        raise UserError(f"model {name} needs {', '.join(missing)} (e.g. conductivity: 3.5e7 for aluminium, in S/m)",
-                        file, key)
+        raise UserError(f"model {name} needs {', '.join(missing)} (e.g. {ms.example})", file, key)
+    if ms.check is not None:
+        ms.check(params, file, key)
     return DielectricModel(ms, params)
