@@ -190,3 +190,21 @@ def test_kernel_coefficients_equal_the_vectorized_assembly():
     bare = ~np.isnan(q2_ref)
     np.testing.assert_allclose(q2[bare], q2_ref[bare], rtol=1e-12, atol=0)
     assert films.sum() > 1000 and leaving[films].any() and (cur == lossy_in).any()
+
+
+def test_tangents_are_world_x_projected_onto_the_face():
+    """`kernels.tangents`: unit, perpendicular to the normal, and in the plane spanned by the
+    normal and world X (world Y when the normal is within 26 degrees of X), to rounding."""
+    from pmmw_cli.trace import kernels
+
+    rng = np.random.default_rng(2)
+    n = rng.normal(size=(5000, 3))
+    n[:3] = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.95, 0.0, 0.312]]
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    t = np.empty_like(n)
+    kernels.tangents(n, t)
+    axis = np.where((np.abs(n[:, 0]) > 0.9)[:, None], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0])
+    np.testing.assert_allclose(np.linalg.norm(t, axis=1), 1.0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", t, n), 0.0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", t, np.cross(n, axis)), 0.0, rtol=0, atol=1e-14)
+    assert np.all(np.einsum("ij,ij->i", t, axis) > 0.0)

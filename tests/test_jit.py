@@ -35,3 +35,13 @@ def test_stale_caches_are_dropped_when_any_compiled_source_changes(tmp_path, mon
     assert jit.clear_stale_caches() is True
     assert not list(cache.glob("*.nb[ic]"))
     assert jit.clear_stale_caches() is False
+
+
+def test_every_module_with_compiled_code_is_watched():
+    """A module that compiles with `pmmw_cli.jit` (or numba directly) but is missing from
+    `SOURCES` would leave its callers' caches stale after an edit: the list must be complete."""
+    import re
+
+    found = sorted(str(p.relative_to(jit.ROOT)) for p in jit.ROOT.rglob("*.py")
+                   if p.name != "jit.py" and re.search(r"from pmmw_cli\.jit import|numba\.njit", p.read_text()))
+    assert found == sorted(jit.SOURCES)

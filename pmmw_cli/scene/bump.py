@@ -96,6 +96,17 @@ class BumpMap:
         _perturb_rows(np.ascontiguousarray(pos, dtype=np.float64), normals, self.gu, self.gv, self.du, self.dv, out)
         return out
 
+    def shade(self, pos, normals, d):
+        """The shading normals the renderer uses: `perturb`'s where the ray ``d`` (shape (n, 3),
+        toward the surface) meets the tilted normal's front (``d . n' < 0``), the geometric
+        normal where the tilt exceeds the incidence (the ray would meet the back of the bump:
+        shading normals cannot model that shadowing)."""
+        normals = np.ascontiguousarray(normals, dtype=np.float64)
+        out = np.empty_like(normals)
+        _shade_rows(np.ascontiguousarray(pos, dtype=np.float64), normals, np.ascontiguousarray(d, dtype=np.float64),
+                    self.gu, self.gv, self.du, self.dv, out)
+        return out
+
 
 @inline()
 def _bilinear(grid, x, y):
@@ -109,36 +120,49 @@ def _bilinear(grid, x, y):
             + (1 - fx) * fy * grid[j1, i0] + fx * fy * grid[j1, i1])
 
 
-@njit()
-def _perturb_rows(pos, normals, grad_u, grad_v, du, dv, out):
-    """`BumpMap.perturb` per hit point (compiled: it runs at every bumped interaction).
+@inline()
+def _perturb1(pos, normals, i, grad_u, grad_v, du, dv):
+    """`BumpMap.perturb` of hit point i: the unit shading normal as three floats.
 
     ``(u, v)`` are the two world coordinates after the dominant axis of the normal; the slopes
     are flipped with the normal so that both orientations of a face see the same bumps; the
     shading normal is ``unit(n - dh/du t_u - dh/dv t_v)`` with ``t_u``, ``t_v`` the world u and v
     axes projected onto the face's plane (module docstring).
     """
+    n = normals[i]
+    axis = 0
+    if abs(n[1]) > abs(n[axis]):
+        axis = 1
+    if abs(n[2]) > abs(n[axis]):
+        axis = 2
+    iu, iv = (axis + 1) % 3, (axis + 2) % 3
+    x, y = pos[i, iu] / du, pos[i, iv] / dv
+    sign = 1.0 if n[axis] > 0.0 else (-1.0 if n[axis] < 0.0 else 0.0)
+    gu = _bilinear(grad_u, x, y) * sign
+    gv = _bilinear(grad_v, x, y) * sign
+    o0 = n[0] - gu * ((1.0 if iu == 0 else 0.0) - n[iu] * n[0]) - gv * ((1.0 if iv == 0 else 0.0) - n[iv] * n[0])
+    o1 = n[1] - gu * ((1.0 if iu == 1 else 0.0) - n[iu] * n[1]) - gv * ((1.0 if iv == 1 else 0.0) - n[iv] * n[1])
+    o2 = n[2] - gu * ((1.0 if iu == 2 else 0.0) - n[iu] * n[2]) - gv * ((1.0 if iv == 2 else 0.0) - n[iv] * n[2])
+    norm = math.sqrt(o0 * o0 + o1 * o1 + o2 * o2)
+    return o0 / norm, o1 / norm, o2 / norm
+
+
+@njit()
+def _perturb_rows(pos, normals, grad_u, grad_v, du, dv, out):
+    """`_perturb1` of every hit point (compiled: it runs at every bumped interaction)."""
     for i in range(pos.shape[0]):
-        n = normals[i]
-        axis = 0
-        if abs(n[1]) > abs(n[axis]):
-            axis = 1
-        if abs(n[2]) > abs(n[axis]):
-            axis = 2
-        iu, iv = (axis + 1) % 3, (axis + 2) % 3
-        x, y = pos[i, iu] / du, pos[i, iv] / dv
-        sign = 1.0 if n[axis] > 0.0 else (-1.0 if n[axis] < 0.0 else 0.0)
-        gu = _bilinear(grad_u, x, y) * sign
-        gv = _bilinear(grad_v, x, y) * sign
-        norm2 = 0.0
-        for c in range(3):
-            t_u = (1.0 if c == iu else 0.0) - n[iu] * n[c]
-            t_v = (1.0 if c == iv else 0.0) - n[iv] * n[c]
-            out[i, c] = n[c] - gu * t_u - gv * t_v
-            norm2 += out[i, c] * out[i, c]
-        norm = math.sqrt(norm2)
-        for c in range(3):
-            out[i, c] /= norm
+        out[i, 0], out[i, 1], out[i, 2] = _perturb1(pos, normals, i, grad_u, grad_v, du, dv)
+
+
+@njit()
+def _shade_rows(pos, normals, d, grad_u, grad_v, du, dv, out):
+    """`BumpMap.shade` per hit point."""
+    for i in range(pos.shape[0]):
+        o0, o1, o2 = _perturb1(pos, normals, i, grad_u, grad_v, du, dv)
+        if d[i, 0] * o0 + d[i, 1] * o1 + d[i, 2] * o2 < 0.0:
+            out[i, 0], out[i, 1], out[i, 2] = o0, o1, o2
+        else:
+            out[i, 0], out[i, 1], out[i, 2] = normals[i, 0], normals[i, 1], normals[i, 2]
 
 
 def gaussian_surface(rms: float, correlation: float, size: float, seed: int = 0) -> np.ndarray:

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pmmw_cli.jit import njit
+
 # R2 sequence: fractional parts of k / g and k / g^2, g the plastic number (root of x^3 = x + 1).
 _G = 1.32471795724474602596
 R2_ALPHA = np.array([1.0 / _G, 1.0 / (_G * _G)])
@@ -113,21 +115,59 @@ class Camera:
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+_FNV = np.uint64(0x100000001B3)
+
+
+@njit(inline="always")
 def _splitmix64(x):
-    """Vectorized splitmix64 finalizer on uint64 arrays (a good integer hash)."""
-    with np.errstate(over="ignore"):
-        x = (x + np.uint64(0x9E3779B97F4A7C15)) & np.uint64(0xFFFFFFFFFFFFFFFF)
-        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        return x ^ (x >> np.uint64(31))
+    """The splitmix64 finalizer of one uint64 (a good integer hash; arithmetic wraps)."""
+    x = x + _GOLDEN
+    x = (x ^ (x >> np.uint64(30))) * _MIX1
+    x = (x ^ (x >> np.uint64(27))) * _MIX2
+    return x ^ (x >> np.uint64(31))
+
+
+@njit(inline="always")
+def _hash_uniform1(seed, key, stream):
+    """A uniform [0, 1) float from the hash of (seed, stream, key) (`hash_uniform` of one key)."""
+    h = _splitmix64(np.uint64(key) ^ _splitmix64(np.uint64(seed) * _FNV + np.uint64(stream)))
+    return float(h >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@njit()
+def _hash_uniform_loop(seed, keys, stream, out):
+    for i in range(keys.shape[0]):
+        out[i] = _hash_uniform1(seed, keys[i], stream)
 
 
 def hash_uniform(seed: int, keys, stream: int = 0):
-    """Uniform [0, 1) floats from a hash of (seed, stream, key), shape of ``keys``."""
-    k = np.asarray(keys, dtype=np.uint64)
-    with np.errstate(over="ignore"):
-        h = _splitmix64(k ^ _splitmix64(np.uint64(seed) * np.uint64(0x100000001B3) + np.uint64(stream)))
-    return (h >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
+    """Uniform [0, 1) floats from a hash of (seed, stream, key), shape of ``keys`` (compiled)."""
+    k = np.asarray(keys, dtype=np.int64)
+    out = np.empty(k.shape)
+    _hash_uniform_loop(np.int64(seed), np.ascontiguousarray(k).reshape(-1), np.int64(stream), out.reshape(-1))
+    return out
+
+
+@njit()
+def _pixel_samples(width, pixels, spp, seed, start, centre, alpha_u, alpha_v, u, v, pix):
+    """`pixel_samples` per sample: pixel centres, or two R2 replicates with their rotations."""
+    for a in range(pixels.shape[0]):
+        px = pixels[a]
+        col, row = float(px % width), float(px // width)
+        for b in range(spp):
+            i = a * spp + b
+            pix[i] = px
+            if centre:
+                u[i], v[i] = col + 0.5, row + 0.5
+                continue
+            s = start + b
+            key = px * REPLICATES + s % REPLICATES
+            k = float(s // REPLICATES)
+            u[i] = col + (_hash_uniform1(seed, key, 1) + (k + 0.5) * alpha_u) % 1.0
+            v[i] = row + (_hash_uniform1(seed, key, 2) + (k + 0.5) * alpha_v) % 1.0
 
 
 def pixel_samples(width: int, pixels, spp: int, seed: int, start: int = 0, total: int | None = None):
@@ -162,17 +202,10 @@ def pixel_samples(width: int, pixels, spp: int, seed: int, start: int = 0, total
     pix : ndarray, shape (p * spp,), int64
         The pixel index of each sample.
     """
-    pixels = np.asarray(pixels, dtype=np.int64)
-    pix = np.repeat(pixels, spp)
-    col = (pix % width).astype(np.float64)
-    row = (pix // width).astype(np.float64)
-    if (total if total is not None else start + spp) == 1:
-        return col + 0.5, row + 0.5, pix
-    s = np.tile(np.arange(start, start + spp, dtype=np.int64), pixels.size)
-    # two replicates per pixel (even and odd sample numbers), each an R2 sequence with its own
-    # random rotation: independent randomized-QMC estimates whose difference measures the error
-    key = pix * REPLICATES + s % REPLICATES
-    k = (s // REPLICATES).astype(np.float64)
-    ju = np.mod(hash_uniform(seed, key, stream=1) + (k + 0.5) * R2_ALPHA[0], 1.0)
-    jv = np.mod(hash_uniform(seed, key, stream=2) + (k + 0.5) * R2_ALPHA[1], 1.0)
-    return col + ju, row + jv, pix
+    pixels = np.ascontiguousarray(pixels, dtype=np.int64)
+    n = pixels.size * spp
+    u, v, pix = np.empty(n), np.empty(n), np.empty(n, np.int64)
+    centre = (total if total is not None else start + spp) == 1
+    _pixel_samples(int(width), pixels, int(spp), np.int64(seed), int(start), centre, float(R2_ALPHA[0]),
+                   float(R2_ALPHA[1]), u, v, pix)
+    return u, v, pix

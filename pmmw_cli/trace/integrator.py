@@ -39,7 +39,7 @@ from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import REPLICATES, pixel_samples
 from pmmw_cli.trace import kernels
 from pmmw_cli.trace.intersect import offset_along
-from pmmw_cli.trace.job import BLACKBODY, C0, METAL, OPAQUE, TraceJob
+from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, TraceJob
 
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
@@ -152,21 +152,6 @@ def _stderr(s1, s2, count):
 
 def _normalize(v):
     return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
-def _scale_columns(m, a, b):
-    """M @ diag(a, b) for (n, 2, 2) M and (n,) a, b."""
-    out = m.copy()
-    out[:, :, 0] *= a[:, None]
-    out[:, :, 1] *= b[:, None]
-    return out
-
-
-def _amplitude(amp, power):
-    """An amplitude with the phase of ``amp`` and the magnitude sqrt(power) (renormalized R, T)."""
-    mag = np.abs(amp)
-    phase = np.where(mag > 0.0, amp / np.where(mag > 0.0, mag, 1.0), 1.0)
-    return phase * np.sqrt(np.maximum(power, 0.0))
 
 
 def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
@@ -368,30 +353,13 @@ class Integrator:
                         float(self.t_bounds[0]), float(self.t_bounds[1]))
         self._choice = (kernels.STRATEGIES[st.strategy], int(st.split_depth))
         # smooth scenes interact in one compiled pass (`kernels.scatter`); rough surfaces and bump
-        # maps run the same kernel about drawn facets, then `kernels.settle` (`_interact`), rough
-        # layers a numpy walk around it (`_walk_layers`); ``compiled=False`` sends smooth scenes
-        # through `_interact` too (the reference of tests/test_compiled_tracer.py)
+        # maps run the same kernel about drawn facets, then `kernels.settle` (`_interact`), and so
+        # does each facet event of the walk through rough layers (`_walk_layers`); ``compiled=False``
+        # sends smooth scenes through `_interact` too (the reference of tests/test_compiled_tracer.py)
         self.compiled = not self.rough_scene if compiled is None else bool(compiled and not self.rough_scene)
         self._faces = (np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
                        np.ascontiguousarray(intersector.face_offset, float))
-        self._media = (np.ascontiguousarray(media.kind, np.int8), np.ascontiguousarray(media.alpha, float),
-                       np.ascontiguousarray(media.temperature, float), np.sqrt(media.eps.astype(complex)).real.copy(),
-                       np.array([c is not None for c in media.coating]), np.ascontiguousarray(media.eps, complex))
-        # the media's coherent films for `kernels.scatter` (flattened, outermost first)
-        coats = [c for c in media.coating if c is not None]
-        self._films = (np.cumsum([0] + [0 if c is None else c.eps.size for c in media.coating[:-1]]).astype(np.int64),
-                       np.array([0 if c is None else c.eps.size for c in media.coating], np.int64),
-                       np.concatenate([c.eps for c in coats] + [np.ones(1)]).astype(complex),
-                       np.concatenate([c.thickness for c in coats] + [np.zeros(1)]).astype(float),
-                       np.array([0.0 if c is None else c.temperature for c in media.coating], float),
-                       float(job.k0))
-        # the media's roughness models for `kernels.settle`'s masking test: GGX and Beckmann there,
-        # others (``OTHER_CODE``) by their array code
-        models = [media.rough(k) for k in range(len(media.ids))]
-        self._rough = (np.array([NOT_ROUGH if r is None else getattr(r, "code", OTHER_CODE) for r in models], np.int8),
-                       np.array([getattr(r, "ax", 1.0) for r in models], float),
-                       np.array([getattr(r, "ay", 1.0) for r in models], float),
-                       np.array([getattr(r, "orientation", 0.0) for r in models], float))
+        self._media, self._films, self._rough, self._rough_models, self._layer_media = _kernel_tables(job)
         self._rough_other = bool((self._rough[0] == OTHER_CODE).any())
 
     # -- public -----------------------------------------------------------------------------
@@ -521,7 +489,7 @@ class Integrator:
             self.first_t[wave.sid] = t
             self.first_m[wave.sid[~miss]] = self.job.face_medium[prim[~miss]]
         if miss.any():
-            self._sky(wave.take(miss))
+            self._sky(wave, np.flatnonzero(miss))
         return t, prim, miss
 
     def _bounce(self, wave: _Wave, first: bool):
@@ -586,31 +554,35 @@ class Integrator:
         """
         media = self.job.media
         out = n_in
-        for k in _values(face_med):
+        values = _values(face_med)
+        for k in values:
             bump = media.bump_map(int(k))
             if bump is None:
                 continue
+            if values.size == 1:
+                return bump.shade(pos, n_in, d)  # the usual case: every ray on one material
             g = face_med == k
             if out is n_in:
                 out = n_in.copy()
-            tilted = bump.perturb(pos[g], n_in[g])
-            seen = np.einsum("ij,ij->i", d[g], tilted) < 0.0
-            out[g] = np.where(seen[:, None], tilted, n_in[g])
+            out[g] = bump.shade(pos[g], n_in[g], d[g])
         return out
 
-    def _sky(self, wv: _Wave):
+    def _sky(self, wave: _Wave, rows):
+        """The sky's brightness seen by the rays ``rows`` of a wave (which missed every face)."""
         sky = self.job.sky
-        ta, tb = sky.brightness(wv.d, heights=wv.o[:, 2])
+        d, sid, m = wave.d[rows], wave.sid[rows], wave.m[rows]
+        ta, tb = sky.brightness(d, heights=wave.o[rows, 2])
         if sky.unpolarized:
-            self._emit(wv.sid, wv.m, np.asarray(ta, float))
+            self._emit(sid, m, np.asarray(ta, float))
             return
-        k = -wv.d
+        s = wave.s[rows]
+        k = -d
         hvec = cross(_Z[None, :], k)
         norm = np.linalg.norm(hvec, axis=1, keepdims=True)
-        hvec = np.where(norm > _TINY, hvec / np.where(norm > _TINY, norm, 1.0), wv.s)
+        hvec = np.where(norm > _TINY, hvec / np.where(norm > _TINY, norm, 1.0), s)
         vvec = cross(k, hvec)
-        m = rebase(wv.m, wv.s, wv.p, hvec, vvec)
-        self._emit(wv.sid, m, np.asarray(tb, float), np.asarray(ta, float))  # columns (h, v) = (Th, Tv)
+        m = rebase(m, s, wave.p[rows], hvec, vvec)
+        self._emit(sid, m, np.asarray(tb, float), np.asarray(ta, float))  # columns (h, v) = (Th, Tv)
 
     def _interact(self, wv: _Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit=0):
         """Interaction of rays with one face: emission of what it absorbs, reflected and
@@ -709,7 +681,7 @@ class Integrator:
         normal of its side (0 on the wrong side); the others hit the same point again at once
         (`_interact` with ``rehit + 1``, no intersection), up to ``roughness.MAX_REHITS`` after
         which the chain's power is emitted at the surface temperature. On its way to the next
-        facet a re-hitting child crosses one wavelength of its side's medium (`_cross_wavelength`):
+        facet a re-hitting child crosses one wavelength of its side's medium (`kernels.settle`):
         a metal-like body swallows what it transmits (as `pmmw_cli.brdf` does with a lossy
         substrate), a clear one lets it walk on. A child on the wrong side of the *geometric*
         face (a bump map's tilt) is mirrored through the face's plane, keeping its power.
@@ -729,15 +701,17 @@ class Integrator:
                 p_leave = np.zeros(n)
                 for k in _values(fm):
                     g = fm == k
-                    p_leave[r[g]] = self.job.media.rough(int(k)).masking(n_x[g], tangent[ir[g]], child.d[r[g]])
+                    p_leave[r[g]] = self._rough_models[int(k)].masking(n_x[g], tangent[ir[g]], child.d[r[g]])
         else:
             tangent = n_mac  # not read
         leave, back = _Wave.empty(n, child.stack.shape[1]), _Wave.empty(n, child.stack.shape[1])
         side = (np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, bool), np.empty(n))
         hit = (pos, n_geo, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
-        nl, nb = kernels.settle(child.arrays(), i, branch, u, p_leave, hit, n_mac, tangent, step, rehit + 1 > MAX_REHITS,
+        t_face = self._media[2][face_med]
+        chain_end = (np.full(len(pos), rehit + 1 > MAX_REHITS), np.stack([t_face, t_face], axis=1))
+        nl, nb = kernels.settle(child.arrays(), i, branch, u, p_leave, hit, n_mac, tangent, step, chain_end,
                                 self._media, self._rough, C0 / self.job.frequency, self.acc, leave.arrays(),
-                                back.arrays(), side)
+                                back.arrays(), side, (np.empty(n, np.int64), np.empty(n)), True)
         if not nb:
             return leave.head(nl), None
         j, cur, other, leaving, sign = (a[:nb] for a in side)
@@ -751,10 +725,11 @@ class Integrator:
         The surface is a pile of interfaces at one point: interface j < L is the rough top of
         rough layer j (`RoughLayer`, with its coherent films), interface L the substrate's own
         surface (its ``coating`` films and ``roughness``). A ray on it is at an interface j, on its
-        upper or lower side. Each step: draw a facet (the interface's model, or its macro normal),
-        split by Fresnel / the films' multilayer about it (absorption emitted at the films'
-        temperature), mask each child (masked ones stay at interface j on their side after one
-        wavelength of that side's medium), and send the others across the layer they are in,
+        upper or lower side. Each step (`_layer_step`): draw a facet (the interface's model, or its
+        macro normal), split by Fresnel / the films' multilayer about it (absorption emitted at the
+        films' temperature) and mask each child, by the same kernels as any surface (each rough
+        layer is a medium of the kernels' tables, `_kernel_tables`; masked children stay at
+        interface j on their side after one wavelength of that side's medium), and send the others across the layer they are in,
         attenuated by exp(-alpha t / cos) and emitting at the layer's temperature, to the next
         interface. A child leaving the top interface upward or the substrate's interface downward
         is a real child of the scene: reflected or transmitted as for a smooth surface. Russian
@@ -768,7 +743,7 @@ class Integrator:
         for kv in np.unique(key):
             g = np.nonzero(key == kv)[0]
             k, lv = int(face_med[g[0]]), bool(leaving[g[0]])
-            pile = _Pile(media, k, int(other[g[0]]) if lv else int(cur[g[0]]))
+            pile = _Pile(media, k, int(other[g[0]]) if lv else int(cur[g[0]]), self._layer_media[k])
             up = -1.0 if lv else 1.0  # side normals facing the outside
             w = wv.take(g)
             n_up, g_up, p_g, step = up * n_mac[g], up * n_geo[g], pos[g], self.isect.face_offset[prim[g]]
@@ -812,76 +787,71 @@ class Integrator:
         return out
 
     def _layer_step(self, w, pile, j, a, n_in, n_fac, tangent, rehits, rows):
-        """One facet event at interface j for rays on side ``a`` (True: above).
+        """One facet event at interface j for rays on side ``a`` (True: above), by the kernels
+        of every surface: `kernels.scatter` about the facets (the interface's coefficients, with
+        its films; the emission of what it absorbs or a sink swallows; the branch choice), then
+        `kernels.settle` without leaving the point (the interface's masking; masked children
+        back at interface j on their side after one wavelength of its medium).
 
         Returns the real exits ``[(exit_up, wave, rows)]`` and the parts of the walk that go on,
         ``[(wave, lvl, above, rehits, rows)]``.
         """
-        model = pile.roughness(j)
+        nr = len(w)
+        cur, other = pile.index(j, a), pile.index(j, not a)
+        fm = pile.index(j, False)  # the medium whose top surface interface j is
         cos1 = np.clip(-np.einsum("ij,ij->i", w.d, n_fac), 0.0, 1.0)
-        films, metal = pile.films(j), j == pile.n and pile.kind == METAL
-        sink = j == pile.n and a and pile.kind in (BLACKBODY, OPAQUE)
-        eps1, eps2 = pile.eps(j, a), pile.eps(j, not a)
-        if j == pile.n and pile.kind == BLACKBODY:  # index-matched, as in `surface_response`
-            eps2 = films.eps[-1] if (films is not None and a) else eps1
-        c, t_films, q2 = interface_response(cos1, eps1, eps2, films, not a, metal, self.job.k0, pile.medium(j, a)[1],
-                                            pile.t_body)
-        coeff = c._asdict()
-        s, ml = _local_basis(w, n_fac)
-        self._emit_absorbed(w.sid, ml, coeff, t_films, np.full(len(w), sink), pile.t_body)
-        trans = (not sink and not metal) & ((coeff["Ts"] > 0.0) | (coeff["Tp"] > 0.0))
-        keep_r, keep_t, gain_r, gain_t = self._choose_branches(w, coeff, trans)
+        hit = (np.ascontiguousarray(w.o), np.ascontiguousarray(n_fac), cos1, np.full(nr, cur), np.full(nr, fm),
+               np.full(nr, other), np.full(nr, not a), _NO_CODE)
+        u_choose = self.rng.random(nr) if self.job.settings.strategy != "split" else _NO_RANDOM
+        kids = _Wave.empty(2 * nr, w.stack.shape[1])
+        src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
+        none = np.zeros(nr, np.int64)
+        count = kernels.scatter(np.arange(nr), w.arrays(), hit, self._films, none, self._faces, self._media,
+                                self._choice, u_choose, _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(),
+                                (False, src, branch))
+        kids, src, branch = kids.head(count), src[:count], branch[:count]
+        kids.top[:] = w.top[src]  # inside the pile the media stack stays as it was (`_layer_exit`)
+        model = self._rough_models[fm]
+        u, p_leave = np.zeros(count), _NO_RANDOM
+        if model is not None:
+            u = self.rng.random(count)
+            if self._rough[0][fm] == OTHER_CODE:
+                p_leave = model.masking(branch[:, None] * n_in[src], tangent[src], kids.d)
+        t_end = np.array([pile.end_temperature(j, a), pile.end_temperature(j, not a)])
+        chain_end = (rehits + 1 > MAX_REHITS, np.broadcast_to(t_end, (nr, 2)).copy())
+        leave, back = _Wave.empty(count, w.stack.shape[1]), _Wave.empty(count, w.stack.shape[1])
+        b_side = (np.empty(count, np.int64), np.empty(count, np.int64), np.empty(count, np.int64),
+                  np.empty(count, bool), np.empty(count))
+        l_side = (np.empty(count, np.int64), np.empty(count))
+        nl, nb = kernels.settle(kids.arrays(), src, branch, u, p_leave, hit, np.ascontiguousarray(n_in),
+                                np.ascontiguousarray(tangent), np.zeros(nr), chain_end, self._media, self._rough,
+                                C0 / self.job.frequency, self.acc, leave.arrays(), back.arrays(), b_side, l_side,
+                                False)
         exits, walk = [], []
-        for refl, keep, gain in ((True, keep_r, gain_r), (False, keep_t, gain_t)):
-            if not keep.any():
+        if nb:
+            i, sign = b_side[0][:nb], b_side[4][:nb]
+            walk.append((back.head(nb), np.full(nb, j), np.where(sign > 0, a, not a), rehits[i] + 1, rows[i]))
+        leave = leave.head(nl)
+        leave.depth -= 1  # the walk is one interaction, counted where it leaves (`_layer_exit`)
+        i_all, sign_all = l_side[0][:nl], l_side[1][:nl]
+        for side in (a, not a):
+            sel = np.flatnonzero((sign_all > 0) == (side == a))
+            if not sel.size:
                 continue
-            i = np.nonzero(keep)[0]
-            if refl:
-                d_c = _reflect(w.d[i], n_fac[i])
-                amp_s, amp_p = _amplitude(coeff["rs"][i], coeff["Rs"][i]), _amplitude(coeff["rp"][i], coeff["Rp"][i])
-            else:
-                d_c = _refract(w.d[i], n_fac[i], np.full(i.size, eps1), np.full(i.size, eps2),
-                               None if q2 is None else q2[i])
-                amp_s, amp_p = _amplitude(coeff["ts"][i], coeff["Ts"][i]), _amplitude(coeff["tp"][i], coeff["Tp"][i])
-            side = a if refl else not a
-            child = _Wave(o=w.o[i], d=d_c, s=s[i], p=cross(-d_c, s[i]),
-                          m=_scale_columns(ml[i], gain[i] * amp_s, gain[i] * amp_p), sid=w.sid[i], depth=w.depth[i],
-                          stack=w.stack[i], top=w.top[i], last_t=w.last_t[i])
-            n_x = n_in[i] if refl else -n_in[i]
-            if model is not None:
-                p_leave = model.masking(n_x, tangent[i], d_c)
-            else:
-                p_leave = (np.einsum("ij,ij->i", d_c, n_x) > 0.0).astype(float)
-            stay = self.rng.random(i.size) >= p_leave
-            if stay.any():  # masked: back to interface j on the same side
-                back, rh, r_back = child.take(stay), rehits[i][stay] + 1, rows[i][stay]
-                over = rh > MAX_REHITS
-                if over.any():
-                    self._emit(back.sid[over], back.m[over], pile.end_temperature(j, side))
-                    back, rh, r_back = back.take(~over), rh[~over], r_back[~over]
-                alpha_x, temp_x = pile.medium(j, side)
-                ok = self._cross_wavelength(back, np.full(len(back), alpha_x), temp_x)
-                if ok.any():
-                    n_ok = int(ok.sum())
-                    walk.append((back.take(ok), np.full(n_ok, j), np.full(n_ok, side), rh[ok], r_back[ok]))
-            go = ~stay
-            if not go.any():
-                continue
-            fwd = child.take(go) if stay.any() else child
-            r_go = rows[i][go]
+            fwd, i = leave.take(sel), i_all[sel]
             if (side and j == 0) or (not side and j == pile.n):
-                exits.append((side, fwd, r_go))
+                exits.append((side, fwd, rows[i]))
                 continue
             # across the layer it is in to the neighbouring interface
             lay = pile.layers[j - 1] if side else pile.layers[j]
-            cos_t = np.maximum(np.abs(np.einsum("ij,ij->i", fwd.d, n_in[i][go])), 1e-6)
+            cos_t = np.maximum(np.abs(np.einsum("ij,ij->i", fwd.d, n_in[i])), 1e-6)
             tau = np.exp(-lay.alpha * lay.thickness / cos_t)
             em = tau < 1.0
             if em.any():
                 self._emit(fwd.sid[em], fwd.m[em] * np.sqrt(1.0 - tau[em])[:, None, None], lay.temperature)
                 fwd.m *= np.sqrt(tau)[:, None, None]
             walk.append((fwd, np.full(len(fwd), j - 1 if side else j + 1), np.full(len(fwd), not side),
-                         np.zeros(len(fwd), np.int64), r_go))
+                         np.zeros(len(fwd), np.int64), rows[i]))
         return exits, walk
 
     def _layer_exit(self, child, r, exit_up, leaving, k, pos, g_up, step, t_body):
@@ -902,57 +872,6 @@ class Integrator:
         child.stack, child.top = stack, top
         return child
 
-    def _cross_wavelength(self, back: _Wave, alpha, temperature):
-        """A masked child's way back to the microsurface: one wavelength of its medium (the
-        shortest facet spacing for which geometrical optics holds), absorbing ``1 - exp(-alpha
-        lambda)`` and emitting it at ``temperature``. Returns the rays with power left."""
-        tau = np.exp(-alpha * (C0 / self.job.frequency))
-        lossy = tau < 1.0
-        if lossy.any():
-            t = temperature if np.ndim(temperature) == 0 else temperature[lossy]
-            self._emit(back.sid[lossy], back.m[lossy] * np.sqrt(1.0 - tau[lossy])[:, None, None], t)
-            back.m[lossy] *= np.sqrt(tau[lossy])[:, None, None]
-        return tau > _A_ROUNDING
-
-    def _emit_absorbed(self, sid, ml, coeff, t_absorb, sink, t_body):
-        """Emission of what an interaction absorbs: the interface's (or films') A at ``t_absorb``,
-        and, where ``sink`` (blackbody, opaque), the transmitted T at the body's ``t_body``."""
-        absorb = (coeff["As"] > _A_ROUNDING) | (coeff["Ap"] > _A_ROUNDING)
-        if absorb.any():
-            t = t_absorb if np.ndim(t_absorb) == 0 else t_absorb[absorb]
-            self._emit(sid[absorb], _scale_columns(ml[absorb], np.sqrt(coeff["As"][absorb]),
-                                                   np.sqrt(coeff["Ap"][absorb])), t)
-        if sink.any():
-            t = t_body if np.ndim(t_body) == 0 else t_body[sink]
-            self._emit(sid[sink], _scale_columns(ml[sink], np.sqrt(coeff["Ts"][sink]), np.sqrt(coeff["Tp"][sink])), t)
-
-    def _choose_branches(self, wv: _Wave, coeff, trans):
-        """Which children to follow (``render.strategy``) and their amplitude gains.
-
-        ``split`` follows both (Murakowski 2014's deterministic splitting). ``stochastic`` follows one,
-        reflected with probability P = (Rs + Rp) / (Rs + Rp + Ts + Tp), and divides its power by
-        the probability of the choice (unbiased). ``hybrid`` splits for the first
-        ``split_depth`` interactions of a path and chooses after that.
-        """
-        st = self.job.settings
-        n = len(wv)
-        keep_r, keep_t = np.ones(n, bool), trans.copy()
-        gain_r, gain_t = np.ones(n), np.ones(n)
-        if st.strategy == "split":
-            return keep_r, keep_t, gain_r, gain_t
-        choose = trans & ((wv.depth >= st.split_depth) if st.strategy == "hybrid" else True)
-        if choose.any():
-            r = coeff["Rs"][choose] + coeff["Rp"][choose]
-            t = coeff["Ts"][choose] + coeff["Tp"][choose]
-            p_r = r / np.maximum(r + t, _TINY)
-            take_r = self.rng.random(p_r.shape[0]) < p_r
-            idx = np.nonzero(choose)[0]
-            keep_r[idx[~take_r]] = False
-            keep_t[idx[take_r]] = False
-            gain_r[idx[take_r]] = 1.0 / np.sqrt(p_r[take_r])
-            gain_t[idx[~take_r]] = 1.0 / np.sqrt(1.0 - p_r[~take_r])
-        return keep_r, keep_t, gain_r, gain_t
-
     def _terminate(self, wv: _Wave):
         """Depth cut-off and weight threshold (Murakowski 2014 sec. 2.2.5, 2.2.9)."""
         keep = self._survivors(wv)
@@ -969,6 +888,55 @@ class Integrator:
         return keep
 
 
+def _kernel_tables(job: TraceJob):
+    """The media as the kernels take them (`kernels.scatter`, `kernels.settle`), with each rough
+    coating layer (`job.RoughLayer`) a dielectric medium of its own after the scene's media.
+
+    Returns
+    -------
+    media : tuple (kind, alpha, temperature, n1_real, has_coat, eps) of arrays, one entry per medium
+    films : tuple (start, count, eps, thickness, temperature, k0)
+        The coherent films of each medium (outermost first), flattened.
+    rough : tuple (code, alpha_x, alpha_y, orientation)
+        Each medium's roughness model for the masking test (`roughness.smith_g1` codes).
+    models : list
+        Each medium's roughness model (None: smooth).
+    layer_media : list of list of int
+        ``layer_media[k][j]``: the medium index of rough layer j of medium k.
+    """
+    m = job.media
+    n = len(m.ids)
+    kind, alpha, temp, eps = list(m.kind), list(m.alpha), list(m.temperature), list(m.eps)
+    coats, models = list(m.coating), [m.rough(k) for k in range(n)]
+    layer_media = []
+    for k in range(n):
+        idx = []
+        for layer in m.rough_layers(k):
+            idx.append(len(kind))
+            kind.append(DIELECTRIC)
+            alpha.append(layer.alpha)
+            temp.append(layer.temperature)
+            eps.append(layer.eps)
+            coats.append(layer.films)
+            models.append(layer.roughness)
+        layer_media.append(idx)
+    eps = np.array(eps, complex)
+    media = (np.array(kind, np.int8), np.array(alpha, float), np.array(temp, float), np.sqrt(eps).real.copy(),
+             np.array([c is not None for c in coats]), eps)
+    sizes = [0 if c is None else c.eps.size for c in coats]
+    present = [c for c in coats if c is not None]
+    films = (np.cumsum([0] + sizes[:-1]).astype(np.int64), np.array(sizes, np.int64),
+             np.concatenate([c.eps for c in present] + [np.ones(1)]).astype(complex),
+             np.concatenate([c.thickness for c in present] + [np.zeros(1)]).astype(float),
+             np.array([0.0 if c is None else c.temperature for c in coats], float), float(job.k0))
+    # GGX and Beckmann are masked in the kernel; others (``OTHER_CODE``) by their array code
+    rough = (np.array([NOT_ROUGH if r is None else getattr(r, "code", OTHER_CODE) for r in models], np.int8),
+             np.array([getattr(r, "ax", 1.0) for r in models], float),
+             np.array([getattr(r, "ay", 1.0) for r in models], float),
+             np.array([getattr(r, "orientation", 0.0) for r in models], float))
+    return media, films, rough, models, layer_media
+
+
 class _Pile:
     """The interfaces of one surface with rough coating layers, seen by one group of rays.
 
@@ -977,8 +945,11 @@ class _Pile:
     interface 0 is the outside medium, below interface n the body (index k).
     """
 
-    def __init__(self, media, k, outside):
+    def __init__(self, media, k, outside, layer_media=()):
         self.layers = media.rough_layers(k)
+        # medium indices in the kernels' tables (`_kernel_tables`): above interface 0 the outside,
+        # then the layers, below interface n the body
+        self._index = [int(outside)] + list(layer_media) + [int(k)]
         self.n = len(self.layers)
         self.kind = int(media.kind[k])
         self.t_body = float(media.temperature[k])
@@ -992,6 +963,10 @@ class _Pile:
         # where a walk that ends early emits: the layer it is in, the body on either outer side
         self._end_above = np.array([self.t_body] + [x.temperature for x in lay])
         self._end_below = np.array([x.temperature for x in lay] + [self.t_body])
+
+    def index(self, j, above):
+        """Medium index (kernels' tables) on one side of interface j."""
+        return self._index[j] if above else self._index[j + 1]
 
     def roughness(self, j):
         return self.layers[j].roughness if j < self.n else self._media.rough(self._k)
@@ -1011,22 +986,6 @@ class _Pile:
 
     def end_temperatures(self, lvl, above):
         return np.where(above, self._end_above[lvl], self._end_below[lvl])
-
-
-def _local_basis(wv: _Wave, n):
-    """The (s, p) basis of the outgoing wave k = -d about the (facet) normal n (eq. 2.23), and the
-    rays' Jones matrices re-expressed in it. ``s = unit(n x k)``, or the ray's own s at normal
-    incidence (n parallel to k)."""
-    k_out = -wv.d
-    s = cross(n, k_out)
-    norm = np.sqrt(np.einsum("ij,ij->i", s, s))[:, None]
-    s = np.where(norm > 1e-9, s / np.where(norm > 1e-9, norm, 1.0), wv.s)
-    return s, rebase(wv.m, wv.s, wv.p, s, cross(k_out, s))
-
-
-def _reflect(d, n):
-    """Mirror direction of d about the unit normal n (eq. 2.21)."""
-    return d - 2.0 * np.einsum("ij,ij->i", d, n)[:, None] * n
 
 
 def _mirror_wrong_side(child: _Wave, g, rows=True):
@@ -1060,49 +1019,11 @@ def _values(a):
 
 
 def _tangents(n):
-    """Unit tangents: world X projected onto the plane normal to n (world Y where n ~ X)."""
-    t = np.zeros_like(n)
-    t[:, 0] = 1.0
-    near_x = np.abs(n[:, 0]) > 0.9
-    t[near_x] = (0.0, 1.0, 0.0)
-    t -= np.einsum("ij,ij->i", t, n)[:, None] * n
-    return t / np.linalg.norm(t, axis=1, keepdims=True)
+    """Unit tangents: world X projected onto the plane normal to n (world Y where n ~ X),
+    `kernels.tangents`; shape (n, 3)."""
+    n = np.ascontiguousarray(n, dtype=np.float64)
+    out = np.empty_like(n)
+    kernels.tangents(n, out)
+    return out
 
 
-def _refract(d, n_in, eps1, eps2, q2=None):
-    """Real transmitted direction under the homogeneous-wave assumption (Murakowski 2014 sec. 2.2.4).
-
-    The tangential wave-vector component is conserved (eq. 2.18) and the normal component is
-    Re q2 = Re sqrt(eps2 - eps1 sin^2 th1) (eq. 2.20, outgoing branch Re q2 >= 0), so that for
-    lossless media this is Snell's law exactly.
-
-    Parameters
-    ----------
-    d : ndarray, shape (n, 3)
-        Incident (trace) direction.
-    n_in : ndarray, shape (n, 3)
-        Unit normal facing the incident side (d . n_in < 0).
-    eps1, eps2 : ndarray, shape (n,), complex128
-    q2 : ndarray, shape (n,), complex128, optional
-        ``sqrt(eps2 - eps1 sin^2 th1)`` (outgoing branch) where already known, NaN elsewhere.
-
-    Returns
-    -------
-    ndarray, shape (n, 3), float64
-    """
-    cos1 = -np.einsum("ij,ij->i", d, n_in)
-    tang = d + cos1[:, None] * n_in  # |tang| = sin th1
-    sin2 = np.clip(1.0 - cos1**2, 0.0, 1.0)
-    n1 = np.sqrt(eps1 + 0j)
-    # the wave runs away from the interface (eq. 2.20): the outgoing root, Re q2 >= 0, which is
-    # also the decaying one unless the incident medium is lossy; `fresnel.interface` has it
-    # already (NaN where the coefficients came from a coating stack)
-    if q2 is None:
-        q2 = fresnel.normal_component(eps2, eps1 * sin2, branch="outgoing")
-    else:
-        missing = np.isnan(q2)
-        if missing.any():
-            q2 = q2.copy()
-            q2[missing] = fresnel.normal_component(eps2[missing], (eps1 * sin2)[missing], branch="outgoing")
-    dt = n1.real[:, None] * tang - q2.real[:, None] * n_in
-    return _normalize(dt)

@@ -35,7 +35,7 @@ import numpy as np
 
 from pmmw_cli.jit import inline, njit
 from pmmw_cli.physics import fresnel, multilayer, roughness
-from pmmw_cli.scene import bump
+from pmmw_cli.scene import bump, camera
 from pmmw_cli.trace.intersect import _plane_distance
 from pmmw_cli.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
 
@@ -481,6 +481,18 @@ def _copy_row(src, c, dst, n):
 
 
 @_jit
+def tangents(n, out):
+    """Unit anisotropy tangents of rough faces: world X projected onto the plane normal to each
+    unit normal n (world Y where n is within 26 degrees of X); shape (N, 3)."""
+    for i in range(n.shape[0]):
+        t0, t1 = (0.0, 1.0) if abs(n[i, 0]) > 0.9 else (1.0, 0.0)
+        tn = t0 * n[i, 0] + t1 * n[i, 1]
+        x0, x1, x2 = t0 - tn * n[i, 0], t1 - tn * n[i, 1], -tn * n[i, 2]
+        norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+        out[i, 0], out[i, 1], out[i, 2] = x0 / norm, x1 / norm, x2 / norm
+
+
+@_jit
 def compact(wave, keep):
     """Move the rows of a wave with ``keep`` to its front, in order (in place: the wave's arrays
     must not be shared); returns how many."""
@@ -494,10 +506,11 @@ def compact(wave, keep):
 
 
 @_jit
-def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, rehit_over, media, rough, wavelength, acc,
-           leave, back, back_side):
+def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain_end, media, rough, wavelength, acc,
+           leave, back, back_side, leave_side, finish):
     """Children of a rough surface's facets (`scatter` with ``finish`` False) sent off the
-    surface or back onto it (`Integrator._settle`, which describes the rule).
+    surface or back onto it (`Integrator._settle`, which describes the rule), or between the
+    interfaces of rough coating layers (`Integrator._layer_step`: ``finish`` False).
 
     Parameters
     ----------
@@ -516,9 +529,10 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, rehit
         Macro normals facing the incident side, and the anisotropy tangents (`roughness.local_frame`).
     step : ndarray, shape (rows,)
         Offset off the face [m].
-    rehit_over : bool
-        The re-hit chain is at its end: a masked child's power is emitted at the face's
-        temperature.
+    chain_end : tuple (over, t_end)
+        ``over`` (rows,) bool: the re-hit chain of the row is at its end, and a masked child's
+        power is emitted at ``t_end`` (rows, 2) [K] (column 0 for reflected children, 1 for
+        transmitted ones).
     media : tuple (kind, alpha, temperature, ...)
     rough : tuple (code, alpha_x, alpha_y, orientation) of arrays, one entry per medium
         The media's roughness models (`roughness.smith_g1`'s codes; `roughness.NOT_ROUGH`: smooth).
@@ -531,6 +545,11 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, rehit
     back_side : tuple (src, cur, other, leaving, sign)
         Filled for each re-hitting child: its row in ``hit``, the media of its side seen from
         there, and its branch.
+    leave_side : tuple (src, sign)
+        Filled for each leaving child: its row in ``hit`` and its branch.
+    finish : bool
+        Leaving children leave the surface here (mirrored to the right side of the face and
+        offset along it); otherwise they are left at the hit point as they are.
 
     Returns
     -------
@@ -541,6 +560,8 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, rehit
     kind, alpha, temperature = media[0], media[1], media[2]
     b_src, b_cur, b_other, b_leaving, b_sign = back_side
     r_code, r_ax, r_ay, r_orient = rough
+    over, t_end = chain_end
+    l_src, l_sign = leave_side
     o, d, s, p, m, sid = kids[0], kids[1], kids[2], kids[3], kids[4], kids[5]
     nl, nb = 0, 0
     for c in range(src.shape[0]):
@@ -556,6 +577,11 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, rehit
                                     (tangent[i, 0], tangent[i, 1], tangent[i, 2]), (d[c, 0], d[c, 1], d[c, 2]),
                                     code, r_ax[fm], r_ay[fm], r_orient[fm])
         if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
+            l_src[nl], l_sign[nl] = i, sg
+            if not finish:
+                _copy_row(kids, c, leave, nl)
+                nl += 1
+                continue
             # off the surface; a child on the wrong side of the geometric face (a bump's tilt)
             # is mirrored through its plane (d and s reflected, p follows: power kept)
             dg = d[c, 0] * gx + d[c, 1] * gy + d[c, 2] * gz
@@ -573,9 +599,9 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, rehit
             nl += 1
             continue
         k = sid[c]
-        if rehit_over:  # the chain's end: its power emitted at the surface temperature
-            t_face = temperature[fm_a[i]]
-            _add(acc, k, m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], t_face, t_face)
+        if over[i]:  # the chain's end: its power emitted where it is
+            te = t_end[i, 0] if sg > 0.0 else t_end[i, 1]
+            _add(acc, k, m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], te, te)
             continue
         # the side the child is on, seen from there: a reflected child keeps the media, a
         # refracted one swaps them, a thin sheet's transmitted child keeps them
@@ -633,8 +659,9 @@ def warm(stack_size: int = 8) -> None:
     ints = np.zeros(0, np.int64)
     compact(wave, np.zeros(n, bool))
     rough = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
-    settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), False,
-           media, rough, 1e-3, acc, wave, wave, (ints, ints, ints, np.zeros(0, bool), empty))
+    settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
+           (np.zeros(n, bool), np.zeros((n, 2))), media, rough, 1e-3, acc, wave, wave,
+           (ints, ints, ints, np.zeros(0, bool), empty), (ints, empty), True)
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
     frozen = np.zeros(0)
     frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
@@ -644,6 +671,11 @@ def warm(stack_size: int = 8) -> None:
     roughness._ggx_sample_rows(v3, v3, v3, empty, empty, 1.0, 1.0, 0.0, v3, empty)
     roughness._smith_masking_rows(v3, v3, v3, roughness.GGX_CODE, 1.0, 1.0, 0.0, empty)
     bump._perturb_rows(v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
+    bump._shade_rows(v3, v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
+    tangents(v3, v3)
+    # camera samples (`Integrator._trace`)
+    camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
+    camera.hash_uniform(0, np.zeros(1, np.int64), 3)
     # the layered atmosphere's cell walk (`AtmosphereModel.path`)
     from pmmw_cli.atmosphere.model import _path_loop
 
