@@ -945,24 +945,17 @@ class _Pile:
     interface 0 is the outside medium, below interface n the body (index k).
     """
 
-    def __init__(self, media, k, outside, layer_media=()):
+    def __init__(self, media, k, outside, layer_media):
         self.layers = media.rough_layers(k)
         # medium indices in the kernels' tables (`_kernel_tables`): above interface 0 the outside,
         # then the layers, below interface n the body
         self._index = [int(outside)] + list(layer_media) + [int(k)]
         self.n = len(self.layers)
-        self.kind = int(media.kind[k])
         self.t_body = float(media.temperature[k])
         self._media, self._k = media, k
-        lay = self.layers
-        # per interface j: (eps, alpha, temperature) of the medium above and below it
-        self._above = [(complex(media.eps[outside]), float(media.alpha[outside]), float(media.temperature[outside]))]
-        self._above += [(x.eps, x.alpha, x.temperature) for x in lay]
-        self._below = [(x.eps, x.alpha, x.temperature) for x in lay]
-        self._below += [(complex(media.eps[k]), float(media.alpha[k]), self.t_body)]
         # where a walk that ends early emits: the layer it is in, the body on either outer side
-        self._end_above = np.array([self.t_body] + [x.temperature for x in lay])
-        self._end_below = np.array([x.temperature for x in lay] + [self.t_body])
+        self._end_above = np.array([self.t_body] + [x.temperature for x in self.layers])
+        self._end_below = np.array([x.temperature for x in self.layers] + [self.t_body])
 
     def index(self, j, above):
         """Medium index (kernels' tables) on one side of interface j."""
@@ -970,16 +963,6 @@ class _Pile:
 
     def roughness(self, j):
         return self.layers[j].roughness if j < self.n else self._media.rough(self._k)
-
-    def films(self, j):
-        return self.layers[j].films if j < self.n else self._media.coating[self._k]
-
-    def eps(self, j, above):
-        return (self._above if above else self._below)[j][0]
-
-    def medium(self, j, above):
-        """(alpha, temperature) of the medium on one side of interface j."""
-        return (self._above if above else self._below)[j][1:]
 
     def end_temperature(self, j, above):
         return float(self._end_above[j] if above else self._end_below[j])
