@@ -528,7 +528,8 @@ class Integrator:
                                     u_roul, self._limits, self.acc, self.cut, kids.arrays(), kernels.NO_SETTLE)
             out.append(kids.head(count))
             return _Wave.concat(out)
-        wv = wave.take(rows)
+        # the interacting rays to the front of the wave, in place (its other rays are done with)
+        wv = wave.head(kernels.compact(arrays, hit[7] == 2))
         pos, n_in, cur, face_med, other, leaving = (hit[k][rows] for k in (0, 1, 3, 4, 5, 6))
         prim = prim[rows]
         n_mac = self._bumped(pos, wv.d, n_in, face_med)
