@@ -339,3 +339,21 @@ def test_depth_and_material_previews_with_their_legends(tmp_path):
     px = oiio.ImageBuf(str(prev / "tiny_material.png")).get_pixels(oiio.FLOAT)[..., :3]
     colours = {tuple(np.round(c, 2)) for c in px.reshape(-1, 3)}
     assert len(colours) >= 4  # sky, concrete, metal and the white page
+
+
+def test_bench_render_times_report_trace_against_embree(tmp_path):
+    """`pmmw bench --render-times`'s table (`docs/benchmarks.md`): per config the rays, the trace
+    time, Embree's time for those rays and their ratio (trace x workers / Embree: above 1, since
+    the trace contains the intersection), and the whole command."""
+    from pmmw_cli.bench import _render_times_section
+
+    scn = _scene(tmp_path)
+    text = _render_times_section([str(scn)], workers=1)
+    row = [ln for ln in text.splitlines() if ln.startswith(f"| `{scn}`")]
+    assert len(row) == 1
+    cells = [c.strip() for c in row[0].strip("|").split("|")]
+    assert cells[1] == "24 x 16" and cells[2] == "2"
+    rays, trace, embree, ratio, command = (float(c) for c in cells[3:])
+    assert rays > 0 and trace >= 0 and command >= trace
+    assert embree >= 0 and (ratio > 1.0 or embree == 0.0)
+    assert "| config | pixels | spp | rays [M] | trace [s] | Embree [s] | ratio | command [s] |" in text
