@@ -38,12 +38,10 @@ from pmmw_cli.physics.roughness import MAX_REHITS, NOT_ROUGH, OTHER_CODE
 from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import REPLICATES, pixel_samples
 from pmmw_cli.trace import kernels
-from pmmw_cli.trace.intersect import offset_along
 from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, TraceJob
 
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
-_A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
 _NO_RANDOM = np.zeros(0)  # the kernels' "no uniforms drawn"
 _NO_CODE = np.zeros(0, np.int8)  # `kernels.scatter` does not read the codes of `kernels.arrive`
@@ -768,8 +766,8 @@ class Integrator:
                         if model is not None:
                             n_fac = self._draw_facets(model, w, sel, n_fac, tangent[rows[sel]],
                                                       pile.end_temperature(j, a))
-                        exits, more = self._layer_step(w.take(sel), pile, j, a, n_in[sel], n_fac, tangent[rows[sel]],
-                                                       rehits[sel], rows[sel])
+                        exits, more = self._layer_step(w.take(sel), p_g[rows[sel]], pile, j, a, n_in[sel], n_fac,
+                                                       tangent[rows[sel]], rehits[sel], rows[sel])
                         out += [self._layer_exit(child, r, exit_up, lv, k, p_g, g_up, step, pile.t_body)
                                 for exit_up, child, r in exits]
                         walk += more
@@ -787,8 +785,8 @@ class Integrator:
                 self._emit(w.sid, w.m, pile.end_temperatures(lvl, above))
         return out
 
-    def _layer_step(self, w, pile, j, a, n_in, n_fac, tangent, rehits, rows):
-        """One facet event at interface j for rays on side ``a`` (True: above), by the kernels
+    def _layer_step(self, w, pos, pile, j, a, n_in, n_fac, tangent, rehits, rows):
+        """One facet event at interface j for rays on side ``a`` (True: above) at points ``pos``, by the kernels
         of every surface: `kernels.scatter` about the facets (the interface's coefficients, with
         its films; the emission of what it absorbs or a sink swallows; the branch choice), then
         `kernels.settle` without leaving the point (the interface's masking; masked children
@@ -801,7 +799,7 @@ class Integrator:
         cur, other = pile.index(j, a), pile.index(j, not a)
         fm = pile.index(j, False)  # the medium whose top surface interface j is
         cos1 = np.clip(-np.einsum("ij,ij->i", w.d, n_fac), 0.0, 1.0)
-        hit = (np.ascontiguousarray(w.o), np.ascontiguousarray(n_fac), cos1, np.full(nr, cur), np.full(nr, fm),
+        hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, np.full(nr, cur), np.full(nr, fm),
                np.full(nr, other), np.full(nr, not a), _NO_CODE)
         u_choose = self.rng.random(nr) if self.job.settings.strategy != "split" else _NO_RANDOM
         kids = _Wave.empty(2 * nr, w.stack.shape[1])
@@ -858,9 +856,9 @@ class Integrator:
     def _layer_exit(self, child, r, exit_up, leaving, k, pos, g_up, step, t_body):
         """A child leaving the layered surface: on the outside (``exit_up``) or into the body,
         with the media stack of a reflected or transmitted child and the smooth code's offset."""
-        g = g_up[r] if exit_up else -g_up[r]
-        _mirror_wrong_side(child, g)
-        child.o = offset_along(pos[r], g, child.d, step[r])
+        g = np.ascontiguousarray(g_up[r] if exit_up else -g_up[r])
+        child.o = pos[r]
+        kernels.off_surface(child.arrays(), g, np.ascontiguousarray(step[r]))
         child.depth = child.depth + 1
         child.last_t = np.full(len(child), t_body)
         stack, top = child.stack.copy(), child.top.copy()
@@ -970,20 +968,6 @@ class _Pile:
 
     def end_temperatures(self, lvl, above):
         return np.where(above, self._end_above[lvl], self._end_below[lvl])
-
-
-def _mirror_wrong_side(child: _Wave, g, rows=True):
-    """Mirror the children (of ``rows``) that point to the wrong side of the face (``d.g <= 0``,
-    a bump's tilt) through the face's plane: d and its basis vector s are reflected, p follows,
-    so the basis stays orthonormal and the power is kept."""
-    wrong = rows & (np.einsum("ij,ij->i", child.d, g) <= 0.0)
-    if wrong.any():
-        gw = g[wrong]
-        d_w, s_w = child.d[wrong], child.s[wrong]
-        d_w = d_w - 2.0 * np.einsum("ij,ij->i", d_w, gw)[:, None] * gw
-        s_w = s_w - 2.0 * np.einsum("ij,ij->i", s_w, gw)[:, None] * gw
-        child.d[wrong], child.s[wrong] = d_w, s_w
-        child.p[wrong] = cross(-d_w, s_w)
 
 
 def _merge_walk(parts):

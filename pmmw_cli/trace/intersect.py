@@ -281,15 +281,3 @@ def offset_origins(points, normals, directions, scale=None) -> np.ndarray:
 def _offset_length(mag):
     """``RAY_EPS_ULPS`` float32 spacings at coordinate magnitude ``mag`` [m], plus the floor."""
     return RAY_EPS_ULPS * np.spacing(np.asarray(mag).astype(EMBREE_DTYPE)).astype(np.float64) + RAY_EPS_FLOOR
-
-
-def offset_along(points, normals, directions, step):
-    """`offset_origins` with a known step length per ray (e.g. ``face_offset[prim]``).
-
-    Parameters
-    ----------
-    points, normals, directions : ndarray, shape (N, 3), float64
-    step : ndarray, shape (N,), float64 [m]
-    """
-    side = np.where(np.einsum("ij,ij->i", directions, normals) < 0.0, -step, step)
-    return points + side[:, None] * normals

@@ -239,29 +239,47 @@ def _amplitude(amp, power):
 
 
 @_inline
+def _off_surface(o, d, s, p, c, gx, gy, gz, step):
+    """Ray c of a wave off the surface at its origin, along the side normal g: a ray on the wrong
+    side (``d . g <= 0``, a bump's tilt) is first mirrored through the face's plane (d and s
+    reflected, p = k x s follows: the power is kept), then moved by ``step`` along g."""
+    dg = d[c, 0] * gx + d[c, 1] * gy + d[c, 2] * gz
+    if dg <= 0.0:
+        sg = s[c, 0] * gx + s[c, 1] * gy + s[c, 2] * gz
+        d[c, 0], d[c, 1], d[c, 2] = d[c, 0] - 2.0 * dg * gx, d[c, 1] - 2.0 * dg * gy, d[c, 2] - 2.0 * dg * gz
+        s[c, 0], s[c, 1], s[c, 2] = s[c, 0] - 2.0 * sg * gx, s[c, 1] - 2.0 * sg * gy, s[c, 2] - 2.0 * sg * gz
+        p[c, 0] = -(d[c, 1] * s[c, 2] - d[c, 2] * s[c, 1])
+        p[c, 1] = -(d[c, 2] * s[c, 0] - d[c, 0] * s[c, 2])
+        p[c, 2] = -(d[c, 0] * s[c, 1] - d[c, 1] * s[c, 0])
+        dg = -dg
+    side = -step if dg < 0.0 else step
+    o[c, 0], o[c, 1], o[c, 2] = o[c, 0] + side * gx, o[c, 1] + side * gy, o[c, 2] + side * gz
+
+
+@_jit
+def off_surface(wave, g, step):
+    """`_off_surface` for every ray of a wave (at the surface), side normals ``g`` (n, 3) and
+    steps (n,) [m]; in place."""
+    for c in range(g.shape[0]):
+        _off_surface(wave[0], wave[1], wave[2], wave[3], c, g[c, 0], g[c, 1], g[c, 2], step[c])
+
+
+@_inline
 def _child(out, n, o_pos, dv, sv, mm, sid, depth, stack_row, top, last_t, g, step, finish):
-    """Write one child at row n of ``out``: direction ``dv`` with basis vector ``sv``, off the
-    surface at ``o_pos`` along the side normal ``g`` (mirrored through the face's plane first if
-    it points to the wrong side, keeping its power); at ``o_pos`` itself unless ``finish``."""
+    """Write one child at row n of ``out``: direction ``dv`` with basis vector ``sv``, at
+    ``o_pos``, and unless ``finish`` is False off the surface along the side normal ``g``
+    (`_off_surface`)."""
     oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
-    side = 0.0
-    if finish:
-        dg = dv[0] * g[0] + dv[1] * g[1] + dv[2] * g[2]
-        if dg <= 0.0:
-            sg = sv[0] * g[0] + sv[1] * g[1] + sv[2] * g[2]
-            for c in range(3):
-                dv[c] -= 2.0 * dg * g[c]
-                sv[c] -= 2.0 * sg * g[c]
-            dg = -dg
-        side = -step if dg < 0.0 else step
     for c in range(3):
-        oo[n, c] = o_pos[c] + side * g[c]
+        oo[n, c] = o_pos[c]
         od[n, c] = dv[c]
         os_[n, c] = sv[c]
     # p = k x s with k = -d
     op[n, 0] = -(dv[1] * sv[2] - dv[2] * sv[1])
     op[n, 1] = -(dv[2] * sv[0] - dv[0] * sv[2])
     op[n, 2] = -(dv[0] * sv[1] - dv[1] * sv[0])
+    if finish:
+        _off_surface(oo, od, os_, op, n, g[0], g[1], g[2], step)
     for a in range(2):
         for b in range(2):
             om[n, a, b] = mm[a, b]
@@ -578,23 +596,8 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
                                     code, r_ax[fm], r_ay[fm], r_orient[fm])
         if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
             l_src[nl], l_sign[nl] = i, sg
-            if not finish:
-                _copy_row(kids, c, leave, nl)
-                nl += 1
-                continue
-            # off the surface; a child on the wrong side of the geometric face (a bump's tilt)
-            # is mirrored through its plane (d and s reflected, p follows: power kept)
-            dg = d[c, 0] * gx + d[c, 1] * gy + d[c, 2] * gz
-            if dg <= 0.0:
-                sgg = s[c, 0] * gx + s[c, 1] * gy + s[c, 2] * gz
-                d[c, 0], d[c, 1], d[c, 2] = d[c, 0] - 2.0 * dg * gx, d[c, 1] - 2.0 * dg * gy, d[c, 2] - 2.0 * dg * gz
-                s[c, 0], s[c, 1], s[c, 2] = s[c, 0] - 2.0 * sgg * gx, s[c, 1] - 2.0 * sgg * gy, s[c, 2] - 2.0 * sgg * gz
-                p[c, 0] = -(d[c, 1] * s[c, 2] - d[c, 2] * s[c, 1])
-                p[c, 1] = -(d[c, 2] * s[c, 0] - d[c, 0] * s[c, 2])
-                p[c, 2] = -(d[c, 0] * s[c, 1] - d[c, 1] * s[c, 0])
-                dg = d[c, 0] * gx + d[c, 1] * gy + d[c, 2] * gz
-            side = -step[i] if dg < 0.0 else step[i]
-            o[c, 0], o[c, 1], o[c, 2] = o[c, 0] + side * gx, o[c, 1] + side * gy, o[c, 2] + side * gz
+            if finish:
+                _off_surface(o, d, s, p, c, gx, gy, gz, step[i])  # off the surface (a wrong-side child mirrored)
             _copy_row(kids, c, leave, nl)
             nl += 1
             continue
@@ -673,6 +676,7 @@ def warm(stack_size: int = 8) -> None:
     bump._perturb_rows(v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
     bump._shade_rows(v3, v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
     tangents(v3, v3)
+    off_surface(wave, v3, np.zeros(n))
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
     camera.hash_uniform(0, np.zeros(1, np.int64), 3)
