@@ -143,18 +143,58 @@ def test_kernels_run_as_python_without_jit(tmp_path):
     np.testing.assert_allclose(out["1"], out["0"], rtol=0, atol=1e-9)
 
 
+def _reference_coefficients(job, cur, fm, other, leaving, cos1):
+    """The interface rules over arrays, one group of rays at a time: under coherent films the
+    stack from the incident medium through them (innermost first for a ray leaving the body) to
+    the far medium (a blackbody index-matched to the innermost film, a metal as the stack's
+    perfect conductor), emitting at the films' temperature; a bare perfect conductor at the
+    body's; a bare interface (a thin sheet and a blackbody index-matched to the incident medium)
+    at the incident medium's. q2 where the bare interface gives it, NaN elsewhere."""
+    from pmmw_cli.physics import fresnel, multilayer
+    from pmmw_cli.trace.job import BLACKBODY, METAL, THIN
+
+    media = job.media
+    n = cos1.size
+    out = {k: np.empty(n, complex) for k in ("rs", "rp", "ts", "tp")}
+    out.update({k: np.empty(n) for k in ("Rs", "Rp", "Ts", "Tp", "As", "Ap")})
+    t_abs, q2 = np.empty(n), np.full(n, np.nan + 0j)
+    key = (fm * 2 + leaving) * 64 + cur
+    for kv in np.unique(key):
+        g = np.flatnonzero(key == kv)
+        k, c, o, lv = int(fm[g[0]]), int(cur[g[0]]), int(other[g[0]]), bool(leaving[g[0]])
+        kind, films, eps1 = media.kind[k], media.coating[k], media.eps[c]
+        far = eps1 if kind in (THIN, BLACKBODY) else media.eps[o]
+        if films is not None:
+            f_eps, f_d = (films.eps[::-1], films.thickness[::-1]) if lv else (films.eps, films.thickness)
+            e2 = films.eps[-1] if kind == BLACKBODY else far
+            eps = np.concatenate([[eps1], f_eps, [e2]])
+            coeff = multilayer.stack(eps[None, :], f_d[None, :], cos1[g], job.k0,
+                                     substrate="metal" if kind == METAL else "dielectric")
+            t_abs[g] = films.temperature
+        elif kind == METAL:
+            coeff = fresnel.perfect_conductor(g.size)
+            t_abs[g] = media.temperature[k]
+        else:
+            coeff, q = fresnel.interface(np.full(g.size, eps1), np.full(g.size, far), cos1[g], with_q2=True)
+            t_abs[g], q2[g] = media.temperature[c], q
+        for name in out:
+            out[name][g] = getattr(coeff, name)
+    from pmmw_cli.physics.fresnel import Fresnel
+
+    return Fresnel(**out), t_abs, q2
+
+
 def test_kernel_coefficients_equal_the_vectorized_assembly():
     """`kernels.coefficients` (what `kernels.scatter` uses per ray: films reversed for a ray
     leaving the body, a blackbody index-matched to the innermost film, the far medium's normal
-    component, the emission temperature) against `integrator.surface_coefficients`, which
-    assembles the same from `multilayer.stack` and `fresnel.interface` over arrays. Media: bare
+    component, the emission temperature) against the same rules assembled here over arrays from
+    `multilayer.stack`, `fresnel.interface` and `fresnel.perfect_conductor`. Media: bare
     and coated dielectrics (lossy films, one and three), coated metal, blackbody, opaque body
     and thin sheet, a lossy incident medium; rays entering and leaving, cosines 0..1. Equal to
     1e-12 relative (the same arithmetic in another order)."""
     import trimesh
 
     from pmmw_cli.trace import kernels
-    from pmmw_cli.trace.integrator import surface_coefficients
     from tests.scenes import UniformSky, looking_down_at, make_job, material
 
     box = trimesh.creation.box(extents=[1, 1, 1])
@@ -176,7 +216,7 @@ def test_kernel_coefficients_equal_the_vectorized_assembly():
     cos1 = rng.random(n)
     cos1[:20] = 0.0
     cos1[20:40] = 1.0
-    ref, t_ref, q2_ref = surface_coefficients(job, cur, fm, other, leaving, cos1)
+    ref, t_ref, q2_ref = _reference_coefficients(job, cur, fm, other, leaving, cos1)
     amp, power, q2, t_abs = np.empty((n, 4), complex), np.empty((n, 6)), np.empty(n, complex), np.empty(n)
     kernels.coefficients(cur, fm, other, leaving, cos1, integ._media, integ._films, amp, power, q2, t_abs)
     for a, name in enumerate(("rs", "rp", "ts", "tp")):

@@ -32,13 +32,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from pmmw_cli.physics import fresnel, multilayer
+from pmmw_cli.physics import fresnel
 from pmmw_cli.physics.jones import rebase
 from pmmw_cli.physics.roughness import MAX_REHITS, NOT_ROUGH, OTHER_CODE
 from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import REPLICATES, pixel_samples
 from pmmw_cli.trace import kernels
-from pmmw_cli.trace.job import BLACKBODY, C0, DIELECTRIC, METAL, TraceJob
+from pmmw_cli.trace.job import C0, DIELECTRIC, TraceJob
 
 _Z = np.array([0.0, 0.0, 1.0])
 _TINY = 1e-12
@@ -162,7 +162,8 @@ def surface_response(job: TraceJob, cur, face_med, other, leaving, cos1):
 
 
 def surface_coefficients(job: TraceJob, cur, face_med, other, leaving, cos1):
-    """Interface coefficients of rays meeting faces, each with its own media and orientation.
+    """Interface coefficients of rays meeting faces, each with its own media and orientation:
+    `kernels.coefficients`, the tracer's own, over arrays (for `pmmw po` and the tests).
 
     Parameters
     ----------
@@ -179,93 +180,21 @@ def surface_coefficients(job: TraceJob, cur, face_med, other, leaving, cos1):
     coeffs : fresnel.Fresnel
         Amplitudes and powers, arrays of shape (n,).
     t_coat : ndarray, shape (n,), float64
-        Temperature at which the absorbed part emits [K]: the coating's; for a bare interface the
-        absorbed remainder only exists when the incident medium is lossy (homogeneous-wave
-        approximation, PHYSICS.md) and is emitted at the incident medium's temperature.
+        Temperature at which the absorbed part emits [K]: the films'; the body's for a bare
+        perfect conductor; for a bare interface the absorbed remainder only exists when the
+        incident medium is lossy (homogeneous-wave approximation, PHYSICS.md) and is emitted at
+        the incident medium's temperature.
     q2 : ndarray, shape (n,), complex128
-        The exit medium's normal component for a bare interface (refraction reuses it); NaN
-        under films.
+        The far medium's normal component (outgoing root) that refraction uses; NaN for a
+        perfect conductor.
     """
-    media = job.media
+    media, films = _kernel_tables(job)[:2]
     n = cos1.shape[0]
-    kind = media.kind[face_med]
-    eps1 = media.eps[cur]
-    eps2 = kernels.far_eps(kind, eps1, media.eps[other])
-    coats = media.coating
-    coated = np.array([coats[k] is not None for k in range(len(coats))])[face_med]
-    metal = kind == METAL
-    t_in, t_body = media.temperature[cur], media.temperature[face_med]
-    out = {k: np.empty(n, complex) for k in ("rs", "rp", "ts", "tp")}
-    out.update({k: np.empty(n) for k in ("Rs", "Rp", "Ts", "Tp", "As", "Ap")})
-    t_coat = np.empty(n)
-    q2 = np.full(n, np.nan + 0j)
-
-    def fill(g, c, t):
-        for name in out:
-            out[name][g] = getattr(c, name)
-        t_coat[g] = t
-
-    for is_metal in (False, True):
-        g = np.flatnonzero(~coated & (metal == is_metal))
-        if g.size:
-            c, t, q = interface_response(cos1[g], eps1[g], eps2[g], None, False, is_metal, job.k0, t_in[g], t_body[g])
-            fill(g, c, t)
-            if q is not None:
-                q2[g] = q
-    if coated.any():
-        idx = np.flatnonzero(coated)
-        key = face_med[idx] * 2 + leaving[idx]
-        for kv in np.unique(key):
-            g = idx[key == kv]
-            k = int(face_med[g[0]])
-            films = coats[k]
-            e2 = np.full(g.size, films.eps[-1]) if media.kind[k] == BLACKBODY else eps2[g]
-            c, t, _ = interface_response(cos1[g], eps1[g], e2, films, bool(leaving[g[0]]), media.kind[k] == METAL,
-                                         job.k0, t_in[g], t_body[g])
-            fill(g, c, t)
-    return fresnel.Fresnel(**out), t_coat, q2
-
-
-def interface_response(cos1, eps1, eps2, films, reverse, metal, k0, t_incident, t_body):
-    """Coefficients of one interface: bare (Fresnel), under coherent films (multilayer), or a
-    perfect conductor, for rays from medium ``eps1``.
-
-    Parameters
-    ----------
-    cos1 : ndarray, shape (n,), float64
-    eps1, eps2 : complex, or ndarray of shape (n,)
-        Incident medium and far medium (ignored for a metal).
-    films : Coating or None
-        Coherent films between them, listed from the ``eps1`` side unless ``reverse``.
-    metal : bool
-        The far side is a perfect conductor.
-    k0 : float
-        Free-space wavenumber [1/m] (films only).
-    t_incident, t_body : float or ndarray of shape (n,)
-        Temperatures of the incident medium and of the body [K].
-
-    Returns
-    -------
-    coeffs : fresnel.Fresnel
-    t_emit : float or ndarray
-        Where the absorbed part emits: the films' temperature, the body's for a bare metal, the
-        incident medium's for a bare interface (a lossy incident medium's homogeneous-wave
-        remainder, PHYSICS.md).
-    q2 : ndarray or None
-        The far medium's normal component for a bare interface (refraction reuses it).
-    """
-    n = cos1.shape[0]
-    if metal and films is None:
-        return fresnel.perfect_conductor(n), t_body, None
-    eps1 = np.broadcast_to(np.asarray(eps1, complex), (n,))
-    eps2 = np.broadcast_to(np.asarray(eps2, complex), (n,))
-    if films is None:
-        c, q2 = fresnel.interface(eps1, eps2, cos1, with_q2=True)
-        return c, t_incident, q2
-    f_eps, f_d = (films.eps[::-1], films.thickness[::-1]) if reverse else (films.eps, films.thickness)
-    eps = np.concatenate([eps1[:, None], np.broadcast_to(f_eps, (n, f_eps.size)), eps2[:, None]], axis=1)
-    c = multilayer.stack(eps, f_d[None, :], cos1, k0, substrate="metal" if metal else "dielectric")
-    return c, films.temperature, None
+    amp, power, q2, t_coat = np.empty((n, 4), complex), np.empty((n, 6)), np.empty(n, complex), np.empty(n)
+    kernels.coefficients(np.ascontiguousarray(cur, np.int64), np.ascontiguousarray(face_med, np.int64),
+                         np.ascontiguousarray(other, np.int64), np.ascontiguousarray(leaving, bool),
+                         np.ascontiguousarray(cos1, float), media, films, amp, power, q2, t_coat)
+    return fresnel.Fresnel(*(amp[:, k] for k in range(4)), *(power[:, k] for k in range(6))), t_coat, q2
 
 
 def brightness_bounds(job: TraceJob, source_range=()):

@@ -302,7 +302,7 @@ def _film_buffers(films):
 def _coefficients1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
     """Coefficients of one ray meeting a face of medium ``fm`` from medium ``cur`` (``other``
     beyond; ``leaving`` ``fm``) at cosine ``cos1``: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2,
-    t_absorb), as `integrator.surface_coefficients` gives them. Under coherent films (eq.
+    t_absorb) (`integrator.surface_coefficients` over arrays). Under coherent films (eq.
     2.27-2.34) the stack from ``cur`` through them (innermost first when leaving) to the far
     medium, its absorption emitting at the films' temperature; a perfect conductor; or a bare
     interface, a lossy incident medium's remainder emitting at that medium's temperature. ``q2``:
