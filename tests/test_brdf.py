@@ -500,3 +500,30 @@ def test_material_option_uses_the_coating_and_roughness_of_the_database_entry():
     rough = B.run_brdf(material="clothed_skin", frequency="95 GHz", incidence=30.0, samples=2000, alpha=0.3,
                        plots=False)
     assert rough.summary["total_reflectance"] != pytest.approx(sum(r) / 2, abs=1e-3)
+
+
+def test_a_stack_becomes_one_medium_of_the_renderers_tables():
+    """`pmmw brdf`'s Monte Carlo traces a stack through the renderer's surface layer: the layers
+    above the substrate become its rough coating layers (power attenuation 4 pi Im(n) / lambda
+    where a thickness is given, none without one, Optics Express 2016 assumption 3), each with
+    its films and roughness; the substrate is a sink (``opaque``) when lossy, ``metal`` when a
+    perfect conductor, a dielectric when lossless."""
+    from pmmw_cli.brdf.montecarlo import stack_media
+    from pmmw_cli.trace.job import DIELECTRIC, METAL, OPAQUE
+
+    f = 94e9
+    top = B.Layer(eps=2.25 + 0.05j, roughness=R.GGX(0.3), thickness=2e-3, coating=((3.0 + 0.1j, 1e-4),))
+    mid = B.Layer(eps=2.0 + 0.01j, roughness=R.Beckmann(0.2))
+    for bottom, kind in ((B.Layer(eps=6.0 + 2.0j, roughness=R.GGX(0.1)), OPAQUE),
+                         (B.Layer(eps=0j, metal=True), METAL), (B.Layer(eps=4.0 + 0j), DIELECTRIC)):
+        media = stack_media(B.Stack(layers=(top, mid, bottom), frequency=f))
+        assert list(media.kind) == [DIELECTRIC, kind]
+        assert media.rough(1) is bottom.roughness
+        layers = media.rough_layers(1)
+        assert [x.roughness for x in layers] == [top.roughness, mid.roughness]
+        lam = 299_792_458.0 / f
+        assert layers[0].alpha == pytest.approx(4.0 * math.pi * np.sqrt(2.25 + 0.05j).imag / lam, rel=1e-12)
+        assert layers[0].thickness == 2e-3 and layers[1].alpha == 0.0
+        np.testing.assert_array_equal(layers[0].films.eps, [3.0 + 0.1j])
+        np.testing.assert_array_equal(layers[0].films.thickness, [1e-4])
+        assert layers[1].films is None and media.coating[1] is None

@@ -108,15 +108,16 @@ def test_rough_kernels_equal_the_models_array_code(monkeypatch):
                    f"materials.desert_sand.roughness={spec}")
         isect = make_intersector(job.vertices, job.faces)
         fast = Integrator(job, isect)
-        assert (fast._rough[0] == roughness.GGX_CODE).any() and not fast._rough_other
+        assert (fast.surfaces._rough[0] == roughness.GGX_CODE).any() and not fast.surfaces._rough_other
         a = [fast.render_tile(t) for t in job.tiles()]
         with monkeypatch.context() as mp:
             mp.setattr(roughness.GGX, "sample_normals", roughness._Microfacet.sample_normals)
             mp.setattr(roughness.GGX, "masking", roughness._Microfacet.masking)
             slow = Integrator(job, isect)
-            code = slow._rough[0]
-            slow._rough = (np.where(code != roughness.NOT_ROUGH, roughness.OTHER_CODE, code),) + slow._rough[1:]
-            slow._rough_other = True
+            sf = slow.surfaces
+            code = sf._rough[0]
+            sf._rough = (np.where(code != roughness.NOT_ROUGH, roughness.OTHER_CODE, code),) + sf._rough[1:]
+            sf._rough_other = True
             b = [slow.render_tile(t) for t in job.tiles()]
         for field in ("mean", "truncated"):
             np.testing.assert_allclose(_image(b, field), _image(a, field), rtol=0, atol=1e-9, err_msg=field)
@@ -218,7 +219,7 @@ def test_kernel_coefficients_equal_the_vectorized_assembly():
     cos1[20:40] = 1.0
     ref, t_ref, q2_ref = _reference_coefficients(job, cur, fm, other, leaving, cos1)
     amp, power, q2, t_abs = np.empty((n, 4), complex), np.empty((n, 6)), np.empty(n, complex), np.empty(n)
-    kernels.coefficients(cur, fm, other, leaving, cos1, integ._media, integ._films, amp, power, q2, t_abs)
+    kernels.coefficients(cur, fm, other, leaving, cos1, integ.surfaces._media, integ.surfaces._films, amp, power, q2, t_abs)
     for a, name in enumerate(("rs", "rp", "ts", "tp")):
         np.testing.assert_allclose(amp[:, a], getattr(ref, name), rtol=1e-12, atol=1e-15, err_msg=name)
     for a, name in enumerate(("Rs", "Rp", "Ts", "Tp", "As", "Ap")):

@@ -1,10 +1,12 @@
 """Rough and bumped surfaces in the renderer (issue 4).
 
 References: energy conservation (isothermal enclosures read their temperature; a rough lossless
-dielectric reflects plus transmits 1), `pmmw_cli.brdf.monte_carlo` (the same estimator written a
-second time, path by path over an infinite plane, independent of the renderer's wavefront,
-media stack, geometry and intersector), the Optics Express 2016 copper number, and the flat-surface
-Fresnel closed form as the exponent grows.
+dielectric reflects plus transmits 1), `pmmw_cli.brdf.monte_carlo` (the renderer's surface code,
+`pmmw_cli.surface`, driven forward from the source side over an infinite plane: these comparisons
+check the renderer's backward, reciprocal use of it through its wavefront, media stack, geometry,
+intersector and sky, not the surface physics, which tests/test_brdf.py checks against the analytic
+model and SCATMECH), the Optics Express 2016 copper number, and the flat-surface Fresnel closed form
+as the exponent grows.
 """
 
 from __future__ import annotations
@@ -145,13 +147,13 @@ def test_rough_converges_to_smooth():
 
 def test_smooth_scenes_never_touch_the_roughness_code(monkeypatch):
     """'Smooth costs nothing': with no rough or bumped material the facet code is never called."""
-    from pmmw_cli.trace import integrator
+    from pmmw_cli.surface import surfaces
 
     def boom(*a, **k):
         raise AssertionError("roughness code called for a smooth scene")
 
-    monkeypatch.setattr(integrator.Integrator, "_facets", boom)
-    monkeypatch.setattr(integrator.Integrator, "_bumped", boom)
+    monkeypatch.setattr(surfaces.Surfaces, "_facets", boom)
+    monkeypatch.setattr(surfaces.Surfaces, "_bumped", boom)
     img = _plane(30.0, material(eps=3.0 + 0.1j, temperature=300.0), spp=4)
     assert np.isfinite(img["I"]).all()
 

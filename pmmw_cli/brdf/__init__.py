@@ -7,12 +7,15 @@ Two methods share one surface description (`Stack`) and one output grid:
     facet normals come from `pmmw_cli.physics.roughness`, split by the polarized Fresnel
     coefficients of `pmmw_cli.physics.fresnel` / `pmmw_cli.physics.multilayer` about each facet,
     and are followed through the layers until they leave the top surface (collected), enter the
-    substrate, or are absorbed. It is the estimator of the renderer (roughness module docstring,
-    "How the renderer uses this"): exact visible normals, Smith masking, masked and wrong-side
-    rays re-hit the same interface, nothing is discarded. Each path carries a Jones matrix, so
-    one run gives the whole Mueller matrix; the branch (reflected or transmitted) is drawn with
-    probability proportional to its unpolarized power and the Jones matrix is rescaled, so a
-    lossless stack returns R + T = 1 exactly, path by path.
+    substrate, or are absorbed. It is the renderer's own code: the stack becomes one medium of
+    the renderer's tables (`montecarlo.stack_media`: rough layers, films, roughness, a lossy
+    substrate as an ``opaque`` sink) and each wave of facet events runs through
+    `pmmw_cli.surface.Surfaces` (roughness module docstring, "How the renderer uses this"): exact
+    visible normals, Smith masking, masked and wrong-side rays re-hit the same interface, nothing
+    is discarded. Each path carries a Jones matrix (the transpose of the renderer's M), so one run
+    gives the whole Mueller matrix; the branch (reflected or transmitted) is drawn with
+    probability proportional to the power it would carry (``render.strategy: stochastic``) and
+    the Jones matrix is rescaled, so a lossless stack returns R + T = 1 to rounding, path by path.
 ``analytic``
     The polarized Ashikhmin model of Stryjewski et al. 2009 for one rough interface (the substrate, optionally
     under a coherent coating on its facets): the single-reflection term

@@ -1,6 +1,7 @@
-"""Surface optics shared by the Monte Carlo and the analytic model: the interfaces of a `Stack`
-with their polarized Fresnel coefficients (bare, coated or metal), the facet's (s, p) basis,
-refraction about a facet, and the reflectance of the same stack made smooth.
+"""Surface optics of the analytic model: the interfaces of a `Stack` with their polarized Fresnel
+coefficients (bare, coated or metal), the facet's (s, p) basis, and the reflectance of the same
+stack made smooth. (The Monte Carlo traces the stack through the renderer's surface layer,
+`pmmw_cli.surface`.)
 """
 
 from __future__ import annotations
@@ -65,17 +66,6 @@ class _Interface:
         thick = np.array([d for _, d in films], dtype=np.float64)
         k0 = self.k0 if self.k0 is not None else 1.0  # films need k0 (checked at load time)
         return multilayer.stack(eps[None, :], thick[None, :], cos1, k0, substrate="metal" if self.metal else "dielectric")
-
-
-def _refract(d, m, eps1, eps2):
-    """Real transmitted direction about facet normal m (facing the incident side), as the
-    renderer's integrator: tangential component conserved, normal component Re q2."""
-    cos1 = -dot(d, m)
-    tang = d + cos1[:, None] * m
-    sin2 = np.clip(1.0 - cos1 ** 2, 0.0, 1.0)
-    n1 = np.sqrt(complex(eps1))
-    q2 = fresnel.normal_component(np.full(d.shape[0], eps2), eps1 * sin2, branch="outgoing")
-    return unit(n1.real * tang - q2.real[:, None] * m)
 
 
 def flat_reflectance(stack: Stack, theta_i):

@@ -15,7 +15,7 @@ Currents (Xia et al. 2023 eq. 4-5)
 ----------------------------------
 On a lit facet with outward normal n the total field is the incident plus the locally reflected
 plane wave: E1 = Ei + Er, H1 = Hi + Hr, with ``H = (1/eta) k_hat x E`` for each wave. The
-reflection is the renderer's (`pmmw_cli.trace.integrator.surface_response`: bare Fresnel, coherent
+reflection is the renderer's (`pmmw_cli.surface.surface_response`: bare Fresnel, coherent
 coatings through the multilayer recursion, perfect conductors): rs is the E-field ratio of the
 s (TE) part, rp the H-field ratio of the p (TM) part, so a perfect conductor has rs = -1, rp = +1.
 With s_hat = k_hat x n / |k_hat x n| and the reflected direction k_r = k_hat - 2 (k_hat . n) n,
@@ -56,7 +56,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from pmmw_cli.po import kernels
-from pmmw_cli.trace.integrator import surface_response
+from pmmw_cli.surface import surface_response
 from pmmw_cli.trace.intersect import make_intersector, offset_origins
 
 C0 = 299_792_458.0  # [m/s]

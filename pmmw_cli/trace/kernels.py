@@ -21,7 +21,7 @@ models without compiled code. Everything per ray between them runs here:
   `compact` to drop the ended rays in place.
 
 A wave is passed as a tuple ``(o, d, s, p, m, sid, depth, stack, top, last_t)`` of arrays (the
-fields of `integrator._Wave`). Random numbers are drawn by the caller (one per ray that may need
+fields of `pmmw_cli.surface.Wave`). Random numbers are drawn by the caller (one per ray that may need
 one), so the kernels are deterministic functions of their inputs. The compiled code is cached on
 disk (`pmmw_cli.jit`): the first render after an install compiles it (`warm`), later ones load
 it; ``NUMBA_DISABLE_JIT=1`` runs the same code as Python.
@@ -302,7 +302,7 @@ def _film_buffers(films):
 def _coefficients1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
     """Coefficients of one ray meeting a face of medium ``fm`` from medium ``cur`` (``other``
     beyond; ``leaving`` ``fm``) at cosine ``cos1``: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2,
-    t_absorb) (`integrator.surface_coefficients` over arrays). Under coherent films (eq.
+    t_absorb) (`pmmw_cli.surface.surface_coefficients` over arrays). Under coherent films (eq.
     2.27-2.34) the stack from ``cur`` through them (innermost first when leaving) to the far
     medium, its absorption emitting at the films' temperature; a perfect conductor; or a bare
     interface, a lossy incident medium's remainder emitting at that medium's temperature. ``q2``:
@@ -427,7 +427,11 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         trans = (kd == DIELECTRIC or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
         keep_r, keep_t, gain_r, gain_t = True, trans, 1.0, 1.0
         if strategy != 0 and trans and (strategy == 1 or depth[i] >= split_depth):
-            r_sum, t_sum = Rs + Rp, Ts + Tp
+            # the branches' shares of the power this ray carries (its Jones columns' powers
+            # times R and T): for a lossless interface the chosen child keeps that power exactly
+            c0 = ml[0, 0].real ** 2 + ml[0, 0].imag ** 2 + ml[1, 0].real ** 2 + ml[1, 0].imag ** 2
+            c1 = ml[0, 1].real ** 2 + ml[0, 1].imag ** 2 + ml[1, 1].real ** 2 + ml[1, 1].imag ** 2
+            r_sum, t_sum = c0 * Rs + c1 * Rp, c0 * Ts + c1 * Tp
             p_r = r_sum / max(r_sum + t_sum, _TINY)
             if u_choose[j] < p_r:
                 keep_t, gain_r = False, 1.0 / math.sqrt(p_r)
@@ -527,8 +531,8 @@ def compact(wave, keep):
 def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain_end, media, rough, wavelength, acc,
            leave, back, back_side, leave_side, finish):
     """Children of a rough surface's facets (`scatter` with ``finish`` False) sent off the
-    surface or back onto it (`Integrator._settle`, which describes the rule), or between the
-    interfaces of rough coating layers (`Integrator._layer_step`: ``finish`` False).
+    surface or back onto it (`Surfaces._settle`, which describes the rule), or between the
+    interfaces of rough coating layers (`Surfaces._layer_step`: ``finish`` False).
 
     Parameters
     ----------
@@ -610,7 +614,7 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
         # refracted one swaps them, a thin sheet's transmitted child keeps them
         swap = sg < 0.0 and kind[fm_a[i]] == DIELECTRIC
         cur = other_a[i] if swap else cur_a[i]
-        # one wavelength of that medium on the way to the next facet (`Integrator._cross_wavelength`)
+        # one wavelength of that medium on the way to the next facet
         tau = math.exp(-alpha[cur] * wavelength)
         if tau < 1.0:
             e, g = math.sqrt(1.0 - tau), math.sqrt(tau)
@@ -669,7 +673,7 @@ def warm(stack_size: int = 8) -> None:
     frozen = np.zeros(0)
     frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), frozen, frozen)
-    # rough faces and bump maps (`Integrator._facets`, `_bumped`)
+    # rough faces and bump maps (`Surfaces._facets`, `_bumped`)
     v3 = np.zeros((n, 3))
     roughness._ggx_sample_rows(v3, v3, v3, empty, empty, 1.0, 1.0, 0.0, v3, empty)
     roughness._smith_masking_rows(v3, v3, v3, roughness.GGX_CODE, 1.0, 1.0, 0.0, empty)
