@@ -124,7 +124,7 @@ def test_defaults(tmp_path):
     assert s.render.workers is None and s.render.termination == "roulette"
     assert s.output.channels == ("I", "Q", "U", "V", "Ex2", "Ey2") and s.output.aux == ()
     assert s.scene[0].transform.scale == 1.0 and s.scene[0].up_axis is None and s.materials == {}
-    assert s.sky.temperature is None and s.sky.zenith_opacity is None and s.render.tile == 32
+    assert s.sky.temperature is None and s.sky.zenith_opacity is None and s.render.tile == 64
     assert s.render.default_temperature == 290.0 and s.output.dir is None and s.output.previews is True
     assert s.imager.up == (0.0, 0.0, 1.0)
     assert load_scenario(write(tmp_path, BASE.replace("name: t\n", ""), name="stem.yaml")).name == "stem"

@@ -410,7 +410,7 @@ class Render(_Model):
     threshold: float = 1e-3
     seed: int = Field(1, ge=0, le=MAX_SEED)
     workers: Optional[int] = Field(None, ge=1)
-    tile: int = Field(32, ge=8, le=512)
+    tile: int = Field(64, ge=8, le=512)
     termination: Literal["roulette", "temperature"] = "roulette"
     strategy: Literal["split", "stochastic", "hybrid"] = "split"
     split_depth: int = Field(2, ge=0)

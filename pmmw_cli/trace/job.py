@@ -176,7 +176,7 @@ class RenderSettings:
     # [K] largest change of any pixel's Ex2, Ey2 allowed from skipping the layered atmosphere on
     # short segments (`pmmw_cli.trace.integrator.atmosphere_skip_length`); 0: never skip
     atmosphere_tolerance: float = 0.01
-    tile: int = 32
+    tile: int = 64
     stack_size: int = 8
     aux: tuple = ()
 
