@@ -249,3 +249,44 @@ def test_tangents_are_world_x_projected_onto_the_face():
     np.testing.assert_allclose(np.einsum("ij,ij->i", t, n), 0.0, rtol=0, atol=1e-14)
     np.testing.assert_allclose(np.einsum("ij,ij->i", t, np.cross(n, axis)), 0.0, rtol=0, atol=1e-14)
     assert np.all(np.einsum("ij,ij->i", t, axis) > 0.0)
+
+
+def test_tally_equals_the_array_sums():
+    """`kernels.tally` (a tile's per-pixel sums) against the same sums in numpy: a first chunk of
+    3 samples sets the shift (its mean), a second of 2 samples on a subset of the pixels adds to
+    the shifted sums, squares and the replicates (sample number mod 2). Rounding only (1e-12)."""
+    from pmmw_cli.trace import kernels
+
+    rng = np.random.default_rng(5)
+    npx, reps = 7, 2
+    ref, s1, s2 = np.zeros((npx, 4)), np.zeros((npx, 4)), np.zeros((npx, 4))
+    r1, count, trunc = np.zeros((npx, reps, 4)), np.zeros(npx, np.int64), np.zeros((npx, 2))
+    depth, material = np.full(npx, np.inf), np.full(npx, -1.0)
+    want = {k: v.copy() for k, v in dict(ref=ref, s1=s1, s2=s2, r1=r1, count=count, trunc=trunc, depth=depth,
+                                          material=material).items()}
+    done = 0
+    for active, nb in ((np.arange(npx), 3), (np.array([1, 4, 6]), 2)):
+        n = active.size * nb
+        vals, cut = rng.normal(300.0, 20.0, (n, 4)), rng.random((n, 2))
+        first_t = np.where(rng.random(n) < 0.3, np.inf, rng.random(n) * 100.0)
+        first_m = rng.integers(-1, 4, n).astype(float)
+        if done == 0:
+            first_t[:nb] = np.inf  # pixel 0 sees the sky with every first sample
+        kernels.tally(active, vals, cut, first_t, first_m, done, reps, ref, s1, s2, r1, count, trunc, depth, material)
+        v = vals.reshape(active.size, nb, 4)
+        want["trunc"][active] += cut.reshape(active.size, nb, 2).sum(axis=1)
+        if done == 0:
+            want["ref"][active] = v.mean(axis=1)
+            want["depth"][active] = first_t.reshape(active.size, nb).mean(axis=1)
+            want["material"][active] = first_m.reshape(active.size, nb)[:, 0]
+        dv = v - want["ref"][active][:, None, :]
+        want["s1"][active] += dv.sum(axis=1)
+        want["s2"][active] += (dv * dv).sum(axis=1)
+        want["count"][active] += nb
+        for r in range(reps):
+            want["r1"][active, r] += dv[:, (r - done) % reps::reps].sum(axis=1)
+        done += nb
+    got = dict(ref=ref, s1=s1, s2=s2, r1=r1, count=count, trunc=trunc, depth=depth, material=material)
+    for k in want:
+        np.testing.assert_allclose(got[k], want[k], rtol=1e-12, atol=1e-9, err_msg=k)
+    assert np.isinf(depth[0])  # a pixel whose first samples all saw the sky keeps inf

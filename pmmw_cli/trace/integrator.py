@@ -232,19 +232,9 @@ class Integrator:
             while done < end:  # the pass in chunks of at most MAX_WAVE camera rays: memory stays flat in spp
                 nb = min(end - done, max(1, MAX_WAVE // active.size))
                 vals, first_t, first_m, cut = self._trace(pixels[active], done, nb)
-                v = vals.reshape(active.size, nb, 4)
-                trunc[active] += cut.reshape(active.size, nb, 2).sum(axis=1)
-                if done == 0:
-                    ref[active] = v.mean(axis=1)
-                    with np.errstate(invalid="ignore"):
-                        depth[active] = first_t.reshape(active.size, nb).mean(axis=1)
-                    material[active] = first_m.reshape(active.size, nb)[:, 0]
-                dv = v - ref[active][:, None, :]
-                s1[active] += dv.sum(axis=1)
-                s2[active] += (dv * dv).sum(axis=1)
-                count[active] += nb
-                for r in range(REPLICATES):
-                    r1[active, r] += dv[:, (r - done) % REPLICATES::REPLICATES].sum(axis=1)
+                # the sums of the samples' values shifted by the first chunk's mean (`kernels.tally`)
+                kernels.tally(active, vals, cut, first_t, first_m, done, REPLICATES, ref, s1, s2, r1, count, trunc,
+                              depth, material)
                 done += nb
             if not adaptive:
                 break

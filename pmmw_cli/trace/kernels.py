@@ -635,6 +635,57 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     return nl, nb
 
 
+@_jit
+def tally(active, vals, cut, first_t, first_m, done, replicates, ref, s1, s2, r1, count, trunc, depth, material):
+    """Add one chunk of samples to a tile's per-pixel sums (`Integrator.render_tile`).
+
+    Parameters
+    ----------
+    active : ndarray, shape (a,), int64
+        The tile's pixels that took samples ``done .. done + nb - 1``, nb = len(vals) / a.
+    vals : ndarray, shape (a * nb, 4)
+        Per sample (Ex2, Ey2, U, V) [K], pixel-major.
+    cut : ndarray, shape (a * nb, 2)
+        Per sample the truncated power and bound (`TileResult.truncated`).
+    first_t, first_m : ndarray, shape (a * nb,)
+        First-hit distance [m] and medium (-1: sky).
+    ref, s1, s2 : ndarray, shape (pixels, 4)
+        The shift (set on the first chunk to its mean), the sums of shifted values and squares.
+    r1 : ndarray, shape (pixels, replicates, 4)
+        Shifted sums per replicate (sample number mod ``replicates``).
+    count : ndarray, shape (pixels,), int64
+    trunc : ndarray, shape (pixels, 2)
+    depth, material : ndarray, shape (pixels,)
+        Set on the first chunk: mean first-hit distance and the first sample's medium.
+    """
+    nb = vals.shape[0] // active.shape[0]
+    for a in range(active.shape[0]):
+        px = active[a]
+        k0 = a * nb
+        if done == 0:
+            t_sum = 0.0
+            for c in range(4):
+                v = 0.0
+                for j in range(nb):
+                    v += vals[k0 + j, c]
+                ref[px, c] = v / nb
+            for j in range(nb):
+                t_sum += first_t[k0 + j]
+            depth[px] = t_sum / nb
+            material[px] = first_m[k0]
+        for j in range(nb):
+            k = k0 + j
+            r = (done + j) % replicates
+            for c in range(4):
+                dv = vals[k, c] - ref[px, c]
+                s1[px, c] += dv
+                s2[px, c] += dv * dv
+                r1[px, r, c] += dv
+            trunc[px, 0] += cut[k, 0]
+            trunc[px, 1] += cut[k, 1]
+        count[px] += nb
+
+
 def warm(stack_size: int = 8) -> None:
     """Compile (first time after an install) or load the bounce loop's compiled code with the
     integrator's types (these kernels, the Fresnel and coating arithmetic, the intersector's
@@ -681,6 +732,10 @@ def warm(stack_size: int = 8) -> None:
     bump._shade_rows(v3, v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
     tangents(v3, v3)
     off_surface(wave, v3, np.zeros(n))
+    # a tile's per-pixel sums (`Integrator.render_tile`)
+    px4, ints1 = np.zeros((1, 4)), np.zeros(1, np.int64)
+    tally(ints1, px4, np.zeros((1, 2)), np.zeros(1), np.zeros(1), 0, 2, px4, px4, px4, np.zeros((1, 2, 4)), ints1,
+          np.zeros((1, 2)), np.zeros(1), np.zeros(1))
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
     camera.hash_uniform(0, np.zeros(1, np.int64), 3)
