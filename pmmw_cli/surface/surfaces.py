@@ -89,6 +89,8 @@ class Surfaces:
         self._media, self._films, self._rough, self._rough_models, self._layer_media = kernel_tables(media, k0)
         self._rough_other = bool((self._rough[0] == OTHER_CODE).any())
         self.count_facets = count_facets
+        # a chain of re-hits at one point is one interaction, unless depth counts facet events
+        self._rehit_depth = 0 if count_facets else -1
         self.events = self.fallbacks = 0
         self.rng = self.acc = self.cut = None
 
@@ -269,8 +271,7 @@ class Surfaces:
         (`_interact` with ``rehit + 1``, no intersection), up to ``roughness.MAX_REHITS`` after
         which the chain's power is emitted at the surface temperature. On its way to the next
         facet a re-hitting child crosses one wavelength of its side's medium (`kernels.settle`):
-        a metal-like body swallows what it transmits (as `pmmw_cli.brdf` does with a lossy
-        substrate), a clear one lets it walk on. A child on the wrong side of the *geometric*
+        a metal-like body swallows what it transmits, a clear one lets it walk on. A child on the wrong side of the *geometric*
         face (a bump map's tilt) is mirrored through the face's plane, keeping its power.
         ``branch`` (per child) is +1 for reflected children (incident side), -1 for transmitted
         ones (far side); ``i`` their rows in the interaction's arrays. The masking probability
@@ -298,11 +299,9 @@ class Surfaces:
         chain_end = (np.full(len(pos), rehit + 1 > MAX_REHITS), np.stack([t_face, t_face], axis=1))
         nl, nb = kernels.settle(child.arrays(), i, branch, u, p_leave, hit, n_mac, tangent, step, chain_end,
                                 self._media, self._rough, self.wavelength, self.acc, leave.arrays(),
-                                back.arrays(), side, (np.empty(n, np.int64), np.empty(n)), True)
+                                back.arrays(), side, (np.empty(n, np.int64), np.empty(n)), True, self._rehit_depth)
         if not nb:
             return leave.head(nl), None
-        if self.count_facets:
-            back.depth[:nb] += 1  # `kernels.settle` counts a chain of re-hits as one interaction
         j, cur, other, leaving, sign = (a[:nb] for a in side)
         return leave.head(nl), (back.head(nb), pos[j], sign[:, None] * n_geo[j], sign[:, None] * n_mac[j], cur,
                                 face_med[j], other, leaving, prim[j])
@@ -317,7 +316,7 @@ class Surfaces:
         upper or lower side. Each step (`_layer_step`): draw a facet (the interface's model, or its
         macro normal), split by Fresnel / the films' multilayer about it (absorption emitted at the
         films' temperature) and mask each child, by the same kernels as any surface (each rough
-        layer is a medium of the kernels' tables, `_kernel_tables`; masked children stay at
+        layer is a medium of the kernels' tables, `kernel_tables`; masked children stay at
         interface j on their side after one wavelength of that side's medium), and send the others across the layer they are in,
         attenuated by exp(-alpha t / cos) and emitting at the layer's temperature, to the next
         interface. A child leaving the top interface upward or the substrate's interface downward
@@ -416,11 +415,9 @@ class Surfaces:
         nl, nb = kernels.settle(kids.arrays(), src, branch, u, p_leave, hit, np.ascontiguousarray(n_in),
                                 np.ascontiguousarray(tangent), np.zeros(nr), chain_end, self._media, self._rough,
                                 self.wavelength, self.acc, leave.arrays(), back.arrays(), b_side, l_side,
-                                False)
+                                False, self._rehit_depth)
         exits, walk = [], []
         if nb:
-            if self.count_facets:
-                back.depth[:nb] += 1
             i, sign = b_side[0][:nb], b_side[4][:nb]
             walk.append((back.head(nb), np.full(nb, j), np.where(sign > 0, a, not a), rehits[i] + 1, rows[i]))
         leave = leave.head(nl)

@@ -529,7 +529,7 @@ def compact(wave, keep):
 
 @_jit
 def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain_end, media, rough, wavelength, acc,
-           leave, back, back_side, leave_side, finish):
+           leave, back, back_side, leave_side, finish, rehit_depth):
     """Children of a rough surface's facets (`scatter` with ``finish`` False) sent off the
     surface or back onto it (`Surfaces._settle`, which describes the rule), or between the
     interfaces of rough coating layers (`Surfaces._layer_step`: ``finish`` False).
@@ -563,7 +563,7 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     leave, back : tuple of arrays (waves)
         Filled with the children that leave (off the surface, a wrong-side child mirrored
         through the face's plane) and those that re-hit (at the hit point, one wavelength's
-        absorption applied and emitted, depth back by one).
+        absorption applied and emitted, depth changed by ``rehit_depth``).
     back_side : tuple (src, cur, other, leaving, sign)
         Filled for each re-hitting child: its row in ``hit``, the media of its side seen from
         there, and its branch.
@@ -572,6 +572,9 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     finish : bool
         Leaving children leave the surface here (mirrored to the right side of the face and
         offset along it); otherwise they are left at the hit point as they are.
+    rehit_depth : int
+        Added to a re-hitting child's depth: -1 in the renderer (a chain of facets at one point
+        is one interaction), 0 where depth counts facet events (`pmmw brdf`'s orders).
 
     Returns
     -------
@@ -627,7 +630,7 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
             continue
         _copy_row(kids, c, back, nb)
         back[0][nb, 0], back[0][nb, 1], back[0][nb, 2] = pos[i, 0], pos[i, 1], pos[i, 2]
-        back[6][nb] -= 1  # the chain of facets at one point counts as one interaction
+        back[6][nb] += rehit_depth
         b_src[nb], b_cur[nb], b_sign[nb] = i, cur, sg
         b_other[nb] = cur_a[i] if swap else other_a[i]
         b_leaving[nb] = leaving_a[i] != swap
@@ -719,7 +722,7 @@ def warm(stack_size: int = 8) -> None:
     rough = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
     settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
            (np.zeros(n, bool), np.zeros((n, 2))), media, rough, 1e-3, acc, wave, wave,
-           (ints, ints, ints, np.zeros(0, bool), empty), (ints, empty), True)
+           (ints, ints, ints, np.zeros(0, bool), empty), (ints, empty), True, -1)
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
     frozen = np.zeros(0)
     frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
