@@ -200,26 +200,9 @@ def _soil(f, T, sand, clay, moisture, bulk_density=None, particle_density=2.66):
     return complex(eps_r, eps_i)
 
 
-def _siemens_per_metre(v, file, key) -> float:
-    """A conductivity: a number [S/m] or a string '3.77e7 S/m' (YAML reads 3.77e7 as text)."""
-    from pmmw_cli.errors import UserError
-
-    x = None
-    if isinstance(v, (int, float)) and not isinstance(v, bool):
-        x = float(v)
-    elif isinstance(v, str):
-        text = v.strip().removesuffix("S/m").strip()
-        try:
-            x = float(text)
-        except ValueError:
-            x = None
-    if x is None or not (math.isfinite(x) and x > 0):
-        raise UserError(f"expected a conductivity > 0 in S/m, e.g. '3.77e7 S/m', got {v!r}", file, key)
-    return x
-
-
-def _number(lo, hi, unit, example):
-    """A parser of a number in [lo, hi], given bare or with its unit ('40 %', '1.5 g/cm3')."""
+def _number(lo, hi, unit, example, *, above=False):
+    """A parser of a number in [lo, hi] (above ``lo`` with ``above``), given bare or as text with
+    its unit ('40 %', '1.5 g/cm3', '3.77e7 S/m'; YAML reads 3.77e7 as text)."""
 
     def parse(v, file, key):
         from pmmw_cli.errors import UserError
@@ -227,17 +210,21 @@ def _number(lo, hi, unit, example):
         x = None
         if isinstance(v, (int, float)) and not isinstance(v, bool):
             x = float(v)
-        elif isinstance(v, str) and unit:
+        elif isinstance(v, str):
             try:
-                x = float(v.strip().removesuffix(unit).strip())
+                x = float(v.strip().removesuffix(unit).strip() if unit else v)
             except ValueError:
                 x = None
-        if x is None or not (math.isfinite(x) and lo <= x <= hi):
+        if x is None or not (math.isfinite(x) and (x > lo if above else x >= lo) and x <= hi):
             u = f" {unit}" if unit else ""
-            raise UserError(f"expected a number from {lo:g} to {hi:g}{u}, e.g. {example}, got {v!r}", file, key)
+            span = f"above {lo:g}{u}" if math.isinf(hi) else f"from {lo:g} to {hi:g}{u}"
+            raise UserError(f"expected a number {span}, e.g. {example}, got {v!r}", file, key)
         return x
 
     return parse
+
+
+_siemens_per_metre = _number(0.0, math.inf, "S/m", "'3.77e7 S/m'", above=True)  # a conductivity
 
 
 def _check_soil(params, file, key):
