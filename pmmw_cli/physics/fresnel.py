@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from pmmw_cli.jit import njit
+from pmmw_cli.jit import inline, njit
 
 
 __all__ = ["Fresnel", "normal_component", "interface"]
@@ -117,9 +117,11 @@ def normal_component(eps, kpar2, branch="decaying"):
 # The per-ray arithmetic below is compiled (numba, cached on disk; ``NUMBA_DISABLE_JIT=1`` runs it as
 # Python): scalar functions, and loops over flat arrays that the vectorized helpers call.
 _jit = njit()
+_inline = inline()  # one-ray helpers: numba inlines them into their callers (a call between
+# compiled functions is not inlined by LLVM and costs about a third of a bare interface)
 
 
-@_jit
+@_inline
 def _root1(z, scale, decaying):
     """``sqrt(z)`` of one value on a branch (see `normal_component`); ``scale`` bounds |terms| of z."""
     zi = z.imag
@@ -151,7 +153,7 @@ def _root(z, scale, branch):
     return out
 
 
-@_jit
+@_inline
 def _incident1(eps1, cos1):
     """`_incident` of one ray: (q1, q1sq)."""
     c = min(max(cos1, 0.0), 1.0)
@@ -192,7 +194,7 @@ def _incident(eps1, cos1):
     return q1, q1sq
 
 
-@_jit
+@_inline
 def _normal_below1(eps, eps1, q1sq, decaying):
     return _root1((eps - eps1) + q1sq, abs(eps) + abs(eps1), decaying)
 
@@ -218,10 +220,10 @@ def _normal_below(eps, eps1, q1sq, branch):
     return _root((eps - eps1) + q1sq, np.abs(eps) + np.abs(eps1), branch)
 
 
-@_jit
+@_inline
 def _yp1(q, eps):
     """Re(q / eps): the p admittance's real part (NaN for eps = 0)."""
-    return (q / eps).real if eps != 0.0 else np.nan
+    return (q * _reciprocal1(eps)).real if eps != 0.0 else np.nan
 
 
 @_jit
@@ -238,7 +240,7 @@ def _admittance_p(q, eps):
     return out
 
 
-@_jit
+@_inline
 def _powers1(r, t, y1, y2, opaque):
     """R, T, A of one polarization (Murakowski 2014 eq. 2.34, sec. 2.2.4), each in [0, 1] with
     ``R + T + A == 1`` to rounding; ``y1``, ``y2`` are Re of the incident and exit admittances."""
@@ -260,7 +262,7 @@ def _powers1(r, t, y1, y2, opaque):
     return R, T, max(1.0 - R - T, 0.0)
 
 
-@_jit
+@_inline
 def _amplitudes1(q1, y1eps, b, c, amp, opaque, metal_r):
     """r and t of one polarization from the input admittance C / B below (`_close`);
     ``y1eps`` is Y1 times the factor that makes Y1 B - C polynomial (1 for s, eps1 for p)."""
@@ -274,10 +276,24 @@ def _amplitudes1(q1, y1eps, b, c, amp, opaque, metal_r):
         # Exactly grazing (q1 = 0): r = -C/C, which complex division may round to 0.999...; the
         # limit is r = -1, t = 0 (R = 1, T = 0). Passive media give den != 0 everywhere else.
         return -1.0 + 0j, 0j
-    return num / den, 2.0 * q1 * amp / den
+    inv = _reciprocal1(den)
+    return num * inv, 2.0 * q1 * amp * inv
 
 
-@_jit
+@_inline
+def _reciprocal1(z):
+    """``1 / z`` of a nonzero complex number, scaled by its larger part first so that neither
+    |z|^2 overflows nor underflows (the (B, C) of thick stacks are scaled, not bounded): two real
+    divisions, and one reciprocal serves both r and t (a complex division per quotient costs more)."""
+    a, b = z.real, z.imag
+    big = max(abs(a), abs(b))
+    inv_big = 1.0 / big
+    a, b = a * inv_big, b * inv_big
+    k = inv_big / (a * a + b * b)
+    return complex(a * k, -b * k)
+
+
+@_inline
 def _close1(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
     """`_close` of one ray: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap)."""
     # s: Y1 = q1; r = (Y1 B - C)/(Y1 B + C), t = 2 Y1 amp/(Y1 B + C) (Murakowski 2014 eq. 2.24a, 2.25a)
@@ -343,7 +359,7 @@ def _close(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
     return _as_fresnel(amp, power, shape)
 
 
-@_jit
+@_inline
 def interface1(eps1, eps2, cos1):
     """`interface` of one ray, compiled: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2)."""
     one = 1.0 + 0j
@@ -353,7 +369,7 @@ def interface1(eps1, eps2, cos1):
     return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q
 
 
-@_jit
+@_inline
 def conductor1():
     """A perfect conductor's coefficients (one ray, any angle): rs = -1, rp = +1 (the E-field
     and H-field ratios, module docstring), nothing transmitted or absorbed; same tuple as

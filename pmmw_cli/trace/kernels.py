@@ -5,8 +5,10 @@ wave: the Embree call, the sky and atmosphere models, and on rough faces the dra
 models without compiled code. Everything per ray between them runs here:
 
 * `arrive`: for each ray that hit a face, the atmosphere's and the medium's absorption and
-  emission along the segment (Murakowski 2014 eq. 2.37, 2.38), the medium stack (sec. 2.2.9),
-  and whether it interacts with the face or passes through it (then moved across it here);
+  emission along the segment (Murakowski 2014 eq. 2.37, 2.38), Russian roulette of the rays
+  that the segment left below the threshold (before they cost an interaction), the medium stack
+  (sec. 2.2.9), and whether it interacts with the face or passes through it (then moved across
+  it here);
 * `scatter`: for each interacting ray, the interface's coefficients (`coefficients`: Fresnel, a
   perfect conductor, or the stack of its coherent films), the local (s, p) basis (eq. 2.23,
   2.35), the emission of what the interface absorbs (eq. 2.36) or a sink swallows, the choice of
@@ -80,7 +82,7 @@ def _end(acc, cut, k, m00, m01, m10, m11, t_last, t_lo, t_hi):
     cut[k, 1] += max(r0, r1) * max(t_hi - t_last, t_last - t_lo)
 
 
-@_jit
+@_inline
 def survive(acc, cut, k, m, i, depth, t_last, u, limits):
     """Termination of one ray (row ``i`` of ``m``) after an interaction: True to go on.
 
@@ -124,7 +126,7 @@ def _dot(a, i, b, j):
 
 
 @_jit
-def arrive(wave, t, prim, atm, faces, media, acc, hit):
+def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
     """The rays of a wave at the faces they hit.
 
     Parameters
@@ -143,7 +145,12 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit):
     hit : tuple (pos, n_in, cos1, cur, face_med, other, leaving, code), each of length n
         Filled: the hit point, the face normal facing the incident side, the cosine of incidence,
         the media (current, the face's, the far side's), whether the ray leaves the face's
-        medium, and code 0 (missed), 1 (passed through), 2 (interacts).
+        medium, and code 0 (missed), 1 (passed through), 2 (interacts), 3 (ended by roulette).
+    u : ndarray, shape (n,) or (0,)
+        With Russian roulette, one uniform per ray: a ray that the segment's absorption left
+        below ``threshold`` (its largest row power, as `survive` reads it) plays roulette here,
+        before it interacts. It goes on with probability weight / threshold, scaled up by 1 / that
+        (unbiased); otherwise it ends (code 3) and costs no interaction. Empty: no roulette here.
     """
     o, d, m, sid, stack, top = wave[0], wave[1], wave[4], wave[5], wave[7], wave[8]
     face_medium, face_normals, face_offset = faces
@@ -177,6 +184,18 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit):
             for a in range(2):
                 for b in range(2):
                     m[i, a, b] *= g
+        if u.shape[0] > 0:
+            w = max(m[i, 0, 0].real ** 2 + m[i, 0, 0].imag ** 2 + m[i, 0, 1].real ** 2 + m[i, 0, 1].imag ** 2,
+                    m[i, 1, 0].real ** 2 + m[i, 1, 0].imag ** 2 + m[i, 1, 1].real ** 2 + m[i, 1, 1].imag ** 2)
+            if w < threshold:
+                q = w / threshold
+                if not u[i] < q:
+                    code[i] = 3
+                    continue
+                g = 1.0 / math.sqrt(q)
+                for a in range(2):
+                    for b in range(2):
+                        m[i, a, b] *= g
         for c in range(3):
             pos[i, c] = o[i, c] + ti * d[i, c]
         fm = face_medium[f]
@@ -232,10 +251,12 @@ def far_eps(kind, eps1, eps_other):
 
 @_inline
 def _amplitude(amp, power):
-    """An amplitude with the phase of ``amp`` and the magnitude sqrt(power) (renormalized R, T)."""
-    mag = abs(amp)
-    ph = amp / mag if mag > 0.0 else 1.0 + 0.0j
-    return ph * math.sqrt(max(power, 0.0))
+    """An amplitude with the phase of ``amp`` and the magnitude sqrt(power) (renormalized R, T):
+    ``amp sqrt(power / |amp|^2)``, no complex division (an amplitude below 1e-154, whose square
+    underflows, is taken real: its power is below any threshold)."""
+    mag2 = amp.real * amp.real + amp.imag * amp.imag
+    power = max(power, 0.0)
+    return amp * math.sqrt(power / mag2) if mag2 > 0.0 else complex(math.sqrt(power), 0.0)
 
 
 @_inline
@@ -709,7 +730,7 @@ def warm(stack_size: int = 8) -> None:
     hit = (np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), np.zeros(n, np.int64), np.zeros(n, np.int64),
            np.zeros(n, np.int64), np.zeros(n, bool), np.zeros(n, np.int8))
     empty = np.zeros(0)
-    arrive(wave, t, prim, (empty, empty), faces, media, acc, hit)
+    arrive(wave, t, prim, (empty, empty), faces, media, acc, hit, empty, 1e-3)
     limits = (32, 1e-3, True, 0.0, 300.0)
     films = (np.zeros(1, np.int64), np.zeros(1, np.int64), np.ones(1, complex), np.zeros(1), np.zeros(1), 1.0)
     coefficients(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool), empty, media,
