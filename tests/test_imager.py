@@ -121,3 +121,42 @@ def test_band_is_the_mean_over_sub_band_frequencies(tmp_path):
     band = read_exr(tmp_path / "band" / "tiny.exr")[0]["ideal.Ex2"]
     np.testing.assert_allclose(band, (parts[0] + parts[1]) / 2, rtol=1e-6)
     assert np.abs(parts[0] - parts[1]).max() > 0.01  # the two frequencies really differ
+
+
+def test_primary_rays_and_their_basis_follow_the_pinhole_and_thin_lens():
+    """`Camera.rays` against closed forms: the image centre looks along k, the middle of the left
+    edge fov/2 off it (tan of the angle = tan(fov/2), square pixels: the top edge's middle at
+    height/width of that); s is unit, perpendicular to d and in the plane of d and the imager's x;
+    p = -d x s. With a thin lens every ray of one image point passes through the pinhole ray's
+    point on the plane of focus, from origins on the aperture disk. Tolerances: rounding (1e-12)."""
+    from pmmw_cli.scene.camera import Camera
+
+    fov, w, h = np.radians(10.0), 64, 48
+    pin = Camera.look_at([1.0, 2.0, 3.0], [0.0, 50.0, 0.0], [0.0, 0.0, 1.0], fov, (w, h))
+    u, v = np.array([w / 2, 0.0, w / 2]), np.array([h / 2, h / 2, 0.0])
+    o, d, s, p = pin.rays(u, v, np.arange(3), seed=7)
+    np.testing.assert_allclose(o, np.broadcast_to(pin.position, (3, 3)), rtol=0, atol=0)
+    np.testing.assert_allclose(d[0], pin.k, atol=1e-12)
+    angle = np.arccos(np.clip(d @ pin.k, -1.0, 1.0))
+    np.testing.assert_allclose(np.tan(angle[1:]), np.tan(fov / 2) * np.array([1.0, h / w]), rtol=1e-12)
+    assert d[1] @ pin.x < 0 and d[2] @ pin.y > 0  # left is -x, top is +y
+    np.testing.assert_allclose(np.linalg.norm(s, axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", s, d), 0.0, atol=1e-12)
+    np.testing.assert_allclose(np.einsum("ij,j->i", np.cross(d, s), pin.x), 0.0, atol=1e-12)  # s in span(d, x)
+    assert (s @ pin.x > 0).all()
+    np.testing.assert_allclose(p, np.cross(-d, s), atol=1e-12)
+
+    lens = Camera.look_at([1.0, 2.0, 3.0], [0.0, 50.0, 0.0], [0.0, 0.0, 1.0], fov, (w, h),
+                          aperture_radius=0.3, focus_distance=20.0)
+    n = 200
+    uu, vv = np.full(n, 10.3), np.full(n, 40.7)
+    o2, d2, s2, _ = lens.rays(uu, vv, np.arange(n), seed=7)
+    _, d0, _, _ = pin.rays(uu[:1], vv[:1], np.arange(1), seed=7)
+    focus = pin.position + d0[0] * (20.0 / (d0[0] @ pin.k))
+    t = (focus - o2) @ np.ones(3) / (d2 @ np.ones(3))
+    np.testing.assert_allclose(o2 + t[:, None] * d2, np.broadcast_to(focus, (n, 3)), atol=1e-9)
+    off = o2 - pin.position
+    np.testing.assert_allclose(off @ pin.k, 0.0, atol=1e-12)  # on the aperture plane
+    r = np.linalg.norm(off, axis=1)
+    assert r.max() <= 0.3 + 1e-12 and r.min() < 0.1 and r.max() > 0.25  # spread over the disk
+    np.testing.assert_allclose(np.einsum("ij,ij->i", s2, d2), 0.0, atol=1e-12)

@@ -11,6 +11,7 @@ depend only on the run seed and the pixel, never on tiling or worker count.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,58 +62,79 @@ class Camera:
                    float(aperture_radius), focus_distance)
 
     def rays(self, u, v, keys, seed: int):
-        """Primary rays through image-plane positions, with depth of field when focused.
+        """Primary rays through image-plane positions, with depth of field when focused, and
+        each ray's polarization basis (compiled, one pass).
 
         Without ``focus_distance`` every ray starts at the pinhole. With it (thin lens), a ray
         starts at a point of the aperture disk, drawn from the hash of (seed, key), and passes
         through the point that the pinhole ray meets on the plane of focus: objects at the focus
         distance are sharp, others are blurred by the geometric defocus of the aperture.
 
+        The basis is the pixel's (s, p) of `pmmw_cli.physics.jones`: s the imager's x projected
+        perpendicular to the ray and normalized, p = k x s with k = -d the direction the wave
+        travels, so that a path's Jones matrix starts as the identity (Murakowski 2014 eq. 2.11b).
+
         Parameters
         ----------
         u, v : ndarray, shape (n,)
-            Continuous pixel coordinates.
+            Continuous pixel coordinates: u in [0, width) from the left, v in [0, height) from
+            the top.
         keys : ndarray, shape (n,), int64
             A unique number per (pixel, sample), for the aperture position.
         seed : int
 
         Returns
         -------
-        origins, directions : ndarray, shape (n, 3), float64
+        origins, directions, s, p : ndarray, shape (n, 3), float64
         """
-        d = self.directions(u, v)
-        o = np.repeat(self.position[None, :], d.shape[0], axis=0)
-        if self.focus_distance is None or self.aperture_radius <= 0.0:
-            return o, d
-        focus = o + d * (self.focus_distance / (d @ self.k))[:, None]
-        r = self.aperture_radius * np.sqrt(hash_uniform(seed, keys, stream=3))
-        phi = 2.0 * np.pi * hash_uniform(seed, keys, stream=4)
-        o = o + (r * np.cos(phi))[:, None] * self.x + (r * np.sin(phi))[:, None] * self.y
-        d = focus - o
-        return o, d / np.linalg.norm(d, axis=1, keepdims=True)
+        n = np.shape(u)[0]
+        o, d, s, p = (np.empty((n, 3)) for _ in range(4))
+        lens = self.focus_distance is not None and self.aperture_radius > 0.0
+        _rays_loop(np.ascontiguousarray(u, float), np.ascontiguousarray(v, float),
+                   np.ascontiguousarray(keys, np.int64), np.int64(seed), self.position, self.x, self.y, self.k,
+                   np.tan(self.fov / 2.0), float(self.width), float(self.height),
+                   self.aperture_radius if lens else 0.0, float(self.focus_distance) if lens else 0.0, o, d, s, p)
+        return o, d, s, p
 
     @property
     def pixel_angle(self) -> float:
         """Angular width of a pixel at the image centre [rad]."""
         return 2.0 * np.arctan(np.tan(self.fov / 2.0) / self.width)
 
-    def directions(self, u, v):
-        """Unit viewing directions through image-plane positions.
 
-        Parameters
-        ----------
-        u, v : ndarray, shape (n,), float64
-            Continuous pixel coordinates: u in [0, width) from the left, v in [0, height) from the top.
-
-        Returns
-        -------
-        ndarray, shape (n, 3), float64
-        """
-        half = np.tan(self.fov / 2.0)
-        a = (2.0 * u / self.width - 1.0) * half
-        b = (self.height - 2.0 * v) / self.width * half  # square pixels
-        d = self.k[None, :] + a[:, None] * self.x[None, :] + b[:, None] * self.y[None, :]
-        return d / np.linalg.norm(d, axis=1, keepdims=True)
+@njit()
+def _rays_loop(u, v, keys, seed, position, x, y, k, half, width, height, radius, focus, o, d, s, p):
+    """`Camera.rays` per ray: the pinhole direction through (u, v) (square pixels, ``half`` =
+    tan(fov / 2)); with ``radius`` > 0 the thin lens (origin on the aperture disk, through the
+    pinhole ray's point at ``focus`` along k); then s and p."""
+    for i in range(u.shape[0]):
+        a = (2.0 * u[i] / width - 1.0) * half
+        b = (height - 2.0 * v[i]) / width * half
+        dx, dy, dz = k[0] + a * x[0] + b * y[0], k[1] + a * x[1] + b * y[1], k[2] + a * x[2] + b * y[2]
+        norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+        dx, dy, dz = dx / norm, dy / norm, dz / norm
+        ox, oy, oz = position[0], position[1], position[2]
+        if radius > 0.0:
+            t = focus / (dx * k[0] + dy * k[1] + dz * k[2])
+            fx, fy, fz = ox + t * dx, oy + t * dy, oz + t * dz
+            r = radius * math.sqrt(_hash_uniform1(seed, keys[i], 3))
+            phi = 2.0 * math.pi * _hash_uniform1(seed, keys[i], 4)
+            ca, sa = r * math.cos(phi), r * math.sin(phi)
+            ox, oy, oz = ox + ca * x[0] + sa * y[0], oy + ca * x[1] + sa * y[1], oz + ca * x[2] + sa * y[2]
+            dx, dy, dz = fx - ox, fy - oy, fz - oz
+            norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+            dx, dy, dz = dx / norm, dy / norm, dz / norm
+        xd = x[0] * dx + x[1] * dy + x[2] * dz
+        sx, sy, sz = x[0] - xd * dx, x[1] - xd * dy, x[2] - xd * dz
+        norm = math.sqrt(sx * sx + sy * sy + sz * sz)
+        sx, sy, sz = sx / norm, sy / norm, sz / norm
+        o[i, 0], o[i, 1], o[i, 2] = ox, oy, oz
+        d[i, 0], d[i, 1], d[i, 2] = dx, dy, dz
+        s[i, 0], s[i, 1], s[i, 2] = sx, sy, sz
+        # p = k x s with k = -d
+        p[i, 0] = -(dy * sz - dz * sy)
+        p[i, 1] = -(dz * sx - dx * sz)
+        p[i, 2] = -(dx * sy - dy * sx)
 
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)

@@ -103,10 +103,6 @@ def _stderr(s1, s2, count):
     return np.where(c > 1, np.sqrt(var / c), 0.0)
 
 
-def _normalize(v):
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
 def brightness_bounds(job: TraceJob, source_range=()):
     """(T_lo, T_hi) [K]: bounds of every temperature an event of a ray tree can add.
 
@@ -271,11 +267,9 @@ class Integrator:
         self.first_m = np.full(n, -1.0)
         self.surfaces.start(self.rng, self.acc, self.cut)
         sample_no = np.tile(np.arange(start, start + nb, dtype=np.int64), pixels.size)
-        origins, d = cam.rays(u, v, pix * st.spp + sample_no, st.seed)
-        s = _normalize(cam.x[None, :] - np.einsum("ij,j->i", d, cam.x)[:, None] * d)
-        p = cross(-d, s)
-        # The pixel's polarization basis is (s, p): the imager's x projected perpendicular to
-        # the ray and y completing it (jones.py), so M starts as the identity (eq. 2.11b).
+        # the pixel's polarization basis (s, p): the imager's x projected perpendicular to the
+        # ray and y completing it (jones.py), so M starts as the identity (eq. 2.11b)
+        origins, d, s, p = cam.rays(u, v, pix * st.spp + sample_no, st.seed)
         m = np.zeros((n, 2, 2), complex)
         m[:, 0, 0] = m[:, 1, 1] = 1.0
         wave = Wave(

@@ -762,7 +762,7 @@ def warm(stack_size: int = 8) -> None:
           np.zeros((1, 2)), np.zeros(1), np.zeros(1))
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
-    camera.hash_uniform(0, np.zeros(1, np.int64), 3)
+    camera.Camera(np.zeros(3), *np.eye(3), 1.0, 2, 2).rays(np.ones(1), np.ones(1), np.zeros(1, np.int64), 0)
     # the layered atmosphere's cell walk (`AtmosphereModel.path`)
     from pmmw_cli.atmosphere.model import _path_loop
 
