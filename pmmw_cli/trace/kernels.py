@@ -83,6 +83,32 @@ def _end(acc, cut, k, m00, m01, m10, m11, t_last, t_lo, t_hi):
 
 
 @_inline
+def _roulette(w, threshold, u):
+    """Russian roulette of a ray of weight ``w`` below ``threshold``: the factor its Jones matrix
+    is scaled by, 1 / sqrt(q) if it survives (``u`` < q = w / threshold, so that its expected
+    power is kept: unbiased), 0 if it ends."""
+    q = w / threshold
+    return 1.0 / math.sqrt(q) if u < q else 0.0
+
+
+@_inline
+def _fate(m00, m01, m10, m11, depth, u, limits):
+    """The termination rule of one ray after an interaction (`survive`), on the entries of its
+    Jones matrix alone: the factor to scale them by (1 usually, > 1 after roulette), 0 when the
+    ray ends silently, -1 when it ends on the temperature of its last object (`_end`)."""
+    max_depth, threshold, roulette = limits[0], limits[1], limits[2]
+    w = max(m00.real ** 2 + m00.imag ** 2 + m01.real ** 2 + m01.imag ** 2,
+            m10.real ** 2 + m10.imag ** 2 + m11.real ** 2 + m11.imag ** 2)
+    if w <= 0.0:
+        return 0.0
+    if depth >= max_depth:
+        return -1.0
+    if w < threshold:
+        return _roulette(w, threshold, u) if roulette else -1.0
+    return 1.0
+
+
+@_inline
 def survive(acc, cut, k, m, i, depth, t_last, u, limits):
     """Termination of one ray (row ``i`` of ``m``) after an interaction: True to go on.
 
@@ -91,23 +117,13 @@ def survive(acc, cut, k, m, i, depth, t_last, u, limits):
     there too, or with ``roulette`` survives with probability weight / threshold (``u`` < it)
     and is scaled up by 1 / that (unbiased). A ray with no power left ends silently.
     """
-    max_depth, threshold, roulette, t_lo, t_hi = limits
     m00, m01, m10, m11 = m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1]
-    w = max(m00.real ** 2 + m00.imag ** 2 + m01.real ** 2 + m01.imag ** 2,
-            m10.real ** 2 + m10.imag ** 2 + m11.real ** 2 + m11.imag ** 2)
-    if w <= 0.0:
+    g = _fate(m00, m01, m10, m11, depth, u, limits)
+    if g < 0.0:
+        _end(acc, cut, k, m00, m01, m10, m11, t_last, limits[3], limits[4])
+    if g <= 0.0:
         return False
-    if depth >= max_depth:
-        _end(acc, cut, k, m00, m01, m10, m11, t_last, t_lo, t_hi)
-        return False
-    if w < threshold:
-        if not roulette:
-            _end(acc, cut, k, m00, m01, m10, m11, t_last, t_lo, t_hi)
-            return False
-        q = w / threshold
-        if u >= q:
-            return False
-        g = 1.0 / math.sqrt(q)
+    if g != 1.0:
         m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
     return True
 
@@ -188,11 +204,10 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
             w = max(m[i, 0, 0].real ** 2 + m[i, 0, 0].imag ** 2 + m[i, 0, 1].real ** 2 + m[i, 0, 1].imag ** 2,
                     m[i, 1, 0].real ** 2 + m[i, 1, 0].imag ** 2 + m[i, 1, 1].real ** 2 + m[i, 1, 1].imag ** 2)
             if w < threshold:
-                q = w / threshold
-                if not u[i] < q:
+                g = _roulette(w, threshold, u[i])
+                if g == 0.0:
                     code[i] = 3
                     continue
-                g = 1.0 / math.sqrt(q)
                 for a in range(2):
                     for b in range(2):
                         m[i, a, b] *= g
@@ -286,33 +301,6 @@ def off_surface(wave, g, step):
 
 
 @_inline
-def _child(out, n, o_pos, dv, sv, mm, sid, depth, stack_row, top, last_t, g, step, finish):
-    """Write one child at row n of ``out``: direction ``dv`` with basis vector ``sv``, at
-    ``o_pos``, and unless ``finish`` is False off the surface along the side normal ``g``
-    (`_off_surface`)."""
-    oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
-    for c in range(3):
-        oo[n, c] = o_pos[c]
-        od[n, c] = dv[c]
-        os_[n, c] = sv[c]
-    # p = k x s with k = -d
-    op[n, 0] = -(dv[1] * sv[2] - dv[2] * sv[1])
-    op[n, 1] = -(dv[2] * sv[0] - dv[0] * sv[2])
-    op[n, 2] = -(dv[0] * sv[1] - dv[1] * sv[0])
-    if finish:
-        _off_surface(oo, od, os_, op, n, g[0], g[1], g[2], step)
-    for a in range(2):
-        for b in range(2):
-            om[n, a, b] = mm[a, b]
-    osid[n] = sid
-    odepth[n] = depth
-    for c in range(stack_row.shape[0]):
-        ostack[n, c] = stack_row[c]
-    otop[n] = top
-    olast[n] = last_t
-
-
-@_inline
 def _film_buffers(films):
     """Room for one ray's stack of media (`_coefficients1`)."""
     n = films[1].max() + 2 if films[1].shape[0] else 2
@@ -323,35 +311,51 @@ def _film_buffers(films):
 def _coefficients1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
     """Coefficients of one ray meeting a face of medium ``fm`` from medium ``cur`` (``other``
     beyond; ``leaving`` ``fm``) at cosine ``cos1``: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2,
-    t_absorb) (`pmmw_cli.surface.surface_coefficients` over arrays). Under coherent films (eq.
-    2.27-2.34) the stack from ``cur`` through them (innermost first when leaving) to the far
-    medium, its absorption emitting at the films' temperature; a perfect conductor; or a bare
-    interface, a lossy incident medium's remainder emitting at that medium's temperature. ``q2``:
-    the far medium's normal component for refraction (outgoing root; NaN for a conductor)."""
-    kind, temperature, has_coat, eps = media[0], media[2], media[4], media[5]
+    t_absorb) (`pmmw_cli.surface.surface_coefficients` over arrays): `_coated1` under coherent
+    films, else `_bare1`. ``q2``: the far medium's normal component for refraction (outgoing
+    root; NaN for a conductor); ``t_absorb`` the temperature what is absorbed emits at."""
+    if media[4][fm]:
+        return _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d)
+    eps, temperature = media[5], media[2]
+    return _bare1(media[0][fm], eps[cur], eps[other], cos1, temperature[cur], temperature[fm])
+
+
+@_inline
+def _bare1(kd, e1, e_other, cos1, t_cur, t_fm):
+    """A face without films, of kind ``kd``, from permittivity ``e1`` (``e_other`` beyond): a
+    perfect conductor (`fresnel.conductor1`, absorbing nothing; ``t_fm``), or a bare interface
+    (`fresnel.interface1`), a lossy incident medium's remainder emitting at ``t_cur``. Scalars
+    only (see `scatter`)."""
+    if kd == METAL:
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.conductor1()
+        return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, t_fm
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.interface1(e1, _far_eps1(kd, e1, e_other), cos1)
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, t_cur
+
+
+@_inline
+def _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
+    """`_coefficients1` of a face under coherent films (eq. 2.27-2.34): the stack from ``cur``
+    through them (innermost first when leaving) to the far medium, its absorption emitting at
+    the films' temperature."""
+    kind, eps = media[0], media[5]
     f_start, f_count, f_eps, f_d, f_temp, k0 = films
     kd = kind[fm]
     e1 = eps[cur]
-    if has_coat[fm]:
-        nf, st = f_count[fm], f_start[fm]
-        buf_eps[0] = e1
-        for q in range(nf):
-            f = st + (nf - 1 - q if leaving else q)
-            buf_eps[1 + q], buf_d[q] = f_eps[f], f_d[f]
-        # a blackbody is index-matched to the films' innermost layer
-        buf_eps[nf + 1] = f_eps[st + nf - 1] if kd == BLACKBODY else _far_eps1(kd, e1, eps[other])
-        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(buf_eps[:nf + 2], buf_d[:nf], cos1, k0, kd == METAL)
-        q2 = complex(np.nan, 0.0)
-        if kd == DIELECTRIC:
-            eo = eps[other]
-            kpar2 = e1 * (1.0 - cos1 ** 2)
-            q2 = fresnel._root1(eo - kpar2, abs(eo) + abs(kpar2), False)
-        return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, f_temp[fm]
-    if kd == METAL:
-        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.conductor1()
-        return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, temperature[fm]
-    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.interface1(e1, _far_eps1(kd, e1, eps[other]), cos1)
-    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, temperature[cur]
+    nf, st = f_count[fm], f_start[fm]
+    buf_eps[0] = e1
+    for q in range(nf):
+        f = st + (nf - 1 - q if leaving else q)
+        buf_eps[1 + q], buf_d[q] = f_eps[f], f_d[f]
+    # a blackbody is index-matched to the films' innermost layer
+    buf_eps[nf + 1] = f_eps[st + nf - 1] if kd == BLACKBODY else _far_eps1(kd, e1, eps[other])
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(buf_eps[:nf + 2], buf_d[:nf], cos1, k0, kd == METAL)
+    q2 = complex(np.nan, 0.0)
+    if kd == DIELECTRIC:
+        eo = eps[other]
+        kpar2 = e1 * (1.0 - cos1 ** 2)
+        q2 = fresnel._root1(eo - kpar2, fresnel._l1(eo) + fresnel._l1(kpar2), False)
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, f_temp[fm]
 
 
 @_jit
@@ -397,17 +401,17 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
     finish, src, branch = settle
     d, s_old, p_old, m, sid, depth, stack, top = wave[1], wave[2], wave[3], wave[4], wave[5], wave[6], wave[7], wave[8]
     pos, n_in, cos1, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[2], hit[3], hit[4], hit[5], hit[6]
+    oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
     buf_eps, buf_d = _film_buffers(films)
     face_offset = faces[2]
-    kind, temperature, n1_real = media[0], media[2], media[3]
+    kind, temperature, n1_real, has_coat, eps = media[0], media[2], media[3], media[4], media[5]
     strategy, split_depth = choice
     roulette = u_roul.shape[0] > 0
+    cap = stack.shape[1]
+    # The loop body calls no helper that takes arrays: numba counts references to an array
+    # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
+    # than all of an interaction's arithmetic. Helpers here take and return scalars.
     ml = np.empty((2, 2), np.complex128)
-    mc = np.empty((1, 2, 2), np.complex128)  # a child's Jones matrix (as a one-row wave for `survive`)
-    s_new = np.empty(3)
-    dv = np.empty(3)
-    sv = np.empty(3)
-    g = np.empty(3)
     n_out = 0
     for j in range(rows.shape[0]):
         i = rows[j]
@@ -421,23 +425,25 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         sx, sy, sz = -(ny * dz - nz * dy), -(nz * dx - nx * dz), -(nx * dy - ny * dx)
         norm = math.sqrt(sx * sx + sy * sy + sz * sz)
         if norm > _NORMAL:
-            s_new[0], s_new[1], s_new[2] = sx / norm, sy / norm, sz / norm
+            sx, sy, sz = sx / norm, sy / norm, sz / norm
         else:
-            s_new[0], s_new[1], s_new[2] = s_old[i, 0], s_old[i, 1], s_old[i, 2]
+            sx, sy, sz = s_old[i, 0], s_old[i, 1], s_old[i, 2]
         # p = k x s
-        px = -(dy * s_new[2] - dz * s_new[1])
-        py = -(dz * s_new[0] - dx * s_new[2])
-        pz = -(dx * s_new[1] - dy * s_new[0])
+        px, py, pz = -(dy * sz - dz * sy), -(dz * sx - dx * sz), -(dx * sy - dy * sx)
         # M re-expressed in (s, p) (eq. 2.35, `jones.rebase`)
-        b00 = s_new[0] * s_old[i, 0] + s_new[1] * s_old[i, 1] + s_new[2] * s_old[i, 2]
+        b00 = sx * s_old[i, 0] + sy * s_old[i, 1] + sz * s_old[i, 2]
         b01 = px * s_old[i, 0] + py * s_old[i, 1] + pz * s_old[i, 2]
-        b10 = s_new[0] * p_old[i, 0] + s_new[1] * p_old[i, 1] + s_new[2] * p_old[i, 2]
+        b10 = sx * p_old[i, 0] + sy * p_old[i, 1] + sz * p_old[i, 2]
         b11 = px * p_old[i, 0] + py * p_old[i, 1] + pz * p_old[i, 2]
         for a in range(2):
             ml[a, 0] = m[i, a, 0] * b00 + m[i, a, 1] * b10
             ml[a, 1] = m[i, a, 0] * b01 + m[i, a, 1] * b11
-        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coefficients1(fm, cur_a[i], other_a[i], leaving_a[i],
-                                                                            cos1[i], media, films, buf_eps, buf_d)
+        if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(fm, cur_a[i], other_a[i], leaving_a[i],
+                                                                          cos1[i], media, films, buf_eps, buf_d)
+        else:
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(kd, eps[cur_a[i]], eps[other_a[i]], cos1[i],
+                                                                        temperature[cur_a[i]], t_body)
         # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
         if As > A_ROUNDING or Ap > A_ROUNDING:
             ea, eb = math.sqrt(As), math.sqrt(Ap)
@@ -445,7 +451,8 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         if kd == BLACKBODY or kd == OPAQUE:
             ea, eb = math.sqrt(Ts), math.sqrt(Tp)
             _add(acc, k, ml[0, 0] * ea, ml[0, 1] * eb, ml[1, 0] * ea, ml[1, 1] * eb, t_body, t_body)
-        trans = (kd == DIELECTRIC or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
+        diel = kd == DIELECTRIC
+        trans = (diel or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
         keep_r, keep_t, gain_r, gain_t = True, trans, 1.0, 1.0
         if strategy != 0 and trans and (strategy == 1 or depth[i] >= split_depth):
             # the branches' shares of the power this ray carries (its Jones columns' powers
@@ -460,53 +467,61 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
                 keep_r, gain_t = False, 1.0 / math.sqrt(1.0 - p_r)
         step = face_offset[prim[i]]
         dn = dx * nx + dy * ny + dz * nz
-        if keep_r:  # reflected (eq. 2.21, 2.39): stays on the incident side
-            a_s = gain_r * _amplitude(rs, Rs)
-            a_p = gain_r * _amplitude(rp, Rp)
-            for a in range(2):
-                mc[0, a, 0] = ml[a, 0] * a_s
-                mc[0, a, 1] = ml[a, 1] * a_p
-            u = u_roul[2 * j] if roulette else 1.0
-            if not finish or survive(acc, cut, k, mc, 0, depth[i] + 1, t_body, u, limits):
-                dv[0], dv[1], dv[2] = dx - 2.0 * dn * nx, dy - 2.0 * dn * ny, dz - 2.0 * dn * nz
-                sv[:] = s_new
-                g[0], g[1], g[2] = nx, ny, nz
-                _child(out, n_out, pos[i], dv, sv, mc[0], k, depth[i] + 1, stack[i], top[i], t_body, g, step, finish)
-                if not finish:
-                    src[n_out], branch[n_out] = i, 1
-                n_out += 1
-        if keep_t:  # transmitted (eq. 2.19, 2.40): refracted into the other medium, or straight through a sheet
-            a_s = gain_t * _amplitude(ts, Ts)
-            a_p = gain_t * _amplitude(tp, Tp)
-            for a in range(2):
-                mc[0, a, 0] = ml[a, 0] * a_s
-                mc[0, a, 1] = ml[a, 1] * a_p
-            u = u_roul[2 * j + 1] if roulette else 1.0
-            if not finish or survive(acc, cut, k, mc, 0, depth[i] + 1, t_body, u, limits):
-                diel = kd == DIELECTRIC
+        depth_c = depth[i] + 1
+        tp_i = top[i]
+        for br in range(2):
+            if br == 0:  # reflected (eq. 2.21, 2.39): stays on the incident side, along +n
+                if not keep_r:
+                    continue
+                a_s, a_p = gain_r * _amplitude(rs, Rs), gain_r * _amplitude(rp, Rp)
+                cx, cy, cz = dx - 2.0 * dn * nx, dy - 2.0 * dn * ny, dz - 2.0 * dn * nz
+                side, top_c = 1.0, tp_i
+            else:  # transmitted (eq. 2.19, 2.40): refracted into the other medium, or straight through a sheet
+                if not keep_t:
+                    continue
+                a_s, a_p = gain_t * _amplitude(ts, Ts), gain_t * _amplitude(tp, Tp)
                 if diel:
                     # homogeneous wave (sec. 2.2.4): tangential part kept (eq. 2.18), normal part
                     # Re q2 of the outgoing root (eq. 2.20); Snell's law for lossless media
-                    c1 = -dn
                     n1 = n1_real[cur_a[i]]
                     qr = q2c.real
-                    tx, ty, tz = n1 * (dx + c1 * nx) - qr * nx, n1 * (dy + c1 * ny) - qr * ny, n1 * (dz + c1 * nz) - qr * nz
-                    tn = math.sqrt(tx * tx + ty * ty + tz * tz)
-                    dv[0], dv[1], dv[2] = tx / tn, ty / tn, tz / tn
+                    cx, cy, cz = n1 * (dx - dn * nx) - qr * nx, n1 * (dy - dn * ny) - qr * ny, n1 * (dz - dn * nz) - qr * nz
+                    norm = math.sqrt(cx * cx + cy * cy + cz * cz)
+                    cx, cy, cz = cx / norm, cy / norm, cz / norm
+                    top_c = tp_i - 1 if leaving_a[i] else tp_i + 1  # the body's medium popped or pushed
                 else:
-                    dv[0], dv[1], dv[2] = dx, dy, dz
-                sv[:] = s_new
-                g[0], g[1], g[2] = -nx, -ny, -nz
-                tp = top[i]
-                _child(out, n_out, pos[i], dv, sv, mc[0], k, depth[i] + 1, stack[i], tp, t_body, g, step, finish)
-                if not finish:
-                    src[n_out], branch[n_out] = i, -1
-                if diel and not leaving_a[i]:
-                    out[8][n_out] = tp + 1
-                    out[7][n_out, tp + 1] = fm
-                elif diel:
-                    out[8][n_out] = tp - 1
-                n_out += 1
+                    cx, cy, cz = dx, dy, dz
+                    top_c = tp_i
+                side = -1.0
+            m00, m01, m10, m11 = ml[0, 0] * a_s, ml[0, 1] * a_p, ml[1, 0] * a_s, ml[1, 1] * a_p
+            if finish:
+                g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
+                if g < 0.0:
+                    _end(acc, cut, k, m00, m01, m10, m11, t_body, limits[3], limits[4])
+                if g <= 0.0:
+                    continue
+                if g != 1.0:
+                    m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+            # the child, at row n_out: p = k x s with k = -d
+            od[n_out, 0], od[n_out, 1], od[n_out, 2] = cx, cy, cz
+            os_[n_out, 0], os_[n_out, 1], os_[n_out, 2] = sx, sy, sz
+            op[n_out, 0], op[n_out, 1], op[n_out, 2] = -(cy * sz - cz * sy), -(cz * sx - cx * sz), -(cx * sy - cy * sx)
+            gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
+            ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
+            if finish and cx * gx + cy * gy + cz * gz > 0.0:  # off the surface along its side
+                ox, oy, oz = ox + step * gx, oy + step * gy, oz + step * gz
+            oo[n_out, 0], oo[n_out, 1], oo[n_out, 2] = ox, oy, oz
+            if finish and not cx * gx + cy * gy + cz * gz > 0.0:  # (only rounding at grazing incidence)
+                _off_surface(oo, od, os_, op, n_out, gx, gy, gz, step)
+            om[n_out, 0, 0], om[n_out, 0, 1], om[n_out, 1, 0], om[n_out, 1, 1] = m00, m01, m10, m11
+            osid[n_out], odepth[n_out], otop[n_out], olast[n_out] = k, depth_c, top_c, t_body
+            for c in range(cap):
+                ostack[n_out, c] = stack[i, c]
+            if top_c > tp_i:
+                ostack[n_out, top_c] = fm
+            if not finish:
+                src[n_out], branch[n_out] = i, 1 - 2 * br
+            n_out += 1
     return n_out
 
 
