@@ -1,7 +1,8 @@
 """Render the tiles of a job on worker processes.
 
 Each worker builds the Embree scene once and then renders whole tiles, one at a time, that the
-parent sends it over a pipe. Tiles are fixed by the job (not by the worker count) and each tile
+parent sends it over a pipe, two ahead (the next tile waits in the pipe while it renders, so a
+worker does not wait for the parent between tiles). Tiles are fixed by the job (not by the worker count) and each tile
 seeds its own random stream from (run seed, tile index), so images are identical whatever
 ``--workers`` is.
 
@@ -11,7 +12,7 @@ nothing.
 
 The parent waits on every worker's pipe and process sentinel together, so a worker that dies (the
 kernel's OOM killer sends SIGKILL) is seen at once, with the tile it was rendering: that tile is
-rendered once more by another process, and if it kills that one too the render stops with an
+rendered once more by another process (the tile waiting in its pipe goes back to the queue too), and if it kills that one too the render stops with an
 `EnvironmentProblem` naming it. (``multiprocessing.Pool`` never notices a dead worker and waits
 forever; ``concurrent.futures`` does notice but cannot say which task killed it.) Workers ignore
 SIGINT; the parent kills and reaps them on every way out (`pmmw_cli.interrupt`).
@@ -175,12 +176,13 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
 
 
 class _Worker:
-    """A worker process, the parent's end of its pipe, and the tile it renders (None: none)."""
+    """A worker process, the parent's end of its pipe, and the tiles sent to it and not yet
+    returned (the first is the one it renders)."""
 
     def __init__(self, process, conn):
         self.process = process
         self.conn = conn
-        self.tile = None
+        self.tiles = deque()
 
 
 class _WorkerTraceback(Exception):
@@ -231,6 +233,7 @@ def _death(exitcode: int, remedy: str) -> str:
 
 
 _KEPT = "finished tiles are kept: run again with --resume"
+_IN_FLIGHT = 2  # tiles sent to a worker ahead of its results (`_render_on_workers`)
 
 
 def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
@@ -272,35 +275,38 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                         raise value[0] from _WorkerTraceback(value[1])
                     if value is not None:  # a tile (None: the worker is ready)
                         collect(value)
-                    w.tile = None
+                        w.tiles.popleft()
                 if reply is None or w.process.sentinel in ready:
                     live.remove(w)
                     w.process.join()
                     w.conn.close()
-                    if w.tile is None:
+                    if not w.tiles:
                         idle_deaths += 1
                         if idle_deaths > n:
                             how = _death(w.process.exitcode, "use fewer --workers")
                             raise EnvironmentProblem(f"{idle_deaths} worker processes died before rendering a "
                                                      f"tile, the last one {how}; {_KEPT}")
                     else:
-                        index, x0, y0, x1, y1 = w.tile
+                        index, x0, y0, x1, y1 = w.tiles[0]  # the one it was rendering
                         deaths[index] += 1
                         if deaths[index] > _RETRIES:
                             how = _death(w.process.exitcode, "lower render.spp or render.tile, or use fewer --workers")
                             raise EnvironmentProblem(f"tile {index} (pixels x {x0}..{x1 - 1}, y {y0}..{y1 - 1}): the "
                                                      f"worker process rendering it {how}, on each of "
                                                      f"{deaths[index]} tries; {_KEPT}")
-                        queue.appendleft(w.tile)
+                        queue.extendleft(reversed(w.tiles))  # back to the front, in their order
                     if queue:
                         start()
-                elif queue:
-                    w.tile = queue.popleft()
+                    continue
+                # keep _IN_FLIGHT tiles with it: the next one waits in its pipe while it renders,
+                # so it never waits for this process between tiles
+                while queue and len(w.tiles) < _IN_FLIGHT:
+                    w.tiles.append(queue.popleft())
                     try:
-                        w.conn.send(w.tile)
+                        w.conn.send(w.tiles[-1])
                     except OSError:  # it died just now: its sentinel says so next
-                        pass
-                else:  # nothing left for it: EOF ends it
+                        break
+                if not w.tiles:  # nothing left for it: EOF ends it
                     live.remove(w)
                     w.conn.close()
                     retired.append(w)
