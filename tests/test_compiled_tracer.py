@@ -313,3 +313,45 @@ def test_tally_equals_the_array_sums():
     for k in want:
         np.testing.assert_allclose(got[k], want[k], rtol=1e-12, atol=1e-9, err_msg=k)
     assert np.isinf(depth[0])  # a pixel whose first samples all saw the sky keeps inf
+
+
+def test_sky_emission_kernel_equals_the_jones_algebra():
+    """`kernels.sky_emit` against the array algebra of `pmmw_cli.physics.jones`: the Jones matrix
+    re-expressed in the sky's (h, v) basis (`rebase`, h = unit(z x k), v = k x h) and its Stokes
+    terms for columns (Th, Tv) (`stokes_terms`), summed per sample; unpolarized, Tv in both
+    columns. Random rays (one straight up, where h falls back to the ray's s), random complex
+    Jones matrices, two rays per sample. Tolerance: rounding (1e-12 K)."""
+    from pmmw_cli.physics.jones import rebase, stokes_terms
+    from pmmw_cli.surface import Wave
+    from pmmw_cli.trace import kernels
+
+    rng = np.random.default_rng(3)
+    n = 200
+    d = rng.normal(size=(n, 3))
+    d[0] = [0.0, 0.0, 1.0]
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    x = np.cross(d, rng.normal(size=(n, 3)))
+    s = x / np.linalg.norm(x, axis=1, keepdims=True)
+    p = np.cross(-d, s)
+    m = rng.normal(size=(n, 2, 2)) + 1j * rng.normal(size=(n, 2, 2))
+    sid = np.arange(n) // 2
+    wave = Wave(o=np.zeros((n, 3)), d=d, s=s, p=p, m=m, sid=sid, depth=np.zeros(n, np.int32),
+                stack=np.zeros((n, 8), np.int16), top=np.zeros(n, np.int32), last_t=np.zeros(n))
+    rows = np.arange(0, n, 1)[rng.random(n) < 0.7]
+    rows = np.union1d(rows, [0])
+    tv, th = rng.uniform(2.0, 300.0, rows.size), rng.uniform(2.0, 300.0, rows.size)
+    k = -d[rows]
+    h = np.cross(np.array([0.0, 0.0, 1.0]), k)
+    norm = np.linalg.norm(h, axis=1, keepdims=True)
+    h = np.where(norm > 1e-12, h / np.where(norm > 1e-12, norm, 1.0), s[rows])
+    v = np.cross(k, h)
+    for polarized in (True, False):
+        acc = np.zeros((n // 2, 4))
+        kernels.sky_emit(rows, wave.arrays(), tv, th if polarized else tv, polarized, acc)
+        want = np.zeros((n // 2, 4))
+        if polarized:
+            terms = stokes_terms(rebase(m[rows], s[rows], p[rows], h, v), th, tv)
+        else:
+            terms = stokes_terms(m[rows], tv, tv)
+        np.add.at(want, sid[rows], terms)
+        np.testing.assert_allclose(acc, want, rtol=0, atol=1e-12 * np.abs(want).max())

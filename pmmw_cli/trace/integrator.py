@@ -32,15 +32,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from pmmw_cli.physics.jones import rebase
-from pmmw_cli.physics.vec import cross
 from pmmw_cli.scene.camera import REPLICATES, pixel_samples
-from pmmw_cli.surface import Surfaces, Wave, deposit
+from pmmw_cli.surface import Surfaces, Wave
 from pmmw_cli.trace import kernels
 from pmmw_cli.trace.job import TraceJob
 
-_Z = np.array([0.0, 0.0, 1.0])
-_TINY = 1e-12
 _NEIGHBOURS = np.ones((3, 3), bool)  # a pixel and its 8 neighbours (adaptive sampling)
 _NO_RANDOM = np.zeros(0)  # the kernels' "no uniforms drawn"
 MAX_WAVE = 1 << 16  # camera rays traced at once: a tile's pass of more is split, so memory is flat in spp
@@ -333,18 +329,11 @@ class Integrator:
         return Wave.concat(out + self.surfaces.interact(wave, hit, prim, rows))
 
     def _sky(self, wave: Wave, rows):
-        """The sky's brightness seen by the rays ``rows`` of a wave (which missed every face)."""
+        """The sky's brightness seen by the rays ``rows`` of a wave (which missed every face):
+        its model's (Tv, Th), then the rays' Jones matrices in its (h, v) basis (`kernels.sky_emit`)."""
         sky = self.job.sky
-        d, sid, m = wave.d[rows], wave.sid[rows], wave.m[rows]
-        ta, tb = sky.brightness(d, heights=wave.o[rows, 2])
-        if sky.unpolarized:
-            deposit(self.acc, sid, m, np.asarray(ta, float))
-            return
-        s = wave.s[rows]
-        k = -d
-        hvec = cross(_Z[None, :], k)
-        norm = np.linalg.norm(hvec, axis=1, keepdims=True)
-        hvec = np.where(norm > _TINY, hvec / np.where(norm > _TINY, norm, 1.0), s)
-        vvec = cross(k, hvec)
-        m = rebase(m, s, wave.p[rows], hvec, vvec)
-        deposit(self.acc, sid, m, np.asarray(tb, float), np.asarray(ta, float))  # columns (h, v) = (Th, Tv)
+        ta, tb = sky.brightness(wave.d[rows], heights=wave.o[rows, 2])
+        n = rows.size
+        ta = np.ascontiguousarray(np.broadcast_to(np.asarray(ta, float), (n,)))
+        tb = ta if sky.unpolarized else np.ascontiguousarray(np.broadcast_to(np.asarray(tb, float), (n,)))
+        kernels.sky_emit(rows, wave.arrays(), ta, tb, not sky.unpolarized, self.acc)

@@ -18,6 +18,8 @@ models without compiled code. Everything per ray between them runs here:
   (Smith masking, `pmmw_cli.physics.roughness.smith_g1`);
 * `emit`: incoherent emission seen through Jones matrices, added to the per-sample sums
   (`pmmw_cli.physics.jones`, "Stokes from an emission event");
+* `sky_emit`: the sky's brightness for the rays that miss every face, their Jones matrices
+  re-expressed in the sky's (h, v) basis first;
 * `survivors`: the depth cut-off, weight threshold and Russian roulette for a wave (the
   rough-surface code's children; `scatter` applies the same `survive` to its own), and
   `compact` to drop the ended rays in place.
@@ -68,6 +70,36 @@ def emit(acc, sid, m, ta, tb):
     ray's Jones matrix ``m`` (columns a, b), to ``acc[sid]``."""
     for i in range(sid.shape[0]):
         _add(acc, sid[i], m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], ta[i], tb[i])
+
+
+@_jit
+def sky_emit(rows, wave, ta, tb, polarized, acc):
+    """The sky's brightness seen by the rays ``rows`` of a wave (which missed every face): (Tv,
+    Th) = (``ta``, ``tb``) [K], one pair per row. Unpolarized (``polarized`` False): ``ta`` in
+    both columns. Polarized: each Jones matrix re-expressed in the sky's (h, v) basis about the
+    ray (eq. 2.35; h = unit(z x k) with k = -d, the ray's own s at the zenith and nadir, v = k x
+    h), columns (h, v) seeing (Th, Tv)."""
+    d, s, p, m, sid = wave[1], wave[2], wave[3], wave[4], wave[5]
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        m00, m01, m10, m11 = m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1]
+        if not polarized:
+            _add(acc, sid[i], m00, m01, m10, m11, ta[j], ta[j])
+            continue
+        kx, ky, kz = -d[i, 0], -d[i, 1], -d[i, 2]
+        hx, hy = -ky, kx  # z x k
+        norm = math.sqrt(hx * hx + hy * hy)
+        if norm > _TINY:
+            hx, hy, hz = hx / norm, hy / norm, 0.0
+        else:
+            hx, hy, hz = s[i, 0], s[i, 1], s[i, 2]
+        vx, vy, vz = ky * hz - kz * hy, kz * hx - kx * hz, kx * hy - ky * hx  # k x h
+        b00 = hx * s[i, 0] + hy * s[i, 1] + hz * s[i, 2]
+        b01 = vx * s[i, 0] + vy * s[i, 1] + vz * s[i, 2]
+        b10 = hx * p[i, 0] + hy * p[i, 1] + hz * p[i, 2]
+        b11 = vx * p[i, 0] + vy * p[i, 1] + vz * p[i, 2]
+        _add(acc, sid[i], m00 * b00 + m01 * b10, m00 * b01 + m01 * b11, m10 * b00 + m11 * b10, m10 * b01 + m11 * b11,
+             tb[j], ta[j])
 
 
 @_inline
@@ -777,6 +809,8 @@ def warm(stack_size: int = 8) -> None:
           np.zeros((1, 2)), np.zeros(1), np.zeros(1))
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
+    # the sky (`Integrator._sky`)
+    sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
     camera.Camera(np.zeros(3), *np.eye(3), 1.0, 2, 2).rays(np.ones(1), np.ones(1), np.zeros(1, np.int64), 0)
     # the layered atmosphere's cell walk (`AtmosphereModel.path`)
     from pmmw_cli.atmosphere.model import _path_loop
