@@ -72,6 +72,24 @@ def emit(acc, sid, m, ta, tb):
         _add(acc, sid[i], m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], ta[i], tb[i])
 
 
+@_inline
+def _row_powers(m00, m01, m10, m11):
+    """The powers of the two rows of a Jones matrix (`jones.row_power` of one ray)."""
+    return (m00.real ** 2 + m00.imag ** 2 + m01.real ** 2 + m01.imag ** 2,
+            m10.real ** 2 + m10.imag ** 2 + m11.real ** 2 + m11.imag ** 2)
+
+
+@_inline
+def _rebase1(m00, m01, m10, m11, s_old, p_old, s_new, p_new):
+    """A Jones matrix re-expressed in a new local basis, M B (eq. 2.35; `jones.rebase` of one ray;
+    the basis vectors as 3-tuples of floats)."""
+    b00 = s_new[0] * s_old[0] + s_new[1] * s_old[1] + s_new[2] * s_old[2]
+    b01 = p_new[0] * s_old[0] + p_new[1] * s_old[1] + p_new[2] * s_old[2]
+    b10 = s_new[0] * p_old[0] + s_new[1] * p_old[1] + s_new[2] * p_old[2]
+    b11 = p_new[0] * p_old[0] + p_new[1] * p_old[1] + p_new[2] * p_old[2]
+    return m00 * b00 + m01 * b10, m00 * b01 + m01 * b11, m10 * b00 + m11 * b10, m10 * b01 + m11 * b11
+
+
 @_jit
 def sky_emit(rows, wave, ta, tb, polarized, acc):
     """The sky's brightness seen by the rays ``rows`` of a wave (which missed every face): (Tv,
@@ -94,12 +112,9 @@ def sky_emit(rows, wave, ta, tb, polarized, acc):
         else:
             hx, hy, hz = s[i, 0], s[i, 1], s[i, 2]
         vx, vy, vz = ky * hz - kz * hy, kz * hx - kx * hz, kx * hy - ky * hx  # k x h
-        b00 = hx * s[i, 0] + hy * s[i, 1] + hz * s[i, 2]
-        b01 = vx * s[i, 0] + vy * s[i, 1] + vz * s[i, 2]
-        b10 = hx * p[i, 0] + hy * p[i, 1] + hz * p[i, 2]
-        b11 = vx * p[i, 0] + vy * p[i, 1] + vz * p[i, 2]
-        _add(acc, sid[i], m00 * b00 + m01 * b10, m00 * b01 + m01 * b11, m10 * b00 + m11 * b10, m10 * b01 + m11 * b11,
-             tb[j], ta[j])
+        n00, n01, n10, n11 = _rebase1(m00, m01, m10, m11, (s[i, 0], s[i, 1], s[i, 2]), (p[i, 0], p[i, 1], p[i, 2]),
+                                      (hx, hy, hz), (vx, vy, vz))
+        _add(acc, sid[i], n00, n01, n10, n11, tb[j], ta[j])
 
 
 @_inline
@@ -108,8 +123,7 @@ def _end(acc, cut, k, m00, m01, m10, m11, t_last, t_lo, t_hi):
     the ended power (mean of the rows) and the rows' largest power times the largest difference
     between ``t_last`` and any brightness the path could still have seen."""
     _add(acc, k, m00, m01, m10, m11, t_last, t_last)
-    r0 = m00.real ** 2 + m00.imag ** 2 + m01.real ** 2 + m01.imag ** 2
-    r1 = m10.real ** 2 + m10.imag ** 2 + m11.real ** 2 + m11.imag ** 2
+    r0, r1 = _row_powers(m00, m01, m10, m11)
     cut[k, 0] += 0.5 * (r0 + r1)
     cut[k, 1] += max(r0, r1) * max(t_hi - t_last, t_last - t_lo)
 
@@ -129,8 +143,7 @@ def _fate(m00, m01, m10, m11, depth, u, limits):
     Jones matrix alone: the factor to scale them by (1 usually, > 1 after roulette), 0 when the
     ray ends silently, -1 when it ends on the temperature of its last object (`_end`)."""
     max_depth, threshold, roulette = limits[0], limits[1], limits[2]
-    w = max(m00.real ** 2 + m00.imag ** 2 + m01.real ** 2 + m01.imag ** 2,
-            m10.real ** 2 + m10.imag ** 2 + m11.real ** 2 + m11.imag ** 2)
+    w = max(_row_powers(m00, m01, m10, m11))
     if w <= 0.0:
         return 0.0
     if depth >= max_depth:
@@ -233,8 +246,7 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
                 for b in range(2):
                     m[i, a, b] *= g
         if u.shape[0] > 0:
-            w = max(m[i, 0, 0].real ** 2 + m[i, 0, 0].imag ** 2 + m[i, 0, 1].real ** 2 + m[i, 0, 1].imag ** 2,
-                    m[i, 1, 0].real ** 2 + m[i, 1, 0].imag ** 2 + m[i, 1, 1].real ** 2 + m[i, 1, 1].imag ** 2)
+            w = max(_row_powers(m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1]))
             if w < threshold:
                 g = _roulette(w, threshold, u[i])
                 if g == 0.0:
@@ -443,7 +455,6 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
     # The loop body calls no helper that takes arrays: numba counts references to an array
     # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
     # than all of an interaction's arithmetic. Helpers here take and return scalars.
-    ml = np.empty((2, 2), np.complex128)
     n_out = 0
     for j in range(rows.shape[0]):
         i = rows[j]
@@ -462,14 +473,10 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
             sx, sy, sz = s_old[i, 0], s_old[i, 1], s_old[i, 2]
         # p = k x s
         px, py, pz = -(dy * sz - dz * sy), -(dz * sx - dx * sz), -(dx * sy - dy * sx)
-        # M re-expressed in (s, p) (eq. 2.35, `jones.rebase`)
-        b00 = sx * s_old[i, 0] + sy * s_old[i, 1] + sz * s_old[i, 2]
-        b01 = px * s_old[i, 0] + py * s_old[i, 1] + pz * s_old[i, 2]
-        b10 = sx * p_old[i, 0] + sy * p_old[i, 1] + sz * p_old[i, 2]
-        b11 = px * p_old[i, 0] + py * p_old[i, 1] + pz * p_old[i, 2]
-        for a in range(2):
-            ml[a, 0] = m[i, a, 0] * b00 + m[i, a, 1] * b10
-            ml[a, 1] = m[i, a, 0] * b01 + m[i, a, 1] * b11
+        # M re-expressed in (s, p) (eq. 2.35)
+        ml00, ml01, ml10, ml11 = _rebase1(m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
+                                          (s_old[i, 0], s_old[i, 1], s_old[i, 2]),
+                                          (p_old[i, 0], p_old[i, 1], p_old[i, 2]), (sx, sy, sz), (px, py, pz))
         if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
             rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(fm, cur_a[i], other_a[i], leaving_a[i],
                                                                           cos1[i], media, films, buf_eps, buf_d)
@@ -479,18 +486,18 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
         if As > A_ROUNDING or Ap > A_ROUNDING:
             ea, eb = math.sqrt(As), math.sqrt(Ap)
-            _add(acc, k, ml[0, 0] * ea, ml[0, 1] * eb, ml[1, 0] * ea, ml[1, 1] * eb, t_abs, t_abs)
+            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_abs, t_abs)
         if kd == BLACKBODY or kd == OPAQUE:
             ea, eb = math.sqrt(Ts), math.sqrt(Tp)
-            _add(acc, k, ml[0, 0] * ea, ml[0, 1] * eb, ml[1, 0] * ea, ml[1, 1] * eb, t_body, t_body)
+            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_body, t_body)
         diel = kd == DIELECTRIC
         trans = (diel or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
         keep_r, keep_t, gain_r, gain_t = True, trans, 1.0, 1.0
         if strategy != 0 and trans and (strategy == 1 or depth[i] >= split_depth):
             # the branches' shares of the power this ray carries (its Jones columns' powers
             # times R and T): for a lossless interface the chosen child keeps that power exactly
-            c0 = ml[0, 0].real ** 2 + ml[0, 0].imag ** 2 + ml[1, 0].real ** 2 + ml[1, 0].imag ** 2
-            c1 = ml[0, 1].real ** 2 + ml[0, 1].imag ** 2 + ml[1, 1].real ** 2 + ml[1, 1].imag ** 2
+            c0 = ml00.real ** 2 + ml00.imag ** 2 + ml10.real ** 2 + ml10.imag ** 2
+            c1 = ml01.real ** 2 + ml01.imag ** 2 + ml11.real ** 2 + ml11.imag ** 2
             r_sum, t_sum = c0 * Rs + c1 * Rp, c0 * Ts + c1 * Tp
             p_r = r_sum / max(r_sum + t_sum, _TINY)
             if u_choose[j] < p_r:
@@ -517,7 +524,9 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
                     # Re q2 of the outgoing root (eq. 2.20); Snell's law for lossless media
                     n1 = n1_real[cur_a[i]]
                     qr = q2c.real
-                    cx, cy, cz = n1 * (dx - dn * nx) - qr * nx, n1 * (dy - dn * ny) - qr * ny, n1 * (dz - dn * nz) - qr * nz
+                    cx = n1 * (dx - dn * nx) - qr * nx
+                    cy = n1 * (dy - dn * ny) - qr * ny
+                    cz = n1 * (dz - dn * nz) - qr * nz
                     norm = math.sqrt(cx * cx + cy * cy + cz * cz)
                     cx, cy, cz = cx / norm, cy / norm, cz / norm
                     top_c = tp_i - 1 if leaving_a[i] else tp_i + 1  # the body's medium popped or pushed
@@ -525,7 +534,7 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
                     cx, cy, cz = dx, dy, dz
                     top_c = tp_i
                 side = -1.0
-            m00, m01, m10, m11 = ml[0, 0] * a_s, ml[0, 1] * a_p, ml[1, 0] * a_s, ml[1, 1] * a_p
+            m00, m01, m10, m11 = ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p
             if finish:
                 g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
                 if g < 0.0:
