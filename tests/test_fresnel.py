@@ -324,3 +324,19 @@ def test_compiled_square_root_is_the_principal_root():
         for a, b in ((got.real, want.real), (got.imag, want.imag)):
             assert (np.isnan(a) and np.isnan(b)) or (a == b and np.copysign(1, a) == np.copysign(1, b)) \
                 or abs(a - b) <= 1e-15 * abs(want), (v, got, want)
+
+
+def test_compiled_reciprocal_is_safe_over_the_whole_range():
+    """`fresnel._reciprocal1`, the one division behind each pair of r and t (scaled by the larger
+    part first, for the (B, C) of thick stacks): against Python's complex division, the
+    reference, to 2 ulp (relative 4e-16) on 20000 random values over 600 decades, where
+    |z|^2 of an unscaled formula would overflow or underflow for a third of them."""
+    from pmmw_cli.physics.fresnel import _reciprocal1
+
+    rng = np.random.default_rng(11)
+    mag = 10.0 ** rng.uniform(-300, 300, (2, 20000))
+    z = rng.choice([-1.0, 1.0], (2, 20000)) * mag
+    for x, y in zip(*z):
+        v = complex(x, y)
+        got, want = _reciprocal1(v), 1.0 / v
+        assert abs(got - want) <= 4e-16 * abs(want), (v, got, want)
