@@ -23,7 +23,8 @@ __all__ = ["SOURCES", "clear_stale_caches", "inline", "njit"]
 ROOT = Path(__file__).resolve().parent
 #: Every module with compiled code (paths relative to the package).
 SOURCES = ("atmosphere/model.py", "physics/fresnel.py", "physics/multilayer.py", "physics/roughness.py",
-           "po/kernels.py", "scene/bump.py", "scene/camera.py", "trace/intersect.py", "trace/kernels.py")
+           "po/kernels.py", "scene/bump.py", "scene/camera.py", "scene/sky.py", "trace/intersect.py",
+           "trace/kernels.py")
 _STAMP = ROOT / "__pycache__" / "numba-sources.sha256"
 
 

@@ -315,6 +315,39 @@ def test_tally_equals_the_array_sums():
     assert np.isinf(depth[0])  # a pixel whose first samples all saw the sky keeps inf
 
 
+def test_tile_means_are_the_sample_statistics():
+    """`kernels.tile_means` (a tile's results from its `tally` sums) against the statistics of the
+    raw samples in numpy: the mean, the standard error of the mean (sample standard deviation /
+    sqrt(n); 0 for one sample), and the mean of the even-numbered samples minus that of the
+    odd-numbered ones (0 with one sample). Per-pixel counts 1, 2, 3 and 8, values around 300 K
+    with a spread of 20 K, so that the shifted sums' rounding stays below 1e-10 K."""
+    from pmmw_cli.trace import kernels
+
+    rng = np.random.default_rng(11)
+    counts = np.array([1, 2, 3, 8, 5])
+    samples = [rng.normal(300.0, 20.0, (n, 4)) for n in counts]
+    npx = counts.size
+    ref, s1, s2 = np.zeros((npx, 4)), np.zeros((npx, 4)), np.zeros((npx, 4))
+    r1, count, trunc = np.zeros((npx, 2, 4)), np.zeros(npx, np.int64), np.zeros((npx, 2))
+    depth, material = np.full(npx, np.inf), np.full(npx, -1.0)
+    for px, v in enumerate(samples):  # one pixel at a time, all its samples in one chunk
+        n = v.shape[0]
+        kernels.tally(np.array([px]), v, np.zeros((n, 2)), np.ones(n), np.zeros(n), 0, 2, ref, s1, s2, r1, count,
+                      trunc, depth, material)
+    mean, err, diff = np.empty((npx, 4)), np.empty((npx, 4)), np.empty((npx, 4))
+    kernels.tile_means(ref, s1, s2, r1, count, mean, err, diff)
+    alone = np.empty((npx, 4))
+    kernels.stderr(s1, s2, count, alone)
+    np.testing.assert_array_equal(alone, err)
+    for px, v in enumerate(samples):
+        n = v.shape[0]
+        np.testing.assert_allclose(mean[px], v.mean(axis=0), rtol=0, atol=1e-10)
+        want_err = v.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(4)
+        np.testing.assert_allclose(err[px], want_err, rtol=0, atol=1e-10)
+        want_diff = v[0::2].mean(axis=0) - v[1::2].mean(axis=0) if n > 1 else np.zeros(4)
+        np.testing.assert_allclose(diff[px], want_diff, rtol=0, atol=1e-10)
+
+
 def test_sky_emission_kernel_equals_the_jones_algebra():
     """`kernels.sky_emit` against the array algebra of `pmmw_cli.physics.jones`: the Jones matrix
     re-expressed in the sky's (h, v) basis (`rebase`, h = unit(z x k), v = k x h) and its Stokes

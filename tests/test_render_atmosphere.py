@@ -59,14 +59,15 @@ def test_fog_adds_the_liquid_water_attenuation_along_a_horizontal_path():
 
 
 def _count_segments(model):
-    """Wrap model.path to count the segments it evaluates; returns the running count (a list)."""
-    count, orig = [0], model.path
+    """Wrap model.walk (the renderer's call, `kernels.ambient_segments`) to count the segments it
+    evaluates (those of nonzero length); returns the running count (a list)."""
+    count, orig = [0], model.walk
 
-    def path(z0, z1, length):
-        count[0] += len(z0)
-        return orig(z0, z1, length)
+    def walk(z0, z1, length, trans, emission):
+        count[0] += int(np.count_nonzero(length))
+        return orig(z0, z1, length, trans, emission)
 
-    model.path = path
+    model.walk = walk
     return count
 
 
@@ -133,3 +134,51 @@ def test_long_segments_are_not_skipped():
     assert n_on == count[0] > 0
     for c in on:
         np.testing.assert_array_equal(on[c], off[c])
+
+
+def test_sky_tables_built_before_the_workers_fork_are_those_the_rays_use():
+    """`AtmosphereSky.prepare` (called once in the parent by `integrator.prime`) builds the tables
+    of the height levels between the scene's lowest and highest point, and the lowest and highest
+    only when they are many; brightness reads them unchanged."""
+    model = AtmosphereModel(Atmosphere(), F95)
+    sky = AtmosphereSky(model, 290.0)
+    sky.prepare(0.3, 620.0)
+    assert sorted(model._sky_tables) == [0.0, 250.0, 500.0]
+    wide = AtmosphereModel(Atmosphere(), F95)
+    AtmosphereSky(wide, 290.0).prepare(10.0, 9000.0)
+    assert sorted(wide._sky_tables) == [0.0, 9000.0]
+    d = np.array([[0.0, 0.6, 0.8], [0.0, 0.0, 1.0]])
+    fresh = AtmosphereSky(AtmosphereModel(Atmosphere(), F95), 290.0)
+    for h in (0.3, 260.0, 619.0):
+        np.testing.assert_array_equal(sky.brightness(d, np.full(2, h))[0], fresh.brightness(d, np.full(2, h))[0])
+    assert sorted(model._sky_tables) == [0.0, 250.0, 500.0]  # nothing built again
+
+
+def test_sky_lookup_reads_the_tables_as_numpy_interp_at_every_height_and_elevation():
+    """The compiled lookup (`sky._sky_lookup`: the table interval from the square root of the
+    elevation) against `AtmosphereModel.sky_temperature` (numpy.interp in the same tables), over
+    random directions and heights on four levels, with the horizon, the zenith, a point exactly
+    on a table node and rays below the horizon (the ground temperature). Tolerance 1e-9 K: the
+    two interpolate the same two points and differ only in rounding (~1e-13 K)."""
+    from pmmw_cli.atmosphere.model import SKY_ELEVATIONS
+
+    model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
+    sky = AtmosphereSky(model, 281.5)
+    rng = np.random.default_rng(7)
+    n = 20000
+    el = np.concatenate([rng.uniform(-0.3, np.pi / 2, n), rng.uniform(0.0, 0.02, n),
+                         [0.0, np.pi / 2, SKY_ELEVATIONS[300], -1e-9]])
+    az = rng.uniform(0.0, 2.0 * np.pi, el.size)
+    d = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
+    heights = rng.uniform(-5.0, 1000.0, el.size)
+    got, same = sky.brightness(d, heights)
+    assert got is same
+    el_d = np.arcsin(d[:, 2])
+    want = np.full(el.size, 281.5)
+    for h in (0.0, 250.0, 500.0, 750.0):
+        sel = (el_d >= 0.0) & (np.floor(np.clip(heights, 0.0, None) / 250.0) * 250.0 == h)
+        assert sel.sum() > 1000
+        want[sel] = model.sky_temperature(el_d[sel], height=h)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+    assert np.all(got[el_d < 0.0] == 281.5) and (el_d < 0.0).sum() > 1000
+    assert sorted(model._sky_tables) == [0.0, 250.0, 500.0, 750.0]

@@ -94,6 +94,8 @@ DZ_SPLIT_HEIGHT = 20.0e3  # [m]
 F_MIN, F_MAX = 1e9, 1e12  # validity of P.676 Annex 1, P.838, P.840 [Hz]
 # elevations in a sky table, el = (pi/2) u^2 with u uniform: dense at the horizon
 N_SKY_TABLE = 1025
+SKY_ELEVATIONS = 0.5 * np.pi * np.linspace(0.0, 1.0, N_SKY_TABLE) ** 2  # [rad]
+SKY_ELEVATIONS.setflags(write=False)
 HORIZONTAL_SLOPE = 1e-9  # |z1 - z0| / L below which a segment counts as horizontal
 # largest vertical optical depth of a scattering cell: its mean source then stands for the source
 # anywhere in it (the two-stream field varies on a scale 1/k >~ 1 optical depth)
@@ -555,7 +557,7 @@ class AtmosphereModel:
         """(elevation [rad], T [K]) table of the sky seen from `height` [m]; built once, cached."""
         key = float(np.clip(height, 0.0, self.top))
         if key not in self._sky_tables:
-            el = 0.5 * np.pi * np.linspace(0.0, 1.0, N_SKY_TABLE) ** 2
+            el = SKY_ELEVATIONS
             T = layered_sky_temperature(
                 self.edges,
                 self.alpha,
@@ -635,9 +637,15 @@ class AtmosphereModel:
         """
         shape, z0, z1, L = self._segments(z0, z1, length)
         trans, emission = np.empty_like(z0), np.empty_like(z0)
-        _path_loop(np.ascontiguousarray(z0), np.ascontiguousarray(z1), np.ascontiguousarray(L), self.edges, self.alpha,
-                   self.depth, self.source, self.source_mu, bool(np.any(self.source_mu)), trans, emission)
+        self.walk(np.ascontiguousarray(z0), np.ascontiguousarray(z1), np.ascontiguousarray(L), trans, emission)
         return trans.reshape(shape), emission.reshape(shape)
+
+    def walk(self, z0, z1, length, trans, emission):
+        """`path` in place, for the renderer's segments (`pmmw_cli.trace.kernels.ambient_segments`):
+        ``z0``, ``z1`` already within 0..`top`, every argument a contiguous float64 array of
+        shape (N,); a segment of length 0 gives transmittance 1 and no emission."""
+        _path_loop(z0, z1, length, self.edges, self.alpha, self.depth, self.source, self.source_mu,
+                   bool(np.any(self.source_mu)), trans, emission)
 
     def extremes(self, z_lo: float, z_hi: float) -> tuple[float, float, float]:
         """Largest extinction and range of source temperatures of the cells between two heights.
@@ -686,6 +694,9 @@ def _path_loop(z0, z1, length, edges, alpha, depth, source, source_mu, with_mu, 
     last = alpha.size - 1
     for i in range(z0.shape[0]):
         a, b, L = z0[i], z1[i], length[i]
+        if L == 0.0:  # (the renderer's rays that stay out of the atmosphere this bounce)
+            trans[i], emission[i] = 1.0, 0.0
+            continue
         dz = b - a
         if abs(dz) <= HORIZONTAL_SLOPE * L:
             j = min(max(np.searchsorted(edges, 0.5 * (a + b), side="right") - 1, 0), last)

@@ -19,9 +19,13 @@ Temperatures are Rayleigh-Jeans brightness temperatures [K].
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from pmmw_cli.atmosphere.model import SKY_ELEVATIONS
 from pmmw_cli.errors import warn
+from pmmw_cli.jit import njit
 
 T_CMB = 2.725  # cosmic microwave background [K]
 T_SLAB_DEFAULT = 275.0  # mean radiating temperature of the lower troposphere [K]
@@ -129,21 +133,46 @@ class AtmosphereSky:
     def __init__(self, model, ground_temperature: float):
         self.model = model
         self.ground_temperature = float(ground_temperature)
+        # the tables built so far, as `_sky_lookup` reads them: level k's row of T (-1: none yet)
+        self._row = np.full(int((model.top - 1.0) // self.HEIGHT_STEP) + 1, -1, np.int64)
+        self._tables = np.empty((0, SKY_ELEVATIONS.size))
 
     def zenith_angle_temperature(self, elevation, height: float = 0.0):
         return self.model.sky_temperature(elevation, height=height)
 
     def brightness(self, directions, heights=None):
-        el = np.arcsin(np.clip(directions[:, 2], -1.0, 1.0))
-        t = np.full(el.shape, self.ground_temperature)
-        up = el >= 0.0
-        if heights is None:
-            heights = np.zeros(el.shape)
-        level = np.floor(np.clip(heights, 0.0, self.model.top - 1.0) / self.HEIGHT_STEP) * self.HEIGHT_STEP
-        for h in np.unique(level[up]):
-            sel = up & (level == h)
-            t[sel] = self.model.sky_temperature(el[sel], height=float(h))
+        dz = np.ascontiguousarray(directions[:, 2], dtype=np.float64)
+        heights = np.zeros(dz.shape) if heights is None else np.ascontiguousarray(heights, dtype=np.float64)
+        t = np.empty(dz.shape)
+        while (missing := _sky_lookup(dz, heights, self.HEIGHT_STEP, self.model.top - 1.0, self._row, SKY_ELEVATIONS,
+                                      self._tables, self.ground_temperature, t)) >= 0.0:
+            self._add(missing)
         return t, t
+
+    def level(self, heights):
+        """The observer heights [m] whose tables serve rays leaving at ``heights`` (the
+        `HEIGHT_STEP` level at or below each)."""
+        return np.floor(np.clip(heights, 0.0, self.model.top - 1.0) / self.HEIGHT_STEP) * self.HEIGHT_STEP
+
+    def _add(self, height: float):
+        """The table of the level at ``height`` [m] (`AtmosphereModel.sky_table`), for `_sky_lookup`."""
+        k = int(round(height / self.HEIGHT_STEP))
+        if self._row[k] >= 0:
+            return
+        _, temperature = self.model.sky_table(k * self.HEIGHT_STEP)  # at the points SKY_ELEVATIONS
+        self._tables = np.vstack([self._tables, temperature])
+        self._row[k] = self._tables.shape[0] - 1
+
+    def prepare(self, z_lo: float, z_hi: float, most: int = 8):
+        """Build the tables (about 20 ms each) that rays leaving between heights ``z_lo`` and
+        ``z_hi`` [m] use: all their levels, or the lowest and highest when there are more than
+        ``most``. Done once before the worker processes fork, so that each does not build them
+        again; any other level is still built when a ray needs it."""
+        levels = np.unique(self.level(np.array([z_lo, z_hi])))
+        if levels.size and (levels[-1] - levels[0]) / self.HEIGHT_STEP < most:
+            levels = np.arange(levels[0], levels[-1] + 0.5 * self.HEIGHT_STEP, self.HEIGHT_STEP)
+        for h in levels:
+            self._add(float(h))
 
     def temperature_range(self) -> tuple[float, float]:
         """Lowest and highest brightness [K]: the sky is a mix of the cells' sources (in every
@@ -151,6 +180,37 @@ class AtmosphereSky:
         _, lo, hi = self.model.extremes(0.0, self.model.top)
         ts = (lo, hi, T_CMB, self.ground_temperature)
         return min(ts), max(ts)
+
+
+@njit()
+def _sky_lookup(dz, heights, step, h_max, row, el_grid, tables, ground, out):
+    """`AtmosphereSky.brightness` of rays with direction z-components ``dz`` leaving at
+    ``heights`` [m], into ``out`` [K]: below the horizon ``ground``, above it the table of the
+    ray's level (``floor(min(max(height, 0), h_max) / step)``, its row of ``tables`` given by
+    ``row``), linear in elevation between the table's points ``el_grid`` [rad] as
+    `numpy.interp` (the points are (pi / 2) (k / (N - 1))^2, so the interval is found from the
+    square root, not searched). Returns the height [m] of the first level met that has no table
+    yet (for the caller to build and call again), -1 when every ray was served."""
+    last = el_grid.shape[0] - 1
+    scale = last / math.sqrt(el_grid[last])
+    for i in range(dz.shape[0]):
+        el = math.asin(min(max(dz[i], -1.0), 1.0))
+        if el < 0.0:
+            out[i] = ground
+            continue
+        level = math.floor(min(max(heights[i], 0.0), h_max) / step)
+        r = row[int(level)]
+        if r < 0:
+            return level * step
+        k = min(int(math.sqrt(el) * scale), last - 1)
+        while k > 0 and el < el_grid[k]:  # (rounding of the square root)
+            k -= 1
+        while k < last - 1 and el >= el_grid[k + 1]:
+            k += 1
+        x0, x1 = el_grid[k], el_grid[k + 1]
+        y0 = tables[r, k]
+        out[i] = tables[r, last] if el >= x1 else y0 + (tables[r, k + 1] - y0) * ((el - x0) / (x1 - x0))
+    return -1.0
 
 
 def _make_uniform(cfg, f, atmosphere_model=None):

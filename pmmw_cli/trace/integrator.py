@@ -92,13 +92,6 @@ class TileResult:
     replicate_diff: np.ndarray | None = None
 
 
-def _stderr(s1, s2, count):
-    """Standard error of the mean from shifted sums of values and squares; 0 for one sample."""
-    c = count[:, None].astype(float)
-    var = np.maximum(s2 - s1 * s1 / c, 0.0) / np.maximum(c - 1.0, 1.0)
-    return np.where(c > 1, np.sqrt(var / c), 0.0)
-
-
 def brightness_bounds(job: TraceJob, source_range=()):
     """(T_lo, T_hi) [K]: bounds of every temperature an event of a ray tree can add.
 
@@ -160,6 +153,15 @@ def atmosphere_skip_length(job: TraceJob) -> float:
     if d_t <= 0.0:
         return np.inf  # isothermal: the atmosphere changes nothing
     return st.atmosphere_tolerance / (st.max_depth * alpha_max * d_t)
+
+
+def prime(job: TraceJob):
+    """Build what rendering would otherwise build lazily in every worker process: the layered
+    sky's tables at the heights of the scene and the imager (`AtmosphereSky.prepare`). Called
+    once before the workers fork."""
+    prepare = getattr(job.sky, "prepare", None)
+    if prepare is not None:
+        prepare(*_scene_heights(job))
 
 
 class Integrator:
@@ -231,7 +233,8 @@ class Integrator:
                 done += nb
             if not adaptive:
                 break
-            err = _stderr(s1[active], s2[active], count[active])
+            err = np.empty((active.size, 4))
+            kernels.stderr(s1[active], s2[active], count[active], err)
             need = np.zeros(npx, bool)
             need[active[np.max(err[:, :2], axis=1) > st.target_error * st.error_footprint]] = True
             # a pixel that a small object covers in part may miss it with every one of its first
@@ -239,12 +242,9 @@ class Integrator:
             grown = binary_dilation(need.reshape(h, w), structure=_NEIGHBOURS).ravel()
             active = active[grown[active]]
             batch = done  # double the samples of the pixels that still need them
-        mean = ref + s1 / count[:, None]
-        stderr = _stderr(s1, s2, count)
         # every pixel took samples 0 .. count-1: replicate r holds the sample numbers = r mod 2
-        rcount = np.stack([(count + REPLICATES - 1 - r) // REPLICATES for r in range(REPLICATES)], axis=1)
-        halves = r1 / np.maximum(rcount, 1)[:, :, None]
-        diff = np.where((rcount > 0).all(axis=1)[:, None], halves[:, 0] - halves[:, 1], 0.0)
+        mean, stderr, diff = np.empty((npx, 4)), np.empty((npx, 4)), np.empty((npx, 4))
+        kernels.tile_means(ref, s1, s2, r1, count, mean, stderr, diff)
         return TileResult(
             index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
             depth.reshape(h, w), material.reshape(h, w), self.rays,
@@ -307,12 +307,10 @@ class Integrator:
         atm = (_NO_RANDOM, _NO_RANDOM)
         if job.atmosphere is not None:
             # the layered atmosphere along ambient segments (shorter ones: below the error budget)
-            amb = ~miss & (wave.stack[np.arange(n), wave.top] == 0) & (t > self.atm_skip_length)
-            if amb.any():
-                trans, emission = np.ones(n), np.zeros(n)
-                trans[amb], emission[amb] = job.atmosphere.path(wave.o[amb, 2], wave.o[amb, 2] + t[amb] * wave.d[amb, 2],
-                                                                t[amb])
-                atm = (trans, emission)
+            z0, z1, length = np.empty(n), np.empty(n), np.empty(n)
+            if kernels.ambient_segments(wave.arrays(), t, prim, self.atm_skip_length, job.atmosphere.top, z0, z1, length):
+                atm = (np.empty(n), np.empty(n))
+                job.atmosphere.walk(z0, z1, length, *atm)
         hit = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n, np.int64), np.empty(n, np.int64),
                np.empty(n, np.int64), np.empty(n, bool), np.empty(n, np.int8))
         arrays = wave.arrays()

@@ -181,6 +181,26 @@ def survivors(wave, u, limits, acc, cut, keep):
         keep[i] = survive(acc, cut, sid[i], m, i, depth[i], last_t[i], u[i] if u.shape[0] else 1.0, limits)
 
 
+@_jit
+def ambient_segments(wave, t, prim, skip, top_height, z0, z1, length):
+    """The segments of a wave's rays through the layered atmosphere (`AtmosphereModel.walk`): those
+    of rays that hit a face, travelled in the ambient medium (0) and are longer than ``skip`` [m]
+    (`integrator.atmosphere_skip_length`). Fills their ends' heights (within 0..``top_height``
+    [m]) and length, and length 0 for every other ray; returns how many there are."""
+    o, d, stack, top = wave[0], wave[1], wave[7], wave[8]
+    count = 0
+    for i in range(t.shape[0]):
+        ti = t[i]
+        if prim[i] >= 0 and stack[i, top[i]] == 0 and ti > skip:
+            a = o[i, 2]
+            b = a + ti * d[i, 2]
+            z0[i], z1[i], length[i] = min(max(a, 0.0), top_height), min(max(b, 0.0), top_height), ti
+            count += 1
+        else:
+            z0[i], z1[i], length[i] = 0.0, 0.0, 0.0
+    return count
+
+
 @_inline
 def _dot(a, i, b, j):
     return a[i, 0] * b[j, 0] + a[i, 1] * b[j, 1] + a[i, 2] * b[j, 2]
@@ -319,21 +339,37 @@ def _amplitude(amp, power):
 
 
 @_inline
-def _off_surface(o, d, s, p, c, gx, gy, gz, step):
-    """Ray c of a wave off the surface at its origin, along the side normal g: a ray on the wrong
-    side (``d . g <= 0``, a bump's tilt) is first mirrored through the face's plane (d and s
-    reflected, p = k x s follows: the power is kept), then moved by ``step`` along g."""
-    dg = d[c, 0] * gx + d[c, 1] * gy + d[c, 2] * gz
-    if dg <= 0.0:
-        sg = s[c, 0] * gx + s[c, 1] * gy + s[c, 2] * gz
-        d[c, 0], d[c, 1], d[c, 2] = d[c, 0] - 2.0 * dg * gx, d[c, 1] - 2.0 * dg * gy, d[c, 2] - 2.0 * dg * gz
-        s[c, 0], s[c, 1], s[c, 2] = s[c, 0] - 2.0 * sg * gx, s[c, 1] - 2.0 * sg * gy, s[c, 2] - 2.0 * sg * gz
-        p[c, 0] = -(d[c, 1] * s[c, 2] - d[c, 2] * s[c, 1])
-        p[c, 1] = -(d[c, 2] * s[c, 0] - d[c, 0] * s[c, 2])
-        p[c, 2] = -(d[c, 0] * s[c, 1] - d[c, 1] * s[c, 0])
+def _k_cross(dx, dy, dz, sx, sy, sz):
+    """p = k x s of a ray of direction d (k = -d, the wave's direction of travel toward the
+    detector) and basis vector s: the second vector of its (s, p) basis."""
+    return -(dy * sz - dz * sy), -(dz * sx - dx * sz), -(dx * sy - dy * sx)
+
+
+@_inline
+def _off_surface1(ox, oy, oz, dx, dy, dz, sx, sy, sz, gx, gy, gz, step):
+    """A ray at the surface (origin o, direction d, basis vector s) off it along the side normal
+    g: a ray on the wrong side (``d . g <= 0``, a bump's tilt) is first mirrored through the face's
+    plane (d and s reflected; the caller sets p = k x s: the power is kept), then moved by
+    ``step`` along g. Returns (o, d, s, mirrored) as scalars (see `scatter` on why scalars)."""
+    dg = dx * gx + dy * gy + dz * gz
+    mirrored = dg <= 0.0
+    if mirrored:
+        sg = sx * gx + sy * gy + sz * gz
+        dx, dy, dz = dx - 2.0 * dg * gx, dy - 2.0 * dg * gy, dz - 2.0 * dg * gz
+        sx, sy, sz = sx - 2.0 * sg * gx, sy - 2.0 * sg * gy, sz - 2.0 * sg * gz
         dg = -dg
     side = -step if dg < 0.0 else step
-    o[c, 0], o[c, 1], o[c, 2] = o[c, 0] + side * gx, o[c, 1] + side * gy, o[c, 2] + side * gz
+    return ox + side * gx, oy + side * gy, oz + side * gz, dx, dy, dz, sx, sy, sz, mirrored
+
+
+@_inline
+def _off_surface(o, d, s, p, c, gx, gy, gz, step):
+    """`_off_surface1` of ray c of a wave, in place."""
+    (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
+     mirrored) = _off_surface1(o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
+                               gx, gy, gz, step)
+    if mirrored:
+        p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
 
 
 @_jit
@@ -472,7 +508,7 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         else:
             sx, sy, sz = s_old[i, 0], s_old[i, 1], s_old[i, 2]
         # p = k x s
-        px, py, pz = -(dy * sz - dz * sy), -(dz * sx - dx * sz), -(dx * sy - dy * sx)
+        px, py, pz = _k_cross(dx, dy, dz, sx, sy, sz)
         # M re-expressed in (s, p) (eq. 2.35)
         ml00, ml01, ml10, ml11 = _rebase1(m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
                                           (s_old[i, 0], s_old[i, 1], s_old[i, 2]),
@@ -546,7 +582,7 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
             # the child, at row n_out: p = k x s with k = -d
             od[n_out, 0], od[n_out, 1], od[n_out, 2] = cx, cy, cz
             os_[n_out, 0], os_[n_out, 1], os_[n_out, 2] = sx, sy, sz
-            op[n_out, 0], op[n_out, 1], op[n_out, 2] = -(cy * sz - cz * sy), -(cz * sx - cx * sz), -(cx * sy - cy * sx)
+            op[n_out, 0], op[n_out, 1], op[n_out, 2] = _k_cross(cx, cy, cz, sx, sy, sz)
             gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
             ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
             if finish and cx * gx + cy * gy + cz * gz > 0.0:  # off the surface along its side
@@ -566,17 +602,21 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
     return n_out
 
 
-@_inline
-def _copy_row(src, c, dst, n):
-    """Row c of wave ``src`` to row n of wave ``dst``."""
-    for a in range(3):
-        dst[0][n, a], dst[1][n, a], dst[2][n, a], dst[3][n, a] = src[0][c, a], src[1][c, a], src[2][c, a], src[3][c, a]
-    for a in range(2):
-        for b in range(2):
-            dst[4][n, a, b] = src[4][c, a, b]
-    dst[5][n], dst[6][n], dst[8][n], dst[9][n] = src[5][c], src[6][c], src[8][c], src[9][c]
-    for a in range(src[7].shape[1]):
-        dst[7][n, a] = src[7][c, a]
+@_jit
+def gather(src, rows, dst):
+    """Rows ``rows`` of wave ``src`` to rows 0, 1, ... of wave ``dst`` (the same wave when every
+    ``rows[n] >= n``: in place). One call per wave: numba counts references to arrays handed to a
+    helper, at a cost above a row's copy, so the arrays are unpacked once here."""
+    o, d, s, p, m, sid, depth, stack, top, last_t = src
+    o2, d2, s2, p2, m2, sid2, depth2, stack2, top2, last_t2 = dst
+    for n in range(rows.shape[0]):
+        c = rows[n]
+        for a in range(3):
+            o2[n, a], d2[n, a], s2[n, a], p2[n, a] = o[c, a], d[c, a], s[c, a], p[c, a]
+        m2[n, 0, 0], m2[n, 0, 1], m2[n, 1, 0], m2[n, 1, 1] = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
+        sid2[n], depth2[n], top2[n], last_t2[n] = sid[c], depth[c], top[c], last_t[c]
+        for a in range(stack.shape[1]):
+            stack2[n, a] = stack[c, a]
 
 
 @_jit
@@ -595,13 +635,9 @@ def tangents(n, out):
 def compact(wave, keep):
     """Move the rows of a wave with ``keep`` to its front, in order (in place: the wave's arrays
     must not be shared); returns how many."""
-    n = 0
-    for c in range(keep.shape[0]):
-        if keep[c]:
-            if n != c:
-                _copy_row(wave, c, wave, n)
-            n += 1
-    return n
+    rows = np.flatnonzero(keep)
+    gather(wave, rows, wave)
+    return rows.shape[0]
 
 
 @_jit
@@ -665,6 +701,7 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     over, t_end = chain_end
     l_src, l_sign = leave_side
     o, d, s, p, m, sid = kids[0], kids[1], kids[2], kids[3], kids[4], kids[5]
+    l_rows, b_rows = np.empty(src.shape[0], np.int64), np.empty(src.shape[0], np.int64)
     nl, nb = 0, 0
     for c in range(src.shape[0]):
         i = src[c]
@@ -680,9 +717,13 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
                                     code, r_ax[fm], r_ay[fm], r_orient[fm])
         if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
             l_src[nl], l_sign[nl] = i, sg
-            if finish:
-                _off_surface(o, d, s, p, c, gx, gy, gz, step[i])  # off the surface (a wrong-side child mirrored)
-            _copy_row(kids, c, leave, nl)
+            if finish:  # off the surface (a wrong-side child mirrored), written out here: see `scatter`
+                (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
+                 mirrored) = _off_surface1(o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1],
+                                           s[c, 2], gx, gy, gz, step[i])
+                if mirrored:
+                    p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
+            l_rows[nl] = c
             nl += 1
             continue
         k = sid[c]
@@ -705,14 +746,53 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
                     m[c, a, b] *= g
         if not tau > A_ROUNDING:
             continue
-        _copy_row(kids, c, back, nb)
-        back[0][nb, 0], back[0][nb, 1], back[0][nb, 2] = pos[i, 0], pos[i, 1], pos[i, 2]
-        back[6][nb] += rehit_depth
+        b_rows[nb] = c
         b_src[nb], b_cur[nb], b_sign[nb] = i, cur, sg
         b_other[nb] = cur_a[i] if swap else other_a[i]
         b_leaving[nb] = leaving_a[i] != swap
         nb += 1
+    gather(kids, l_rows[:nl], leave)
+    gather(kids, b_rows[:nb], back)
+    b_o, b_depth = back[0], back[6]
+    for j in range(nb):  # a re-hit starts at the hit point
+        i = b_src[j]
+        b_o[j, 0], b_o[j, 1], b_o[j, 2] = pos[i, 0], pos[i, 1], pos[i, 2]
+        b_depth[j] += rehit_depth
     return nl, nb
+
+
+@_inline
+def _stderr1(s1, s2, c):
+    """Standard error of a mean of ``c`` samples from their shifted sum ``s1`` and sum of
+    squares ``s2`` (0 for one sample)."""
+    var = max(s2 - s1 * s1 / c, 0.0) / max(c - 1.0, 1.0)
+    return math.sqrt(var / c) if c > 1.0 else 0.0
+
+
+@_jit
+def stderr(s1, s2, count, out):
+    """`_stderr1` of each pixel's four values: sums ``s1``, ``s2`` (pixels, 4), ``count`` (pixels,)."""
+    for px in range(count.shape[0]):
+        c = float(count[px])
+        for k in range(4):
+            out[px, k] = _stderr1(s1[px, k], s2[px, k], c)
+
+
+@_jit
+def tile_means(ref, s1, s2, r1, count, mean, err, diff):
+    """A tile's per-pixel results from its sums (`tally`; `Integrator.render_tile`): the mean,
+    its standard error (`_stderr1`), and the mean of the even samples minus that of the odd ones
+    (replicates 0 and 1 of ``r1``; 0 where either has none)."""
+    if r1.shape[1] != 2:
+        raise ValueError("tile_means reads two replicates")
+    for px in range(count.shape[0]):
+        n = count[px]
+        c = float(n)
+        n0, n1 = float((n + 1) // 2), float(n // 2)  # samples 0, 2, 4, ... and 1, 3, ...
+        for k in range(4):
+            mean[px, k] = ref[px, k] + s1[px, k] / c
+            err[px, k] = _stderr1(s1[px, k], s2[px, k], c)
+            diff[px, k] = r1[px, 0, k] / n0 - r1[px, 1, k] / n1 if n1 > 0.0 else 0.0
 
 
 @_jit
@@ -787,6 +867,7 @@ def warm(stack_size: int = 8) -> None:
            np.zeros(n, np.int64), np.zeros(n, bool), np.zeros(n, np.int8))
     empty = np.zeros(0)
     arrive(wave, t, prim, (empty, empty), faces, media, acc, hit, empty, 1e-3)
+    ambient_segments(wave, t, prim, 0.0, 1e3, np.zeros(n), np.zeros(n), np.zeros(n))
     limits = (32, 1e-3, True, 0.0, 300.0)
     films = (np.zeros(1, np.int64), np.zeros(1, np.int64), np.ones(1, complex), np.zeros(1), np.zeros(1), 1.0)
     coefficients(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool), empty, media,
@@ -816,10 +897,15 @@ def warm(stack_size: int = 8) -> None:
     px4, ints1 = np.zeros((1, 4)), np.zeros(1, np.int64)
     tally(ints1, px4, np.zeros((1, 2)), np.zeros(1), np.zeros(1), 0, 2, px4, px4, px4, np.zeros((1, 2, 4)), ints1,
           np.zeros((1, 2)), np.zeros(1), np.zeros(1))
+    tile_means(px4, px4, px4, np.zeros((1, 2, 4)), ints1 + 1, px4.copy(), px4.copy(), px4.copy())
+    stderr(px4, px4, ints1, px4.copy())
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
     # the sky (`Integrator._sky`)
     sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
+    from pmmw_cli.scene.sky import _sky_lookup
+
+    _sky_lookup(empty, empty, 1.0, 1.0, np.zeros(1, np.int64), cells3 := np.array([0.0, 1.0]), cells3[None], 0.0, empty)
     camera.Camera(np.zeros(3), *np.eye(3), 1.0, 2, 2).rays(np.ones(1), np.ones(1), np.zeros(1, np.int64), 0)
     # the layered atmosphere's cell walk (`AtmosphereModel.path`)
     from pmmw_cli.atmosphere.model import _path_loop

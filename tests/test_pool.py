@@ -1,0 +1,45 @@
+"""The worker pool hands back exactly what one process renders: every array of every tile, with
+the tiles' arrays coming back through memory shared with the forked workers (`pool._Slots`)."""
+
+from pathlib import Path
+
+import numpy as np
+
+from pmmw_cli.pipeline import make_job, resolve
+from pmmw_cli.trace import pool
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_workers_return_every_array_of_every_tile_as_one_process_renders_it():
+    # adaptive sampling (per-pixel sample counts differ), tiles of three sizes (37 x 21 in tiles
+    # of 8: the slots that held a full tile then hold smaller ones), more tiles than slots
+    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml",
+                  ["imager.resolution=[37, 21]", "render.tile=8", "render.spp=16", "render.min_spp=2"])
+    job = make_job(res, res.scenario.frequencies[0])
+    one = pool.render_tiles(job, workers=1)
+    two = pool.render_tiles(job, workers=2)
+    assert len(two) == len(one) == 15
+    assert len({r.samples.max() for r in two}) > 1 or len({r.samples.min() for r in two}) > 1  # adaptive
+    for a, b in zip(one, two):
+        assert (b.index, b.box, b.rays) == (a.index, a.box, a.rays) and b.t_isect > 0.0
+        for name, _ in pool._PLANES:
+            x, y = getattr(a, name), getattr(b, name)
+            assert y.dtype == x.dtype and y.shape == x.shape, name
+            np.testing.assert_array_equal(y, x, err_msg=name)
+
+
+def test_slots_round_trip_a_tile_and_leave_the_result_without_arrays():
+    rng = np.random.default_rng(3)
+    h, w = 3, 5
+    r = pool.TileResult(7, (2, 4, 2 + w, 4 + h), rng.random((h, w, 4)), rng.random((h, w, 4)), rng.random((h, w)),
+                        rng.integers(-1, 4, (h, w)).astype(float), 11, rng.integers(1, 2**31 - 1, (h, w)).astype(np.int32),
+                        0.5, rng.random((h, w, 2)), rng.random((h, w, 4)))
+    want = {name: getattr(r, name).copy() for name, _ in pool._PLANES}
+    slots = pool._Slots(2, 64)
+    sent = slots.put(1, r)
+    assert all(getattr(sent, name) is None for name, _ in pool._PLANES)
+    back = slots.take(1, sent)
+    for name, a in want.items():
+        assert getattr(back, name).dtype == a.dtype, name
+        np.testing.assert_array_equal(getattr(back, name), a, err_msg=name)
