@@ -689,8 +689,8 @@ def _depth_in(z, k, edges, depth):
 @njit()
 def _path_loop(z0, z1, length, edges, alpha, depth, source, source_mu, with_mu, trans, emission):
     """`AtmosphereModel.path` per segment, compiled: a horizontal segment stays in one cell; a
-    sloped one walks the cells from the observer outward, each cell's optical depth from the
-    cumulative vertical depth stretched by L / |dz|, its source seen through the cells before it."""
+    sloped one walks the cells from the observer outward, optical depths from the cumulative
+    vertical depth stretched by L / |dz|, each cell's source seen through the cells before it."""
     last = alpha.size - 1
     for i in range(z0.shape[0]):
         a, b, L = z0[i], z1[i], length[i]
@@ -705,9 +705,9 @@ def _path_loop(z0, z1, length, edges, alpha, depth, source, source_mu, with_mu, 
             emission[i] = source[j] * -math.expm1(-tau)
             continue
         if dz > 0.0:
-            j, end, step = np.searchsorted(edges, a, side="right") - 1, np.searchsorted(edges, b, side="left") - 1, 1
+            j, end = np.searchsorted(edges, a, side="right") - 1, np.searchsorted(edges, b, side="left") - 1
         else:
-            j, end, step = np.searchsorted(edges, a, side="left") - 1, np.searchsorted(edges, b, side="right") - 1, -1
+            j, end = np.searchsorted(edges, a, side="left") - 1, np.searchsorted(edges, b, side="right") - 1
         j, end = min(max(j, 0), last), min(max(end, 0), last)
         # vertical optical depth at the segment's ends, linear within the cell each end lies in
         # (the cells' own are `depth`); j and end are those cells
@@ -716,11 +716,21 @@ def _path_loop(z0, z1, length, edges, alpha, depth, source, source_mu, with_mu, 
         d_hi = _depth_in(max(a, b), hi, edges, depth)
         stretch = L / abs(dz)
         mu = -dz / L  # direction of the radiation, toward the observer (only rain's source depends on it)
+        # the transmittance from the observer to the far edge of each cell in turn, from the
+        # vertical depth between them (one exp per cell, no product of the cells' own: about
+        # twice as fast as expm1 per cell, the same to 1e-13 K); the cell emits its source times
+        # what it takes off that transmittance
         t, em = 1.0, 0.0
-        for _ in range(abs(end - j) + 1):
-            x = math.expm1(-max(min(depth[j + 1], d_hi) - max(depth[j], d_lo), 0.0) * stretch)  # exp(-tau) - 1
-            src = source[j] + source_mu[j] * mu if with_mu else source[j]
-            em -= src * x * t
-            t *= 1.0 + x
-            j += step
+        if dz > 0.0:  # up: the observer at d_lo, each cell's far edge its top
+            for _ in range(end - j + 1):
+                t_far = math.exp(-max(min(depth[j + 1], d_hi) - d_lo, 0.0) * stretch)
+                em += (source[j] + source_mu[j] * mu if with_mu else source[j]) * (t - t_far)
+                t = t_far
+                j += 1
+        else:  # down: the observer at d_hi, each cell's far edge its bottom
+            for _ in range(j - end + 1):
+                t_far = math.exp(-max(d_hi - max(depth[j], d_lo), 0.0) * stretch)
+                em += (source[j] + source_mu[j] * mu if with_mu else source[j]) * (t - t_far)
+                t = t_far
+                j -= 1
         trans[i], emission[i] = t, em
