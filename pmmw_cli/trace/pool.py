@@ -388,8 +388,9 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                         start()
                     continue
                 # keep _IN_FLIGHT tiles with it: the next one waits in its pipe while it renders,
-                # so it never waits for this process between tiles
-                while queue and len(w.tiles) < _IN_FLIGHT:
+                # so it never waits for this process between tiles; but not at the end, where a
+                # tile waiting here would keep a worker that is done sooner idle
+                while queue and len(w.tiles) < _IN_FLIGHT and (not w.tiles or len(queue) >= len(live)):
                     w.slot_of.append(w.free_slot())
                     w.tiles.append(queue.popleft())
                     try:
