@@ -429,31 +429,41 @@ def smith_g1(n, t, w, code, ax, ay, orientation):
     return min(max(c / area, 0.0), 1.0)
 
 
+@_inline
+def ggx_draw1(n, t, wo, u1, u2, ax, ay, orientation):
+    """`GGX.sample_normals` of one ray (3-tuples n, t, wo: macro normal, tangent, direction
+    toward the viewer): the spherical-cap draw (`_ggx_vndf_local`) in the ray's `local_frame`.
+    Returns the facet normal's three components and the draw's weight (1, or 0 where the facet
+    faces away from wo: measure zero)."""
+    x, y = _frame1(n[0], n[1], n[2], t[0], t[1], t[2], orientation)
+    wx = wo[0] * x[0] + wo[1] * x[1] + wo[2] * x[2]
+    wy = wo[0] * y[0] + wo[1] * y[1] + wo[2] * y[2]
+    wz = wo[0] * n[0] + wo[1] * n[1] + wo[2] * n[2]
+    vx, vy, vz = ax * wx, ay * wy, wz
+    nv = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if nv > 0.0:
+        vx, vy, vz = vx / nv, vy / nv, vz / nv
+    phi = 2.0 * math.pi * u1
+    zc = (1.0 - u2) * (1.0 + vz) - vz
+    sin_t = math.sqrt(min(max(1.0 - zc * zc, 0.0), 1.0))
+    mx, my, mz = ax * (sin_t * math.cos(phi) + vx), ay * (sin_t * math.sin(phi) + vy), max(zc + vz, 0.0)
+    nm = math.sqrt(mx * mx + my * my + mz * mz)
+    if nm <= 0.0:  # c = -v exactly (measure zero)
+        mx, my, mz = 0.0, 0.0, 1.0
+    else:
+        mx, my, mz = mx / nm, my / nm, mz / nm
+    w = 1.0 if mx * wx + my * wy + mz * wz > 0.0 else 0.0
+    return (mx * x[0] + my * y[0] + mz * n[0], mx * x[1] + my * y[1] + mz * n[1], mx * x[2] + my * y[2] + mz * n[2],
+            w)
+
+
 @_jit
 def _ggx_sample_rows(n, t, wo, u1, u2, ax, ay, orientation, m_out, w_out):
-    """`GGX.sample_normals` per ray: the spherical-cap draw (`_ggx_vndf_local`) in each ray's
-    `local_frame`; arrays of shape (N, 3) and (N,), filled in ``m_out`` and ``w_out``."""
+    """`ggx_draw1` of arrays of rays, shape (N, 3) and (N,), filled in ``m_out`` and ``w_out``."""
     for i in range(n.shape[0]):
-        x, y = _frame1(n[i, 0], n[i, 1], n[i, 2], t[i, 0], t[i, 1], t[i, 2], orientation)
-        wx = wo[i, 0] * x[0] + wo[i, 1] * x[1] + wo[i, 2] * x[2]
-        wy = wo[i, 0] * y[0] + wo[i, 1] * y[1] + wo[i, 2] * y[2]
-        wz = wo[i, 0] * n[i, 0] + wo[i, 1] * n[i, 1] + wo[i, 2] * n[i, 2]
-        vx, vy, vz = ax * wx, ay * wy, wz
-        nv = math.sqrt(vx * vx + vy * vy + vz * vz)
-        if nv > 0.0:
-            vx, vy, vz = vx / nv, vy / nv, vz / nv
-        phi = 2.0 * math.pi * u1[i]
-        zc = (1.0 - u2[i]) * (1.0 + vz) - vz
-        sin_t = math.sqrt(min(max(1.0 - zc * zc, 0.0), 1.0))
-        mx, my, mz = ax * (sin_t * math.cos(phi) + vx), ay * (sin_t * math.sin(phi) + vy), max(zc + vz, 0.0)
-        nm = math.sqrt(mx * mx + my * my + mz * mz)
-        if nm <= 0.0:  # c = -v exactly (measure zero)
-            mx, my, mz = 0.0, 0.0, 1.0
-        else:
-            mx, my, mz = mx / nm, my / nm, mz / nm
-        w_out[i] = 1.0 if mx * wx + my * wy + mz * wz > 0.0 else 0.0
-        for c in range(3):
-            m_out[i, c] = mx * x[c] + my * y[c] + mz * n[i, c]
+        m_out[i, 0], m_out[i, 1], m_out[i, 2], w_out[i] = ggx_draw1(
+            (n[i, 0], n[i, 1], n[i, 2]), (t[i, 0], t[i, 1], t[i, 2]), (wo[i, 0], wo[i, 1], wo[i, 2]), u1[i], u2[i],
+            ax, ay, orientation)
 
 
 @_jit

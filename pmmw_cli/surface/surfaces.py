@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pmmw_cli.physics.roughness import MAX_REHITS, OTHER_CODE
+from pmmw_cli.physics.roughness import GGX_CODE, MAX_REHITS, OTHER_CODE
 from pmmw_cli.surface.tables import Pile, kernel_tables
 from pmmw_cli.surface.wave import Wave
 from pmmw_cli.trace import kernels
@@ -147,8 +147,9 @@ class Surfaces:
                                   prim[a]) if a.size else []
             kids += self._walk_layers(wv.take(b), pos[b], n_in[b], n_mac[b], cur[b], face_med[b], other[b],
                                       leaving[b], prim[b])
-        children = Wave.concat(kids)
-        return [self._terminate(children)] if children is not None else []
+        # each part terminated on its own, in order: the same uniforms as for the parts joined
+        # (the caller joins them once, with the rays that passed through)
+        return [w for w in (self._terminate(part) for part in kids) if len(w)]
 
     def _bumped(self, pos, d, n_in, face_med):
         """Macro normals tilted by the bump maps of the faces' materials (the face normal elsewhere).
@@ -178,27 +179,17 @@ class Surfaces:
         ``n_geo`` is the face's geometric normal and ``n_mac`` its macro (shading) normal, a
         bump map's tilt of it, both facing the incident side. On a rough surface each ray
         first draws a microfacet normal visible from it (`pmmw_cli.physics.roughness`, "How the
-        renderer uses this") and the smooth-surface code below runs about that facet; children
+        renderer uses this") and the smooth-surface code runs about that facet; children
         masked by the microsurface re-hit the same point at once (``rehit`` counts the chain).
+        Where every rough model of the scene has compiled masking (GGX, Beckmann) this is one
+        pass of `kernels.scatter` (``MASKED``: GGX facets drawn there too); otherwise facets,
+        `kernels.scatter` and `kernels.settle` (`_settle`) run one after the other.
         """
-        step = self._faces[2][prim]
-        n_fac, tangent, rough = n_mac, None, None
-        if self.rough_scene:
-            n_fac, tangent, rough = self._facets(wv, n_mac, face_med)
-        nr = len(wv)
-        self.events += nr
-        cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_fac), 0.0, 1.0)
-        # the smooth code about the facets (`kernels.scatter`), its children left at the hit
-        # points for the masking test
-        hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
-        rows = np.arange(nr)
-        u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
-        kids = Wave.empty(2 * nr, wv.stack.shape[1])
-        src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
-        count = kernels.scatter(rows, wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice, u_choose,
-                                _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), (False, src, branch))
-        leave, back = self._settle(kids.head(count), src[:count], branch[:count], pos, n_geo, n_mac, tangent, rough,
-                                   face_med, prim, step, cur, other, leaving, rehit)
+        self.events += len(wv)
+        if self._rough_other:
+            leave, back = self._scatter_settle(wv, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit)
+        else:
+            leave, back = self._scatter_masked(wv, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit)
         out = [leave]
         if back is not None:
             # masked children of both branches hit the same points again, as one group (with the
@@ -211,6 +202,82 @@ class Surfaces:
             if len(back):
                 out += self._interact(back, *args, rehit + 1)
         return [w for w in out if w is not None and len(w)]
+
+    def _scatter_masked(self, wv: Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit):
+        """`_interact`'s step in one pass of `kernels.scatter` (``MASKED``). Returns the children
+        that leave and, for those that come back, the arguments of their re-hit (or None).
+
+        The uniforms are drawn in the order of `_scatter_settle`'s steps (facets per material,
+        branch choice, then one per child of a rough face), so both give the same image for the
+        same seed: the masking's are drawn for every possible child (two per ray) and the
+        generator is then set back to just after the ones the kernel used."""
+        nr = len(wv)
+        n_mac = np.ascontiguousarray(n_mac, dtype=np.float64)
+        n_fac, u1, u2 = self._draws(wv, n_mac, face_med)
+        u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
+        hit = (np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
+        kids = Wave.empty(2 * nr, wv.stack.shape[1])
+        side = (np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64),
+                np.empty(2 * nr, bool), np.empty(2 * nr))
+        counts = np.zeros(3, np.int64)
+        generator = self.rng.bit_generator
+        state = generator.state
+        u_leave = self.rng.random(2 * nr)
+        settle = kernels.masked(self._rough[0] == GGX_CODE, u1, u2, np.ascontiguousarray(n_geo), n_mac, u_leave,
+                                self._rough, rehit + 1 > MAX_REHITS, self.wavelength, self._rehit_depth, side, counts)
+        nl = kernels.scatter(np.arange(nr), wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice,
+                             u_choose, _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), settle)
+        generator.state = state
+        generator.advance(int(counts[1]))
+        self.fallbacks += int(counts[0])
+        nb = int(counts[2])
+        if not nb:
+            return kids.head(nl), None
+        back = kids.take(np.arange(2 * nr - 1, 2 * nr - 1 - nb, -1))  # written from the end, in order
+        j, cur, other, leaving, sign = (a[:nb] for a in side)
+        return kids.head(nl), (back, pos[j], sign[:, None] * n_geo[j], sign[:, None] * n_mac[j], cur, face_med[j],
+                               other, leaving, prim[j])
+
+    def _draws(self, wv: Wave, n_mac, face_med):
+        """The facet draws of `_scatter_masked`'s rays: normals (n, 3) (macro normals, or the
+        facets that models without a compiled draw give, `_draw_facets`) and the GGX draws'
+        uniforms u1, u2 (n,), drawn per material in `_facets`' order."""
+        models = {k: self.media.rough(int(k)) for k in _values(face_med)}
+        models = {k: mdl for k, mdl in models.items() if mdl is not None}
+        n_fac, u1, u2, tangent = n_mac, _NO_RANDOM, _NO_RANDOM, None
+        for k, mdl in models.items():
+            g = np.nonzero(face_med == k)[0]
+            if self._rough[0][k] == GGX_CODE:  # drawn in `kernels.scatter`
+                if u1 is _NO_RANDOM:
+                    u1, u2 = np.zeros(len(wv)), np.zeros(len(wv))
+                u1[g], u2[g] = self.rng.random((2, g.size))
+                continue
+            if tangent is None:
+                tangent, n_fac = _tangents(n_mac), n_mac.copy()
+            n_fac[g] = self._draw_facets(mdl, wv, g, n_mac[g], tangent[g], self.media.temperature[k])
+        return n_fac, u1, u2
+
+    def _scatter_settle(self, wv: Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit):
+        """`_interact`'s step for scenes with a roughness model without compiled masking: facets
+        (`_facets`), `kernels.scatter` about them (``AT_POINT``), `_settle`. Returns as
+        `_scatter_masked`."""
+        step = self._faces[2][prim]
+        n_fac, tangent, rough = n_mac, None, None
+        if self.rough_scene:
+            n_fac, tangent, rough = self._facets(wv, n_mac, face_med)
+        nr = len(wv)
+        cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_fac), 0.0, 1.0)
+        # the smooth code about the facets (`kernels.scatter`), its children left at the hit
+        # points for the masking test
+        hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
+        rows = np.arange(nr)
+        u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
+        kids = Wave.empty(2 * nr, wv.stack.shape[1])
+        src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
+        count = kernels.scatter(rows, wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice, u_choose,
+                                _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), kernels.at_point(src, branch))
+        return self._settle(kids.head(count), src[:count], branch[:count], pos, n_geo, n_mac, tangent, rough,
+                            face_med, prim, step, cur, other, leaving, rehit)
 
     def _facets(self, wv: Wave, n_mac, face_med):
         """Microfacet normals for the rays on rough faces (the macro normal elsewhere).
@@ -397,7 +464,7 @@ class Surfaces:
         none = np.zeros(nr, np.int64)
         count = kernels.scatter(np.arange(nr), w.arrays(), hit, self._films, none, self._faces, self._media,
                                 self._choice, u_choose, _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(),
-                                (False, src, branch))
+                                kernels.at_point(src, branch))
         kids, src, branch = kids.head(count), src[:count], branch[:count]
         kids.top[:] = w.top[src]  # inside the pile the media stack stays as it was (`_layer_exit`)
         model = self._rough_models[fm]

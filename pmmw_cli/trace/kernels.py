@@ -14,8 +14,12 @@ models without compiled code. Everything per ray between them runs here:
   2.35), the emission of what the interface absorbs (eq. 2.36) or a sink swallows, the choice of
   branches (``render.strategy``), the reflected and transmitted children (eq. 2.19-2.21, 2.39,
   2.40) off the surface, and their termination (`survive`);
-* `settle`: on rough faces, each child of a facet off the surface or back onto it for a re-hit
-  (Smith masking, `pmmw_cli.physics.roughness.smith_g1`);
+  On rough faces whose masking is compiled (GGX, Beckmann; ``MASKED``) the same pass draws the
+  GGX facet (`pmmw_cli.physics.roughness.ggx_draw1`) and sends each child off the surface or back
+  onto it for a re-hit (Smith masking, `pmmw_cli.physics.roughness.smith_g1`);
+* `settle`: that masking as a pass of its own over children that `scatter` left at the hit
+  point (``AT_POINT``), for models whose masking is array code and for the walk through rough
+  coating layers;
 * `emit`: incoherent emission seen through Jones matrices, added to the per-sample sums
   (`pmmw_cli.physics.jones`, "Stokes from an emission event");
 * `sky_emit`: the sky's brightness for the rays that miss every face, their Jones matrices
@@ -48,7 +52,24 @@ _TINY = 1e-12
 _NORMAL = 1e-9  # |n x k| below this: normal incidence, the ray keeps its own s
 
 STRATEGIES = {"split": 0, "stochastic": 1, "hybrid": 2}
-NO_SETTLE = (True, np.zeros(0, np.int64), np.zeros(0, np.int8))  # `scatter`'s children leave at once
+#: What `scatter` does with the children (its ``settle`` argument's first entry): they leave the
+#: surface at once and are terminated (smooth faces); they stay at the hit point (the rough code's
+#: steps that follow); or, on rough faces, each leaves or comes back by Smith masking here.
+FINISH, AT_POINT, MASKED = 0, 1, 2
+_I64, _I8, _F8, _B1 = np.zeros(0, np.int64), np.zeros(0, np.int8), np.zeros(0), np.zeros(0, bool)
+NO_SETTLE = (FINISH, _I64, _I8, None)  # `scatter`'s children leave at once
+
+
+def at_point(src, branch):
+    """`scatter`'s ``settle`` argument for children left at the hit point (``AT_POINT``), each
+    one's row in the wave to ``src`` and +1 (reflected) or -1 (transmitted) to ``branch``."""
+    return (AT_POINT, src, branch, None)
+
+
+def masked(draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts):
+    """`scatter`'s ``settle`` argument for rough faces (``MASKED``): see `scatter`."""
+    return (MASKED, _I64, _I8, (draw, u1, u2, n_geo, n_mac, u_leave, rough, bool(over), float(wavelength),
+                                int(rehit_depth), back_side, counts))
 
 _jit = njit()
 _inline = inline()
@@ -450,17 +471,36 @@ def coefficients(cur, face_med, other, leaving, cos1, media, films, amp, power, 
         power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 
 
+@_inline
+def _masked_side1(side, diel, cur, other, leaving):
+    """The media of the side a masked child is on, seen from there (cur, other, leaving): a
+    reflected child (``side`` > 0) keeps them, a refracted one swaps them, a thin sheet's
+    transmitted child keeps them."""
+    if side < 0.0 and diel:
+        return other, cur, not leaving
+    return cur, other, leaving
+
+
+@_inline
+def _to_next_facet1(alpha, wavelength):
+    """A masked child's way to the next facet, one wavelength of its side's medium (extinction
+    ``alpha`` [1/m]): transmittance, and the amplitude factors of what it emits and keeps."""
+    tau = math.exp(-alpha * wavelength)
+    return tau, math.sqrt(1.0 - tau), math.sqrt(tau)
+
+
 @_jit
 def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, settle):
     """Interactions of the rays ``rows`` of a wave with the faces they hit (`arrive` filled
-    ``hit``); their surviving children are written to ``out`` (room for two per row). Returns
-    how many.
+    ``hit``); their children are written to ``out`` (room for two per row). Returns how many
+    (with ``MASKED``: how many leave).
 
     Parameters
     ----------
     hit : tuple (pos, n, cos1, cur, face_med, other, leaving, code)
         As `arrive` fills it; on a rough face ``n`` is the facet normal drawn for the ray and
-        ``cos1`` the cosine about it.
+        ``cos1`` the cosine about it (with ``MASKED``: the macro normal, or the facet normal a
+        model without a compiled draw gave, and ``cos1`` is not read).
     films : tuple (start, count, eps, thickness, temperature, k0)
         The media's coherent films (`job.Coating`, outermost first), flattened: medium k's are
         ``eps[start[k]:start[k] + count[k]]`` and ``thickness[...]`` [m], their absorption emits at
@@ -472,26 +512,56 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
     u_choose, u_roul : ndarray
         Uniforms for the branch choice (one per row; empty with ``split``) and Russian roulette
         (two per row; empty without roulette).
-    settle : tuple (finish, src, branch)
-        ``finish``: the children leave the surface here (offset along the side normal, then
-        `survive`). Otherwise (rough faces: masking decides first) they stay at the hit point,
-        unterminated, and ``src``/``branch`` receive each child's row in the wave and +1
-        (reflected) or -1 (transmitted).
+    settle : tuple (mode, src, branch, facets)
+        ``FINISH`` (`NO_SETTLE`): the children leave the surface here (offset along the side
+        normal, then `survive`). ``AT_POINT`` (`at_point`; the rough code's steps decide what
+        follows): they stay at the hit point, unterminated, and ``src``/``branch`` receive each
+        child's row in the wave and +1 (reflected) or -1 (transmitted). ``MASKED`` (`masked`):
+        a rough face's whole interaction, `Surfaces._interact` without the steps between
+        kernels. ``facets`` = (draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength,
+        rehit_depth, back_side, counts): per row its face normal and macro normal (facing the
+        incident side); where ``draw[face_med]``, the GGX facet drawn here from ``u1``, ``u2``
+        (`roughness.ggx_draw1` about the `_tangent1` frame; a facet that faces away: the power
+        emitted at the face's temperature, the ray goes on with none about the macro normal).
+        Each child then leaves (off the surface as `settle` sends it, unterminated: rows 0, 1, ...
+        of ``out``) unless the next of ``u_leave`` (one per child of a rough face, in order) is
+        at or above its Smith masking probability (`roughness.smith_g1`, ``rough`` the media's
+        codes as `settle` takes them); a masked child emits its power at the face's temperature
+        if ``over`` (the chain's end), else it crosses one ``wavelength`` of its side's medium and
+        comes back for a re-hit (depth changed by ``rehit_depth``): rows ``len(out) - 1``,
+        ``len(out) - 2``, ... of ``out``, its row, media and branch in ``back_side`` (src, cur,
+        other, leaving, sign) as `settle` fills them. ``counts`` receives (draws of weight other
+        than 1, uniforms of ``u_leave`` used, children that came back).
     """
-    finish, src, branch = settle
+    return _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out,
+                    settle[0], settle[1], settle[2], settle[3])
+
+
+@_jit
+def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, mode, src,
+             branch, facets):
+    """`scatter` with its ``settle`` unpacked: ``facets`` is None but with ``MASKED``, so that
+    numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
+    6 % of an interaction as run-time branches)."""
+    finish = mode == FINISH
     d, s_old, p_old, m, sid, depth, stack, top = wave[1], wave[2], wave[3], wave[4], wave[5], wave[6], wave[7], wave[8]
-    pos, n_in, cos1, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[2], hit[3], hit[4], hit[5], hit[6]
+    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[2], hit[3], hit[4], hit[5], hit[6]
     oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
+    if facets is not None:
+        draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts = facets
+        r_code, r_ax, r_ay, r_orient = rough
+        b_src, b_cur, b_other, b_leaving, b_sign = back_side
     buf_eps, buf_d = _film_buffers(films)
     face_offset = faces[2]
-    kind, temperature, n1_real, has_coat, eps = media[0], media[2], media[3], media[4], media[5]
+    kind, alpha, temperature, n1_real, has_coat, eps = media[0], media[1], media[2], media[3], media[4], media[5]
     strategy, split_depth = choice
     roulette = u_roul.shape[0] > 0
     cap = stack.shape[1]
+    last_row = oo.shape[0] - 1
     # The loop body calls no helper that takes arrays: numba counts references to an array
     # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
     # than all of an interaction's arithmetic. Helpers here take and return scalars.
-    n_out = 0
+    n_out, n_back, used, drawn_off = 0, 0, 0, 0
     for j in range(rows.shape[0]):
         i = rows[j]
         k = sid[i]
@@ -500,6 +570,23 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         t_body = temperature[fm]
         nx, ny, nz = n_in[i, 0], n_in[i, 1], n_in[i, 2]
         dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+        if facets is not None:
+            code, tx, ty, tz = r_code[fm], 0.0, 0.0, 0.0
+            if code != roughness.NOT_ROUGH:
+                tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
+            if draw[fm]:  # the facet visible from the ray (GGX)
+                fx, fy, fz, w = roughness.ggx_draw1((n_mac[i, 0], n_mac[i, 1], n_mac[i, 2]), (tx, ty, tz),
+                                                    (-dx, -dy, -dz), u1[i], u2[i], r_ax[fm], r_ay[fm], r_orient[fm])
+                if w != 1.0:
+                    drawn_off += 1
+                if w > 0.0:
+                    nx, ny, nz = fx, fy, fz
+                else:  # no facet visible (degenerate input only): the power emitted here, none goes on
+                    _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
+                    m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
+            cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0)
+        else:
+            cos1 = cos1_a[i]
         # the outgoing wave's (s, p) about the normal: s = unit(n x k), k = -d (eq. 2.23)
         sx, sy, sz = -(ny * dz - nz * dy), -(nz * dx - nx * dz), -(nx * dy - ny * dx)
         norm = math.sqrt(sx * sx + sy * sy + sz * sz)
@@ -515,9 +602,9 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
                                           (p_old[i, 0], p_old[i, 1], p_old[i, 2]), (sx, sy, sz), (px, py, pz))
         if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
             rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(fm, cur_a[i], other_a[i], leaving_a[i],
-                                                                          cos1[i], media, films, buf_eps, buf_d)
+                                                                          cos1, media, films, buf_eps, buf_d)
         else:
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(kd, eps[cur_a[i]], eps[other_a[i]], cos1[i],
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(kd, eps[cur_a[i]], eps[other_a[i]], cos1,
                                                                         temperature[cur_a[i]], t_body)
         # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
         if As > A_ROUNDING or Ap > A_ROUNDING:
@@ -579,26 +666,61 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
                     continue
                 if g != 1.0:
                     m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
-            # the child, at row n_out: p = k x s with k = -d
-            od[n_out, 0], od[n_out, 1], od[n_out, 2] = cx, cy, cz
-            os_[n_out, 0], os_[n_out, 1], os_[n_out, 2] = sx, sy, sz
-            op[n_out, 0], op[n_out, 1], op[n_out, 2] = _k_cross(cx, cy, cz, sx, sy, sz)
             gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
             ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
+            row, depth_row, comes_back = n_out, depth_c, False
+            if facets is not None:  # off the surface, or masked by the microsurface (as `settle`)
+                leaves = True
+                if code != roughness.NOT_ROUGH:
+                    g1 = roughness.smith_g1((side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz),
+                                            (cx, cy, cz), code, r_ax[fm], r_ay[fm], r_orient[fm])
+                    leaves = not u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
+                    used += 1
+                if leaves:  # along the face's side normal (a wrong-side child mirrored)
+                    ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
+                        ox, oy, oz, cx, cy, cz, sx, sy, sz, side * n_geo[i, 0], side * n_geo[i, 1], side * n_geo[i, 2],
+                        step)
+                else:
+                    if over:  # the chain's end: its power emitted where it is
+                        _add(acc, k, m00, m01, m10, m11, t_body, t_body)
+                        continue
+                    cur, oth, lv = _masked_side1(side, diel, cur_a[i], other_a[i], leaving_a[i])
+                    tau, e, g = _to_next_facet1(alpha[cur], wavelength)
+                    if tau < 1.0:
+                        tc = temperature[cur]
+                        _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
+                        m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+                    if not tau > A_ROUNDING:
+                        continue
+                    row, depth_row, comes_back = last_row - n_back, depth_c + rehit_depth, True
+                    b_src[n_back], b_cur[n_back], b_other[n_back] = i, cur, oth
+                    b_leaving[n_back], b_sign[n_back] = lv, side
+                    n_back += 1
+                    sx_c, sy_c, sz_c = sx, sy, sz
+            else:
+                sx_c, sy_c, sz_c = sx, sy, sz
+            # the child, at its row: p = k x s with k = -d
+            od[row, 0], od[row, 1], od[row, 2] = cx, cy, cz
+            os_[row, 0], os_[row, 1], os_[row, 2] = sx_c, sy_c, sz_c
+            op[row, 0], op[row, 1], op[row, 2] = _k_cross(cx, cy, cz, sx_c, sy_c, sz_c)
             if finish and cx * gx + cy * gy + cz * gz > 0.0:  # off the surface along its side
                 ox, oy, oz = ox + step * gx, oy + step * gy, oz + step * gz
-            oo[n_out, 0], oo[n_out, 1], oo[n_out, 2] = ox, oy, oz
+            oo[row, 0], oo[row, 1], oo[row, 2] = ox, oy, oz
             if finish and not cx * gx + cy * gy + cz * gz > 0.0:  # (only rounding at grazing incidence)
-                _off_surface(oo, od, os_, op, n_out, gx, gy, gz, step)
-            om[n_out, 0, 0], om[n_out, 0, 1], om[n_out, 1, 0], om[n_out, 1, 1] = m00, m01, m10, m11
-            osid[n_out], odepth[n_out], otop[n_out], olast[n_out] = k, depth_c, top_c, t_body
+                _off_surface(oo, od, os_, op, row, gx, gy, gz, step)
+            om[row, 0, 0], om[row, 0, 1], om[row, 1, 0], om[row, 1, 1] = m00, m01, m10, m11
+            osid[row], odepth[row], otop[row], olast[row] = k, depth_row, top_c, t_body
             for c in range(cap):
-                ostack[n_out, c] = stack[i, c]
+                ostack[row, c] = stack[i, c]
             if top_c > tp_i:
-                ostack[n_out, top_c] = fm
-            if not finish:
-                src[n_out], branch[n_out] = i, 1 - 2 * br
-            n_out += 1
+                ostack[row, top_c] = fm
+            if mode == AT_POINT:
+                src[row], branch[row] = i, 1 - 2 * br
+            if not comes_back:
+                n_out += 1
+    if facets is not None:
+        counts[0] += drawn_off
+        counts[1], counts[2] = used, n_back
     return n_out
 
 
@@ -619,16 +741,22 @@ def gather(src, rows, dst):
             stack2[n, a] = stack[c, a]
 
 
+@_inline
+def _tangent1(n0, n1, n2):
+    """The unit anisotropy tangent of a rough face of unit normal n: world X projected onto the
+    plane normal to n (world Y where n is within 26 degrees of X)."""
+    t0, t1 = (0.0, 1.0) if abs(n0) > 0.9 else (1.0, 0.0)
+    tn = t0 * n0 + t1 * n1
+    x0, x1, x2 = t0 - tn * n0, t1 - tn * n1, -tn * n2
+    norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    return x0 / norm, x1 / norm, x2 / norm
+
+
 @_jit
 def tangents(n, out):
-    """Unit anisotropy tangents of rough faces: world X projected onto the plane normal to each
-    unit normal n (world Y where n is within 26 degrees of X); shape (N, 3)."""
+    """`_tangent1` of each unit normal, shape (N, 3)."""
     for i in range(n.shape[0]):
-        t0, t1 = (0.0, 1.0) if abs(n[i, 0]) > 0.9 else (1.0, 0.0)
-        tn = t0 * n[i, 0] + t1 * n[i, 1]
-        x0, x1, x2 = t0 - tn * n[i, 0], t1 - tn * n[i, 1], -tn * n[i, 2]
-        norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-        out[i, 0], out[i, 1], out[i, 2] = x0 / norm, x1 / norm, x2 / norm
+        out[i, 0], out[i, 1], out[i, 2] = _tangent1(n[i, 0], n[i, 1], n[i, 2])
 
 
 @_jit
@@ -731,14 +859,9 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
             te = t_end[i, 0] if sg > 0.0 else t_end[i, 1]
             _add(acc, k, m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], te, te)
             continue
-        # the side the child is on, seen from there: a reflected child keeps the media, a
-        # refracted one swaps them, a thin sheet's transmitted child keeps them
-        swap = sg < 0.0 and kind[fm_a[i]] == DIELECTRIC
-        cur = other_a[i] if swap else cur_a[i]
-        # one wavelength of that medium on the way to the next facet
-        tau = math.exp(-alpha[cur] * wavelength)
+        cur, oth, lv = _masked_side1(sg, kind[fm_a[i]] == DIELECTRIC, cur_a[i], other_a[i], leaving_a[i])
+        tau, e, g = _to_next_facet1(alpha[cur], wavelength)
         if tau < 1.0:
-            e, g = math.sqrt(1.0 - tau), math.sqrt(tau)
             tc = temperature[cur]
             _add(acc, k, m[c, 0, 0] * e, m[c, 0, 1] * e, m[c, 1, 0] * e, m[c, 1, 1] * e, tc, tc)
             for a in range(2):
@@ -747,9 +870,7 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
         if not tau > A_ROUNDING:
             continue
         b_rows[nb] = c
-        b_src[nb], b_cur[nb], b_sign[nb] = i, cur, sg
-        b_other[nb] = cur_a[i] if swap else other_a[i]
-        b_leaving[nb] = leaving_a[i] != swap
+        b_src[nb], b_cur[nb], b_other[nb], b_leaving[nb], b_sign[nb] = i, cur, oth, lv, sg
         nb += 1
     gather(kids, l_rows[:nl], leave)
     gather(kids, b_rows[:nb], back)
@@ -878,6 +999,10 @@ def warm(stack_size: int = 8) -> None:
     ints = np.zeros(0, np.int64)
     compact(wave, np.zeros(n, bool))
     rough = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
+    # rough faces with compiled masking (`Surfaces._scatter_masked`)
+    scatter(np.zeros(0, np.int64), wave, hit, films, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave,
+            masked(np.zeros(1, bool), empty, empty, np.zeros((n, 3)), np.zeros((n, 3)), empty, rough, False, 1e-3, -1,
+                   (ints, ints, ints, np.zeros(0, bool), empty), np.zeros(3, np.int64)))
     settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
            (np.zeros(n, bool), np.zeros((n, 2))), media, rough, 1e-3, acc, wave, wave,
            (ints, ints, ints, np.zeros(0, bool), empty), (ints, empty), True, -1)
