@@ -501,12 +501,8 @@ class Surfaces:
                 continue
             # across the layer it is in to the neighbouring interface
             lay = pile.layers[j - 1] if side else pile.layers[j]
-            cos_t = np.maximum(np.abs(np.einsum("ij,ij->i", fwd.d, n_in[i])), 1e-6)
-            tau = np.exp(-lay.alpha * lay.thickness / cos_t)
-            em = tau < 1.0
-            if em.any():
-                deposit(self.acc, fwd.sid[em], fwd.m[em] * np.sqrt(1.0 - tau[em])[:, None, None], lay.temperature)
-                fwd.m *= np.sqrt(tau)[:, None, None]
+            kernels.cross_layer(fwd.arrays(), np.ascontiguousarray(n_in, dtype=np.float64), i, float(lay.alpha),
+                                float(lay.thickness), float(lay.temperature), self.acc)
             walk.append((fwd, np.full(len(fwd), j - 1 if side else j + 1), np.full(len(fwd), not side),
                          np.zeros(len(fwd), np.int64), rows[i]))
         return exits, walk

@@ -882,6 +882,24 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     return nl, nb
 
 
+@_jit
+def cross_layer(wave, n, rows, alpha, thickness, temperature, acc):
+    """Rays of a wave across a rough coating layer to its next interface (`Surfaces._layer_step`),
+    in place: each attenuated by exp(-alpha t / |cos|) (its direction against the layer's normal
+    ``n[rows[c]]``, the cosine kept above 1e-6) and emitting what it loses at ``temperature``
+    [K] (Murakowski 2014 eq. 2.37, 2.38); ``alpha`` [1/m], ``thickness`` [m]."""
+    d, m, sid = wave[1], wave[4], wave[5]
+    for c in range(d.shape[0]):
+        i = rows[c]
+        cos_t = max(abs(d[c, 0] * n[i, 0] + d[c, 1] * n[i, 1] + d[c, 2] * n[i, 2]), 1e-6)
+        tau = math.exp(-alpha * thickness / cos_t)
+        if tau < 1.0:
+            e, g = math.sqrt(1.0 - tau), math.sqrt(tau)
+            _add(acc, sid[c], m[c, 0, 0] * e, m[c, 0, 1] * e, m[c, 1, 0] * e, m[c, 1, 1] * e, temperature,
+                 temperature)
+            m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m[c, 0, 0] * g, m[c, 0, 1] * g, m[c, 1, 0] * g, m[c, 1, 1] * g
+
+
 @_inline
 def _stderr1(s1, s2, c):
     """Standard error of a mean of ``c`` samples from their shifted sum ``s1`` and sum of
@@ -1018,6 +1036,7 @@ def warm(stack_size: int = 8) -> None:
     bump._shade_rows(v3, v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
     tangents(v3, v3)
     off_surface(wave, v3, np.zeros(n))
+    cross_layer(wave, v3, np.zeros(n, np.int64), 1.0, 1e-3, 300.0, acc)
     # a tile's per-pixel sums (`Integrator.render_tile`)
     px4, ints1 = np.zeros((1, 4)), np.zeros(1, np.int64)
     tally(ints1, px4, np.zeros((1, 2)), np.zeros(1), np.zeros(1), 0, 2, px4, px4, px4, np.zeros((1, 2, 4)), ints1,
