@@ -81,3 +81,36 @@ def test_a_rendering_process_reuses_the_memory_of_freed_arrays():
 
     assert faults("default") >= 1000
     assert faults("keep") < 64
+
+
+def _tiles_and_what_they_see(*overrides):
+    """The cinderblocks' tiles at 64 x 64 pixels in tiles of 16, in `pool._by_cost` order, and the
+    media that an 8 x 8 grid of camera rays per tile hits (Embree)."""
+    from pmmw_cli.trace.intersect import make_intersector
+
+    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml",
+                  ["imager.resolution=[64, 64]", "render.tile=16", *overrides])
+    job = make_job(res, res.scenario.frequencies[0])
+    tiles = job.tiles()
+    order = [t[0] for t in pool._by_cost(job, tiles)]
+    assert sorted(order) == list(range(16))
+    isect = make_intersector(job.vertices, job.faces)
+    hits = {}
+    for i, x0, y0, x1, y1 in tiles:
+        u, v = np.meshgrid(np.linspace(x0, x1, 8, endpoint=False), np.linspace(y0, y1, 8, endpoint=False))
+        o, d, _, _ = job.camera.rays(u.ravel(), v.ravel(), np.arange(64), 1)
+        _, prim = isect.intersect(o, d)
+        hits[i] = set(job.media.ids[k] for k in job.face_medium[prim[prim >= 0]])
+    return order, hits
+
+
+def test_workers_take_the_tiles_with_most_of_the_scene_first_and_the_sky_last():
+    """`pool._by_cost` orders the work by the triangles each tile's screen area holds: on the
+    cinderblocks as shipped (looking down: every tile sees the sand) the six tiles that see a
+    block come first; looking level, the tiles that see only sky come last, in index order."""
+    order, hits = _tiles_and_what_they_see()
+    with_block = [n for n, i in enumerate(order) if "cinderblock" in hits[i]]
+    assert len(with_block) >= 4 and with_block == list(range(len(with_block)))
+    order, hits = _tiles_and_what_they_see("imager.look_at=[0.05, 5.25, 1.5]")
+    sky = [i for i in order if not hits[i]]
+    assert len(sky) >= 4 and order[-len(sky):] == sorted(sky)
