@@ -155,6 +155,37 @@ def atmosphere_skip_length(job: TraceJob) -> float:
     return st.atmosphere_tolerance / (st.max_depth * alpha_max * d_t)
 
 
+COLUMN_CELLS = 16  # an imager above this many atmosphere cells over the scene gets a `camera_column`
+
+
+def camera_column(job: TraceJob):
+    """The layered atmosphere's column between the imager and the top of the scene, tabulated for
+    the imager's first segments (`AtmosphereModel.column`, `AtmosphereModel.walk_below`), or None.
+
+    Every ray of a pinhole imager starts at its height, and each that hits a face crosses the
+    column down to the scene's top in full, cell by cell (37 cells for SAR's 3 km, 18 % of its
+    trace). Tabulated against the slope (within 1e-9 K of the cell walk), only the part below the
+    scene's top is walked. Not for a thin lens (its rays start across the aperture), nor where
+    the column holds fewer than `COLUMN_CELLS` cells (the table's array steps then cost more than
+    the walk they save)."""
+    atm, cam = job.atmosphere, job.camera
+    if atm is None or not job.vertices.size or (cam.focus_distance is not None and cam.aperture_radius > 0.0):
+        return None
+    z_top, z_bottom = min(float(cam.position[2]), atm.top), max(float(job.vertices[:, 2].max()), 0.0)
+    if np.searchsorted(atm.edges, z_top) - np.searchsorted(atm.edges, z_bottom) < COLUMN_CELLS:
+        return None
+    # the slopes of the imager's rays that go down (from a 65 x 65 grid over the image; a ray
+    # outside the table's range walks in full)
+    u, v = np.meshgrid(np.linspace(0.0, cam.width, 65), np.linspace(0.0, cam.height, 65))
+    _, d, _, _ = cam.rays(u.ravel(), v.ravel(), np.zeros(u.size, np.int64), 0)
+    down = -d[:, 2][d[:, 2] < 0.0]
+    if not down.size:
+        return None
+    s_lo, s_hi = 1.0 / down.max(), min(1.0 / down.min(), 1e3)
+    margin = 0.01 * (s_hi - s_lo)
+    return atm.column(z_top, z_bottom, s_lo - margin, s_hi + margin)
+
+
 def prime(job: TraceJob):
     """Build what rendering would otherwise build lazily in every worker process: the layered
     sky's tables at the heights of the scene and the imager (`AtmosphereSky.prepare`). Called
@@ -186,6 +217,7 @@ class Integrator:
         self._faces, self._media = faces, self.surfaces.media_table
         self.compiled = self.surfaces.compiled
         self.atm_skip_length = atmosphere_skip_length(job)
+        self.column = camera_column(job)
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:
@@ -310,7 +342,10 @@ class Integrator:
             z0, z1, length = np.empty(n), np.empty(n), np.empty(n)
             if kernels.ambient_segments(wave.arrays(), t, prim, self.atm_skip_length, job.atmosphere.top, z0, z1, length):
                 atm = (np.empty(n), np.empty(n))
-                job.atmosphere.walk(z0, z1, length, *atm)
+                if first and self.column is not None:  # the imager's rays: the column above the scene tabulated
+                    job.atmosphere.walk_below(self.column, z0, z1, length, *atm)
+                else:
+                    job.atmosphere.walk(z0, z1, length, *atm)
         hit = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n, np.int64), np.empty(n, np.int64),
                np.empty(n, np.int64), np.empty(n, bool), np.empty(n, np.int8))
         arrays = wave.arrays()
