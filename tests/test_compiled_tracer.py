@@ -111,6 +111,32 @@ def test_roulette_at_arrival_keeps_the_estimator():
     assert _z_test(*runs)[0] > bound
 
 
+def test_roulette_of_a_rough_faces_children_keeps_the_estimator():
+    """On rough faces the children that leave play Russian roulette inside the interaction
+    (`kernels.scatter` ``MASKED``, `kernels.settle`). The rough cinderblocks at a threshold that
+    makes it frequent (0.05) against practically none (1e-9: three times the rays) agree: the
+    pooled difference of all pixels' Ex2 and Ey2 within 4 of its standard error (the per-pixel
+    test above has tails here: a few pixels owe their mean to rare bright paths that their
+    standard error does not see), and the pooled variances within 25 %. A 1 % bias is rejected."""
+    runs = []
+    for threshold in ("0.05", "1e-9"):
+        job = _job("cinderblocks_rough_35ghz", "imager.resolution=[24, 24]", "render.spp=64",
+                   "render.termination=roulette", f"render.threshold={threshold}", "render.target_error=null")
+        integ = Integrator(job, make_intersector(job.vertices, job.faces))
+        assert not integ.surfaces._rough_other  # the one-pass rough interaction
+        runs.append([integ.render_tile(t) for t in job.tiles()])
+    assert sum(r.rays for r in runs[1]) > 2 * sum(r.rays for r in runs[0])
+
+    def pooled_z(a, b, bias=1.0):
+        ma, mb = _image(a, "mean")[:, :2], _image(b, "mean")[:, :2] * bias
+        var = _image(a, "stderr")[:, :2] ** 2 + _image(b, "stderr")[:, :2] ** 2
+        return float((mb - ma).sum() / np.sqrt(var.sum()))
+
+    assert abs(pooled_z(*runs)) < 4.0
+    assert 0.8 < _z_test(*runs)[2] < 1.25
+    assert abs(pooled_z(*runs, bias=1.01)) > 4.0
+
+
 def test_rough_scenes_take_the_vectorized_path():
     job = _job("cinderblocks_rough_35ghz", "imager.resolution=[8, 8]")
     integ = Integrator(job, make_intersector(job.vertices, job.faces))

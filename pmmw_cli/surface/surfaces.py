@@ -139,17 +139,16 @@ class Surfaces:
         prim = prim[rows]
         n_mac = self._bumped(pos, wv.d, n_in, face_med)
         layered = self.layered[face_med] if self.layered is not None else None
+        # the children come back terminated (`_interact`: as they leave the surface; the layer
+        # walk's: here); the caller joins them once, with the rays that passed through
         if layered is None or not layered.any():
-            kids = self._interact(wv, pos, n_in, n_mac, cur, face_med, other, leaving, prim)
-        else:
-            a, b = np.nonzero(~layered)[0], np.nonzero(layered)[0]
-            kids = self._interact(wv.take(a), pos[a], n_in[a], n_mac[a], cur[a], face_med[a], other[a], leaving[a],
-                                  prim[a]) if a.size else []
-            kids += self._walk_layers(wv.take(b), pos[b], n_in[b], n_mac[b], cur[b], face_med[b], other[b],
-                                      leaving[b], prim[b])
-        # each part terminated on its own, in order: the same uniforms as for the parts joined
-        # (the caller joins them once, with the rays that passed through)
-        return [w for w in (self._terminate(part) for part in kids) if len(w)]
+            return self._interact(wv, pos, n_in, n_mac, cur, face_med, other, leaving, prim)
+        a, b = np.nonzero(~layered)[0], np.nonzero(layered)[0]
+        kids = self._interact(wv.take(a), pos[a], n_in[a], n_mac[a], cur[a], face_med[a], other[a], leaving[a],
+                              prim[a]) if a.size else []
+        walked = self._walk_layers(wv.take(b), pos[b], n_in[b], n_mac[b], cur[b], face_med[b], other[b], leaving[b],
+                                   prim[b])
+        return kids + [w for w in (self._terminate(part) for part in walked) if len(w)]
 
     def _bumped(self, pos, d, n_in, face_med):
         """Macro normals tilted by the bump maps of the faces' materials (the face normal elsewhere).
@@ -208,13 +207,15 @@ class Surfaces:
         that leave and, for those that come back, the arguments of their re-hit (or None).
 
         The uniforms are drawn in the order of `_scatter_settle`'s steps (facets per material,
-        branch choice, then one per child of a rough face), so both give the same image for the
-        same seed: the masking's are drawn for every possible child (two per ray) and the
-        generator is then set back to just after the ones the kernel used."""
+        branch choice, Russian roulette of the children that leave, then one per child of a rough
+        face for its masking), so both give the same image for the same seed: the masking's are
+        drawn for every possible child (two per ray) and the generator is then set back to just
+        after the ones the kernel used. The children that leave are terminated here (`survive`)."""
         nr = len(wv)
         n_mac = np.ascontiguousarray(n_mac, dtype=np.float64)
         n_fac, u1, u2 = self._draws(wv, n_mac, face_med)
         u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
+        u_roul = self.rng.random(2 * nr) if self._limits[2] else _NO_RANDOM
         hit = (np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         side = (np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64),
@@ -226,7 +227,7 @@ class Surfaces:
         settle = kernels.masked(self._rough[0] == GGX_CODE, u1, u2, np.ascontiguousarray(n_geo), n_mac, u_leave,
                                 self._rough, rehit + 1 > MAX_REHITS, self.wavelength, self._rehit_depth, side, counts)
         nl = kernels.scatter(np.arange(nr), wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice,
-                             u_choose, _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), settle)
+                             u_choose, u_roul, self._limits, self.acc, self.cut, kids.arrays(), settle)
         generator.state = state
         generator.advance(int(counts[1]))
         self.fallbacks += int(counts[0])
@@ -259,8 +260,8 @@ class Surfaces:
 
     def _scatter_settle(self, wv: Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim, rehit):
         """`_interact`'s step for scenes with a roughness model without compiled masking: facets
-        (`_facets`), `kernels.scatter` about them (``AT_POINT``), `_settle`. Returns as
-        `_scatter_masked`."""
+        (`_facets`), `kernels.scatter` about them (``AT_POINT``), `_settle` (which terminates the
+        children that leave). Returns as `_scatter_masked`."""
         step = self._faces[2][prim]
         n_fac, tangent, rough = n_mac, None, None
         if self.rough_scene:
@@ -272,12 +273,13 @@ class Surfaces:
         hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
         rows = np.arange(nr)
         u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
+        u_roul = self.rng.random(2 * nr) if self._limits[2] else _NO_RANDOM
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
         count = kernels.scatter(rows, wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice, u_choose,
                                 _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), kernels.at_point(src, branch))
         return self._settle(kids.head(count), src[:count], branch[:count], pos, n_geo, n_mac, tangent, rough,
-                            face_med, prim, step, cur, other, leaving, rehit)
+                            face_med, prim, step, cur, other, leaving, rehit, u_roul)
 
     def _facets(self, wv: Wave, n_mac, face_med):
         """Microfacet normals for the rays on rough faces (the macro normal elsewhere).
@@ -327,7 +329,7 @@ class Surfaces:
         return np.where(w[:, None] > 0.0, m, n)
 
     def _settle(self, child: Wave, i, branch, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, cur, other,
-                leaving, rehit):
+                leaving, rehit, u_roul):
         """Send children off the surface, or back onto it.
 
         Returns the children that leave and, for those that do not, the arguments of their
@@ -366,7 +368,8 @@ class Surfaces:
         chain_end = (np.full(len(pos), rehit + 1 > MAX_REHITS), np.stack([t_face, t_face], axis=1))
         nl, nb = kernels.settle(child.arrays(), i, branch, u, p_leave, hit, n_mac, tangent, step, chain_end,
                                 self._media, self._rough, self.wavelength, self.acc, leave.arrays(),
-                                back.arrays(), side, (np.empty(n, np.int64), np.empty(n)), True, self._rehit_depth)
+                                back.arrays(), side, (np.empty(n, np.int64), np.empty(n)), True, self._rehit_depth,
+                                (u_roul, self._limits, self.cut))
         if not nb:
             return leave.head(nl), None
         j, cur, other, leaving, sign = (a[:nb] for a in side)
@@ -482,7 +485,7 @@ class Surfaces:
         nl, nb = kernels.settle(kids.arrays(), src, branch, u, p_leave, hit, np.ascontiguousarray(n_in),
                                 np.ascontiguousarray(tangent), np.zeros(nr), chain_end, self._media, self._rough,
                                 self.wavelength, self.acc, leave.arrays(), back.arrays(), b_side, l_side,
-                                False, self._rehit_depth)
+                                False, self._rehit_depth, (_NO_RANDOM, self._limits, self.cut))
         exits, walk = [], []
         if nb:
             i, sign = b_side[0][:nb], b_side[4][:nb]

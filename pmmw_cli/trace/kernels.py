@@ -511,7 +511,8 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
     choice : tuple (strategy code, split_depth)
     u_choose, u_roul : ndarray
         Uniforms for the branch choice (one per row; empty with ``split``) and Russian roulette
-        (two per row; empty without roulette).
+        (two per row, the reflected child's first; empty without roulette; read by ``FINISH`` and
+        ``MASKED``).
     settle : tuple (mode, src, branch, facets)
         ``FINISH`` (`NO_SETTLE`): the children leave the surface here (offset along the side
         normal, then `survive`). ``AT_POINT`` (`at_point`; the rough code's steps decide what
@@ -523,8 +524,8 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         incident side); where ``draw[face_med]``, the GGX facet drawn here from ``u1``, ``u2``
         (`roughness.ggx_draw1` about the `_tangent1` frame; a facet that faces away: the power
         emitted at the face's temperature, the ray goes on with none about the macro normal).
-        Each child then leaves (off the surface as `settle` sends it, unterminated: rows 0, 1, ...
-        of ``out``) unless the next of ``u_leave`` (one per child of a rough face, in order) is
+        Each child then leaves (terminated by `survive` with ``u_roul`` as with ``FINISH``, then
+        off the surface as `settle` sends it: rows 0, 1, ... of ``out``) unless the next of ``u_leave`` (one per child of a rough face, in order) is
         at or above its Smith masking probability (`roughness.smith_g1`, ``rough`` the media's
         codes as `settle` takes them); a masked child emits its power at the face's temperature
         if ``over`` (the chain's end), else it crosses one ``wavelength`` of its side's medium and
@@ -658,7 +659,13 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
                     top_c = tp_i
                 side = -1.0
             m00, m01, m10, m11 = ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p
-            if finish:
+            leaves = True
+            if facets is not None and code != roughness.NOT_ROUGH:  # masked by the microsurface? (as `settle`)
+                g1 = roughness.smith_g1((side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz),
+                                        (cx, cy, cz), code, r_ax[fm], r_ay[fm], r_orient[fm])
+                leaves = not u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
+                used += 1
+            if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
                 g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
                 if g < 0.0:
                     _end(acc, cut, k, m00, m01, m10, m11, t_body, limits[3], limits[4])
@@ -669,13 +676,7 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
             gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
             ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
             row, depth_row, comes_back = n_out, depth_c, False
-            if facets is not None:  # off the surface, or masked by the microsurface (as `settle`)
-                leaves = True
-                if code != roughness.NOT_ROUGH:
-                    g1 = roughness.smith_g1((side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz),
-                                            (cx, cy, cz), code, r_ax[fm], r_ay[fm], r_orient[fm])
-                    leaves = not u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
-                    used += 1
+            if facets is not None:
                 if leaves:  # along the face's side normal (a wrong-side child mirrored)
                     ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
                         ox, oy, oz, cx, cy, cz, sx, sy, sz, side * n_geo[i, 0], side * n_geo[i, 1], side * n_geo[i, 2],
@@ -770,7 +771,7 @@ def compact(wave, keep):
 
 @_jit
 def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain_end, media, rough, wavelength, acc,
-           leave, back, back_side, leave_side, finish, rehit_depth):
+           leave, back, back_side, leave_side, finish, rehit_depth, fate):
     """Children of a rough surface's facets (`scatter` with ``finish`` False) sent off the
     surface or back onto it (`Surfaces._settle`, which describes the rule), or between the
     interfaces of rough coating layers (`Surfaces._layer_step`: ``finish`` False).
@@ -811,11 +812,16 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     leave_side : tuple (src, sign)
         Filled for each leaving child: its row in ``hit`` and its branch.
     finish : bool
-        Leaving children leave the surface here (mirrored to the right side of the face and
-        offset along it); otherwise they are left at the hit point as they are.
+        Leaving children are terminated (`survive`) and leave the surface here (mirrored to the
+        right side of the face and offset along it); otherwise they are left at the hit point as
+        they are.
     rehit_depth : int
         Added to a re-hitting child's depth: -1 in the renderer (a chain of facets at one point
         is one interaction), 0 where depth counts facet events (`pmmw brdf`'s orders).
+    fate : tuple (u_roul, limits, cut)
+        With ``finish``: Russian roulette's uniforms, two per row of ``hit`` (the reflected
+        child's first, as `scatter` reads them; empty without roulette), ``survive``'s limits and
+        truncation sums.
 
     Returns
     -------
@@ -828,7 +834,9 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     r_code, r_ax, r_ay, r_orient = rough
     over, t_end = chain_end
     l_src, l_sign = leave_side
-    o, d, s, p, m, sid = kids[0], kids[1], kids[2], kids[3], kids[4], kids[5]
+    o, d, s, p, m, sid, k_depth, k_last = kids[0], kids[1], kids[2], kids[3], kids[4], kids[5], kids[6], kids[9]
+    u_roul, limits, cut = fate
+    roulette = u_roul.shape[0] > 0
     l_rows, b_rows = np.empty(src.shape[0], np.int64), np.empty(src.shape[0], np.int64)
     nl, nb = 0, 0
     for c in range(src.shape[0]):
@@ -844,6 +852,16 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
                                     (tangent[i, 0], tangent[i, 1], tangent[i, 2]), (d[c, 0], d[c, 1], d[c, 2]),
                                     code, r_ax[fm], r_ay[fm], r_orient[fm])
         if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
+            if finish:  # terminated (as `scatter` does)
+                m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
+                g = _fate(m00, m01, m10, m11, k_depth[c], u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0,
+                          limits)
+                if g < 0.0:
+                    _end(acc, cut, sid[c], m00, m01, m10, m11, k_last[c], limits[3], limits[4])
+                if g <= 0.0:
+                    continue
+                if g != 1.0:
+                    m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
             l_src[nl], l_sign[nl] = i, sg
             if finish:  # off the surface (a wrong-side child mirrored), written out here: see `scatter`
                 (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
@@ -1023,7 +1041,7 @@ def warm(stack_size: int = 8) -> None:
                    (ints, ints, ints, np.zeros(0, bool), empty), np.zeros(3, np.int64)))
     settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
            (np.zeros(n, bool), np.zeros((n, 2))), media, rough, 1e-3, acc, wave, wave,
-           (ints, ints, ints, np.zeros(0, bool), empty), (ints, empty), True, -1)
+           (ints, ints, ints, np.zeros(0, bool), empty), (ints, empty), True, -1, (empty, limits, cut))
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
     frozen = np.zeros(0)
     frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
