@@ -308,20 +308,16 @@ def region_masks(regions, cam) -> dict:
     """Boolean (H, W) masks of the named regions (`output.regions`) on the image."""
     h, w = cam.height, cam.width
     yy, xx = np.mgrid[0:h, 0:w]
-    half = np.tan(cam.fov / 2.0)
     masks = {}
     for name, r in regions.items():
         if r.box is not None:
             x0, y0, x1, y1 = r.box
             masks[name] = (xx >= x0) & (xx < x1) & (yy >= y0) & (yy < y1)
             continue
-        d = np.asarray(r.center) - cam.position
-        depth = d @ cam.k
+        (u,), (v,), (depth,) = cam.image_coordinates(np.asarray(r.center, float)[None])
         if depth <= 0:
             masks[name] = np.zeros((h, w), bool)
             continue
-        u = ((d @ cam.x) / depth / half + 1.0) * w / 2.0  # inverse of Camera.directions
-        v = (h - (d @ cam.y) / depth * w / half) / 2.0
         masks[name] = (xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= r.radius**2
     return masks
 

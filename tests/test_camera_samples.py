@@ -58,3 +58,21 @@ def test_pixel_samples_follow_their_definition():
     one = pixel_samples(width, pixels, 1, seed, total=1)
     np.testing.assert_array_equal(one[0], pixels % width + 0.5)
     np.testing.assert_array_equal(one[1], pixels // width + 0.5)
+
+
+def test_image_coordinates_invert_the_pinhole_rays():
+    """`Camera.image_coordinates` of points along the rays through (u, v) gives back (u, v) (to
+    1e-9 pixel: rounding of a 10-degree tangent over 37 pixels) and their distance along the
+    viewing direction; a point behind the imager has a negative depth."""
+    from pmmw_cli.scene.camera import Camera
+
+    cam = Camera.look_at([1.0, -2.0, 3.0], [0.5, 8.0, 0.0], [0, 0, 1], np.radians(10.0), (37, 23))
+    rng = np.random.default_rng(4)
+    u, v = rng.uniform(0, 37, 200), rng.uniform(0, 23, 200)
+    o, d, _, _ = cam.rays(u, v, np.arange(200), 1)
+    dist = rng.uniform(0.1, 5e3, 200)
+    pu, pv, depth = cam.image_coordinates(o + dist[:, None] * d)
+    np.testing.assert_allclose(pu, u, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(pv, v, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(depth, dist * (d @ cam.k), rtol=1e-12)
+    assert cam.image_coordinates(cam.position - cam.k[None])[2][0] < 0.0

@@ -96,6 +96,19 @@ class Camera:
                    self.aperture_radius if lens else 0.0, float(self.focus_distance) if lens else 0.0, o, d, s, p)
         return o, d, s, p
 
+    def image_coordinates(self, points):
+        """Where world points appear on the image through the pinhole: the inverse of `rays`'
+        direction through (u, v). Returns continuous pixel coordinates u, v (as `rays` takes
+        them) and the depth along the viewing direction [m], each of shape (n,); u and v are
+        meaningful only where the depth is positive (in front of the imager)."""
+        rel = np.asarray(points, float) - self.position
+        depth = rel @ self.k
+        half = np.tan(self.fov / 2.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = (rel @ self.x / depth / half + 1.0) * (self.width / 2.0)
+            v = (self.height - rel @ self.y / depth / half * self.width) / 2.0
+        return u, v, depth
+
     @property
     def pixel_angle(self) -> float:
         """Angular width of a pixel at the image centre [rad]."""

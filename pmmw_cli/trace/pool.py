@@ -166,7 +166,7 @@ def _by_cost(job: TraceJob, tiles: list) -> list:
     nx, ny = -(-cam.width // ts), -(-cam.height // ts)
     # every triangle up to _COST_TRIANGLES, an even sample of them beyond (a few ms either way)
     faces = job.faces[::-(-len(job.faces) // _COST_TRIANGLES)] if len(job.faces) else job.faces
-    tri = job.vertices[faces] - cam.position  # (n, 3 corners, 3)
+    tri = job.vertices[faces] - cam.position  # (n, 3 corners, 3), from the imager
     z = tri @ cam.k
     near = 1e-9 * max(float(np.abs(z).max(initial=0.0)), 1.0)
     # the corners in front, and where each edge crosses the near plane
@@ -179,10 +179,8 @@ def _by_cost(job: TraceJob, tiles: list) -> list:
         points.append((tri[:, i] + t[:, None] * (tri[:, j] - tri[:, i]))[:, None])
         valid.append(cross[:, None])
     points, valid = np.concatenate(points, axis=1), np.concatenate(valid, axis=1)
-    depth = np.maximum(points @ cam.k, near)
-    half = np.tan(cam.fov / 2.0)
-    u = (points @ cam.x / depth / half + 1.0) * (cam.width / 2.0)
-    v = (cam.height - points @ cam.y / depth / half * cam.width) / 2.0
+    u, v, _ = cam.image_coordinates(points.reshape(-1, 3) + cam.position)
+    u, v = u.reshape(valid.shape), v.reshape(valid.shape)
     lo_u, hi_u = np.where(valid, u, np.inf).min(axis=1), np.where(valid, u, -np.inf).max(axis=1)
     lo_v, hi_v = np.where(valid, v, np.inf).min(axis=1), np.where(valid, v, -np.inf).max(axis=1)
     seen = (hi_u >= 0.0) & (lo_u < cam.width) & (hi_v >= 0.0) & (lo_v < cam.height)
