@@ -786,16 +786,12 @@ def _path_loop(z0, z1, length, edges, alpha, depth, source, source_mu, with_mu, 
         # twice as fast as expm1 per cell, the same to 1e-13 K); the cell emits its source times
         # what it takes off that transmittance
         t, em = 1.0, 0.0
-        if dz > 0.0:  # up: the observer at d_lo, each cell's far edge its top
-            for _ in range(end - j + 1):
-                t_far = math.exp(-max(min(depth[j + 1], d_hi) - d_lo, 0.0) * stretch)
-                em += (source[j] + source_mu[j] * mu if with_mu else source[j]) * (t - t_far)
-                t = t_far
-                j += 1
-        else:  # down: the observer at d_hi, each cell's far edge its bottom
-            for _ in range(j - end + 1):
-                t_far = math.exp(-max(d_hi - max(depth[j], d_lo), 0.0) * stretch)
-                em += (source[j] + source_mu[j] * mu if with_mu else source[j]) * (t - t_far)
-                t = t_far
-                j -= 1
+        up = dz > 0.0  # the observer at d_lo, each cell's far edge its top; else at d_hi, its bottom
+        d_obs, step = (d_lo, 1) if up else (d_hi, -1)
+        for _ in range(abs(end - j) + 1):
+            far = min(depth[j + 1], d_hi) if up else max(depth[j], d_lo)
+            t_far = math.exp(-max((far - d_obs) * step, 0.0) * stretch)
+            em += (source[j] + source_mu[j] * mu if with_mu else source[j]) * (t - t_far)
+            t = t_far
+            j += step
         trans[i], emission[i] = t, em
