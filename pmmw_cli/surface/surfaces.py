@@ -127,8 +127,7 @@ class Surfaces:
         """
         if self.compiled:
             self.events += rows.size
-            u_choose = self.rng.random(rows.size) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
-            u_roul = self.rng.random(2 * rows.size) if self._limits[2] else _NO_RANDOM
+            u_choose, u_roul = self._uniforms(rows.size)
             kids = Wave.empty(2 * rows.size, wave.stack.shape[1])
             count = kernels.scatter(rows, wave.arrays(), hit, self._films, prim, self._faces, self._media, self._choice,
                                     u_choose, u_roul, self._limits, self.acc, self.cut, kids.arrays(), kernels.NO_SETTLE)
@@ -149,6 +148,19 @@ class Surfaces:
         walked = self._walk_layers(wv.take(b), pos[b], n_in[b], n_mac[b], cur[b], face_med[b], other[b], leaving[b],
                                    prim[b])
         return kids + [w for w in (self._terminate(part) for part in walked) if len(w)]
+
+    def _uniforms(self, n):
+        """The uniforms of an interaction of ``n`` rays that `kernels.scatter` reads, drawn in one
+        order by every caller: the branch choice (one per ray; none with ``split``), then Russian
+        roulette (two per ray; none without roulette)."""
+        u_choose = self.rng.random(n) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
+        return u_choose, self.rng.random(2 * n) if self._limits[2] else _NO_RANDOM
+
+    def _models(self, face_med):
+        """The roughness models of the media in ``face_med``, {medium: model}, in ascending order
+        of medium (the order their facets are drawn in), smooth media left out."""
+        models = {k: self.media.rough(int(k)) for k in _values(face_med)}
+        return {k: mdl for k, mdl in models.items() if mdl is not None}
 
     def _bumped(self, pos, d, n_in, face_med):
         """Macro normals tilted by the bump maps of the faces' materials (the face normal elsewhere).
@@ -214,8 +226,7 @@ class Surfaces:
         nr = len(wv)
         n_mac = np.ascontiguousarray(n_mac, dtype=np.float64)
         n_fac, u1, u2 = self._draws(wv, n_mac, face_med)
-        u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
-        u_roul = self.rng.random(2 * nr) if self._limits[2] else _NO_RANDOM
+        u_choose, u_roul = self._uniforms(nr)
         hit = (np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         side = (np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64),
@@ -243,10 +254,8 @@ class Surfaces:
         """The facet draws of `_scatter_masked`'s rays: normals (n, 3) (macro normals, or the
         facets that models without a compiled draw give, `_draw_facets`) and the GGX draws'
         uniforms u1, u2 (n,), drawn per material in `_facets`' order."""
-        models = {k: self.media.rough(int(k)) for k in _values(face_med)}
-        models = {k: mdl for k, mdl in models.items() if mdl is not None}
         n_fac, u1, u2, tangent = n_mac, _NO_RANDOM, _NO_RANDOM, None
-        for k, mdl in models.items():
+        for k, mdl in self._models(face_med).items():
             g = np.nonzero(face_med == k)[0]
             if self._rough[0][k] == GGX_CODE:  # drawn in `kernels.scatter`
                 if u1 is _NO_RANDOM:
@@ -272,12 +281,12 @@ class Surfaces:
         # points for the masking test
         hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
         rows = np.arange(nr)
-        u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
-        u_roul = self.rng.random(2 * nr) if self._limits[2] else _NO_RANDOM
+        u_choose, u_roul = self._uniforms(nr)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
-        count = kernels.scatter(rows, wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice, u_choose,
-                                _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(), kernels.at_point(src, branch))
+        count = kernels.scatter(rows, wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice,
+                                u_choose, _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(),
+                                kernels.at_point(src, branch))
         return self._settle(kids.head(count), src[:count], branch[:count], pos, n_geo, n_mac, tangent, rough,
                             face_med, prim, step, cur, other, leaving, rehit, u_roul)
 
@@ -293,9 +302,7 @@ class Surfaces:
             Anisotropy tangent: world X projected onto the macro plane (Y where that degenerates).
         rough : ndarray, shape (n,), bool or None
         """
-        media = self.media
-        models = {k: media.rough(int(k)) for k in _values(face_med)}
-        models = {k: mdl for k, mdl in models.items() if mdl is not None}
+        models = self._models(face_med)
         if not models:
             return n_mac, None, None
         tangent = _tangents(n_mac)

@@ -525,8 +525,9 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         (`roughness.ggx_draw1` about the `_tangent1` frame; a facet that faces away: the power
         emitted at the face's temperature, the ray goes on with none about the macro normal).
         Each child then leaves (terminated by `survive` with ``u_roul`` as with ``FINISH``, then
-        off the surface as `settle` sends it: rows 0, 1, ... of ``out``) unless the next of ``u_leave`` (one per child of a rough face, in order) is
-        at or above its Smith masking probability (`roughness.smith_g1`, ``rough`` the media's
+        off the surface as `settle` sends it: rows 0, 1, ... of ``out``) unless the next of
+        ``u_leave`` (one per child of a rough face, in order) is at or above its Smith masking
+        probability (`roughness.smith_g1`, ``rough`` the media's
         codes as `settle` takes them); a masked child emits its power at the face's temperature
         if ``over`` (the chain's end), else it crosses one ``wavelength`` of its side's medium and
         comes back for a re-hit (depth changed by ``rehit_depth``): rows ``len(out) - 1``,
@@ -913,9 +914,9 @@ def cross_layer(wave, n, rows, alpha, thickness, temperature, acc):
         tau = math.exp(-alpha * thickness / cos_t)
         if tau < 1.0:
             e, g = math.sqrt(1.0 - tau), math.sqrt(tau)
-            _add(acc, sid[c], m[c, 0, 0] * e, m[c, 0, 1] * e, m[c, 1, 0] * e, m[c, 1, 1] * e, temperature,
-                 temperature)
-            m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m[c, 0, 0] * g, m[c, 0, 1] * g, m[c, 1, 0] * g, m[c, 1, 1] * g
+            m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
+            _add(acc, sid[c], m00 * e, m01 * e, m10 * e, m11 * e, temperature, temperature)
+            m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
 
 
 @_inline
