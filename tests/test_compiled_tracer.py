@@ -419,3 +419,37 @@ def test_sky_emission_kernel_equals_the_jones_algebra():
             terms = stokes_terms(m[rows], tv, tv)
         np.add.at(want, sid[rows], terms)
         np.testing.assert_allclose(acc, want, rtol=0, atol=1e-12 * np.abs(want).max())
+
+
+def test_crossing_a_rough_coating_layer_is_beer_lambert():
+    """`kernels.cross_layer` against Beer-Lambert over the slant path (Murakowski 2014 eq. 2.37,
+    2.38): each ray's Jones matrix scaled by sqrt(tau), tau = exp(-alpha t / |cos|) with the
+    cosine against the layer's normal (kept above 1e-6: a ray along the layer loses everything),
+    and what it loses emitted at the layer's temperature, T (1 - tau) times its rows' powers in
+    Ex2 and Ey2. Random directions, normals and Jones matrices; tolerance: rounding (1e-12 K of
+    emissions up to ~1e3 K, 1e-15 of amplitudes)."""
+    from pmmw_cli.trace import kernels
+
+    rng = np.random.default_rng(1)
+    n = 200
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    normals = rng.normal(size=(n, 3))
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    rows = rng.permutation(n)  # ray c's normal is normals[rows[c]]
+    along = int(np.flatnonzero(rows == 0)[0])  # this ray runs along its layer
+    normals[0] = np.cross(d[along], [0.0, 0.0, 1.0])
+    normals[0] /= np.linalg.norm(normals[0])
+    m = rng.normal(size=(n, 2, 2)) + 1j * rng.normal(size=(n, 2, 2))
+    wave = (np.zeros((n, 3)), d, np.zeros((n, 3)), np.zeros((n, 3)), m.copy(), np.arange(n), np.zeros(n, np.int32),
+            np.zeros((n, 8), np.int16), np.zeros(n, np.int32), np.zeros(n))
+    acc = np.zeros((n, 4))
+    alpha, thickness, temp = 50.0, 2e-3, 300.0
+    kernels.cross_layer(wave, normals, rows, alpha, thickness, temp, acc)
+    cos = np.maximum(np.abs(np.sum(d * normals[rows], axis=1)), 1e-6)
+    tau = np.exp(-alpha * thickness / cos)
+    assert tau[along] == 0.0 and tau.max() > 0.8
+    np.testing.assert_allclose(wave[4], m * np.sqrt(tau)[:, None, None], rtol=0, atol=1e-15 * np.abs(m).max())
+    rows_power = np.abs(m) ** 2
+    np.testing.assert_allclose(acc[:, 0], temp * (1 - tau) * rows_power[:, 0].sum(axis=1), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(acc[:, 1], temp * (1 - tau) * rows_power[:, 1].sum(axis=1), rtol=0, atol=1e-12)
