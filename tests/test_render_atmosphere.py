@@ -158,7 +158,8 @@ def test_sky_lookup_reads_the_tables_as_numpy_interp_at_every_height_and_elevati
     """The compiled lookup (`sky._sky_lookup`: the table interval from the square root of the
     elevation) against `AtmosphereModel.sky_temperature` (numpy.interp in the same tables), over
     random directions and heights on four levels, with the horizon, the zenith, a point exactly
-    on a table node and rays below the horizon (the ground temperature). Tolerance 1e-9 K: the
+    on a table node and rays below the horizon (the ground through the air from the ray's height:
+    `AtmosphereSky.ground_through_air`; the bare ground from at or below z = 0). Tolerance 1e-9 K: the
     two interpolate the same two points and differ only in rounding (~1e-13 K)."""
     from pmmw_cli.atmosphere.model import SKY_ELEVATIONS
 
@@ -179,8 +180,14 @@ def test_sky_lookup_reads_the_tables_as_numpy_interp_at_every_height_and_elevati
         sel = (el_d >= 0.0) & (np.floor(np.clip(heights, 0.0, None) / 250.0) * 250.0 == h)
         assert sel.sum() > 1000
         want[sel] = model.sky_temperature(el_d[sel], height=h)
+    # below the horizon: the ground through the air down from the ray's height (model.path), from
+    # any height above the ground; at or below it (heights down to -5 m) the bare ground
+    down = (el_d < 0.0) & (heights > 0.0)
+    trans, emission = model.path(heights[down], 0.0, heights[down] / -d[down, 2])
+    want[down] = emission + trans * 281.5
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
-    assert np.all(got[el_d < 0.0] == 281.5) and (el_d < 0.0).sum() > 1000
+    assert np.all(got[(el_d < 0.0) & ~down] == 281.5) and ((el_d < 0.0) & ~down).sum() > 10
+    assert down.sum() > 1000 and ((el_d < 0.0) & (heights > 0.0) & (heights < 250.0)).sum() > 500
     assert sorted(model._sky_tables) == [0.0, 250.0, 500.0, 750.0]
 
 

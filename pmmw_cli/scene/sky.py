@@ -13,8 +13,9 @@ Models are chosen by ``sky.model`` through `SKY_MODELS`:
 * ``texture``: a user's equirectangular EXR with ``Tv``, ``Th`` channels [K]
   (`pmmw_cli.scene.sky_texture`), polarized in the sky basis of `pmmw_cli.physics.jones`.
 
-Below the horizon (el < 0) rays see ``sky.ground_temperature``, unless a texture covers it.
-Temperatures are Rayleigh-Jeans brightness temperatures [K].
+Below the horizon (el < 0) rays see ``sky.ground_temperature``, unless a texture covers it; with
+the ``atmosphere`` sky, through the layered atmosphere between the ray's height and the ground
+(`AtmosphereSky.ground_through_air`). Temperatures are Rayleigh-Jeans brightness temperatures [K].
 """
 
 from __future__ import annotations
@@ -124,7 +125,14 @@ class AtmosphereSky:
     curvature.
     Rays leave the scene from various heights; the sky above a ray is taken from a table for the
     nearest of `HEIGHT_STEP`-spaced observer heights below it (cached per height), so an aircraft
-    sees only the air above it. Below the horizon: ``ground_temperature``.
+    sees only the air above it; rays that leave from exactly a height given to `observe` (a
+    pinhole imager's: every camera ray starts there) read a table of that height. Below the
+    horizon: the ground, a blackbody at ``ground_temperature`` at z = 0, seen through the air
+    between the ray's height and the ground (`ground_through_air`): from an imager high up, the
+    atmosphere's own emission, not the bare ground; from any height, so that a ray that misses
+    every mesh reads what one that hits a blackbody ground mesh reads. Rays that leave within the
+    lowest level (below `HEIGHT_STEP`) read the sky from the ground above the horizon (the air
+    below them counted twice: at most 250 m of it).
     """
 
     unpolarized = True
@@ -136,18 +144,61 @@ class AtmosphereSky:
         # the tables built so far, as `_sky_lookup` reads them: level k's row of T (-1: none yet)
         self._row = np.full(int((model.top - 1.0) // self.HEIGHT_STEP) + 1, -1, np.int64)
         self._tables = np.empty((0, SKY_ELEVATIONS.size))
+        # the heights given to `observe` and their rows of T
+        self._exact_h, self._exact_row = np.empty(0), np.empty(0, np.int64)
 
     def zenith_angle_temperature(self, elevation, height: float = 0.0):
         return self.model.sky_temperature(elevation, height=height)
 
     def brightness(self, directions, heights=None):
+        """(Tv, Th) [K], the same array, shape (n,), for unit directions (n, 3) leaving the scene
+        at heights (n,) [m] above the ground (None: at the ground): above the horizon the sky
+        table of the ray's level (or of its `observe` height), below it `ground_through_air`
+        (at the ground itself: ``ground_temperature``)."""
         dz = np.ascontiguousarray(directions[:, 2], dtype=np.float64)
         heights = np.zeros(dz.shape) if heights is None else np.ascontiguousarray(heights, dtype=np.float64)
         t = np.empty(dz.shape)
         while (missing := _sky_lookup(dz, heights, self.HEIGHT_STEP, self.model.top - 1.0, self._row, SKY_ELEVATIONS,
-                                      self._tables, self.ground_temperature, t)) >= 0.0:
+                                      self._tables, self.ground_temperature, self._exact_h, self._exact_row,
+                                      t)) >= 0.0:
             self._add(missing)
+        down = np.flatnonzero((dz < 0.0) & (heights > 0.0))
+        if down.size:
+            t[down] = self.ground_through_air(dz[down], heights[down])
         return t, t
+
+    def ground_through_air(self, dz, heights):
+        """The ground below the horizon seen from ``heights`` (n,) [m] along rays going down,
+        direction z-components ``dz`` (n,) < 0: ``emission + transmittance * ground_temperature``
+        [K], shape (n,), the air's along the slant path from the ray's height (at most the model's
+        top: no air above it) down to z = 0 (`AtmosphereModel.walk`, exact for its cells: the
+        recurrence of Murakowski 2014 sec. 2.2.7 from the ground up).
+
+        Flat cells, as every path in the scene takes (`AtmosphereModel.path`): a ray that misses a
+        ground mesh reads what one that hits a blackbody mesh at ``ground_temperature`` on z = 0
+        reads. Not modelled: the earth's curvature below the horizon (from a height h, rays less
+        than about sqrt(2 h / R_earth) below it, 3.2 degrees at 10 km and 10 degrees at 100 km,
+        would pass over the earth's limb and see the sky beyond; here they meet the flat ground
+        through a long slant path of air), and the ground's reflection (a blackbody)."""
+        z0 = np.minimum(heights, self.model.top)
+        trans, emission = np.empty(z0.shape), np.empty(z0.shape)
+        self.model.walk(z0, np.zeros(z0.shape), z0 / -dz, trans, emission)
+        return emission + trans * self.ground_temperature
+
+    def observe(self, height: float):
+        """Build the table of the sky seen from exactly ``height`` [m] (`AtmosphereModel.sky_table`)
+        for the rays that leave from there: a pinhole imager's, which would otherwise read the
+        table of their level, up to `HEIGHT_STEP` lower (from 10.25 km at 60 GHz, 1.5 K too warm at
+        30 degrees elevation, 2.6 K at the horizon). Heights on a level need none; nor do imagers
+        within the lowest level (below `HEIGHT_STEP`): they read the ground's table, as every ray
+        there does (near-ground scenes keep their images)."""
+        height = float(height)
+        if not height >= self.HEIGHT_STEP or height in self._exact_h or self.level(height) == height:
+            return
+        _, temperature = self.model.sky_table(height)
+        self._tables = np.vstack([self._tables, temperature])
+        self._exact_h = np.append(self._exact_h, height)
+        self._exact_row = np.append(self._exact_row, self._tables.shape[0] - 1)
 
     def level(self, heights):
         """The observer heights [m] whose tables serve rays leaving at ``heights`` (the
@@ -183,11 +234,12 @@ class AtmosphereSky:
 
 
 @njit()
-def _sky_lookup(dz, heights, step, h_max, row, el_grid, tables, ground, out):
+def _sky_lookup(dz, heights, step, h_max, row, el_grid, tables, ground, exact_h, exact_row, out):
     """`AtmosphereSky.brightness` of rays with direction z-components ``dz`` leaving at
     ``heights`` [m], into ``out`` [K]: below the horizon ``ground``, above it the table of the
     ray's level (``floor(min(max(height, 0), h_max) / step)``, its row of ``tables`` given by
-    ``row``), linear in elevation between the table's points ``el_grid`` [rad] as
+    ``row``), or where the height is one of ``exact_h`` [m] that height's row ``exact_row``,
+    linear in elevation between the table's points ``el_grid`` [rad] as
     `numpy.interp` (the points are (pi / 2) (k / (N - 1))^2, so the interval is found from the
     square root, not searched). Returns the height [m] of the first level met that has no table
     yet (for the caller to build and call again), -1 when every ray was served."""
@@ -198,10 +250,15 @@ def _sky_lookup(dz, heights, step, h_max, row, el_grid, tables, ground, out):
         if el < 0.0:
             out[i] = ground
             continue
-        level = math.floor(min(max(heights[i], 0.0), h_max) / step)
-        r = row[int(level)]
+        r = -1
+        for e in range(exact_h.shape[0]):
+            if heights[i] == exact_h[e]:
+                r = exact_row[e]
         if r < 0:
-            return level * step
+            level = math.floor(min(max(heights[i], 0.0), h_max) / step)
+            r = row[int(level)]
+            if r < 0:
+                return level * step
         k = min(int(math.sqrt(el) * scale), last - 1)
         while k > 0 and el < el_grid[k]:  # (rounding of the square root)
             k -= 1

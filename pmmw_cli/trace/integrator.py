@@ -186,13 +186,23 @@ def camera_column(job: TraceJob):
     return atm.column(z_top, z_bottom, s_lo - margin, s_hi + margin)
 
 
+def observe_from_imager(job: TraceJob):
+    """The layered sky seen from the imager's own height for its rays that miss every face
+    (`AtmosphereSky.observe`): a pinhole imager's rays all start there (a thin lens's start
+    across its aperture and read the tables of their levels)."""
+    observe, cam = getattr(job.sky, "observe", None), job.camera
+    if observe is not None and not (cam.focus_distance is not None and cam.aperture_radius > 0.0):
+        observe(float(cam.position[2]))
+
+
 def prime(job: TraceJob):
     """Build what rendering would otherwise build lazily in every worker process: the layered
-    sky's tables at the heights of the scene and the imager (`AtmosphereSky.prepare`). Called
-    once before the workers fork."""
+    sky's tables at the heights of the scene and the imager (`AtmosphereSky.prepare`,
+    `observe_from_imager`). Called once before the workers fork."""
     prepare = getattr(job.sky, "prepare", None)
     if prepare is not None:
         prepare(*_scene_heights(job))
+    observe_from_imager(job)
 
 
 class Integrator:
@@ -218,6 +228,7 @@ class Integrator:
         self.compiled = self.surfaces.compiled
         self.atm_skip_length = atmosphere_skip_length(job)
         self.column = camera_column(job)
+        observe_from_imager(job)  # (built already where `prime` ran before the workers forked)
 
     # -- public -----------------------------------------------------------------------------
     def render_tile(self, tile) -> TileResult:

@@ -207,18 +207,24 @@ def ambient_segments(wave, t, prim, skip, top_height, z0, z1, length):
     """The segments of a wave's rays through the layered atmosphere (`AtmosphereModel.walk`): those
     of rays that hit a face, travelled in the ambient medium (0) and are longer than ``skip`` [m]
     (`integrator.atmosphere_skip_length`). Fills their ends' heights (within 0..``top_height``
-    [m]) and length, and length 0 for every other ray; returns how many there are."""
+    [m]) and length, and length 0 for every other ray; returns how many there are. The part of a
+    segment above ``top_height`` crosses no air (an imager above the model's top): only the
+    length below it counts, so that the walk's stretch L / |z1 - z0| stays the segment's own."""
     o, d, stack, top = wave[0], wave[1], wave[7], wave[8]
     count = 0
     for i in range(t.shape[0]):
         ti = t[i]
+        z0[i], z1[i], length[i] = 0.0, 0.0, 0.0
         if prim[i] >= 0 and stack[i, top[i]] == 0 and ti > skip:
             a = o[i, 2]
             b = a + ti * d[i, 2]
+            lo, hi = min(a, b), max(a, b)
+            if hi > top_height:
+                if lo >= top_height:
+                    continue
+                ti *= (top_height - lo) / (hi - lo)
             z0[i], z1[i], length[i] = min(max(a, 0.0), top_height), min(max(b, 0.0), top_height), ti
             count += 1
-        else:
-            z0[i], z1[i], length[i] = 0.0, 0.0, 0.0
     return count
 
 
@@ -1068,7 +1074,8 @@ def warm(stack_size: int = 8) -> None:
     sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
     from pmmw_cli.scene.sky import _sky_lookup
 
-    _sky_lookup(empty, empty, 1.0, 1.0, np.zeros(1, np.int64), cells3 := np.array([0.0, 1.0]), cells3[None], 0.0, empty)
+    _sky_lookup(empty, empty, 1.0, 1.0, np.zeros(1, np.int64), cells3 := np.array([0.0, 1.0]), cells3[None], 0.0,
+                empty, np.zeros(0, np.int64), empty)
     camera.Camera(np.zeros(3), *np.eye(3), 1.0, 2, 2).rays(np.ones(1), np.ones(1), np.zeros(1, np.int64), 0)
     # the layered atmosphere's cell walk (`AtmosphereModel.path`)
     from pmmw_cli.atmosphere.model import _path_loop
