@@ -5,11 +5,15 @@
     ds = pmmw.render(scn, spp=4)          # xarray.Dataset of I, Q, U, V, Ex2, Ey2 [K]
     ds["I"].sel(frequency=95e9).plot()
 
-See `pmmw_cli.api` (the functions' documentation) and the README's "Python API".
+Every misuse raises `UserError` naming the argument or the scenario key (`UserErrors` for
+several at once); `EnvironmentProblem` (a `UserError` too) is the machine refusing (a disk full, a
+folder that cannot be written). See `pmmw_cli.api` (the functions' documentation and their errors)
+and the README's "Python API".
 """
 
 from pmmw_cli import __version__
 from pmmw_cli.api import Scenario, brdf, po, render, sky, sweep, validate
-from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors
 
-__all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "UserError", "UserErrors", "__version__"]
+__all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "UserError", "UserErrors",
+           "EnvironmentProblem", "__version__"]

@@ -6,6 +6,7 @@ exit with status 2, never with a traceback.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import math
@@ -19,6 +20,7 @@ import yaml
 
 from pmmw_cli import __version__, interrupt
 from pmmw_cli.errors import UserError
+from pmmw_cli.io.inputs import check_input_path, format_suffix, name_too_long
 
 app = typer.Typer(
     add_completion=False, no_args_is_help=True,
@@ -40,6 +42,12 @@ def _user_errors(fn):
         except UserError as e:  # an EnvironmentProblem too, with its own status
             typer.echo(f"error: {e}", err=True)
             raise typer.Exit(getattr(e, "exit_status", EXIT_USER_ERROR)) from None
+        except OSError as e:  # a path too long to look up, wherever it was given: the user's to shorten
+            problem = name_too_long(e)
+            if problem is None:
+                raise
+            typer.echo(f"error: {problem}", err=True)
+            raise typer.Exit(EXIT_USER_ERROR) from None
         except (KeyboardInterrupt, interrupt.Interrupted) as e:
             stop = e if isinstance(e, interrupt.Interrupted) else interrupt.Interrupted(signal.SIGINT)
             interrupt.report(stop)
@@ -75,11 +83,13 @@ def render(
                                            help="With dask: a dask-jobqueue cluster file (as for pmmw sweep)."),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
+    from pmmw_cli import memory
     from pmmw_cli.pipeline import parse_shard, render as run
 
-    run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
-        quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard), force=force, executor=executor,
-        scheduler=scheduler, cluster=cluster)
+    with memory.overridable("--force", force):  # --force also reads a mesh or sky texture past the memory check
+        run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
+            quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard), force=force, executor=executor,
+            scheduler=scheduler, cluster=cluster)
 
 
 @app.command()
@@ -128,6 +138,8 @@ def materials_show(
     typer.echo(format_material(db, material_id, f))
     if plot is not None:
         t = parse_quantity(temperature, "temperature", file="--temperature") if temperature else None
+        if t is not None and not t > 0.0:  # the bound of every temperature key (config.schema)
+            raise UserError(f"temperature must be > 0 K, got {temperature!r}", "--temperature")
         typer.echo(f"wrote {plot_materials(db, [material_id, *(compare or [])], plot, temperature=t)}")
 
 
@@ -152,12 +164,7 @@ def sky(
     f = _frequency(frequency)
     if fmt not in ("table", "csv"):
         raise UserError(f"expected table or csv, got {fmt!r}", file="--format")
-    try:
-        els = [float(v) for v in elevations.split(",")]
-    except ValueError:
-        raise UserError(f"expected degrees like 5,10,90, got {elevations!r}", file="--elevations") from None
-    if any(not 0 <= e <= 90 for e in els):
-        raise UserError("elevations must be within 0..90 deg", file="--elevations")
+    els = skycmd.parse_elevations(elevations, "--elevations")
     atm = skycmd.load_atmosphere(atmosphere, profile, layer or [], ground_temperature, humidity)
     typer.echo(skycmd.format_table(skycmd.sky_table(atm, f, els), fmt))
     if exr is not None:
@@ -346,25 +353,48 @@ def po(
     out: Optional[Path] = typer.Option(None, "--out", help="Also write po.csv, po.json, po.png, report.md (and "
                                                            "po.exr for a full-sphere grid) in this folder."),
     plot: Optional[Path] = typer.Option(None, "--plot", metavar="FILE.png", help="Write a plot of RCS against theta."),
+    force: bool = typer.Option(False, "--force", metavar="", help="Solve even when the estimated memory (facets, "
+                                                                  "directions, the octree's patterns at this "
+                                                                  "frequency, ray tubes) exceeds what is available."),
 ):
     """Radar cross section of a mesh by physical optics (bistatic pattern or monostatic cuts)."""
-    from pmmw_cli.po.command import format_rows, run_po, write_plot, write_report, write_run
-    from pmmw_cli.units import parse_quantity
+    from pmmw_cli.io.lock import output_lock
 
-    if mesh.suffix.lower() in (".yaml", ".yml"):
+    check_input_path(mesh)
+    if format_suffix(mesh) in (".yaml", ".yml"):
         from pmmw_cli.po.job import run_job
 
-        for path in run_job(mesh, out):
+        for path in run_job(mesh, out, force):
             typer.echo(f"wrote {path}")
         return
     if frequency is None:
         raise UserError("a mesh needs --frequency, e.g. '95 GHz'", "--frequency")
     if fmt not in ("csv", "json", "table"):
         raise UserError(f"expected csv, json or table, got {fmt!r}", "--format")
+    with contextlib.ExitStack() as held:
+        if out is not None:  # one writer per folder, from before the solve to the last file
+            held.enter_context(output_lock(out))
+        _po_run(mesh, material, eps, frequency, incidence, polarization, theta, phi, monostatic, bounces, tube,
+                method, fmt, out, plot, force)
+
+
+#: `pmmw po`'s line after a signal once it writes (each file is written whole or not at all)
+WRITING_OUTCOME = "files already written in {out} are complete, the others missing; run again to write them all"
+
+
+def _po_run(mesh, material, eps, frequency, incidence, polarization, theta, phi, monostatic, bounces, tube, method,
+            fmt, out, plot, force=False):
+    """`po` on a mesh, its output folder (if any) locked."""
+    from pmmw_cli.po.command import format_rows, run_po, write_plot, write_report, write_run
+    from pmmw_cli.units import parse_quantity
+
     res = run_po(mesh, material=material, eps=eps, frequency=_frequency(frequency), incidence=incidence,
                  polarization=polarization, theta=theta, phi=phi, monostatic=monostatic, bounces=bounces,
-                 method=method, tube=None if tube is None else parse_quantity(tube, "length", file="--tube"))
+                 method=method, tube=None if tube is None else parse_quantity(tube, "length", file="--tube"),
+                 force=force)
     typer.echo(format_rows(res, fmt))
+    if out is not None or plot is not None:
+        interrupt.outcome(WRITING_OUTCOME.format(out=out if out is not None else plot.parent))
     if out is not None:
         written = write_run(res, out, "po", Path(mesh).name, *res.axes)
         observation = f"theta `{theta or '0:180:1'}`, phi `{phi or 'the incidence phi'}` (degrees)"
@@ -416,6 +446,12 @@ def bench(
         render_times=tuple(render_times or ()), skip_configs=tuple(skip_configs or ()))
 
 
+#: [bytes] per pixel `view` takes beyond reading the channel: the figure's copies of the image
+#: (float64, the display range's sort, matplotlib's drawing): 102 measured at 8 Mpx, and a
+#: 20000 x 10000 image took 21.5 GB before its size was checked
+VIEW_BYTES_PER_PIXEL = 128
+
+
 @app.command()
 @_user_errors
 def view(
@@ -425,14 +461,16 @@ def view(
                                                            "<name>_<channel>.png)."),
 ):
     """Write any channel of an EXR as a preview with a colour bar and a title."""
-    from pmmw_cli.io.exr import read_exr
+    from pmmw_cli.io.exr import image_size, read_exr
     from pmmw_cli.io.preview import write_figure
 
     if not exr.is_file():
         raise UserError("file not found", exr)
-    chans, attrs = read_exr(exr)
-    if channel not in chans:
-        raise UserError(f"no channel {channel!r}; the file has {', '.join(sorted(chans))}", exr, "--channel")
+    names = image_size(exr)[2]
+    if channel not in names:
+        raise UserError(f"no channel {channel!r}; the file has {', '.join(sorted(names))}", exr, "--channel")
+    # the size checked from the header first, with what the figure takes per pixel
+    chans, attrs = read_exr(exr, channels=[channel], bytes_per_pixel=VIEW_BYTES_PER_PIXEL)
     f = attrs.get("pmmw:frequency_hz")
     title = f"{exr.stem}: {channel}" + (f", {float(f) / 1e9:g} GHz" if f is not None else "")
     from pmmw_cli.pipeline import channel_quantity

@@ -29,16 +29,25 @@ class UserError(Exception):
     MAX_MESSAGE = 600  # characters: a huge value quoted in a message is cut, not printed whole
 
     def __init__(self, message: str, file: str | Path | None = None, key: str | None = None):
+        message = _one_line(str(message))
         if len(message) > self.MAX_MESSAGE:
             message = f"{message[:self.MAX_MESSAGE]}... ({len(message):,} characters in all)"
         super().__init__(message)
         self.message = message
-        self.file = str(file) if file is not None else None
-        self.key = key
+        self.file = _one_line(str(file)) if file is not None else None
+        self.key = _one_line(str(key)) if key is not None else None
 
     def __str__(self) -> str:
         parts = [p for p in (self.file, self.key) if p]
         return ": ".join(parts + [self.message])
+
+
+def _one_line(text: str) -> str:
+    """``text`` as one printable line: line breaks and other control characters (a user's file
+    name, key or value can hold any) written as escapes (``\\n``, ``\\x1b``)."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 class UserErrors(UserError):

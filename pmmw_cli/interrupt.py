@@ -5,7 +5,10 @@ imported. The first SIGINT or SIGTERM raises `Interrupted` in the main thread wh
 (importing, resolving, starting workers, rendering, writing), so that the ``finally`` blocks on
 the way out run: the render pool kills and reaps its workers, an atomic write removes its
 temporary file. The CLI then prints one line and exits with status 128 + N: 130 for SIGINT, 143
-for SIGTERM. Later signals are ignored, so that this clean-up is not cut short.
+for SIGTERM. Later signals are ignored, so that this clean-up is not cut short. The line says what
+the command leaves behind (`outcome`: a render's finished tiles, ``pmmw po``'s "nothing written").
+A compiled call holds the interpreter and delays the exception to its end: long computations are
+cut into calls of a fraction of a second (`pmmw_cli.po.solver.call_slices`).
 
 An exception raised at an arbitrary point can be lost: an extension module being imported turns
 it into an ImportError, a ``__del__`` can only print it. So `main` treats any exception that
@@ -55,7 +58,22 @@ class Interrupted(BaseException):
     @property
     def message(self) -> str:
         word = "interrupted" if self.signum == signal.SIGINT else "terminated"
-        return f"{word}: finished tiles are kept; run again with --resume to continue"
+        return f"{word}: {_outcome}"
+
+
+#: What the line says of a stopped render; other commands say what they leave (`outcome`).
+RENDER_OUTCOME = "finished tiles are kept; run again with --resume to continue"
+#: Commands with a line of their own from their start (`main` looks the command up before it imports
+#: anything, so a signal during the imports already gets it).
+COMMAND_OUTCOMES = {"po": "nothing written"}
+_outcome = RENDER_OUTCOME
+
+
+def outcome(text: str) -> None:
+    """Set what the line after ``interrupted:`` says of the command's outputs (e.g. ``pmmw po``:
+    ``nothing written``), as the command goes."""
+    global _outcome
+    _outcome = text
 
 
 def report(stop: Interrupted) -> None:
@@ -166,6 +184,7 @@ def main() -> None:
     """
     install()
     sys.unraisablehook = _unraisable
+    outcome(COMMAND_OUTCOMES.get(sys.argv[1] if len(sys.argv) > 1 else "", RENDER_OUTCOME))
     try:
         try:
             import_native()

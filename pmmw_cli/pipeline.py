@@ -10,7 +10,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import shutil
 import sys
 import time
 from dataclasses import dataclass
@@ -21,14 +20,17 @@ import numpy as np
 from pmmw_cli import __version__
 from pmmw_cli.config import load_scenario
 from pmmw_cli.config.load import scenario_to_display
-from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors, clear_warnings, collected_warnings, warn
+from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
 from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
-from pmmw_cli.io.atomic import write_text_atomic
 from pmmw_cli.io.exr import write_exr
+from pmmw_cli.io.lock import FolderLock
 from pmmw_cli.io.preview import write_depth_figure, write_figure, write_material_figure
 from pmmw_cli.io.progress import StatusLine
 from pmmw_cli.io.report import write_report
 from pmmw_cli.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
+from pmmw_cli.io.tilestore import (
+    TILE_ROOT, claim, deletable, own_folders, remove_folder, remove_root_if_empty,
+)
 from pmmw_cli.physics.jones import stokes_images
 from pmmw_cli.scene.camera import Camera
 from pmmw_cli.scene.geometry import asset_files, build_geometry, file_up_axis
@@ -447,8 +449,8 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
                     resume: bool = False, shard=None, quiet: bool = True, client=None):
     """Trace the image at frequency f [Hz], averaged over the imager's sub-bands.
 
-    Tiles are kept in ``tile_root/<label>-<shash>/`` when a root is given (resumable), nowhere
-    otherwise. With ``shard=(i, n)`` only that shard's tiles are rendered and no image is made.
+    Tiles are kept in ``tile_root/<folder>/`` (`tile_folders`) when a root is given (resumable),
+    nowhere otherwise. With ``shard=(i, n)`` only that shard's tiles are rendered and no image is made.
     With a Dask ``client`` the tiles are tasks on its cluster (`pool.render_tiles`).
 
     Returns
@@ -459,15 +461,13 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
     tile_dirs : list of Path
     """
     scn = res.scenario
-    stem = _stem(scn, f)
     imgs, dirs = [], []
-    for fk in band_frequencies(f, scn.imager.bandwidth, scn.imager.band_samples):
+    for fk, label, folder in tile_folders(scn, f, shash):
         job = make_job(res, fk)
-        label = stem if fk == f else f"{stem}@{fk / 1e9:.6g}GHz"
-        tile_dir = None if tile_root is None else tile_root / f"{label}-{shash}"
+        tile_dir = None if tile_root is None else tile_root / folder
         if tile_dir is not None:
             dirs.append(tile_dir)
-            _write_manifest(tile_dir, res.scenario, shash)
+            claim(tile_dir, tile_manifest(scn, shash), "--out")
         counts: dict = {}
         if shard is not None:
             mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0] - 1]
@@ -539,18 +539,34 @@ def _all_outputs(names: dict) -> list[str]:
 # [s] per camera path per core: the shipped landing scene on a 2-core laptop (docs/benchmarks.md);
 # refracting and rough scenes take several times longer
 SECONDS_PER_PATH = 1e-5
-WORKER_BASE_BYTES = 250e6  # a render worker: interpreter, numpy, Embree, one wave of MAX_WAVE rays
 TILE_BYTES_PER_PIXEL = 17 * 8  # float64 fields of a TileResult per pixel (pool._save_tile)
+# Memory of a render [bytes]: measured peaks (the sum of the proportional set sizes of the parent
+# and its workers, a 1e6-triangle OBJ on 2 workers; `tests/test_reliability_bounds.py` checks the
+# estimate against a measured render) with a margin.
+PARENT_BASE_BYTES = 250e6  # the parent: interpreter, numpy, trimesh, the compiled kernels (238 MB measured)
+WORKER_BASE_BYTES = 250e6  # a render worker: interpreter, numpy, Embree, one wave of MAX_WAVE rays
+# the scene in the parent: vertices (24 B each, up to 3 a triangle), faces, normals (24 each), material,
+# object, medium (4 each); 73 measured after reading an OBJ (a shared-vertex grid), 129 an STL (a soup)
+PARENT_BYTES_PER_TRIANGLE = 160
+# the peak of reading a mesh in the parent, before any worker starts: 612 measured (OBJ), 822 (STL)
+LOAD_BYTES_PER_TRIANGLE = 1000
+# a worker's own copy of the scene: the intersector's per-face arrays (113 B) and Embree's
+# triangles and BVH; 447 measured (forked: what the worker shares with the parent is counted once)
+WORKER_BYTES_PER_TRIANGLE = 600
 
 
 def estimate_resources(scn, triangles: int, workers: int) -> dict:
     """Memory, disk and time a render of ``scn`` needs, from its size (upper bounds, except the
     time, which is a rough guide for landing-like scenes).
 
-    Memory: the parent holds each frequency's tiles, its sub-band images and the output channels
-    (~136 B per pixel per image); each worker its share of the scene and one wave of rays, which
-    the integrator bounds (`MAX_WAVE`), so it does not grow with spp. Disk: the resumable tiles
-    (~136 B per pixel per sub-band) and the EXR (4 B per channel per pixel, uncompressed bound).
+    Memory: every copy counted, whichever is larger of the mesh's reading (the parent alone,
+    `LOAD_BYTES_PER_TRIANGLE`, before the workers start) and the render: the parent holds the
+    scene (`PARENT_BYTES_PER_TRIANGLE`), the sky texture (its float64 maps and the next sub-band's
+    being read, `sky_texture.LOAD_BYTES_PER_PIXEL`), each frequency's tiles, its sub-band images
+    and the output channels (~136 B per pixel per image); each worker its own copy of the scene
+    (`WORKER_BYTES_PER_TRIANGLE`) and one wave of rays, which the integrator bounds (`MAX_WAVE`),
+    so it does not grow with spp. Disk: the resumable tiles (~136 B per pixel per sub-band) and
+    the EXR (4 B per channel per pixel, uncompressed bound).
     """
     w, h = scn.imager.resolution
     px = w * h
@@ -558,64 +574,75 @@ def estimate_resources(scn, triangles: int, workers: int) -> dict:
     nf = len(scn.frequencies)
     n_chan = 2 * len(scn.output.channels) + 6
     paths = px * scn.render.spp * bands * nf
-    parent = px * (TILE_BYTES_PER_PIXEL * (bands + 2) + 12 * n_chan) + 200e6
-    worker = WORKER_BASE_BYTES + 200.0 * triangles
+    parent = (PARENT_BASE_BYTES + px * (TILE_BYTES_PER_PIXEL * (bands + 2) + 12 * n_chan)
+              + PARENT_BYTES_PER_TRIANGLE * triangles + _sky_texture_bytes(scn))
+    worker = WORKER_BASE_BYTES + WORKER_BYTES_PER_TRIANGLE * triangles
+    load = PARENT_BASE_BYTES + LOAD_BYTES_PER_TRIANGLE * triangles
     return {
         "pixels": px, "camera_paths_at_most": paths,
-        "memory_bytes": int(parent + workers * worker),
+        "memory_bytes": int(max(load, parent + max(1, workers) * worker)),
         "disk_bytes": int(px * (TILE_BYTES_PER_PIXEL * bands + 4 * n_chan) * nf),
         "time_s_rough": paths * SECONDS_PER_PATH / max(1, workers),
     }
 
 
+def _sky_texture_bytes(scn) -> float:
+    """Memory of the scenario's sky texture in the parent [bytes], from its header: the float64
+    maps of one sub-band's sky and the next one's being read (shared with forked workers)."""
+    if scn.sky.model != "texture" or not scn.sky.file:
+        return 0.0
+    from pmmw_cli.io.exr import READ_BYTES_PER_SAMPLE, image_size
+    from pmmw_cli.scene import sky_texture
+
+    try:
+        w, h, _ = image_size(scn.sky.file, key="sky.file")
+    except UserError:  # reported when the sky is made
+        return 0.0
+    read = READ_BYTES_PER_SAMPLE // 2 * len(sky_texture.SKY_CHANNELS)  # its two channels, read by name
+    per_pixel = sky_texture.BYTES_PER_PIXEL + sky_texture.LOAD_BYTES_PER_PIXEL + read
+    return float(w) * h * per_pixel
+
+
 def available_memory() -> float | None:
     """Memory the system can give without swapping [bytes] (Linux MemAvailable), or None."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
-    except OSError:
-        pass
-    return None
+    from pmmw_cli import memory
+
+    return memory.available_memory()
 
 
 def check_memory(est: dict, source, force: bool = False) -> None:
-    """Refuse (`EnvironmentProblem`) a render whose estimate `est` exceeds the available memory,
-    unless ``force``."""
+    """Refuse (`UserError`, exit status 2 as every input sized beyond its limit: `memory`) a
+    render whose estimate `est` exceeds the available memory, unless ``force``."""
     free = available_memory()
     if free is not None and est["memory_bytes"] > free and not force:
-        raise EnvironmentProblem(
+        raise UserError(
             f"the render needs about {est['memory_bytes'] / 1e9:.3g} GB of memory and {free / 1e9:.3g} GB are "
             "available: lower imager.resolution or render.workers (or pass --force to try anyway)", file=source)
 
 
-MANIFEST = "manifest.json"
+def tile_manifest(scn, shash: str) -> dict:
+    """What a tile folder of ``scn`` records (`io.tilestore.claim`): the scenario's name, the
+    hash of its traced settings and inputs, the version and the settings themselves."""
+    return {"name": scn.name, "hash": shash, "version": __version__, "scenario": traced_settings(scn)}
 
 
-def _write_manifest(tile_dir: Path, scn, shash: str) -> None:
-    """What the tiles in ``tile_dir`` were rendered from (compared by `other_tile_folders`)."""
-    path = tile_dir / MANIFEST
-    if not path.exists():
-        tile_dir.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(path, json.dumps({"hash": shash, "version": __version__, "scenario": traced_settings(scn)},
-                                           indent=1, default=str))
+def tile_folders(scn, f: float, shash: str) -> list[tuple[float, str, str]]:
+    """(sub-band frequency [Hz], progress label, tile folder name) of each sub-band traced for the
+    frequency f [Hz]. Folder names are ``<stem>-<hash>`` or ``<stem>@band<k>of<n>-<hash>``: a name
+    cannot hold ``@`` nor end like a frequency suffix (`config.schema`), so no scenario's folder
+    name can be another's."""
+    stem = _stem(scn, f)
+    bands = band_frequencies(f, scn.imager.bandwidth, scn.imager.band_samples)
+    if len(bands) == 1:
+        return [(bands[0], stem, f"{stem}-{shash}")]
+    return [(fk, f"{stem}@{fk / 1e9:.6g}GHz", f"{stem}@band{k + 1}of{len(bands)}-{shash}")
+            for k, fk in enumerate(bands)]
 
 
-def other_tile_folders(tile_root: Path, scn, shash: str) -> list[Path]:
-    """Tile folders of this scenario's images made from other inputs (another hash)."""
-    if not tile_root.is_dir():
-        return []
-    stems = {_stem(scn, f) for f in scn.frequencies}
-    found = []
-    for d in sorted(tile_root.iterdir()):
-        label, _, h = d.name.rpartition("-")
-        if not d.is_dir() or h == shash or len(h) != len(shash):
-            continue
-        base = label.split("@", 1)[0] if "@" in label and label.endswith("GHz") else label
-        if base in stems:
-            found.append(d)
-    return found
+def other_tile_folders(tile_root: Path, scn, shash: str) -> list[tuple[Path, dict]]:
+    """(folder, manifest) of the pmmw tile folders of this scenario (by its name) made from other
+    inputs (another hash)."""
+    return [(d, rec) for d, rec in own_folders(tile_root) if rec.get("name") == scn.name and rec["hash"] != shash]
 
 
 def _differences(a, b, prefix="") -> list[str]:
@@ -632,31 +659,27 @@ def _differences(a, b, prefix="") -> list[str]:
 def refuse_other_tiles(tile_root: Path, scn, shash: str, what: str) -> None:
     """Tiles of this scenario made with other settings are never mixed in nor silently
     re-rendered over: name the folder and the settings that differ."""
-    for d in other_tile_folders(tile_root, scn, shash):
+    for d, old in other_tile_folders(tile_root, scn, shash):
         if not any(d.glob("tile_*.npz")):
             continue
-        try:
-            old = json.loads((d / MANIFEST).read_text())
-            now = traced_settings(scn)
-            diff = _differences(json.loads(json.dumps(old["scenario"], default=str)),
-                                json.loads(json.dumps(now, default=str)))
-            if old.get("version") != __version__:
-                diff.append(f"pmmw version: {old.get('version')} -> {__version__}")
-            why = "; ".join(diff[:6]) or "the same settings but other input files (a mesh, texture or material changed)"
-        except (OSError, ValueError, KeyError):
-            why = "settings unknown (no readable manifest)"
+        now = traced_settings(scn)
+        diff = _differences(json.loads(json.dumps(old.get("scenario"), default=str)),
+                            json.loads(json.dumps(now, default=str)))
+        if old.get("version") != __version__:
+            diff.append(f"pmmw version: {old.get('version')} -> {__version__}")
+        why = "; ".join(diff[:6]) or "the same settings but other input files (a mesh, texture or material changed)"
         raise UserError(f"{d.name} holds tiles of this scenario rendered from other inputs ({why}); run every "
                         "shard with the same scenario, or render without --resume to start afresh (which "
                         "deletes them)", file=what)
 
 
-def remove_stale_tiles(tile_root: Path, scn, shash: str) -> int:
-    """Delete tile folders of this scenario's images made from other inputs (another hash):
-    they can never be resumed. Returns how many were removed."""
-    stale = other_tile_folders(tile_root, scn, shash)
-    for d in stale:
-        shutil.rmtree(d, ignore_errors=True)
-    return len(stale)
+def remove_stale_tiles(tile_root: Path, out_dir: Path, scn, shash: str) -> tuple[int, int]:
+    """Delete the tile folders of this scenario made from other inputs (another hash): they can
+    never be resumed. Only pmmw's own folders inside the real output folder are deleted
+    (`io.tilestore.remove_folder`). Returns (removed, kept)."""
+    stale = [d for d, _ in other_tile_folders(tile_root, scn, shash)]
+    removed = sum(remove_folder(d, out_dir) for d in stale)
+    return removed, len(stale) - removed
 
 
 def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
@@ -686,6 +709,10 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     if executor == "dask" and shard is not None:
         raise UserError("--shard splits a render into separate jobs; with --executor dask the cluster renders "
                         "every tile of one job: use one or the other", "--shard")
+    if executor == "dask" and scheduler and cluster is None:  # a wrong address told before the scene loads
+        from pmmw_cli.distributed import probe_scheduler
+
+        probe_scheduler(scheduler)
     clear_warnings()
     t0 = time.perf_counter()
     cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed), ("out", out)) if v is not None}
@@ -696,30 +723,54 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     est = estimate_resources(scn, int(res.geometry.faces.shape[0]), n_workers)
     names = {f: output_names(scn, f) for f in scn.frequencies}
     inputs = input_files(scn)
+    where = "output.dir" if out is None else "--out"
     check_outputs(out_dir, [n for f in scn.frequencies for n in _all_outputs(names[f])],
-                  inputs, key="output.dir" if out is None else "--out",
-                  disk_bytes=est["disk_bytes"], force=force)
+                  inputs, key=where, disk_bytes=est["disk_bytes"], force=force, scenario_name=scn.name)
     check_memory(est, scn.source_file, force)
-    remove_stale_staging(out_dir)
-    t_resolve = time.perf_counter() - t0
-    written, renders, tile_dirs = [], [], []
     shash = scenario_hash(scn, res.db, inputs)
-    tile_root = out_dir / ".pmmw-tiles"
-    if resume or shard is not None:
-        refuse_other_tiles(tile_root, scn, shash, "--resume" if shard is None else f"--shard {shard[0]}/{shard[1]}")
-    stale = 0 if (resume or shard is not None) else remove_stale_tiles(tile_root, scn, shash)
-    if stale and not quiet:
-        print(f"removed {stale} tile folder(s) of an earlier version of this scenario (other inputs: never resumable)",
-              file=sys.stderr)
+    tile_root = out_dir / TILE_ROOT
+    with FolderLock(out_dir, mode="write" if shard is None else "shard", what=where) as lock:
+        remove_stale_staging(out_dir)
+        if resume or shard is not None:
+            refuse_other_tiles(tile_root, scn, shash, "--resume" if shard is None else f"--shard {shard[0]}/{shard[1]}")
+        elif deletable(tile_root, out_dir):
+            removed, kept = remove_stale_tiles(tile_root, out_dir, scn, shash)
+            if removed and not quiet:
+                print(f"removed {removed} tile folder(s) of an earlier version of this scenario (other inputs: never "
+                      "resumable)", file=sys.stderr)
+            if kept:
+                warn(f"kept {kept} tile folder(s) of an earlier version of this scenario in {tile_root}: they hold "
+                     "files pmmw did not write")
+        for f in scn.frequencies:  # every tile folder checked before the first ray
+            for _, _, folder in tile_folders(scn, f, shash):
+                claim(tile_root / folder, tile_manifest(scn, shash), where)
+        t_resolve = time.perf_counter() - t0
+        written, tile_dirs = _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolve,
+                                                n_workers=n_workers, resume=resume, shard=shard, quiet=quiet,
+                                                executor=executor, scheduler=scheduler, cluster=cluster)
+        if written and not keep_tiles:  # only once every output is in place: until then tiles resume
+            if deletable(tile_root, out_dir):
+                for d in tile_dirs:
+                    remove_folder(d, out_dir)
+                remove_root_if_empty(tile_root, out_dir)
+            else:
+                print(f"tiles kept in {tile_root}: it links out of the output folder, and pmmw never deletes "
+                      "through a link", file=sys.stderr)
+    return written
+
+
+def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolve, *, n_workers, resume, shard,
+                       quiet, executor, scheduler, cluster):
+    """Trace every frequency of the resolved scenario, then stage its outputs and commit them
+    (reports last) while ``lock`` is still this run's. Returns (EXRs written, tile folders)."""
+    scn = res.scenario
+    written, renders, tile_dirs = [], [], []
     client = None
     with contextlib.ExitStack() as staging:  # staged outputs are deleted on the way out, committed or not
         if executor == "dask":
-            from pmmw_cli.distributed import connect
+            from pmmw_cli.distributed import dask_client
 
-            client, dask_cluster = connect(scheduler, cluster, n_workers)
-            staging.callback(client.close)
-            if dask_cluster is not None:
-                staging.callback(dask_cluster.close)
+            client = staging.enter_context(dask_client(scheduler, cluster, n_workers))
         for f in scn.frequencies:
             t1 = time.perf_counter()
             try:
@@ -748,17 +799,12 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
                 write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
             except OSError as e:
                 raise os_problem(e, out_dir, "write the report") from None
-            staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports)
+            staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
             print(
                 f"{report['name']}: {r['pixels']} px x {r['spp']} spp, {r['rays'] / 1e6:.2f} M rays, "
                 f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}"
             )
-    if renders and not keep_tiles:  # only once every output is in place: until then tiles resume
-        for d in tile_dirs:
-            shutil.rmtree(d, ignore_errors=True)
-        if tile_root.is_dir() and not any(tile_root.iterdir()):
-            tile_root.rmdir()
-    return written
+    return written, tile_dirs
 
 
 def frequency_images(scn, f, job, img, shash: str = "") -> dict:

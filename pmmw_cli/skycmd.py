@@ -40,6 +40,29 @@ def parse_layer(text: str):
     return {"kind": kind, "base": base, "top": top, "liquid_water": parts[3]}
 
 
+def parse_elevations(value, file="--elevations", key: str | None = None) -> list[float]:
+    """Elevations [deg] as ``pmmw sky --elevations`` and `pmmw.sky` take them: ``"5,10,90"`` or a
+    sequence of numbers; at least one, each finite and within 0..90 deg (above the horizon, where
+    the layered atmosphere's sky is). Errors name ``file`` (the option or function) and ``key``."""
+    example = "expected elevations in degrees like 5,10,90"
+    if isinstance(value, str):
+        try:
+            values = [float(v) for v in value.split(",")]
+        except ValueError:
+            raise UserError(f"{example}, got {value!r}", file, key) from None
+    elif isinstance(value, (list, tuple, np.ndarray)) and all(
+            isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) for v in value):
+        values = [float(v) for v in value]
+    else:
+        raise UserError(f"{example} (a list of numbers), got {value!r}", file, key)
+    if not values:
+        raise UserError(f"{example}, got none", file, key)
+    bad = [v for v in values if not 0.0 <= v <= 90.0]  # NaN too
+    if bad:
+        raise UserError(f"elevations must be within 0..90 deg, got {bad[0]:g}", file, key)
+    return values
+
+
 def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], ground_temperature, humidity,
                     data: dict | None = None):
     """An `Atmosphere` record from a YAML file (or the mapping ``data``) and/or command-line

@@ -13,6 +13,11 @@ tiles share the machine without oversubscribing it); ``dask`` sends each variant
 cluster as one task (rendered in the worker's process): a ``LocalCluster`` when no address is
 given, a running scheduler (``--scheduler tcp://host:8786``), or a batch-queue cluster from
 dask-jobqueue (``--cluster slurm.yaml``). The same seeds give bit-identical images everywhere.
+A Dask task renders its variant in a temporary folder of its worker and returns the files; pmmw
+writes them into ``DIR/<variant>/`` (`_commit_variant`). So a task still running after its sweep
+ended (its scheduler killed, pmmw stopped: a worker finishes the task it has begun) never writes
+into ``DIR``. A scheduler that goes away stops the sweep with one line and status 1, after
+``sweep.csv`` and the report of the variants done.
 
 A variant is done when its folder holds ``variant.json`` with the hash of the scenario it renders
 (`pipeline.scenario_hash`); ``--resume`` skips those. A failed variant is recorded with its error
@@ -25,8 +30,10 @@ import csv
 import io
 import itertools
 import json
+import math
 import re
 import sys
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,8 +41,9 @@ from pathlib import Path
 import yaml
 
 from pmmw_cli.distributed import EXECUTORS
-from pmmw_cli.errors import UserError, UserErrors, exception_text
+from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors, exception_text
 from pmmw_cli.io.atomic import write_text_atomic
+from pmmw_cli.io.lock import output_lock
 from pmmw_cli.io.progress import StatusLine
 from pmmw_cli.io.yamlio import load_yaml, read_yaml
 
@@ -70,7 +78,11 @@ def linspace(text: str, where: str) -> list | None:
         if not nm:
             raise UserError(f"linspace ends must be numbers with an optional unit, got {part!r}", where)
         ends.append((float(nm.group(1)), nm.group(2).strip()))
-    (a, ua), (b, ub), n = ends[0], ends[1], int(m.group(3))
+    count = m.group(3).lstrip("0") or "0"
+    if len(count) > len(str(MAX_VARIANTS)) or int(count) > MAX_VARIANTS:  # sized before a value is made
+        shown = count if len(count) <= 20 else f"a {len(count)}-digit number of"
+        raise UserError(f"linspace of {shown} points: a sweep has at most {MAX_VARIANTS:,} variants", where)
+    (a, ua), (b, ub), n = ends[0], ends[1], int(count)
     if ua != ub:
         raise UserError(f"linspace ends must share a unit, got {ua!r} and {ub!r}", where)
     if n < 1:
@@ -175,11 +187,16 @@ def variants(spec: SweepSpec) -> list[dict]:
         if len({len(v) for v in lists}) != 1:
             raise UserError(f"zipped lists must have one length, got {[len(v) for v in lists]} for {zipped}",
                             spec.source, "zip")
+    # the grid's size from its axes' lengths, before a combination is made
+    lengths = ([len(lists[0])] if zipped else []) + [len(values) for k, values in spec.grid if k not in zipped]
+    count = math.prod(lengths)
+    if count > MAX_VARIANTS:
+        raise UserError(f"{count:,} variants ({' x '.join(map(str, lengths))}); a sweep has at most "
+                        f"{MAX_VARIANTS:,}: sweep fewer values or zip keys side by side", spec.source)
+    if zipped:
         axes.append([dict(zip(zipped, c)) for c in zip(*lists)])
     axes += [[{k: v} for v in values] for k, values in spec.grid if k not in zipped]
     combos = [dict(kv for step in c for kv in step.items()) for c in itertools.product(*axes)]
-    if len(combos) > MAX_VARIANTS:
-        raise UserError(f"{len(combos)} variants; at most {MAX_VARIANTS}", spec.source)
     order = [k for k, _ in spec.grid]
     return [{k: c[k] for k in order} for c in combos]
 
@@ -192,14 +209,58 @@ def overrides_of(params: dict) -> list[str]:
     return [f"{k}={_yaml_value(v)}" for k, v in params.items()]
 
 
-def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: int | None, shash: str) -> dict:
+def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: int | None, shash: str,
+                   ship: bool = False) -> dict:
     """Render one variant (a Dask task or a local call); never raises for a user error: the
-    outcome is in ``status``."""
+    outcome is in ``status``.
+
+    With ``ship`` (a Dask task) the variant is rendered in a temporary folder of the worker,
+    deleted after, and the row also holds its files (``files``: path relative to the variant's
+    folder -> bytes; ``exr`` relative too) and that folder (``rendered_in``), for the client to
+    write into ``out_dir`` (`_commit_variant`). Nothing is written into ``out_dir`` then.
+    """
+    if ship:
+        return _render_shipped(scenario, overrides, workers)
+    row = _render_row(scenario, overrides, Path(out_dir), workers)
+    if row["status"] == "done":
+        write_text_atomic(Path(out_dir) / "variant.json", json.dumps({"hash": shash, "overrides": overrides}, indent=1))
+    return row
+
+
+def _scratch_folder() -> str | None:
+    """The Dask worker's own folder (``local_directory``) when this runs in one, else None (the
+    system's temporary folder)."""
+    try:
+        from distributed import get_worker
+
+        return get_worker().local_directory
+    except (ImportError, ValueError, AttributeError):  # not in a worker
+        return None
+
+
+def _render_shipped(scenario: str, overrides: list[str], workers: int | None) -> dict:
+    """`render_variant` with ``ship``: the render in a temporary folder, its files in the row."""
+    with tempfile.TemporaryDirectory(prefix="pmmw-variant-", dir=_scratch_folder(), ignore_cleanup_errors=True) as tmp:
+        out = Path(tmp) / "out"
+        row = _render_row(scenario, overrides, out, workers)
+        if row["status"] == "done":
+            try:
+                row["files"] = {p.relative_to(out).as_posix(): p.read_bytes() for p in sorted(out.rglob("*"))
+                                if p.is_file() and not any(part.startswith(".") for part in p.relative_to(out).parts)}
+            except OSError as e:
+                return {"status": f"failed: reading the rendered files in {tmp}: {e}", "exr": "",
+                        "wall_s": row["wall_s"]}
+            row["exr"] = Path(row["exr"]).relative_to(out).as_posix() if row["exr"] else ""
+            row["rendered_in"] = str(out)
+    return row
+
+
+def _render_row(scenario: str, overrides: list[str], out: Path, workers: int | None) -> dict:
+    """Render one variant into ``out``; its table row (``status``, ``exr``, ``wall_s``, ``rays``)."""
     from pmmw_cli.errors import UserError as _UserError
     from pmmw_cli.pipeline import render
 
     t0 = time.perf_counter()
-    out = Path(out_dir)
     try:
         exrs = render(scenario, overrides, out=out, workers=workers, quiet=True)
     except _UserError as e:
@@ -208,7 +269,6 @@ def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: i
         # crossing Dask can hang its client when the traceback does not pickle
         return {"status": f"failed: {type(e).__name__}: {str(e)[:300]} ({exception_text(e, 600)})", "exr": "",
                 "wall_s": round(time.perf_counter() - t0, 3)}
-    write_text_atomic(out / "variant.json", json.dumps({"hash": shash, "overrides": overrides}, indent=1))
     rays = 0
     for path in out.glob("report*.json"):  # one report per frequency
         try:
@@ -240,6 +300,10 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
     (0 all done, 1 some failed)."""
     if spec.executor not in EXECUTORS:
         raise UserError(f"expected one of {', '.join(EXECUTORS)}, got {spec.executor!r}", "--executor")
+    if spec.executor == "dask" and spec.scheduler and spec.cluster is None and not dry_run:
+        from pmmw_cli.distributed import probe_scheduler
+
+        probe_scheduler(spec.scheduler)  # a wrong address told before any variant is looked at
     if dry_run:
         if spec.cluster is None:
             raise UserError("--dry-run prints the batch job script of --cluster FILE", "--dry-run")
@@ -250,6 +314,12 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
     if not spec.scenario.is_file():
         raise UserError("scenario file not found", spec.scenario)
     out = (spec.out or Path.cwd() / "out" / f"{spec.scenario.stem}_sweep").resolve()
+    with output_lock(out):  # one sweep per folder: a second is refused, naming this one
+        return _sweep_into(spec, out, resume=resume, quiet=quiet)
+
+
+def _sweep_into(spec: SweepSpec, out: Path, *, resume: bool, quiet: bool) -> int:
+    """`run_sweep` in the locked output folder ``out``."""
     combos = variants(spec)
     names = [f"v{i:03d}" for i in range(len(combos))]
     plans, rows = [], {}
@@ -271,39 +341,91 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
         for name, overrides, vdir, shash in plans:
             rows[name] = render_variant(str(spec.scenario), overrides, str(vdir), spec.workers, shash)
             log.update(rows)
-    elif plans:
-        from dask.distributed import as_completed
-
-        from pmmw_cli.distributed import connect
-        from pmmw_cli.trace.pool import default_workers
-
-        client, cluster = connect(spec.scheduler, spec.cluster,
-                                  min(spec.workers or default_workers(), len(plans)))
-        try:
-            # render_variant returns its errors; a lost worker's task is rescheduled (`distributed`)
-            futures = {client.submit(render_variant, str(spec.scenario), ov, str(vd), 1, sh, key=f"pmmw-{name}-{sh}",
-                                     pure=False): name for name, ov, vd, sh in plans}
-            for fut in as_completed(futures):
-                name = futures[fut]
-                try:
-                    rows[name] = fut.result()
-                except Exception as e:  # KilledWorker: the workers running it were lost too often
-                    rows[name] = {"status": f"failed: {type(e).__name__}: {str(e)[:200]}", "exr": "", "wall_s": 0.0}
-                log.update(rows)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+    lost = None  # the address of a Dask scheduler that went away
+    if spec.executor == "dask" and plans:
+        lost = _render_on_dask(spec, plans, rows, log)
     table = [_row(spec, out, name, params, rows[name]) for name, params in zip(names, combos)]
     write_table(out / "sweep.csv", table)
     from pmmw_cli.sweep_report import write_report
 
     write_report(out, spec, table)
+    if lost:
+        done = sum(r["status"] == "done" for r in table)
+        raise EnvironmentProblem(f"the Dask scheduler at {lost} went away during the sweep ({done} of {len(table)} "
+                                 "variants done; rerun with --resume to keep them)")
     failed = [r for r in table if r["status"] != "done"]
     print(f"sweep: {len(table) - len(failed)} of {len(table)} variants done -> {out / 'sweep.csv'}")
     for r in failed:
         print(f"  {r['variant']}: {r['status']}", file=sys.stderr)
     return 1 if failed else 0
+
+
+def _render_on_dask(spec: SweepSpec, plans: list, rows: dict, log: _Log) -> str | None:
+    """Render ``plans`` (name, overrides, folder, hash) as one Dask task each (`render_variant`
+    with ``ship``), write each finished one into its folder here (`_commit_variant`) and its row
+    into ``rows``. Returns the scheduler's address if it went away (the variants not finished
+    are marked so), else None. The tasks left are cancelled on the way out, whatever the way."""
+    from dask.distributed import as_completed
+
+    from pmmw_cli.distributed import cancel_quietly, dask_client, scheduler_lost
+    from pmmw_cli.trace.pool import default_workers
+
+    with dask_client(spec.scheduler, spec.cluster, min(spec.workers or default_workers(), len(plans))) as client:
+        # render_variant returns its errors; a lost worker's task is rescheduled (`distributed`)
+        futures = {client.submit(render_variant, str(spec.scenario), ov, str(vd), 1, sh, True, key=f"pmmw-{name}-{sh}",
+                                 pure=False): (name, ov, vd, sh) for name, ov, vd, sh in plans}
+        try:
+            for fut in as_completed(list(futures)):
+                name, overrides, vdir, shash = futures.pop(fut)
+                try:
+                    result = fut.result()
+                except Exception as e:  # noqa: BLE001 - KilledWorker: the workers running it were lost too often
+                    if scheduler_lost(client, e):
+                        address = client.scheduler.address
+                        for n, *_ in plans:
+                            rows.setdefault(n, {"status": f"failed: not rendered: the Dask scheduler at {address} "
+                                                          "went away", "exr": "", "wall_s": 0.0})
+                        return address
+                    result = {"status": f"failed: {type(e).__name__}: {str(e)[:200]}", "exr": "", "wall_s": 0.0}
+                fut.release()  # its files are no longer held on the cluster
+                rows[name] = _commit_variant(vdir, result, shash, overrides)
+                log.update(rows)
+        finally:
+            cancel_quietly(client, futures)
+    return None
+
+
+def _moved(data: bytes, rel: str, old: str, new: Path) -> bytes:
+    """A report ``rel`` (JSON or Markdown) rendered in the folder ``old``, naming ``new`` instead."""
+    text = data.decode("utf-8")
+    if rel.endswith(".json"):
+        return text.replace(json.dumps(old)[1:-1], json.dumps(str(new))[1:-1]).encode("utf-8")
+    return text.replace(old, str(new)).encode("utf-8")
+
+
+def _commit_variant(vdir: Path, result: dict, shash: str, overrides: list[str]) -> dict:
+    """Write a variant that a Dask task rendered (`render_variant` with ``ship``) into ``vdir``:
+    its files staged and moved into place together (`io.rundir.Staging`), reports last, the
+    folder it was rendered in replaced by ``vdir`` in them, then ``variant.json``. Returns its
+    table row: failed, with the reason, when the files cannot be written."""
+    from pmmw_cli.io.rundir import Staging, check_outputs
+
+    files, where = result.pop("files", None), result.pop("rendered_in", "")
+    if result["status"] != "done" or files is None:
+        return result
+    reports = [rel for rel in files if rel.endswith((".json", ".md"))]
+    try:
+        check_outputs(vdir, list(files), [], key="--out")
+        with Staging(vdir) as staged:
+            for rel, data in files.items():
+                staged.path(rel).write_bytes(_moved(data, rel, where, vdir) if rel in reports and where else data)
+            staged.commit([rel for rel in files if rel not in reports], last=reports)
+        write_text_atomic(vdir / "variant.json", json.dumps({"hash": shash, "overrides": overrides}, indent=1))
+    except UserError as e:  # an EnvironmentProblem too: the disk
+        return {**result, "status": f"failed: {e}", "exr": ""}
+    except OSError as e:
+        return {**result, "status": f"failed: writing into {vdir}: {e}", "exr": ""}
+    return {**result, "exr": str(vdir / result["exr"]) if result["exr"] else ""}
 
 
 class _Log:

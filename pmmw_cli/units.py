@@ -27,6 +27,7 @@ ratios go (10 log10 r = 10/ln(10) * ln r). ``Np`` here is the power (opacity) ne
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from functools import lru_cache
 
@@ -130,6 +131,8 @@ def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit:
     def fail(why: str):
         return UserError(f"{value!r} {why}; expected e.g. {example}", file, key)
 
+    if isinstance(value, numbers.Real) and not isinstance(value, (bool, int, float)):
+        value = float(value)  # a numpy scalar stands for the Python number (np.bool_ is no Real)
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise UserError(f"expected {_a(noun)} such as {example}, got {value!r}", file, key)
     if isinstance(value, str):

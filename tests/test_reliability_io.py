@@ -187,7 +187,7 @@ def test_render_refuses_what_memory_cannot_hold_unless_forced(tmp_path, monkeypa
     monkeypatch.setattr(pipeline, "available_memory", lambda: 1e6)  # a 1 MB machine
     scn = _scene(tmp_path)
     res = _run("render", scn, "--out", tmp_path / "out")
-    assert res.exit_code == 1
+    assert res.exit_code == 2  # a refusal of the input's size, as every bound (was 1)
     _one_error_line(res, "memory", "--force")
     assert not (tmp_path / "out" / "tiny.exr").exists()
     assert _run("render", scn, "--out", tmp_path / "out", "--force").exit_code == 0

@@ -8,13 +8,25 @@ import re
 import typing
 from pathlib import Path
 
+import numpy as np
 from pydantic import BaseModel, ValidationError
 
-from pmmw_cli.config.schema import Scenario
+from pmmw_cli.config.schema import _FREQUENCY_SUFFIX, _NAME_MARKS, Scenario
 from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.io.inputs import check_input_path
 from pmmw_cli.io.yamlio import MalformedYAML, load_yaml, read_yaml
 
 _INDEX = re.compile(r"^(.*?)\[(\d+)\]$")
+
+
+def default_name(path: Path) -> str:
+    """The name of a scenario that gives none: its file's stem, with what pmmw itself adds to output
+    names (``@``, a final ``_35GHz``) turned into ``-`` (``radar_35GHz.yaml`` -> ``radar-35GHz``)."""
+    stem = path.stem
+    for mark in _NAME_MARKS:
+        stem = stem.replace(mark, "-")
+    m = _FREQUENCY_SUFFIX.search(stem)
+    return stem if m is None else f"{stem[:m.start()]}-{stem[m.start() + 1:]}"
 
 
 def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | None = None,
@@ -43,10 +55,9 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
     """
     path = Path(path)
     if data is not None:
-        import copy
-
-        raw = copy.deepcopy(data)
+        raw = plain(data)
     else:
+        check_input_path(path)
         if not path.exists():
             raise UserError("scenario file not found", file=path)
         if not path.is_file():
@@ -58,13 +69,29 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
         raise UserError(f"the top level must be a mapping of keys (name, frequency, imager, scene, ...), got a {type(raw).__name__}", file=path)
     raw = apply_overrides(raw, list(overrides))
     if values:
-        raw = apply_overrides(raw, [], values=dict(values))
+        raw = apply_overrides(raw, [], values=plain(dict(values)))
     for key, dotted in (("spp", "render.spp"), ("workers", "render.workers"), ("seed", "render.seed")):
         if cli and cli.get(key) is not None:
-            raw = apply_overrides(raw, [], values={dotted: cli[key]})
+            raw = apply_overrides(raw, [], values={dotted: plain(cli[key])})
     if cli and cli.get("out") is not None:
         raw = apply_overrides(raw, [], values={"output.dir": str(Path(cli["out"]).expanduser().resolve())})
     return _validate(raw, path.resolve())
+
+
+def plain(value):
+    """A copy of ``value`` with numpy scalars and arrays as the Python numbers, booleans and
+    lists they hold (in mappings, lists and tuples too): a value from numpy stands wherever its
+    Python type does (``np.int64(8)`` for ``8``, ``np.bool_(True)`` for ``True``)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, dict):
+        return {plain(k): plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        items = [plain(v) for v in value]
+        return tuple(items) if type(value) is tuple else items
+    return copy.deepcopy(value)
 
 
 def _split_key(key: str) -> list:
@@ -155,7 +182,7 @@ def _validate(raw: dict, path: Path) -> Scenario:
         freq_key = "imager.frequency"
     elif "frequency" in data:
         data["frequencies"] = data.pop("frequency")
-    data.setdefault("name", path.stem)
+    data.setdefault("name", default_name(path))
     data["source_file"] = str(path)
     if isinstance(data.get("scene"), list):
         entries = []

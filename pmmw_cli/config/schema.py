@@ -6,11 +6,19 @@ its type, ``Annotated[float, Quantity(kind)]``, which also parses it; range chec
 ``after`` validators on the parsed float. Unknown keys are errors (``extra="forbid"``).
 Relative input paths resolve against the scenario file's folder, which the loader passes in the
 validation context as ``base_dir``.
+
+Every temperature key (``sky.temperature``, ``sky.ground_temperature``, ``atmosphere.temperature``,
+``atmosphere.ground_temperature``, ``render.default_temperature`` and the materials' and their
+layers' ``temperature``) takes the same range, `TEMPERATURE_RANGE`: above 0 K, at most
+`pmmw_cli.units.TEMPERATURE_MAX`. The temperatures of matter enter models that divide by them
+(Liebe 1991's and ITU-R P.676's theta = 300 K / T), and no sky is colder than the cosmic
+background (2.7 K): a sky that emits nothing is given as a small temperature, e.g. ``2.7 K``.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
@@ -20,7 +28,8 @@ from pydantic_core import core_schema
 
 from pmmw_cli.atmosphere.model import F_MAX, F_MIN
 from pmmw_cli.errors import UserError
-from pmmw_cli.units import parse_quantity
+from pmmw_cli.io.inputs import format_suffix, no_extension, path_problem, shown
+from pmmw_cli.units import TEMPERATURE_MAX, parse_quantity
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".stl", ".off")
 CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
@@ -97,23 +106,34 @@ def _integer(value):
 def _input_path(value, info: ValidationInfo) -> Path:
     if not isinstance(value, (str, Path)):
         raise ConfigValueError(f"expected a file path, got {value!r}")
+    if not str(value).strip():
+        raise ConfigValueError("expected a file path, got an empty string")
     p = Path(value).expanduser()
     base = (info.context or {}).get("base_dir")
     if not p.is_absolute() and base is not None:
         p = Path(base) / p
-    p = p.resolve()
+    why = path_problem(p)
+    if why:
+        raise ConfigValueError(f"{shown(p)}: {why}")
+    # the folders resolved, the file's own name kept: a symbolic link's name tells the format
+    p = p.parent.resolve() / p.name
     if not p.is_file():
         raise ConfigValueError(f"file not found: {p}")
     return p
 
 
 _NAME_FORBIDDEN = set("/\\\0")
+# what pmmw appends to a name in output names: ``_<f>GHz`` (multi-frequency outputs) and ``@``
+# (sub-band tile folders); a name holding either could name another scenario's files
+_NAME_MARKS = "@"
+_FREQUENCY_SUFFIX = re.compile(r"_[0-9.e+-]+GHz$")
 MAX_NAME = 100  # characters of `name`: output files add up to ~40 (`_300GHz_Ex2_ideal_sensor.png`,
 # temporary-file suffixes) and file systems take 255 bytes per file name
 MAX_SIDE = 16384  # [pixels] per image side
 MAX_PIXELS = 1 << 26  # 64 Mpx (8192 x 8192)
 MAX_SPP = 1 << 20
 MAX_SEED = (1 << 63) - 1
+TEMPERATURE_RANGE = (0.0, TEMPERATURE_MAX)  # [K] every temperature key: > 0, <= max
 FREQUENCY_RANGE = (F_MIN, F_MAX)  # [Hz] the ITU-R atmosphere models' range
 
 
@@ -250,8 +270,11 @@ class SceneEntry(_Model):
     @classmethod
     def _mesh(cls, v, info: ValidationInfo):
         p = _input_path(v, info)
-        if p.suffix.lower() not in MESH_SUFFIXES:
-            raise ConfigValueError(f"unsupported mesh format {p.suffix!r}; use one of {', '.join(MESH_SUFFIXES)}")
+        suffix = format_suffix(p)
+        if not suffix:
+            raise ConfigValueError(no_extension(p, "mesh", MESH_SUFFIXES))
+        if suffix not in MESH_SUFFIXES:
+            raise ConfigValueError(f"unsupported mesh format {suffix!r}; use one of {', '.join(MESH_SUFFIXES)}")
         return p
 
     @model_validator(mode="after")
@@ -354,9 +377,10 @@ class Atmosphere(_Model):
         return self
 
 
-def _positive_temperature(t):
-    if t <= 0:
-        raise ConfigValueError(f"temperature must be > 0 K, got {t:g} K")
+def _positive_temperature(t, hint: str = ""):
+    """``t`` [K] within `TEMPERATURE_RANGE` (the rule of every temperature key; module docstring)."""
+    if not t > TEMPERATURE_RANGE[0]:
+        raise ConfigValueError(f"temperature must be > 0 K, got {t:g} K{hint}")
     return t
 
 
@@ -366,6 +390,13 @@ class Sky(_Model):
     file: Optional[Path] = None
     zenith_opacity: Optional[float] = None
     ground_temperature: Annotated[float, Quantity("temperature")] = 290.0
+
+    @field_validator("temperature", "ground_temperature")
+    @classmethod
+    def _t(cls, t, info: ValidationInfo):
+        hint = " (a sky that emits nothing: give the cosmic background, 2.7 K)" if info.field_name == "temperature" \
+            else ""
+        return None if t is None else _positive_temperature(t, hint)
 
     @model_validator(mode="before")
     @classmethod
@@ -399,8 +430,6 @@ class Sky(_Model):
             raise ConfigValueError("a uniform sky needs 'temperature', e.g. {model: uniform, temperature: 60 K}")
         if self.model == "texture" and self.file is None:
             raise ConfigValueError("a texture sky needs 'texture: path/to/sky.exr' (channels Tv, Th)")
-        if self.temperature is not None and self.temperature < 0:
-            raise ConfigValueError("sky temperature must be >= 0 K")
         return self
 
 
@@ -532,6 +561,9 @@ class Scenario(_Model):
         # the name becomes output file names: keep it one plain path component
         if not v.strip() or v.strip() in (".", "..") or _NAME_FORBIDDEN & set(v) or not v.isprintable():
             raise ConfigValueError(f"name {v!r} must be a plain file name: not empty, no / or \\")
+        if set(_NAME_MARKS) & set(v) or _FREQUENCY_SUFFIX.search(v):
+            raise ConfigValueError(f"name {v!r} may not hold '@' nor end like '_35GHz': pmmw adds those to the names "
+                                   "of a multi-frequency scenario's files, which could then be another scenario's")
         if len(v) > MAX_NAME or len(v.encode("utf-8")) > 2 * MAX_NAME:
             raise ConfigValueError(f"name is {len(v)} characters long; at most {MAX_NAME} (it names the output files)")
         return v
@@ -554,6 +586,10 @@ class Scenario(_Model):
             raise ConfigValueError(why)
         if len(set(out)) != len(out):
             raise ConfigValueError("a frequency is listed twice")
+        labels = [f"{f / 1e9:g}" for f in out]
+        if len(out) > 1 and len(set(labels)) != len(labels):
+            raise ConfigValueError("two frequencies agree to 6 digits and would write the same files "
+                                   f"(_{labels[0]}GHz ...): give frequencies that differ within 6 digits")
         return out
 
     @field_validator("materials", mode="before")

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 
+from pmmw_cli import __version__
 from pmmw_cli.io.atomic import atomic_path
 
 #: Fraction of the pixels clipped at each end of the display range (Murakowski 2014 sec. 3.2 footnote).
@@ -22,7 +23,9 @@ MID_GREY = 128
 
 #: PNG options of the figures: zlib level 1 writes a render's previews 1.7x faster than
 #: matplotlib's default and, on these noisy images, 45 % smaller (landing: 1.4 MB against 2.5 MB).
-_PNG = {"format": "png", "pil_kwargs": {"compress_level": 1}}
+#: The ``Software`` text names pmmw: a render replaces only files it recognises as its own
+#: (`io.rundir.made_by_pmmw`).
+_PNG = {"format": "png", "pil_kwargs": {"compress_level": 1}, "metadata": {"Software": f"pmmw {__version__}"}}
 
 
 def display_range(img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:

@@ -17,6 +17,7 @@ import numpy as np
 from pmmw_cli.errors import UserError
 from pmmw_cli.io.atomic import write_text_atomic
 from pmmw_cli.io.preview import save_figure
+from pmmw_cli.memory import check_fits
 from pmmw_cli.po import solver
 
 CSV_HEADER = "theta_deg,phi_deg,rcs_theta_m2,rcs_phi_m2"
@@ -121,9 +122,9 @@ METHODS = ("auto", "direct", "octree")
 
 
 def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, polarization="theta",
-           theta=None, phi=None, monostatic=False, bounces=1, method="auto", tube=None) -> Result:
+           theta=None, phi=None, monostatic=False, bounces=1, method="auto", tube=None, force=False) -> Result:
     """The ``pmmw po`` job; see the command's help. ``tube``: ray-tube side [m] for bounces > 1
-    (default a quarter wavelength)."""
+    (default a quarter wavelength); ``force``: solve past the memory check (`compute`)."""
     if polarization not in ("theta", "phi"):
         raise UserError(f"expected theta or phi, got {polarization!r}", "--polarization")
     if not 1 <= bounces <= MAX_BOUNCES:
@@ -139,7 +140,7 @@ def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, p
     t0 = time.perf_counter()
     target = load_target(Path(mesh), material, eps, frequency)
     res = compute(target, frequency, th_i, ph_i, polarization, tt, pp, monostatic=monostatic, bounces=bounces,
-                  method=method, tube=tube, t0=t0)
+                  method=method, tube=tube, t0=t0, force=force, source=mesh)
     res.axes = (thetas, phis)
     return res
 
@@ -152,11 +153,60 @@ def grid(thetas, phis):
     return tt.ravel(), pp.ravel()
 
 
+# Memory of a solve [bytes], beyond the mesh already read: measured peaks (1e6- and 2e5-facet
+# plates at 10 GHz) with a margin.
+SOLVE_BASE_BYTES = 150e6  # the kernels' threads and buffers, Embree's library (72 MB measured)
+# Embree's scene and the intersector's arrays, lit facets, normals, the currents J, M and their
+# temporaries (614 measured)
+SOLVE_BYTES_PER_FACET = 1000
+SOLVE_BYTES_PER_DIRECTION = 2500  # angles, far field, the rows written (1530 measured with JSON)
+SOLVE_BYTES_PER_TUBE = 1500  # a ray tube's field, side vectors, hit and reflection (520 measured, a plate)
+
+
+def memory_estimate(target, k0: float, directions: int, *, method: str = "auto", bounces: int = 1,
+                    tube: float | None = None, monostatic: bool = False) -> float:
+    """Peak memory [bytes] of `compute` beyond the loaded ``target``, before it solves anything.
+
+    The facets' terms (`SOLVE_BYTES_PER_FACET`, all facets counted lit), the directions'
+    (`SOLVE_BYTES_PER_DIRECTION`), the octree's patterns when the method is or may be ``octree``
+    (`octree.memory_bytes`: they grow with the target's size in wavelengths squared, so with the
+    frequency), and for ``bounces`` > 1 the ray tubes of side ``tube`` [m] (default a quarter
+    wavelength) over the target's disc (`SOLVE_BYTES_PER_TUBE`).
+    """
+    facets = len(target.faces)
+    need = SOLVE_BASE_BYTES + SOLVE_BYTES_PER_FACET * facets + SOLVE_BYTES_PER_DIRECTION * directions
+    if not monostatic:  # a monostatic solve is one direction at a time: the direct sum
+        d = directions + 1  # the backscatter rides along
+        octree = method == "octree" or (method == "auto" and d >= solver.OCTREE_DIRECTIONS
+                                        and float(facets) * d >= solver.OCTREE_TERMS)
+        if octree and facets:
+            from pmmw_cli.po.octree import memory_bytes
+
+            need += memory_bytes(target.tri, k0, d)
+    if bounces > 1 and facets:
+        from pmmw_cli.po.sbr import MAX_TUBES  # more are refused by `sbr.tube_grid`
+
+        side = tube or np.pi / (2.0 * k0)  # a quarter wavelength
+        lo, hi = target.vertices.min(axis=0), target.vertices.max(axis=0)
+        n = math.ceil((float(np.linalg.norm(hi - lo)) / 2.0 + side) / side)
+        need += SOLVE_BYTES_PER_TUBE * min((2 * n + 1) ** 2, MAX_TUBES)
+    return need
+
+
 def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=False, bounces=1,
-            method="auto", tube=None, t0=None) -> Result:
-    """RCS of ``target`` at ``frequency`` [Hz] on the directions (tt, pp) [rad]."""
+            method="auto", tube=None, t0=None, force=False, source=None) -> Result:
+    """RCS of ``target`` at ``frequency`` [Hz] on the directions (tt, pp) [rad].
+
+    Before solving, its memory (`memory_estimate`) is checked against the memory available: more
+    is refused (a `UserError` located at ``source``, the mesh or job file) unless ``force``.
+    """
     t0 = time.perf_counter() if t0 is None else t0
     k0 = 2.0 * np.pi * frequency / solver.C0
+    need = memory_estimate(target, k0, tt.size, method=method, bounces=bounces, tube=tube, monostatic=monostatic)
+    check_fits(need, f"physical optics of {len(target.faces)} facets toward {tt.size} directions at "
+               f"{frequency / 1e9:g} GHz", file=source, force=force, option="--force",
+               remedy="fewer directions (--theta, --phi), a coarser mesh or a lower frequency"
+               + (", or --method direct" if not monostatic and method != "direct" else ""))
     if monostatic:
         s_t, s_p, n_lit = solver.monostatic(target, k0, polarization, tt, pp, bounces, tube)
         back = None

@@ -27,8 +27,10 @@ from typing import Annotated, Literal, Optional, Union
 import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
+from pmmw_cli import interrupt
 from pmmw_cli.config.schema import Quantity, SceneEntry, _Model, frequency_problem
 from pmmw_cli.errors import UserError, UserErrors
+from pmmw_cli.io.lock import output_lock
 from pmmw_cli.io.yamlio import read_yaml
 from pmmw_cli.po import command, solver
 
@@ -130,22 +132,32 @@ def _angles(value, option, theta: bool) -> np.ndarray:
     return command.parse_theta(text, option=option) if theta else command.parse_phi(text, option=option)
 
 
-def run_job(path: Path, out: Path | None = None) -> list[Path]:
-    """Run every (frequency, polarization) of the job; returns the files written."""
+def run_job(path: Path, out: Path | None = None, force: bool = False) -> list[Path]:
+    """Run every (frequency, polarization) of the job; returns the files written. ``force``:
+    solve past the memory check (`command.compute`)."""
     job = load_job(Path(path), out)
     key = str(job.source_file)
     thetas = _angles(job.observation.theta, f"{key}: observation.theta", True)
     phis = _angles(job.observation.phi, f"{key}: observation.phi", False)
     tt, pp = command.grid(thetas, phis)
     out_dir = job.output.dir or Path.cwd() / "out" / job.name
+    with output_lock(out_dir, "--out" if out is not None else f"{key}: output.dir"):
+        return _run_locked(job, out_dir, thetas, phis, tt, pp, force)
+
+
+def _run_locked(job, out_dir: Path, thetas, phis, tt, pp, force: bool = False) -> list[Path]:
+    """`run_job` in its locked output folder."""
     th_i, ph_i = job.incidence if job.incidence is not None else (0.0, 0.0)
     written, runs = [], []
     for f in job.frequencies:
         target = _targets(job, f)
         for pol in job.polarization:
             res = command.compute(target, f, th_i, ph_i, pol, tt, pp, monostatic=job.monostatic,
-                                  bounces=job.bounces, method=job.method, tube=job.tube)
+                                  bounces=job.bounces, method=job.method, tube=job.tube, force=force,
+                                  source=job.source_file)
             stem = f"{job.name}_{f / 1e9:g}GHz_{pol}"
+            interrupt.outcome(f"files already written in {out_dir} are complete, the others missing; run the "
+                              "job again to write them all")
             written += command.write_run(res, out_dir, stem, job.name, thetas, phis, job.output.plot)
             runs.append((stem, res))
     observation = f"theta `{job.observation.theta}`, phi `{job.observation.phi}` (degrees)"

@@ -38,7 +38,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from pmmw_cli.po import kernels
-from pmmw_cli.po.solver import ETA0, direction, theta_phi_hats
+from pmmw_cli.po.solver import ETA0, call_slices, direction, theta_phi_hats
 
 _LEAF_WAVELENGTHS = 1.5  # leaf side [wavelengths]; 1.5 is 7 % faster than 3 and 20 % than 1 (82k-facet sphere)
 _OVERSAMPLE = 2  # root grid upsampling before the local interpolation to the requested directions
@@ -126,8 +126,11 @@ def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n):
     start = np.searchsorted(box, np.arange(B + 1)).astype(np.int64)
     r_hat = np.ascontiguousarray(_half_grid(n).reshape(-1, 3))  # (n // 2 + 1) x n directions
     q = np.ascontiguousarray(k0 * (k_hat[None, :] - r_hat))
-    half = kernels.box_patterns(np.ascontiguousarray(tri), np.ascontiguousarray(area), np.ascontiguousarray(src),
-                                start, np.ascontiguousarray(centres), q, r_hat, ETA0)
+    tri, area, src = np.ascontiguousarray(tri), np.ascontiguousarray(area), np.ascontiguousarray(src)
+    centres = np.ascontiguousarray(centres)
+    half = np.empty((B, 3, r_hat.shape[0]), np.complex128)
+    for run in call_slices(np.diff(start) * r_hat.shape[0]):  # boxes in runs: Ctrl-C between them
+        half[run] = kernels.box_patterns(tri, area, src, start[run.start:run.stop + 1], centres[run], q, r_hat, ETA0)
     return _unfold(half.reshape(B, 3, n // 2 + 1, n))
 
 
@@ -164,6 +167,82 @@ def _interpolate(P: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarra
     return out
 
 
+def _tree(tri, k0, tol):
+    """The octree of facets ``tri`` (F, 3, 3) [m] binned by centroid over their bounding cube.
+
+    Returns
+    -------
+    order : (F,) int, the facets in Morton order (a box's facets contiguous)
+    tri : (F, 3, 3), the facets in that order
+    levels : list of dict, deepest first: ``lev``, ``keys``, ``ijk`` and ``centres`` of its boxes,
+        ``box`` (each facet's box index), ``n`` (grid points per angle, never coarser than a child's)
+    side0 : float, the cube's side [m]
+    """
+    cen = tri.mean(axis=1)
+    lo, hi = cen.min(axis=0), cen.max(axis=0)
+    side0 = float(max((hi - lo).max(), 1e-12)) * (1.0 + 1e-9)
+    wavelength = 2.0 * np.pi / k0
+    depth = max(0, int(np.ceil(np.log2(side0 / (_LEAF_WAVELENGTHS * wavelength)))))
+    leaf_side = side0 / 2**depth
+    ijk = np.clip(np.floor((cen - lo) / leaf_side).astype(np.int64), 0, 2**depth - 1)
+    del cen
+
+    # Morton order: a box's children are contiguous and its key is theirs shifted by 3 bits
+    morton = np.zeros(len(ijk), np.int64)
+    for bit in range(depth):
+        for axis in range(3):
+            morton |= ((ijk[:, axis] >> bit) & 1) << (3 * bit + 2 - axis)
+    order = np.argsort(morton, kind="stable")
+    tri, ijk, morton = tri[order], ijk[order], morton[order]
+
+    # boxes per level, deepest first; each facet's box index at that level
+    levels = []
+    for lev in range(depth, -1, -1):
+        keys, first, inv = np.unique(morton >> (3 * (depth - lev)), return_index=True,
+                                     return_inverse=True)
+        side = side0 / 2**lev
+        c = ijk[first] >> (depth - lev)
+        centres = lo + (c + 0.5) * side
+        R = float(np.linalg.norm(tri - centres[inv][:, None, :], axis=2).max())
+        levels.append(dict(lev=lev, keys=keys, ijk=c, centres=centres, box=inv,
+                           n=_grid_size(k0 * R, tol)))
+    # a parent's grid is never coarser than its children's
+    for a, b in zip(levels[:-1], levels[1:]):
+        b["n"] = max(b["n"], a["n"])
+    return order, tri, levels, side0
+
+
+def memory_bytes(tri, k0: float, directions: int, tol: float = 1e-3) -> float:
+    """Peak memory [bytes] of `far_field_octree` on the facets ``tri`` (F, 3, 3) [m] (all of
+    them: the lit ones are fewer, their patterns no larger), at ``k0`` [1/m] toward
+    ``directions`` directions, from the tree alone (`_tree`: no pattern computed).
+
+    The largest of its stages, each counted with the arrays alive in it (complex128, 16 B):
+    the leaves' patterns (half the torus computed, then unfolded); each level's children and
+    parents with one block of upsampling (`_CHUNK`) and the level's grid and translation; the
+    root's pattern upsampled `_OVERSAMPLE` times with its FFT's buffers. Plus the facets' own
+    arrays in Morton order (tri, area, currents, keys: ~220 B each, and each level's box index).
+    """
+    order, _, levels, _ = _tree(np.asarray(tri, float), k0, tol)
+    facets = len(order) * (220.0 + 8.0 * len(levels))
+    cplx = 16.0
+    leaf = levels[0]
+    b0, n0 = len(leaf["centres"]), leaf["n"]
+    stages = [b0 * 3 * (n0 // 2 + 1 + n0) * n0 * cplx]
+    for child, parent in zip(levels[:-1], levels[1:]):
+        nc, n_p = child["n"], parent["n"]
+        step = max(1, _CHUNK // (3 * n_p * n_p))
+        block = min(step, len(child["centres"])) * 3 * cplx * (2 * nc * nc + n_p * nc + 3 * n_p * n_p)
+        stages.append((len(child["centres"]) * nc * nc + len(parent["centres"]) * n_p * n_p) * 3 * cplx
+                      + block + 88.0 * n_p * n_p)
+    n_r = levels[-1]["n"]
+    n_fine = sfft.next_fast_len(int(np.ceil(_OVERSAMPLE * n_r)))
+    n_fine += n_fine % 2
+    stages.append(3 * cplx * (3 * n_r * n_r + n_fine * n_r + 3 * n_fine * n_fine) + _CHUNK * 2 * cplx
+                  + directions * 200.0)
+    return facets + max(stages)
+
+
 def far_field_octree(target, lit, J, M, k_hat, k0, theta, phi, tol=1e-3):
     """`solver.far_field` by octree aggregation (see the module docstring).
 
@@ -185,40 +264,9 @@ def far_field_octree(target, lit, J, M, k_hat, k0, theta, phi, tol=1e-3):
     if not lit.any():
         z = np.zeros(shape, complex)
         return z, z.copy()
-    tri, area = target.tri[lit], target.area[lit]
-    src = np.concatenate([J[lit], M[lit]], axis=1)
-    cen = tri.mean(axis=1)
-
-    # octree over the bounding cube of the centroids
-    lo, hi = cen.min(axis=0), cen.max(axis=0)
-    side0 = float(max((hi - lo).max(), 1e-12)) * (1.0 + 1e-9)
-    wavelength = 2.0 * np.pi / k0
-    depth = max(0, int(np.ceil(np.log2(side0 / (_LEAF_WAVELENGTHS * wavelength)))))
-    leaf_side = side0 / 2**depth
-    ijk = np.clip(np.floor((cen - lo) / leaf_side).astype(np.int64), 0, 2**depth - 1)
-
-    # Morton order: a box's children are contiguous and its key is theirs shifted by 3 bits
-    morton = np.zeros(len(ijk), np.int64)
-    for bit in range(depth):
-        for axis in range(3):
-            morton |= ((ijk[:, axis] >> bit) & 1) << (3 * bit + 2 - axis)
-    order = np.argsort(morton, kind="stable")
-    tri, area, src, ijk, morton = tri[order], area[order], src[order], ijk[order], morton[order]
-
-    # boxes per level, deepest first; each facet's box index at that level
-    levels = []
-    for lev in range(depth, -1, -1):
-        keys, first, inv = np.unique(morton >> (3 * (depth - lev)), return_index=True,
-                                     return_inverse=True)
-        side = side0 / 2**lev
-        c = ijk[first] >> (depth - lev)
-        centres = lo + (c + 0.5) * side
-        R = float(np.linalg.norm(tri - centres[inv][:, None, :], axis=2).max())
-        levels.append(dict(lev=lev, keys=keys, ijk=c, centres=centres, box=inv,
-                           n=_grid_size(k0 * R, tol)))
-    # a parent's grid is never coarser than its children's
-    for a, b in zip(levels[:-1], levels[1:]):
-        b["n"] = max(b["n"], a["n"])
+    order, tri, levels, side0 = _tree(target.tri[lit], k0, tol)
+    area = target.area[lit][order]
+    src = np.concatenate([J[lit], M[lit]], axis=1)[order]
 
     leaf = levels[0]
     P = _leaf_patterns(tri, area, src, leaf["box"], leaf["centres"], k_hat, k0, leaf["n"])

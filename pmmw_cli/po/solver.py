@@ -62,6 +62,31 @@ from pmmw_cli.trace.intersect import make_intersector, offset_origins
 C0 = 299_792_458.0  # [m/s]
 ETA0 = 376.730313668  # [ohm] impedance of free space
 
+#: Facet x direction terms per thread in one call of a compiled sum (`kernels.direction_sums`,
+#: `kernels.box_patterns`). A compiled call holds the interpreter, which sees Ctrl-C only between
+#: calls: at 2-5e6 terms per second and thread (2 cores, idle to busy) a call lasts 0.1-0.25 s,
+#: and the calls' overhead (~20 us each) is lost in that.
+CALL_TERMS = 500_000
+
+
+def call_slices(cost) -> list[slice]:
+    """Runs of consecutive items, each one compiled call of about `CALL_TERMS` terms per thread.
+
+    cost : (n,) terms of each item (independent of one another: the results do not depend on
+    the cut). A run holds at least one item per thread, so that every thread has work.
+    """
+    import numba
+
+    threads = numba.get_num_threads()
+    total = np.cumsum(np.asarray(cost, np.float64))
+    runs, i, n = [], 0, len(total)
+    while i < n:
+        j = int(np.searchsorted(total, (total[i - 1] if i else 0.0) + CALL_TERMS * threads, side="right"))
+        j = min(n, max(j, i + threads))
+        runs.append(slice(i, j))
+        i = j
+    return runs
+
 
 def direction(theta, phi) -> np.ndarray:
     """Unit vectors (..., 3) for angles [rad] (theta from +z, phi from +x toward +y)."""
@@ -204,8 +229,10 @@ def radiation_vectors(target: Target, lit, J, M, k_hat, k0, r_hat):
     """N and L (D, 3) of the lit facets' currents toward the unit directions ``r_hat`` (D, 3)."""
     src = np.ascontiguousarray(np.concatenate([J[lit], M[lit]], axis=1))
     q = np.ascontiguousarray(k0 * (np.asarray(k_hat, float)[None, :] - r_hat))
-    NL = kernels.direction_sums(np.ascontiguousarray(target.tri[lit]), np.ascontiguousarray(target.area[lit]),
-                                src, q)
+    tri, area = np.ascontiguousarray(target.tri[lit]), np.ascontiguousarray(target.area[lit])
+    NL = np.empty((q.shape[0], src.shape[1]), np.complex128)
+    for run in call_slices(np.full(q.shape[0], tri.shape[0])):  # directions in runs: Ctrl-C between them
+        NL[run] = kernels.direction_sums(tri, area, src, q[run])
     return NL[:, :3], NL[:, 3:]
 
 

@@ -37,6 +37,8 @@ import numpy as np
 import trimesh
 
 from pmmw_cli.errors import UserError, UserErrors, warn
+from pmmw_cli.io.inputs import format_suffix, no_extension
+from pmmw_cli.memory import check_fits, release_freed_memory
 from pmmw_cli.trace.intersect import DEGENERATE_REL
 
 MESH_FORMATS = {".glb": "gltf", ".gltf": "gltf", ".obj": "obj", ".ply": "ply", ".stl": "stl"}
@@ -50,6 +52,28 @@ _OBJ_NAMES_MTL = "__pmmw_material_names__.mtl"
 
 # Reader exceptions are quoted in the message up to this length (some repeat a whole buffer).
 _EXCEPTION_CHARS = 200
+
+#: [bytes] of memory at the peak of reading a mesh, per byte of the file (and of the glTF buffers
+#: and images it names): trimesh's parse, then this module's arrays, checked against the memory
+#: available before the file is read. Measured on 1e6-triangle grids: OBJ 15 (trimesh's export),
+#: 21 (short numbers), 29 (quads); binary STL 16; binary PLY 31; GLB 33. The factors leave room
+#: for files more compact than those (ASCII STL and PLY take 3-5 times less than their bound).
+LOAD_BYTES_PER_FILE_BYTE = {"obj": 40, "stl": 25, "ply": 60, "gltf": 60}
+
+#: [bytes] of an OBJ's material library (``mtllib``): a text file of some 100-300 bytes per
+#: material, read for the texture files it names. A larger one is refused before it is read
+#: (a 3 GB file took 6.4 GB to read whole).
+MAX_MTL_BYTES = 8 << 20
+
+# Freed memory is handed back after reading a mesh file of at least this many bytes, or building
+# a scene of at least `_RELEASE_TRIANGLES` (smaller ones leave little; the collection takes ~0.1 s).
+_RELEASE_BYTES = 1 << 24
+_RELEASE_TRIANGLES = 100_000
+
+# Statements are looked for in blocks of this many bytes of a text file; a line longer than
+# `_MAX_LINE` names no file (the rest of it is skipped), so a scan's memory is bounded.
+_BLOCK = 1 << 20
+_MAX_LINE = 1 << 16
 
 # MTL statements that name a texture file (the file name is the statement's last word).
 _MTL_MAPS = {
@@ -130,9 +154,12 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
     if up_axis not in (None, "y", "z"):
         raise UserError(f"up_axis must be 'y' or 'z', got {up_axis!r}", file=path)
     _check_file(path, fmt)
+    size = _check_load_memory(path, fmt)
     try:
         with _quiet():
-            scene = _read_obj(path) if fmt == "obj" else _load_scene(str(path), process=False)
+            # the type from the name given: a link's target may have none
+            file_type = format_suffix(path)[1:]
+            scene = _read_obj(path) if fmt == "obj" else _load_scene(str(path), file_type=file_type, process=False)
     except UserError:
         raise
     except Exception as e:  # whatever the reader trips on, the file is the user's to fix
@@ -140,7 +167,16 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
         if isinstance(e, IndexError):  # e.g. an OBJ face naming a vertex past the last one
             why = f"an index past the end of its data, a truncated file? {why}"
         raise UserError(f"not a valid {_FORMAT_NAMES[fmt]} file ({why})", file=path) from e
+    try:
+        return _parts(path, fmt, scene, up_axis)
+    finally:
+        del scene
+        if size >= _RELEASE_BYTES:
+            release_freed_memory()  # the reader's text and lists: ~400 B a triangle of an OBJ, else resident
 
+
+def _parts(path: Path, fmt: str, scene, up_axis) -> list[tuple[str, trimesh.Trimesh]]:
+    """`load_entry_mesh`'s parts of a scene trimesh has read."""
     rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis) == "y" else None
     parts = []
     n_not_finite = 0
@@ -240,10 +276,13 @@ def file_up_axis(path, up_axis: str | None = None) -> str:
 
 
 def _mesh_format(path: Path) -> str:
-    fmt = MESH_FORMATS.get(path.suffix.lower())
+    suffix = format_suffix(path)  # a symbolic link's own name first (content-addressed stores)
+    if not suffix:
+        raise UserError(no_extension(path, "mesh", sorted(MESH_FORMATS)), file=path)
+    fmt = MESH_FORMATS.get(suffix)
     if fmt is None:
         raise UserError(
-            f"unsupported mesh format {path.suffix!r}; supported: {', '.join(sorted(MESH_FORMATS))}", file=path
+            f"unsupported mesh format {suffix!r}; supported: {', '.join(sorted(MESH_FORMATS))}", file=path
         )
     return fmt
 
@@ -291,6 +330,27 @@ def _check_file(path: Path, fmt: str) -> None:
                 )
 
 
+def _check_load_memory(path: Path, fmt: str) -> int:
+    """Refuse a mesh whose reading would need more memory than is available, from the size of its
+    file and of the files a glTF names (`LOAD_BYTES_PER_FILE_BYTE`), before it is read; returns
+    that size [bytes]."""
+    size = path.stat().st_size
+    if fmt == "gltf" and format_suffix(path) != ".glb":
+        size += sum(file.stat().st_size for _, _, file, _ in _gltf_external_files(path, _gltf_json(path)))
+    check_fits(LOAD_BYTES_PER_FILE_BYTE[fmt] * size,
+               f"reading this {size / 1e6:.4g} MB {_FORMAT_NAMES[fmt]} mesh", file=path,
+               remedy="simplify the mesh (fewer triangles) or free memory")
+    return size
+
+
+def _check_mtl(mtl: Path, path: Path) -> None:
+    """Refuse a material library larger than `MAX_MTL_BYTES` (named by the OBJ ``path``)."""
+    size = mtl.stat().st_size
+    if size > MAX_MTL_BYTES:
+        raise UserError(f"material library {mtl.name!r} named by {path.name} is {size / 1e6:.4g} MB; an MTL is a "
+                        f"small text file, at most {MAX_MTL_BYTES >> 20} MiB: check its `mtllib` line", file=path)
+
+
 def _check_stl(path: Path, size: int) -> None:
     """A binary STL is an 84-byte header (80 free bytes, uint32 triangle count N) and 50 bytes
     per triangle; anything else must be ASCII STL text (``solid ...``)."""
@@ -326,7 +386,7 @@ def _gltf_json(path: Path) -> dict:
     (magic ``glTF``, version 2, total length), then chunks of (uint32 length, uint32 type, data);
     the first is the JSON.
     """
-    if path.suffix.lower() != ".glb":
+    if format_suffix(path) != ".glb":
         data = path.read_bytes()
     else:
         size = path.stat().st_size
@@ -380,9 +440,11 @@ def _gltf_external_files(path: Path, tree: dict) -> list[tuple[str, str, Path, i
 
 
 def _obj_external_files(path: Path) -> list[Path]:
-    """The existing ``mtllib`` files of an OBJ and the existing texture maps they name."""
+    """The existing ``mtllib`` files of an OBJ and the existing texture maps they name; a library
+    larger than `MAX_MTL_BYTES` is refused before it is read."""
     files = []
     for mtl in _named_files(path, {"mtllib"}, whole_words=True):
+        _check_mtl(mtl, path)
         files.append(mtl)
         files += _named_files(mtl, _MTL_MAPS, whole_words=False)
     return files
@@ -390,18 +452,48 @@ def _obj_external_files(path: Path) -> list[Path]:
 
 def _named_files(path: Path, keywords: set, whole_words: bool) -> list[Path]:
     """Existing files named by the lines of text file `path` that start with one of `keywords`,
-    relative to its folder. A statement's rest of line is one file name if such a file exists
-    (names with spaces); otherwise each word (``whole_words``: ``mtllib a.mtl b.mtl``) or the
-    last word (texture maps, after their options) is."""
+    relative to its folder (`_named_in`); the file is scanned in blocks (`_statements`)."""
+    return _named_in(path.parent, _statements(path, keywords), whole_words)
+
+
+def _named_in(folder: Path, lines, whole_words: bool) -> list[Path]:
+    """Existing files in ``folder`` named by statements ``lines`` (``keyword rest...``). A
+    statement's rest of line is one file name if such a file exists (names with spaces);
+    otherwise each word (``whole_words``: ``mtllib a.mtl b.mtl``) or the last word (texture
+    maps, after their options) is."""
     files = []
-    for line in path.read_text(errors="replace").splitlines():
+    for line in lines:
         words = line.split()
-        if len(words) < 2 or words[0].lower() not in keywords:
+        if len(words) < 2:
             continue
         rest = line.strip()[len(words[0]):].strip()
-        candidates = [rest] if (path.parent / rest).is_file() else (words[1:] if whole_words else words[-1:])
-        files += [path.parent / c for c in candidates if (path.parent / c).is_file()]
+        candidates = [rest] if (folder / rest).is_file() else (words[1:] if whole_words else words[-1:])
+        files += [folder / c for c in candidates if (folder / c).is_file()]
     return files
+
+
+def _statements(path: Path, keywords: set) -> list[str]:
+    """The lines of text file ``path`` whose first word is one of ``keywords`` (any case), found
+    block by block (`_BLOCK` bytes): the memory does not grow with the file (a 400 MB OBJ was
+    read whole and split into some 15 million strings to find its ``mtllib`` line)."""
+    first = rb"^[ \t]*(?:" + b"|".join(re.escape(k.encode()) for k in sorted(keywords)) + rb")[ \t]+\S[^\r\n]*"
+    pattern = re.compile(first, re.IGNORECASE | re.MULTILINE)
+    found, tail, skipping = [], b"", False
+    with path.open("rb") as f:
+        for block in iter(lambda: f.read(_BLOCK), b""):
+            if skipping:  # the rest of an overlong line
+                end = block.find(b"\n")
+                if end < 0:
+                    continue
+                block, skipping = block[end + 1:], False
+            block = tail + block
+            cut = block.rfind(b"\n") + 1
+            block, tail = block[:cut], block[cut:]
+            if len(tail) > _MAX_LINE:
+                tail, skipping = b"", True
+            found += [m.group().decode(errors="replace") for m in pattern.finditer(block)]
+    found += [m.group().decode(errors="replace") for m in pattern.finditer(tail)]
+    return found
 
 
 def _read_obj(path: Path) -> trimesh.Scene:
@@ -415,6 +507,9 @@ def _read_obj(path: Path) -> trimesh.Scene:
     if b"\0" in data:
         raise UserError("not a valid OBJ file (binary data, not OBJ text)", file=path)
     text = data.decode(errors="replace")
+    libraries = re.findall(r"(?im)^[ \t]*mtllib[ \t]+\S.*$", text)
+    for mtl in _named_in(path.parent, libraries, whole_words=True):  # not read here, but by the render's hash
+        _check_mtl(mtl, path)
     names = list(dict.fromkeys(re.findall(r"^[ \t]*usemtl[ \t]+(.+?)[ \t]*$", text, flags=re.MULTILINE)))
     text = re.sub(r"^[ \t]*mtllib\b.*$", "", text, flags=re.MULTILINE)
     resolver = None
@@ -549,9 +644,13 @@ def build_geometry(entries, scenario_file=None) -> SceneGeometry:
 
     vertices = np.concatenate(verts) if verts else np.zeros((0, 3))
     all_faces = np.concatenate(faces) if faces else np.zeros((0, 3), dtype=np.int64)
+    del verts, faces
     normals, _ = _face_normals(vertices, all_faces)
     used = vertices[all_faces].reshape(-1, 3)
     bounds = np.array([used.min(axis=0), used.max(axis=0)]) if len(used) else np.zeros((2, 3))
+    del used
+    if len(all_faces) >= _RELEASE_TRIANGLES:
+        release_freed_memory()  # the checks' temporaries (watertightness, normals): ~400 B a triangle, else resident
     return SceneGeometry(
         vertices=vertices,
         faces=all_faces,

@@ -36,6 +36,12 @@ SKY_CHANNELS = ("Tv", "Th")
 
 _TWO_PI = 2.0 * np.pi
 
+#: [bytes] per pixel a sky texture takes beyond reading its two float32 channels: the float64
+#: maps Tv and Th (16, kept by the render) and the temperature check's masks (~4).
+LOAD_BYTES_PER_PIXEL = 24
+#: [bytes] per pixel a loaded sky texture holds (the float64 maps Tv and Th).
+BYTES_PER_PIXEL = 16
+
 
 def _check_temperatures(name: str, t: np.ndarray) -> str | None:
     """A description of the first bad pixel of a temperature map, or None if all are valid."""
@@ -84,21 +90,22 @@ class SkyTexture:
             temperature; located by ``path`` and the scenario ``key`` that named it.
         """
         path = Path(path)
-        channels, _ = read_exr(path, key=key)
+        channels, _ = read_exr(path, key=key, channels=SKY_CHANNELS, bytes_per_pixel=LOAD_BYTES_PER_PIXEL)
         missing = [c for c in SKY_CHANNELS if c not in channels]
         if missing:
+            from pmmw_cli.io.exr import image_size
+
+            have = image_size(path, key=key)[2]
             raise UserError(
                 f"sky texture lacks channel(s) {', '.join(missing)}: a sky texture needs channels "
                 f"'Tv' and 'Th' (vertical and horizontal brightness temperature [K]); "
-                f"this file has: {', '.join(channels) or 'none'}",
+                f"this file has: {', '.join(have) or 'none'}",
                 file=path, key=key,
             )
-        tv, th = (channels[c].astype(np.float64) for c in SKY_CHANNELS)
-        for name, t in zip(SKY_CHANNELS, (tv, th)):
-            problem = _check_temperatures(name, t)
-            if problem:
-                raise UserError(f"sky texture: {problem}", file=path, key=key)
-        return cls(tv, th)
+        try:  # the float64 maps made and checked once, from the float32 channels
+            return cls(*(channels.pop(c) for c in SKY_CHANNELS))
+        except ValueError as e:
+            raise UserError(f"sky texture: {e}", file=path, key=key) from None
 
     def pixel_directions(self) -> np.ndarray:
         """Unit directions of the pixel centres, shape (H, W, 3), float64 (module convention)."""

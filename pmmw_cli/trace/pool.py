@@ -261,7 +261,8 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     ------
     EnvironmentProblem
         A tile's worker process died on every try (`_RETRIES`), or workers keep dying before
-        they render anything. The tiles finished by then are saved.
+        they render anything, or the Dask scheduler of ``client`` went away. The tiles finished
+        by then are saved.
     """
     tiles = job.tiles() if tiles is None else tiles
     results: dict[int, TileResult] = {}
@@ -290,7 +291,12 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
             progress(len(results), len(tiles), rays, time.perf_counter() - start)
 
     if todo and client is not None:
-        _render_on_dask(client, job, intersector, todo, _collect)
+        try:
+            _render_on_dask(client, job, intersector, todo, _collect)
+        except _SchedulerGone as e:
+            kept = "; rerun with --resume to keep them" if tile_dir is not None else ""
+            raise EnvironmentProblem(f"the Dask scheduler at {e} went away during the render ({len(results)} of "
+                                     f"{len(tiles)} tiles done{kept})") from None
     elif todo and workers == 1:
         _init_worker(job, intersector)
         for t in todo:
@@ -475,25 +481,44 @@ def _dask_tile(job: TraceJob, kind: str, token: str, tile) -> TileResult | str:
         return exception_text(e)
 
 
+class _SchedulerGone(Exception):
+    """The Dask scheduler (its address is the message) went away: the client's futures are cancelled."""
+
+
 def _render_on_dask(client, job: TraceJob, kind: str, todo: list, collect):
     """Render ``todo`` as one Dask task per tile on ``client``'s workers, results to ``collect``
     as they finish. The job is sent to every worker once. A task whose worker is lost is
     rescheduled by the scheduler; a tile that raises, or whose workers keep dying, stops the
-    render with an `EnvironmentProblem` naming it (finished tiles are already saved)."""
+    render with an `EnvironmentProblem` naming it (finished tiles are already saved); a lost
+    scheduler raises `_SchedulerGone`. Tasks only return their tiles: ``collect`` saves them
+    here, so no task of a render that ended (its scheduler gone, pmmw stopped) can write a file.
+    The tasks left are cancelled on the way out."""
     import uuid
 
     from dask.distributed import as_completed
 
+    from pmmw_cli.distributed import cancel_quietly, scheduler_lost
+
     token = uuid.uuid4().hex
-    [job_f] = client.scatter([job], broadcast=True, hash=False)
-    futures = {client.submit(_dask_tile, job_f, kind, token, t, key=f"pmmw-tile-{token}-{t[0]}", pure=False): t
-               for t in todo}
+    futures = {}
     try:
+        try:
+            [job_f] = client.scatter([job], broadcast=True, hash=False)
+        except Exception as e:  # noqa: BLE001 - each a line, not a traceback
+            if scheduler_lost(client):
+                raise _SchedulerGone(client.scheduler.address) from None
+            # a TimeoutError is an OSError, which the caller would blame on the tile folder
+            raise EnvironmentProblem(f"the Dask cluster at {client.scheduler.address} did not take the job "
+                                     f"({type(e).__name__}: {str(e)[:200]}): does it have workers?") from None
+        futures = {client.submit(_dask_tile, job_f, kind, token, t, key=f"pmmw-tile-{token}-{t[0]}", pure=False): t
+                   for t in todo}
         for fut in as_completed(futures):
             t = futures[fut]
             try:
                 r = fut.result()
             except Exception as e:  # KilledWorker: its workers were lost too often
+                if scheduler_lost(client, e):
+                    raise _SchedulerGone(client.scheduler.address) from None
                 r = f"{type(e).__name__}: {str(e)[:300]}"
             if isinstance(r, str):
                 raise EnvironmentProblem(
@@ -501,7 +526,7 @@ def _render_on_dask(client, job: TraceJob, kind: str, todo: list, collect):
                     f"{r.strip()}; finished tiles are kept: run again with --resume")
             collect(r)
     finally:
-        client.cancel(list(futures))
+        cancel_quietly(client, futures)
 
 
 def assemble(job: TraceJob, results: list[TileResult]):
