@@ -302,7 +302,8 @@ def render(scenario, *, spp: int | None = None, workers: int | None = None, seed
         imager, ``ideal.I`` ... before it, ``aux.*``), float32 [K] with dims (frequency, y, x);
         coordinates ``frequency`` [Hz] and pixel indices ``y`` (row 0 at the top) and ``x``;
         attributes: the EXR header without its ``pmmw:`` prefix, ``regions`` (the report's
-        region means and contrasts per frequency, when the scenario names regions) and, rendered
+        region means, contrasts with their SNR and ``detectable`` by the detection criterion, and
+        verdicts, per frequency, when the scenario names regions) and, rendered
         in memory, ``warnings`` (the report's; they are printed too).
     """
     from pmmw_cli import pipeline

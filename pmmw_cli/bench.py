@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from pmmw_cli import __version__
+from pmmw_cli.constants import C0
 from pmmw_cli.imaging.imager import blur, psf_kernel
 from pmmw_cli.io.atomic import save_npz_atomic, write_text_atomic
 from pmmw_cli.io.preview import save_figure
@@ -238,7 +239,7 @@ def scaling(levels=(2, 3, 4, 5, 6, 7, 8), resolution=(128, 128), spp=4, workers=
         faces = np.concatenate([ball.faces, ground.faces + len(ball.vertices)])
         normals = np.concatenate([ball.face_normals, ground.face_normals])
         fmed = np.concatenate([np.full(len(ball.faces), 1), np.full(len(ground.faces), 2)]).astype(np.int32)
-        k0 = 2 * np.pi * 35e9 / 299_792_458.0
+        k0 = 2 * np.pi * 35e9 / C0
         eps = np.array([1 + 0j, 2.5 + 0.6j, 3.9 + 0.56j])
         media = Media(["ambient", "ball", "ground"], eps, np.zeros(3, np.int8), np.array([290.0, 300.0, 300.0]),
                       np.array([0.0, *(2 * k0 * np.sqrt(eps[1:]).imag)]), (None, None, None))

@@ -21,10 +21,11 @@ from pmmw_cli import __version__
 from pmmw_cli.config import load_scenario
 from pmmw_cli.config.load import scenario_to_display
 from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
+from pmmw_cli.imaging import detection
 from pmmw_cli.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
 from pmmw_cli.io.exr import write_exr
 from pmmw_cli.io.lock import FolderLock
-from pmmw_cli.io.preview import write_depth_figure, write_figure, write_material_figure
+from pmmw_cli.io.preview import write_depth_figure, write_figure, write_material_figure, write_regions_figure
 from pmmw_cli.io.progress import StatusLine
 from pmmw_cli.io.report import write_report
 from pmmw_cli.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
@@ -277,9 +278,10 @@ def atmosphere_model(scn, f: float):
     a = scn.atmosphere
     if a is None or a.model != "layered":
         return None
-    from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+    from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel
 
-    layers = tuple(Layer(l.kind, l.base, l.top, l.liquid_water, l.rain_rate) for l in a.layers)
+    # a rain power law's entry holds across the imager's band around its frequency (f may be a sub-band)
+    layers = a.weather_at(f, half_band=scn.imager.bandwidth / 2.0, file=scn.source_file)
     try:
         atm = Atmosphere(profile=a.profile, ground_temperature=a.ground_temperature, humidity=a.humidity,
                          layers=layers, ground_altitude=a.ground_altitude)
@@ -306,22 +308,49 @@ class _Progress:
                        done == total)
 
 
+def region_shapes(regions, cam) -> dict:
+    """The named regions (`output.regions`) in image coordinates [px] (x right, y down, pixel k
+    spanning [k, k + 1)): ``("box", x0, y0, x1, y1)`` or ``("circle", u, v, radius)``, None for a
+    centre behind the imager."""
+    shapes = {}
+    for name, r in regions.items():
+        if r.box is not None:
+            shapes[name] = ("box", *(float(x) for x in r.box))
+            continue
+        (u,), (v,), (depth,) = cam.image_coordinates(np.asarray(r.center, float)[None])
+        shapes[name] = ("circle", float(u), float(v), float(r.radius)) if depth > 0 else None
+    return shapes
+
+
 def region_masks(regions, cam) -> dict:
     """Boolean (H, W) masks of the named regions (`output.regions`) on the image."""
     h, w = cam.height, cam.width
     yy, xx = np.mgrid[0:h, 0:w]
     masks = {}
-    for name, r in regions.items():
-        if r.box is not None:
-            x0, y0, x1, y1 = r.box
-            masks[name] = (xx >= x0) & (xx < x1) & (yy >= y0) & (yy < y1)
-            continue
-        (u,), (v,), (depth,) = cam.image_coordinates(np.asarray(r.center, float)[None])
-        if depth <= 0:
+    for name, shape in region_shapes(regions, cam).items():
+        if shape is None:
             masks[name] = np.zeros((h, w), bool)
-            continue
-        masks[name] = (xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= r.radius**2
+        elif shape[0] == "box":
+            x0, y0, x1, y1 = shape[1:]
+            masks[name] = (xx >= x0) & (xx < x1) & (yy >= y0) & (yy < y1)
+        else:
+            u, v, radius = shape[1:]
+            masks[name] = (xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= radius**2
     return masks
+
+
+#: The channels of the region statistics: the two polarizations and their sum.
+REGION_CHANNELS = ("Ex2", "Ey2", "I")
+
+
+def report_channel(scn) -> str:
+    """The channel a render's report leads with (its verdicts, its regions preview): Ey2 when
+    ``output.channels`` has it, else the first of them that the region statistics cover (Ex2,
+    Ey2, I), else Ey2."""
+    chans = getattr(scn.output, "channels", CHANNELS)  # a bare record (tests, validation) has all of them
+    if "Ey2" in chans:
+        return "Ey2"
+    return next((c for c in chans if c in REGION_CHANNELS), "Ey2")
 
 
 TRUNCATION_NOISE_FRACTION = 0.1  # region bias allowed from truncation, in noise sigmas
@@ -334,9 +363,19 @@ def region_limit(noise: float) -> float:
     return TRUNCATION_NOISE_FRACTION * noise if noise > 0 else TRUNCATION_LIMIT_NO_NOISE
 
 
-def region_stats(scn, cam, sensor, img=None, kernel=None) -> dict:
+def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None) -> dict:
     """Per region: mean sensor temperature, its Monte Carlo standard error and truncation bound;
-    per pair of regions: the contrast in K and noise sigmas, with the same two figures.
+    per pair of regions: the contrast in K and noise sigmas, with the same two figures, and its
+    detection by the one criterion (`imaging.detection`).
+
+    Detection of a pair "a - b" (a the target, b the background) in channel c: ``snr`` =
+    `detection.region_snr` of the contrast of the two regions' means in the ideal image
+    (``ideal``, else `stokes_images` of ``img.mean``; before the PSF), over a's blurred footprint,
+    in the channel's noise (`detection.channel_sigma`); ``snr_stderr`` its Monte Carlo standard
+    error (that of the ideal contrast, weights mask / N, times footprint norm / noise);
+    ``detectable`` ``snr >= 5``. All three None without imager noise (or without the ideal image).
+    ``verdicts`` gives each pair in words over its channels (`detection.contrast_verdict`),
+    ``channel`` the one the report leads with (`report_channel`), ``criterion`` the criterion.
 
     A region's mean in the sensor image is a linear functional of the ideal image, with weights
     W = blur^T(mask / N) (`blur_adjoint`; W = mask / N without an aperture). Pixels' Monte Carlo
@@ -350,8 +389,10 @@ def region_stats(scn, cam, sensor, img=None, kernel=None) -> dict:
     ended on a guessed temperature (`TileResult.truncated`), for Ex2 and Ey2 (twice it for I).
     """
     masks = region_masks(scn.output.regions, cam)
-    chans = [c for c in ("Ex2", "Ey2", "I") if c in sensor]
+    chans = [c for c in REGION_CHANNELS if c in sensor]
     sigma = scn.imager.noise
+    if ideal is None and img is not None:
+        ideal = stokes_images(img.mean)
     limit = region_limit(sigma)
     st = scn.render
     weights = {name: ((blur_adjoint(m / m.sum(), kernel) if kernel is not None else m / m.sum())
@@ -391,25 +432,42 @@ def region_stats(scn, cam, sensor, img=None, kernel=None) -> dict:
                      f"({'a tenth of the noise sigma' if sigma > 0 else 'no imager noise'}): "
                      "raise render.max_depth")
     names = list(masks)
-    contrasts = {}
+    # detection: the ideal image's region means (weights mask / N, no blur) and the target's
+    # blurred footprint (`detection.footprint_norm`)
+    ideal_w = {name: (m / m.sum() if m.any() else None) for name, m in masks.items()}
+    norms = {name: detection.footprint_norm(m, kernel) for name, m in masks.items() if m.any()}
+    contrasts, verdicts = {}, {}
     for i, a in enumerate(names):
         for b_name in names[i + 1:]:
             wa, wb = weights[a], weights[b_name]
             dw = None if wa is None or wb is None else wa - wb
+            dw_ideal = None if dw is None else ideal_w[a] - ideal_w[b_name]
             _, tb = bound(dw)
             pair = {}
             for c in chans:
                 k = means[a][c] - means[b_name][c]
-                scale = sigma * (np.sqrt(2.0) if c == "I" else 1.0)  # I carries sqrt(2) sigma
+                scale = detection.channel_sigma(sigma, c)  # I carries sqrt(2) sigma
                 err = mc_error(dw, c)
-                pair[c] = {"K": k, "sigma": k / scale if sigma > 0 else float("nan"), "stderr_K": err,
-                           "truncation_bound_K": None if tb is None else tb * (2.0 if c == "I" else 1.0)}
+                snr = snr_err = k_ideal = None
+                if dw_ideal is not None and ideal is not None:
+                    k_ideal = float(np.sum(dw_ideal * ideal[c]))
+                    snr = detection.region_snr(k_ideal, masks[a], kernel, scale, norm=norms[a])
+                    e_ideal = mc_error(dw_ideal, c)
+                    if snr is not None and e_ideal is not None:
+                        snr_err = e_ideal * norms[a] / scale
+                pair[c] = {"K": k, "ideal_K": k_ideal, "sigma": k / scale if sigma > 0 else float("nan"),
+                           "stderr_K": err,
+                           "truncation_bound_K": None if tb is None else tb * (2.0 if c == "I" else 1.0),
+                           "snr": snr, "snr_stderr": snr_err, "detectable": detection.detectable(snr)}
                 if err is not None and 2.0 * err > limit * (np.sqrt(2.0) if c == "I" else 1.0):
                     warn(f"output.regions: the contrast {a} - {b_name} in {c} has a Monte Carlo standard error "
                          f"of {err:.3g} K: seeds will differ by more than {limit:.3g} K; raise render.spp "
                          "or set render.target_error")
             contrasts[f"{a} - {b_name}"] = pair
-    return {"means": means, "pixels": pixels, "stderr": errors, "truncation": truncation,
+            verdicts[f"{a} - {b_name}"] = detection.contrast_verdict(
+                f"{a} - {b_name}", {c: (v["snr"], v["snr_stderr"], v["ideal_K"]) for c, v in pair.items()})
+    return {"criterion": detection.CRITERION, "channel": report_channel(scn), "verdicts": verdicts,
+            "means": means, "pixels": pixels, "stderr": errors, "truncation": truncation,
             "contrasts": contrasts, "noise_K": sigma, "limit_K": limit}
 
 
@@ -506,7 +564,9 @@ def _stem(scn, f: float) -> str:
 def output_names(scn, f: float) -> dict:
     """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``,
     ``previews`` and ``side_by_side`` (channel -> PNG), ``aux_previews`` (``depth``, ``material``
-    -> PNG, when ``output.aux`` asks for them), ``reports`` (JSON, Markdown)."""
+    -> PNG, when ``output.aux`` asks for them), ``regions_preview`` (``regions`` -> PNG: the
+    sensor image with ``output.regions`` outlined, when there are regions), ``reports`` (JSON,
+    Markdown)."""
     stem = _stem(scn, f)
     chans = scn.output.channels
     side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
@@ -520,6 +580,7 @@ def output_names(scn, f: float) -> dict:
         "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
         "aux_previews": {a: f"previews/{stem}_{a}.png" for a in ("depth", "material") if a in scn.output.aux}
         if on else {},
+        "regions_preview": {"regions": f"previews/{stem}_regions.png"} if on and scn.output.regions else {},
         "reports": [f"report{suffix}.json", f"report{suffix}.md"],
     }
 
@@ -533,7 +594,7 @@ def _imager_words(scn) -> str:
 
 def _all_outputs(names: dict) -> list[str]:
     return [names["exr"], *names["previews"].values(), *names["side_by_side"].values(),
-            *names["aux_previews"].values(), *names["reports"]]
+            *names["aux_previews"].values(), *names["regions_preview"].values(), *names["reports"]]
 
 
 # [s] per camera path per core: the shipped landing scene on a 2-core laptop (docs/benchmarks.md);
@@ -842,6 +903,7 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     images = frequency_images(scn, f, job, img, shash)
     ideal, sensor, kernel = images["ideal"], images["sensor"], images["kernel"]
     cam = job.camera
+    regions = region_stats(scn, cam, sensor, img, kernel, ideal) if scn.output.regions else None
     try:
         write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
         stats = {}
@@ -852,10 +914,16 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
             if c in names["previews"]:
                 lo, hi = write_figure(staged.path(names["previews"][c]), [(None, chan)], title=label.format(c))
                 stats[c].update(display_low=lo, display_high=hi)
-        for c, rel in names["side_by_side"].items():
+        for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
             write_figure(staged.path(rel), [("ideal (before the imager)", ideal[c]),
                                             (f"sensor ({_imager_words(scn)})", sensor[c])],
                          title=label.format(c))
+        if names["regions_preview"]:
+            c = regions["channel"]
+            first = next(iter(regions["verdicts"].values()), None)
+            write_regions_figure(staged.path(names["regions_preview"]["regions"]), sensor[c],
+                                 region_shapes(scn.output.regions, cam), title=label.format(f"{c}, regions"),
+                                 caption=first)
         if "depth" in names["aux_previews"]:
             write_depth_figure(staged.path(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))
         if "material" in names["aux_previews"]:
@@ -863,7 +931,6 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
                                   title=label.format("material of the first hit"))
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
-    regions = region_stats(scn, job.camera, sensor, img, kernel) if scn.output.regions else None
     t_total = time.perf_counter() - t1 + t_trace
     return {
         "truncation": truncation_summary(img, scn),
@@ -872,6 +939,7 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
         **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
         "frequency_hz": f, "output_exr": str(staged.out_dir / names["exr"]), "channels": stats,
         "previews": {**names["previews"], **{f"aux.{a}": rel for a, rel in names["aux_previews"].items()}},
+        **({"regions_preview": names["regions_preview"]["regions"]} if names["regions_preview"] else {}),
         "rays": img.rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),
                                      "frequency_total_s": round(t_total, 3)},
         "mean_samples_per_pixel": float(img.samples.mean()),

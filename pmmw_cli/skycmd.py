@@ -17,13 +17,16 @@ from pmmw_cli.errors import UserError
 from pmmw_cli.io.preview import save_figure
 from pmmw_cli.units import parse_quantity
 
-# Weathers of Murakowski 2014 ch. 3 (Tables 3.2, 3.5): fog 0-600 m, cloud 1-2 km, rain 0-3 km.
+# Weathers of Murakowski 2014 ch. 3: fog 0-600 m of 0.02 and 0.06 g/cm2 (sec. 3.1.1: 200 and
+# 600 g/m2 over 600 m), cloud 1-2 km (sec. 3.3.3; its water is pmmw's, fitted to the SAR path loss:
+# docs/thesis_parameters.md), rain 10 mm/h up to 1.5 km (sec. 3.3.4; here ITU-R P.838, which holds
+# at any frequency, not Table 3.5's 35/95 GHz power law).
 PRESETS = {
     "clear": (),
-    "cloud 1-2 km, 0.5 g/m3": (("cloud", 1000.0, 2000.0, 0.5e-3, 0.0),),
-    "heavy fog 0.3 g/m3": (("fog", 0.0, 600.0, 0.3e-3, 0.0),),
-    "extreme fog 1 g/m3": (("fog", 0.0, 600.0, 1.0e-3, 0.0),),
-    "rain 10 mm/h": (("rain", 0.0, 3000.0, 0.0, 10.0),),
+    "cloud 1-2 km, 1.3 g/m3": (("cloud", 1000.0, 2000.0, 1.3e-3, 0.0),),
+    "heavy fog 0.02 g/cm2 (0.33 g/m3)": (("fog", 0.0, 600.0, 0.2 / 600.0, 0.0),),
+    "extreme fog 0.06 g/cm2 (1 g/m3)": (("fog", 0.0, 600.0, 0.6 / 600.0, 0.0),),
+    "rain 10 mm/h to 1.5 km": (("rain", 0.0, 1500.0, 0.0, 10.0),),
 }
 
 
@@ -101,8 +104,7 @@ def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], g
 def _model(atm, f, layers=None):
     from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
 
-    lay = tuple(Layer(l.kind, l.base, l.top, l.liquid_water, l.rain_rate) for l in atm.layers) if layers is None else \
-        tuple(Layer(*l) for l in layers)
+    lay = atm.weather_at(f, file="pmmw sky") if layers is None else tuple(Layer(*l) for l in layers)
     return AtmosphereModel(Atmosphere(profile=atm.profile, ground_temperature=atm.ground_temperature,
                                       humidity=atm.humidity, layers=lay, ground_altitude=atm.ground_altitude), f)
 

@@ -5,8 +5,11 @@ A sweep varies scenario keys (``--grid KEY=LIST``, each list a YAML list or
 side by side (a flight path of poses). Each variant is an ordinary render (`pipeline.render`)
 into ``DIR/<variant>/``; ``DIR/sweep.csv`` has one row per variant: ``variant``, one column per
 grid key, ``status``, ``exr``, ``wall_s``, then every region's mean and every pairwise contrast
-in K and in noise sigmas from the variant's report. ``DIR/report.md`` adds plots of the contrasts
-against the swept values and a contact sheet of the previews.
+in K and in noise sigmas from the variant's report, and per contrast its ``snr`` and
+``detectable`` by the one detection criterion (`imaging.detection`) in the channel the report
+leads with (``snr beacon - runway Ey2``). ``DIR/report.md`` adds plots of the SNRs against the
+swept values with the criterion's threshold, which variants are detectable, and a contact sheet
+of the previews.
 
 Executors: ``local`` renders the variants one after another, each on all cores (variants and
 tiles share the machine without oversubscribing it); ``dask`` sends each variant to a Dask
@@ -202,7 +205,8 @@ def variants(spec: SweepSpec) -> list[dict]:
 
 
 def _yaml_value(v) -> str:
-    return yaml.safe_dump(v, default_flow_style=True, width=10_000).strip().removesuffix("...").strip()
+    # mappings in their written order: output.regions' order names each pair "a - b" (a the target)
+    return yaml.safe_dump(v, default_flow_style=True, width=10_000, sort_keys=False).strip().removesuffix("...").strip()
 
 
 def overrides_of(params: dict) -> list[str]:
@@ -463,10 +467,14 @@ def _row(spec, out: Path, name: str, params: dict, result: dict) -> dict:
         for region, chans in (regions.get("means") or {}).items():
             for c, v in chans.items():
                 row[f"mean {region} {c} [K]"] = v
+        lead = regions.get("channel", "Ey2")
         for pair, chans in (regions.get("contrasts") or {}).items():
             for c, v in chans.items():
                 row[f"contrast {pair} {c} [K]"] = v["K"]
                 row[f"contrast {pair} {c} [sigma]"] = v["sigma"]
+            if lead in chans and "snr" in chans[lead]:  # the detection criterion in the report's channel
+                row[f"snr {pair} {lead}"] = chans[lead]["snr"]
+                row[f"detectable {pair} {lead}"] = chans[lead]["detectable"]
     return row
 
 

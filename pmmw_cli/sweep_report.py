@@ -1,6 +1,8 @@
-"""The trade-study report of a sweep: ``DIR/report.md`` with the results table, a plot of each
-I contrast against the swept values, a heat map for two numeric axes, a contact sheet of the
-previews and, for a sweep with keys side by side (a flight path), an animation of the sequence.
+"""The trade-study report of a sweep: ``DIR/report.md`` with the results table, which variants
+are detectable by the one detection criterion (`imaging.detection`: SNR >= 5), a plot of each
+contrast's SNR against the swept values with that threshold, a heat map for two numeric axes, a
+contact sheet of the previews and, for a sweep with keys side by side (a flight path), an
+animation of the sequence.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pmmw_cli.imaging.detection import CRITERION, ROSE_SNR
 from pmmw_cli.io.atomic import atomic_path, write_text_atomic
 from pmmw_cli.io.preview import save_figure
 from pmmw_cli.sweep import _NUMBER_UNIT, SweepSpec, _label, zipped_keys
@@ -33,18 +36,28 @@ def _numeric(values) -> list[float] | None:
     return out
 
 
+def _pair_channel(snr_col: str) -> tuple[str, str]:
+    """``"snr beacon - runway Ey2"`` -> (``"beacon - runway"``, ``"Ey2"``)."""
+    pair, chan = snr_col.removeprefix("snr ").rsplit(" ", 1)
+    return pair, chan
+
+
+def _finite(v) -> bool:
+    return isinstance(v, float) and math.isfinite(v)
+
+
 def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
-    """``report.md``: the table, a plot per I contrast against the swept keys, heat maps, a
-    contact sheet and animations (module docstring)."""
+    """``report.md``: the table, the detectable variants, a plot of each contrast's SNR against
+    the swept keys, heat maps, a contact sheet and animations (module docstring)."""
     keys = [k for k, _ in spec.grid]
     lines = [f"# Sweep of `{spec.scenario.name}`", "",
              f"- grid (every combination{'; side by side: ' + ', '.join(zipped_keys(spec)) if spec.zip else ''}): "
              + "; ".join(f"`{k}` = {', '.join(map(str, v))}" for k, v in spec.grid),
              f"- executor: {spec.executor}; {sum(r['status'] == 'done' for r in table)} of {len(table)} done", ""]
-    contrast_cols = [c for c in dict.fromkeys(k for r in table for k in r)
-                     if c.startswith("contrast ") and c.endswith(" I [sigma]")]
-    k_cols = [c.replace("[sigma]", "[K]") for c in contrast_cols]
-    head = ["variant", *keys, "status", *k_cols, *contrast_cols]
+    snr_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.startswith("snr ")]
+    k_cols = [f"contrast {' '.join(_pair_channel(c))} [K]" for c in snr_cols]
+    det_cols = [c.replace("snr ", "detectable ", 1) for c in snr_cols]
+    head = ["variant", *keys, "status", *k_cols, *snr_cols, *det_cols]
     lines.append("| " + " | ".join(head) + " |")
     lines.append("| " + " | ".join("---" for _ in head) + " |")
     for r in table:
@@ -53,7 +66,12 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
             v = r.get(h, "")
             cells.append(f"{v:.3g}" if isinstance(v, float) and math.isfinite(v) else str(v))
         lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
-    plots = _plots(out, spec, table, contrast_cols) + _heatmaps(out, spec, table, contrast_cols)
+    if snr_cols:
+        lines += ["", f"Detection: a target is {CRITERION}; SNR of each contrast in the channel its reports "
+                  "lead with.", ""]
+        lines += _detection_lines(spec, table, snr_cols)
+    lines += _warning_lines(out, table)
+    plots = _plots(out, spec, table, snr_cols) + _heatmaps(out, spec, table, snr_cols)
     sheet = _contact_sheet(out, spec, table)
     lines += [""] + [f"![{p.stem}]({p.name})" for p in plots + ([sheet] if sheet else [])]
     movies = _animations(out, spec, table)
@@ -63,38 +81,101 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
     return write_text_atomic(out / "report.md", "\n".join(lines) + "\n")
 
 
-def _plots(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list[str]) -> list[Path]:
+def _warning_lines(out: Path, table: list[dict]) -> list[str]:
+    """The variants' warnings (a material outside its model's or table's range, ...), each once with
+    the variants that gave it."""
+    import json
+
+    seen: dict[str, list[str]] = {}
+    for r in table:
+        for rep in sorted((out / r["variant"]).glob("report*.json")) if r["status"] == "done" else ():
+            try:
+                warnings = json.loads(rep.read_text()).get("warnings") or []
+            except (OSError, ValueError):
+                continue
+            for w in warnings:
+                names = seen.setdefault(str(w), [])
+                if r["variant"] not in names:
+                    names.append(r["variant"])
+    if not seen:
+        return ["", "Warnings: none."]
+    out_lines = ["", "Warnings (each once, with the variants that gave it):", ""]
+    for w, names in seen.items():
+        which = "every variant" if len(names) == len(table) else ", ".join(names)
+        out_lines.append(f"- {w} ({which})")
+    return out_lines
+
+
+def _detection_lines(spec: SweepSpec, table: list[dict], snr_cols: list[str]) -> list[str]:
+    """Per contrast (and per value of the keys not on the first numeric axis): the values of that
+    axis where it is detectable and where not (its detection range), or the variants without
+    a numeric axis."""
+    axes = _numeric_axes(spec)
+    x_key, x_of = axes[0] if axes else (None, {})
+    line_keys = _other_keys(spec, [x_key]) if x_key else []
+    lines = []
+    for col in snr_cols:
+        pair, chan = _pair_channel(col)
+        groups: dict[str, list[dict]] = {}
+        for r in table:
+            if r["status"] == "done" and _finite(r.get(col)):
+                groups.setdefault(", ".join(f"{k}={r[k]}" for k in line_keys), []).append(r)
+        if not groups:
+            lines.append(f"- {pair} ({chan}): no SNR (no imager noise)")
+        for label, rows in groups.items():
+            if x_key:
+                rows = sorted(rows, key=lambda r: x_of[r[x_key]])
+            name = (lambda r: str(r[x_key])) if x_key else (lambda r: r["variant"])
+            yes = [name(r) for r in rows if r[col] >= ROSE_SNR]
+            no = [name(r) for r in rows if r[col] < ROSE_SNR]
+            at, there = (f"at {x_key} =", "at") if x_key else ("in", "in")
+            words = ((f"detectable {at} {', '.join(yes)}" if yes else "not detectable")
+                     + (f"; not {there} {', '.join(no)}" if yes and no else f" {at} {', '.join(no)}" if no else ""))
+            lines.append(f"- {pair} ({chan}{', ' + label if label else ''}): {words}")
+    return lines + [""]
+
+
+def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -> list[Path]:
+    """Per contrast, its SNR against the first numeric axis, one line per value of the other
+    keys, the criterion's threshold drawn; detectable variants filled, the others open."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     axes = _numeric_axes(spec)
-    if not axes or not contrast_cols:
+    if not axes or not snr_cols:
         return []
     x_key, x_of = axes[0]
     line_keys = _other_keys(spec, [x_key])
     written = []
-    for col in contrast_cols:
-        fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    for col in snr_cols:
+        pair, chan = _pair_channel(col)
         groups = {}
         for r in table:
-            if r["status"] == "done" and isinstance(r.get(col), float) and math.isfinite(r[col]):
+            if r["status"] == "done" and _finite(r.get(col)):
                 groups.setdefault(", ".join(str(r[k]) for k in line_keys), []).append(r)
+        if not groups:
+            continue
+        fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+        values = []
         for label, rows in groups.items():
-            xs = [x_of[r[x_key]] for r in rows]
-            order = sorted(range(len(rows)), key=lambda i: xs[i])
-            ax.plot([xs[i] for i in order], [rows[i][col] for i in order], "o-", label=label or None)
-        ax.axhline(3.0, color="k", lw=0.8, ls="--")
-        ax.axhline(-3.0, color="k", lw=0.8, ls="--")
+            rows = sorted(rows, key=lambda r: x_of[r[x_key]])
+            xs, ys = [x_of[r[x_key]] for r in rows], [r[col] for r in rows]
+            values += ys
+            line, = ax.plot(xs, ys, "-", label=label or None)
+            ax.scatter(xs, ys, s=28, zorder=3, edgecolors=line.get_color(),
+                       facecolors=[line.get_color() if y >= ROSE_SNR else "white" for y in ys])
+        ax.axhline(ROSE_SNR, color="k", lw=0.9, ls="--", label=f"SNR {ROSE_SNR:g}: detectable above (Rose)")
+        if min(values) > 0 and max(values) > 20 * min(values):
+            ax.set_yscale("log")
         ax.set_xlabel(_axis_label(spec, x_key))
-        ax.set_ylabel(col.replace("contrast ", "").replace(" [sigma]", " contrast [noise sigma]"))
-        ax.set_title(f"{spec.scenario.stem}: {col.split(' I ')[0].replace('contrast ', '')} (I)")
+        ax.set_ylabel(f"SNR (matched filter, {chan}); filled: detectable")
+        ax.set_title(f"{spec.scenario.stem}: {pair} ({chan})")
         ax.grid(True, alpha=0.3)
-        if line_keys:
-            ax.legend(fontsize=7, title=", ".join(line_keys), title_fontsize=7)
+        ax.legend(fontsize=7, title=", ".join(line_keys) or None, title_fontsize=7)
         fig.tight_layout()
-        path = out / ("plot_" + re.sub(r"[^A-Za-z0-9]+", "_", col.split(" I ")[0].replace("contrast ", "")) + ".png")
+        path = out / ("plot_" + re.sub(r"[^A-Za-z0-9]+", "_", pair) + ".png")
         save_figure(fig, path)
         written.append(path)
     return written
@@ -174,11 +255,11 @@ def _other_keys(spec: SweepSpec, used) -> list[str]:
     return [k for k, v in spec.grid if len(v) > 1 and k not in taken]
 
 
-def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list[str]) -> list[Path]:
-    """For two numeric axes, each I contrast [noise sigma] as a heat map over them, one panel per
-    combination of the other varying keys; cells at 3 sigma or more are outlined."""
+def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -> list[Path]:
+    """For two numeric axes, each contrast's SNR as a heat map over them, one panel per
+    combination of the other varying keys; detectable cells (SNR >= 5) outlined."""
     axes = _numeric_axes(spec)
-    if len(axes) < 2 or not contrast_cols:
+    if len(axes) < 2 or not snr_cols:
         return []
     import matplotlib
 
@@ -189,27 +270,28 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list
     panel_keys = _other_keys(spec, [x_key, y_key])
     xs, ys = sorted(set(x_pos.values())), sorted(set(y_pos.values()))
     written = []
-    for col in contrast_cols:
+    for col in snr_cols:
+        pair, chan = _pair_channel(col)
         panels: dict[str, np.ndarray] = {}
         for r in table:
             v = r.get(col)
-            if r["status"] != "done" or not isinstance(v, float) or not math.isfinite(v):
+            if r["status"] != "done" or not _finite(v):
                 continue
             z = panels.setdefault(", ".join(str(r[k]) for k in panel_keys), np.full((len(ys), len(xs)), np.nan))
             z[ys.index(y_pos[r[y_key]]), xs.index(x_pos[r[x_key]])] = v
         if not panels:
             continue
-        lim = max(3.0, max(float(np.nanmax(np.abs(z))) for z in panels.values()))
+        top = max(2.0 * ROSE_SNR, max(float(np.nanmax(z)) for z in panels.values()))
         fig, axs = plt.subplots(1, len(panels), figsize=(0.6 + 3.6 * len(panels), 3.6), dpi=110, squeeze=False)
         for ax, (label, z) in zip(axs[0], panels.items()):
-            shown = ax.imshow(z, cmap="RdBu_r", vmin=-lim, vmax=lim, origin="lower", aspect="auto")
+            shown = ax.imshow(z, cmap="viridis", vmin=0.0, vmax=top, origin="lower", aspect="auto")
             for (i, j), v in np.ndenumerate(z):
                 if math.isfinite(v):
-                    ax.text(j, i, f"{v:.1f}", ha="center", va="center", fontsize=7,
-                            fontweight="bold" if abs(v) >= 3.0 else "normal",
-                            color="w" if abs(v) > 0.6 * lim else "k")
-                    if abs(v) >= 3.0:
-                        ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, lw=1.2, ec="k"))
+                    ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7,
+                            fontweight="bold" if v >= ROSE_SNR else "normal",
+                            color="k" if v > 0.6 * top else "w")
+                    if v >= ROSE_SNR:
+                        ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, lw=1.4, ec="r"))
             ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs], fontsize=7)
             ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys], fontsize=7)
             ax.set_xlabel(_axis_label(spec, x_key), fontsize=8)
@@ -217,9 +299,8 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], contrast_cols: list
             if label:
                 ax.set_title(label, fontsize=8)
         bar = fig.colorbar(shown, ax=axs[0].tolist(), fraction=0.04, pad=0.02)
-        bar.set_label("contrast [noise sigma] (outlined: |c| >= 3)", fontsize=7)
-        pair = col.split(" I ")[0].replace("contrast ", "")
-        fig.suptitle(f"{spec.scenario.stem}: {pair} (I)", fontsize=9)
+        bar.set_label(f"SNR ({chan}) (outlined: detectable, SNR >= {ROSE_SNR:g})", fontsize=7)
+        fig.suptitle(f"{spec.scenario.stem}: {pair} ({chan})", fontsize=9)
         path = out / ("heatmap_" + re.sub(r"[^A-Za-z0-9]+", "_", pair) + ".png")
         save_figure(fig, path)
         written.append(path)

@@ -97,8 +97,10 @@ def test_validate_prints_the_resolved_job(tmp_path):
 def test_materials_list_and_show():
     res = _run("materials", "list", "--frequency", "95 GHz")
     assert res.exit_code == 0 and "human_skin" in res.output
-    res = _run("materials", "show", "concrete")
+    res = _run("materials", "show", "murakowski2014.concrete")
     assert res.exit_code == 0 and "5.5" in res.output
+    res = _run("materials", "show", "concrete")
+    assert res.exit_code == 0 and "ITU-R P.2040-4" in res.output and "5.24" in res.output
 
 
 @pytest.mark.parametrize(

@@ -11,6 +11,7 @@ The contract under test, for any input a user can write:
 """
 
 import contextlib
+import os
 import signal
 import tempfile
 from pathlib import Path
@@ -144,7 +145,11 @@ def _temperatures(obj):
     return out
 
 
-@settings(max_examples=100, deadline=None, derandomize=True, database=None,
+# `make test-full` (PMMW_TEST_FULL=1) hunts twice as long in the two widest searches
+_FULL = os.environ.get("PMMW_TEST_FULL") == "1"
+
+
+@settings(max_examples=100 if _FULL else 50, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(edits=st.lists(st.tuples(st.sampled_from(PATHS), st.one_of(plausible, plausible, values)), max_size=3),
        mats=st.one_of(st.just({}), materials))
@@ -187,7 +192,7 @@ def mesh_samples():
     return {fmt: data.encode() if isinstance(data, str) else data for fmt, data in out.items()}
 
 
-@settings(max_examples=150, deadline=None, derandomize=True, database=None,
+@settings(max_examples=150 if _FULL else 75, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(fmt=st.sampled_from(["stl", "obj", "ply", "glb"]), cut=st.floats(0, 1), flips=st.lists(
     st.tuples(st.floats(0, 1, exclude_max=True), st.integers(0, 255)), max_size=6), junk=st.binary(max_size=64))

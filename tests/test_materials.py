@@ -44,26 +44,26 @@ def _eps(db, mid, f_ghz):
 # --- the shipped database ------------------------------------------------------------------
 
 
-APPENDIX_A = {  # Murakowski 2014 Table A.1: id -> {GHz: eps}
-    "concrete": {35: 5.5 + 0.5j, 95: 2.49 + 6.8e-2j},
-    "asphalt": {35: 2.5 + 0.6j},
-    "brick": {35: 1.3 + 7.4e-2j},
-    "sand": {35: 3.0 + 0.56j, 95: 4.6 + 7e-3j},
-    "ice": {35: 3.1 + 2e-3j, 95: 3.1 + 9e-3j},
-    "dry_soil": {35: 3.1 + 0.2j, 95: 2.9 + 0.2j},
-    "moist_soil": {35: 4.9 + 2.1j, 95: 3.1 + 1.2j},
-    "basalt": {35: 6.7 + 0.28j, 95: 6.8 + 0.45j},
-    "granite": {35: 5.3 + 2.3e-2j},
-    "denim": {35: 1.6 + 6e-2j},
-    "beige_leather": {35: 2.2 + 6e-2j},
-    "human_skin": {35: 14 + 16j, 95: 5.9 + 9.4j},
-    "oak_leaves": {35: 7.3 + 5.6j, 95: 4.1 + 3.3j},
-    "polypropylene": {35: 2.3 + 1.8e-4j, 95: 2.26 + 1.3e-3j},
-    "plexiglass": {35: 2.3 + 2e-2j, 95: 2.59 + 1.9e-2j},
-    "nylon": {35: 2.99 + 2.1e-2j, 95: 2.99 + 2.5e-2j},
-    "fiberglass": {35: 4.3 + 0.11j, 95: 3.78 + 9.3e-2j},
-    "water": {35: 12.5 + 22.5j, 95: 6.65 + 9.4j},
-    "salt_water": {35: 12.3 + 23.2j, 95: 5.82 + 10.1j},
+APPENDIX_A = {  # Murakowski 2014 Table A.1, the set murakowski2014.*: id -> {GHz: eps}
+    "murakowski2014.concrete": {35: 5.5 + 0.5j, 95: 2.49 + 6.8e-2j},
+    "murakowski2014.asphalt": {35: 2.5 + 0.6j},
+    "murakowski2014.brick": {35: 1.3 + 7.4e-2j},
+    "murakowski2014.sand": {35: 3.0 + 0.56j, 95: 4.6 + 7e-3j},
+    "murakowski2014.ice": {35: 3.1 + 2e-3j, 95: 3.1 + 9e-3j},
+    "murakowski2014.dry_soil": {35: 3.1 + 0.2j, 95: 2.9 + 0.2j},
+    "murakowski2014.moist_soil": {35: 4.9 + 2.1j, 95: 3.1 + 1.2j},
+    "murakowski2014.basalt": {35: 6.7 + 0.28j, 95: 6.8 + 0.45j},
+    "murakowski2014.granite": {35: 5.3 + 2.3e-2j},
+    "murakowski2014.denim": {35: 1.6 + 6e-2j},
+    "murakowski2014.beige_leather": {35: 2.2 + 6e-2j},
+    "murakowski2014.human_skin": {35: 14 + 16j, 95: 5.9 + 9.4j},
+    "murakowski2014.oak_leaves": {35: 7.3 + 5.6j, 95: 4.1 + 3.3j},
+    "murakowski2014.polypropylene": {35: 2.3 + 1.8e-4j, 95: 2.26 + 1.3e-3j},
+    "murakowski2014.plexiglass": {35: 2.3 + 2e-2j, 95: 2.59 + 1.9e-2j},
+    "murakowski2014.nylon": {35: 2.99 + 2.1e-2j, 95: 2.99 + 2.5e-2j},
+    "murakowski2014.fiberglass": {35: 4.3 + 0.11j, 95: 3.78 + 9.3e-2j},
+    "murakowski2014.water": {35: 12.5 + 22.5j, 95: 6.65 + 9.4j},
+    "murakowski2014.salt_water": {35: 12.3 + 23.2j, 95: 5.82 + 10.1j},
 }
 
 CHAPTERS = {  # Murakowski 2014 Tables 2.1-2.3, 3.1, 3.3, 3.4: id -> ({GHz: eps}, T [K])
@@ -98,8 +98,8 @@ def test_default_dir_is_the_repo_materials_folder(monkeypatch):
 
 
 def test_spot_checks_from_the_seed_tables(db):
-    assert _eps(db, "concrete", 35) == 5.5 + 0.5j
-    assert _eps(db, "human_skin", 95) == 5.9 + 9.4j
+    assert _eps(db, "murakowski2014.concrete", 35) == 5.5 + 0.5j
+    assert _eps(db, "murakowski2014.human_skin", 95) == 5.9 + 9.4j
     assert _eps(db, "runway_asphalt", 95) == 2.25 + 0.18j
     assert db.get("runway_asphalt").temperature == 288.0
     assert db.get("holster_leather").temperature == 310.0
@@ -154,7 +154,7 @@ def test_shipped_database_is_consistent(db):
 
 
 def test_interpolation_is_linear_in_frequency(db):
-    c = db.get("concrete")
+    c = db.get("murakowski2014.concrete")
     mid = c.eps_at(65 * GHZ)
     assert mid == pytest.approx(((5.5 + 0.5j) + (2.49 + 0.068j)) / 2, rel=1e-12)
     w = (50 - 35) / (95 - 35)
@@ -163,13 +163,16 @@ def test_interpolation_is_linear_in_frequency(db):
 
 def test_outside_the_table_clamps_and_warns_once(db):
     clear_warnings()
-    c = db.get("concrete")
+    c = db.get("murakowski2014.concrete")
     assert c.eps_at(10 * GHZ) == 5.5 + 0.5j
     assert c.eps_at(140 * GHZ) == 2.49 + 0.068j
-    warnings = [w for w in collected_warnings() if "concrete" in w]
-    assert len(warnings) == 1 and "35 GHz" in warnings[0] and "95 GHz" in warnings[0]
-    assert db.get("asphalt").eps_at(95 * GHZ) == 2.5 + 0.6j  # 35 GHz only in Table A.1
-    assert any("asphalt" in w and "35 GHz" in w for w in collected_warnings())
+    assert c.eps_at(140 * GHZ) == 2.49 + 0.068j  # the same frequency again: no second warning
+    warnings = [w for w in collected_warnings() if "murakowski2014.concrete" in w]
+    # one per frequency asked, each naming the material, the frequency and the table's range
+    assert len(warnings) == 2 and all("35 GHz to 95 GHz" in w for w in warnings)
+    assert "10 GHz" in warnings[0] and "140 GHz" in warnings[1]
+    assert db.get("murakowski2014.asphalt").eps_at(95 * GHZ) == 2.5 + 0.6j  # 35 GHz only in Table A.1
+    assert any("murakowski2014.asphalt" in w and "35 GHz" in w for w in collected_warnings())
     clear_warnings()
     assert c.eps_at(35 * GHZ) == 5.5 + 0.5j and c.eps_at(95 * GHZ) == 2.49 + 0.068j
     assert collected_warnings() == []
@@ -196,22 +199,22 @@ def test_frequency_independent_eps(db):
 
 
 def test_partial_override_keeps_the_rest(db):
-    d2 = db.with_overrides({"concrete": {"temperature": "290 K"}}, file=SCN)
-    c = d2.get("concrete")
+    d2 = db.with_overrides({"murakowski2014.concrete": {"temperature": "290 K"}}, file=SCN)
+    c = d2.get("murakowski2014.concrete")
     assert c.temperature == 290.0
-    assert c.eps == db.get("concrete").eps and c.freqs == db.get("concrete").freqs
+    assert c.eps == db.get("murakowski2014.concrete").eps and c.freqs == db.get("murakowski2014.concrete").freqs
     assert c.name == "Concrete" and "Table A.1" in c.source and c.origin == SCN
-    assert db.get("concrete").temperature is None  # the original is untouched
-    d3 = db.with_overrides({"asphalt": {"eps": {"95 GHz": [2.25, 0.18], "35 GHz": [2.5, 0.6]}, "temperature": "288 K"}}, file=SCN)
-    a = d3.get("asphalt")
+    assert db.get("murakowski2014.concrete").temperature is None  # the original is untouched
+    d3 = db.with_overrides({"murakowski2014.asphalt": {"eps": {"95 GHz": [2.25, 0.18], "35 GHz": [2.5, 0.6]}, "temperature": "288 K"}}, file=SCN)
+    a = d3.get("murakowski2014.asphalt")
     assert a.freqs == (35e9, 95e9) and a.eps_at(95 * GHZ) == 2.25 + 0.18j and a.temperature == 288.0
-    d4 = db.with_overrides({"concrete": {"eps": {"60 GHz": [4, 0.3]}}}, file=SCN)
-    assert d4.get("concrete").freqs == (60e9,)  # eps replaces the whole table
+    d4 = db.with_overrides({"murakowski2014.concrete": {"eps": {"60 GHz": [4, 0.3]}}}, file=SCN)
+    assert d4.get("murakowski2014.concrete").freqs == (60e9,)  # eps replaces the whole table
 
 
 def test_override_to_metal_drops_eps(db):
-    d2 = db.with_overrides({"concrete": {"kind": "metal"}}, file=SCN)
-    assert d2.get("concrete").kind == "metal" and d2.get("concrete").eps == ()
+    d2 = db.with_overrides({"murakowski2014.concrete": {"kind": "metal"}}, file=SCN)
+    assert d2.get("murakowski2014.concrete").kind == "metal" and d2.get("murakowski2014.concrete").eps == ()
 
 
 def test_new_material_with_coating(db):
@@ -332,7 +335,7 @@ def test_duplicate_id_against_the_shipped_database(tmp_path):
     extra.write_text("concrete: {eps: [5, 0.5]}\n")
     with pytest.raises(UserError) as ei:
         MaterialDB.load([default_materials_dir(), extra])
-    assert "appendix_a.yaml" in str(ei.value) and "extra.yaml" in str(ei.value)
+    assert "buildings.yaml" in str(ei.value) and "extra.yaml" in str(ei.value)
 
 
 def test_malformed_yaml_names_file_and_line(tmp_path):
@@ -393,9 +396,9 @@ def test_format_material_table(db):
 
 
 def test_format_material(db):
-    text = format_material(db, "concrete")
-    assert "concrete" in text and "5.5 + 0.5j" in text and "Table A.1" in text and "appendix_a.yaml" in text
-    text = format_material(db, "concrete", 65 * GHZ)
+    text = format_material(db, "murakowski2014.concrete")
+    assert "murakowski2014.concrete" in text and "5.5 + 0.5j" in text and "Table A.1" in text and "appendix_a.yaml" in text
+    text = format_material(db, "murakowski2014.concrete", 65 * GHZ)
     assert "65 GHz" in text and "interpolated" in text
     text = format_material(db, "clothed_skin", 95 * GHZ)
     assert "denim_clothing" in text and "0.8 mm" in text
@@ -405,7 +408,7 @@ def test_format_material(db):
 
 
 def test_materials_are_immutable(db):
-    m = db.get("concrete")
+    m = db.get("murakowski2014.concrete")
     with pytest.raises(Exception):
         m.temperature = 3.0  # type: ignore[misc]
     assert math.isclose(m.eps_at(35 * GHZ).real, 5.5)

@@ -34,10 +34,16 @@ def test_a_small_image_is_scaled_up_with_its_own_display_range(tmp_path):
     assert len(greys) > 20
 
 
-def test_a_pair_shares_one_range(tmp_path):
-    a, b = np.full((8, 8), 250.0), np.full((8, 8), 350.0)
+def test_each_panel_of_a_pair_has_its_own_range(tmp_path):
+    """The ideal image beside the sensor image: each on its own display range (the thesis's
+    clipping of each image), the first panel's returned."""
+    from pmmw_cli.io.preview import panel_ranges
+
+    a, b = np.full((8, 8), 250.0), np.full((8, 8), 340.0)
+    a[:, 4:], b[:, 4:] = 260.0, 360.0
     low, high = write_figure(tmp_path / "pair.png", [("ideal", a), ("sensor", b)], title="pair")
-    assert (low, high) == (250.0, 350.0)
+    assert (low, high) == (250.0, 260.0)
+    assert panel_ranges([a, b]) == [(250.0, 260.0), (340.0, 360.0)]
 
 
 def test_render_previews_are_figures_and_the_pair_only_with_an_imager(tmp_path):

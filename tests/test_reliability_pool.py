@@ -215,6 +215,7 @@ def test_a_signal_at_a_random_moment_ends_the_render_cleanly(tmp_path, sig):
 
 
 @pytest.mark.slow
+@pytest.mark.full  # test_a_signal_at_a_random_moment_ends_the_render_cleanly checks the same, fewer times
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_many_signals_at_random_moments_end_the_render_cleanly(tmp_path, sig):
     """As above, 12 times per signal (the old pool hung about one time in ten, so 24 tries

@@ -1,6 +1,7 @@
-"""The generated scenes of Murakowski 2014 sec. 2.3.2 and chapter 3 (scenes/{cinderblocks,landing,
-cwd,sar}): shipped assets load with the expected material names, every part is closed and outward,
-the key dimensions match the thesis, and each script regenerates its assets byte for byte."""
+"""The generated scenes of Murakowski 2014 sec. 2.3 and chapter 3 (scenes/{cinderblocks,truck,
+bikeracks,landing,cwd,sar}): shipped assets load with the expected material names, every part is
+closed and outward, the key dimensions match the thesis, and each script regenerates its assets
+byte for byte."""
 
 from __future__ import annotations
 
@@ -29,6 +30,9 @@ CWD = {"skin", "clothing", "holster", "gun", "shoes", "ground"}
 SAR = {"dry_ground", "wet_ground", "rocks", "shrubs"}
 SHIPPED = {
     "cinderblocks/cinderblocks.glb": {"ground", "cinderblock"},
+    "truck/truck.glb": {"ground", "body", "tires", "interior"},
+    "bikeracks/bikeracks.glb": {"bricks", "grass", "windows", "posts", "chain", "frame", "lock", "tires", "plastics"},
+    "bikeracks/bikeracks_tree.glb": {"tree"},
     "landing/landing_plate.glb": LANDING,
     "landing/landing_brackets.glb": LANDING,
     "cwd/cwd_outdoor.glb": CWD,
@@ -41,6 +45,8 @@ SHIPPED = {
 }
 SCRIPTS = {  # script -> the files it writes with its default arguments
     "cinderblocks": ["cinderblocks.glb"],
+    "truck": ["truck.glb"],
+    "bikeracks": ["bikeracks.glb", "bikeracks_tree.glb"],
     "landing": ["landing_plate.glb", "landing_brackets.glb"],
     "cwd": ["cwd_outdoor.glb", "cwd_outdoor_coated.glb", "cwd_indoor.glb", "cwd_indoor_coated.glb"],
     "sar": ["sar_cessna.glb", "sar_blanket.glb", "sar_beacon.glb"],
@@ -118,6 +124,70 @@ def test_cinderblock_cavities_are_wells_closed_by_the_ground():
             origin = [[x + dx, y, max(b.bounds[1][2] for b in stack) + 1.0]]
             hits, _, _ = everything.ray.intersects_location(origin, [[0.0, 0.0, -1.0]])
             assert hits[:, 2].max() == pytest.approx(0.0, abs=1e-6)  # first hit: the ground
+
+
+# -- truck (Murakowski 2014 sec. 2.3.3) -----------------------------------------------------------
+
+def test_truck_body_tires_and_open_cab():
+    """A compact pickup (5.0 m, 1.72 m high) standing on its four SA-9 tires 1 mm above the sand,
+    its metal 0.19 m or more above it (the under-body cavity is open to the rays), and a cab seen
+    through its open side window (Table 2.2 lists no glass): the imager's ray to the window's
+    middle meets the leather interior first."""
+    rel = "truck/truck.glb"
+    body = trimesh.util.concatenate(of(rel, "body"))
+    extents = np.sort(trimesh.bounds.oriented_bounds(body)[1])
+    assert extents[-1] == pytest.approx(5.04, abs=0.01)  # with the bumpers
+    assert body.bounds[1][2] == pytest.approx(1.72, abs=1e-4)
+    tires = of(rel, "tires")
+    assert len(tires) == 4
+    wheel_centres = [t.bounds.mean(axis=0) for t in tires]
+    under = [m for m in of(rel, "body") if min(np.linalg.norm(m.bounds.mean(axis=0) - c) for c in wheel_centres) > 0.2]
+    assert min(m.bounds[0][2] for m in under) == pytest.approx(0.19, abs=0.005)  # the differential, the lowest
+    for t in tires:
+        assert t.bounds[0][2] == pytest.approx(0.001, abs=1e-4)
+        assert np.ptp(t.vertices[:, 2]) == pytest.approx(0.72, abs=0.002)  # 0.36 m radius
+    everything = trimesh.util.concatenate([m for _, m in parts(rel)])
+    owner = np.concatenate([np.full(len(m.faces), n) for n, m in parts(rel)])
+    window = np.array([0.752, 7.338, 1.33])  # printed by the script: the side window's middle
+    origin = np.array([0.0, 0.0, 1.5])
+    _, _, tri = everything.ray.intersects_location([origin], [(window - origin) / np.linalg.norm(window - origin)],
+                                                   multiple_hits=False)
+    assert owner[tri[0]] == "interior"
+
+
+# -- bike racks (Murakowski 2014 sec. 2.3.4) ------------------------------------------------------
+
+def test_bikeracks_fence_bicycles_and_tree():
+    """Seven capped fence posts with six chains between them, two racks, two bicycles (four tires
+    of 0.34 m, the near pair leaning 25 deg, the far pair upright), a lock; and the large tree
+    behind the imager (sec. 2.3.4), in its own file: 22 m wide, 2 m to 10 m up, wholly behind
+    the imager, which is outside it."""
+    rel = "bikeracks/bikeracks.glb"
+    posts = of(rel, "posts")
+    assert len(posts) == 7 + 2
+    fence = [p for p in posts if abs(p.centroid[1] - 9.0) < 0.01]
+    assert len(fence) == 7
+    for p in fence:
+        assert p.bounds[1][2] == pytest.approx(0.96, abs=1e-4)  # 0.9 m post, 6 cm cap
+    chains = of(rel, "chain")
+    assert len(chains) == 6
+    for c in chains:
+        assert c.bounds[0][2] == pytest.approx(0.80 - 0.15 - 0.0125 - 0.003, abs=0.01)  # the sag, a link, the wire
+    tires = of(rel, "tires")
+    assert len(tires) == 4
+    for t in tires:
+        # the wheel's plane from the tire's vertices: its normal's tilt from horizontal is the lean
+        centred = t.vertices - t.vertices.mean(axis=0)
+        normal = np.linalg.svd(centred, full_matrices=False)[2][-1]
+        lean = np.degrees(np.arcsin(abs(normal[2])))
+        near = t.centroid[1] < 6.0
+        assert lean == pytest.approx(25.0 if near else 0.0, abs=0.1)
+        assert np.linalg.norm(centred, axis=1).max() == pytest.approx(0.34, abs=0.002)  # 700c: 0.34 m radius
+    assert len(of(rel, "lock")) == 1
+    (tree,) = of("bikeracks/bikeracks_tree.glb", "tree")
+    lo, hi = tree.bounds
+    assert hi[1] < -1.9 and hi[0] - lo[0] > 21.5 and hi[2] == pytest.approx(10.0, abs=0.05)
+    assert not merged(tree).contains([[0.0, 0.0, 1.5]]).any()
 
 
 # -- landing (Murakowski 2014 sec. 3.1) -----------------------------------------------------------------
@@ -249,6 +319,8 @@ def test_sar_targets():
 
 @pytest.mark.parametrize("scene", [
     "cinderblocks",
+    "truck",  # ~2 s
+    "bikeracks",  # ~3 s: 50 nodes, chains of links
     "landing",
     pytest.param("cwd", marks=pytest.mark.slow),  # ~8 s: implicit body, clothing, shoes
     pytest.param("sar", marks=pytest.mark.slow),  # ~4 s: terrain, 700 rocks and shrubs

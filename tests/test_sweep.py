@@ -228,6 +228,7 @@ def _pmmw_with_a_worker_killed(tmp_path: Path, what: str, args: list[str]):
     return proc, marks.exists()
 
 
+@pytest.mark.full  # test_render_on_dask_is_bit_identical_even_with_a_worker_killed kills a worker too
 def test_a_dask_worker_killed_mid_sweep_and_the_sweep_completes(tmp_path):
     """A LocalCluster of 2 worker processes, one of which dies (SIGKILL) inside a variant: the
     scheduler reruns that variant on a worker the nanny restarts, every variant ends done, and

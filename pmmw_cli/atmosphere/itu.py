@@ -182,6 +182,13 @@ def p527_water_permittivity(f, T, salinity=0.0):
     and adds the ionic conductivity of Stogryn et al. (1995), 18 sigma / f. Salinity 0 gives pure
     water exactly. The Recommendation states -4 to 40 C, salinity to 40 g/kg, to 1000 GHz.
 
+    One coefficient differs from the Recommendation's print: eq. (18)'s t^3 term is -3.5594e-7, as
+    in Meissner and Wentz's own code (Remote Sensing Systems' ocean emissivity model, coefficient
+    -0.35594E-06), where P.527-6 prints +3.5594e-7 after Meissner and Wentz (2004)'s table. With
+    the printed sign salt would raise the first relaxation frequency 1.7 times at 30 C (35 g/kg)
+    and sea water's eps' at 35 GHz above pure water's (38.4 against 25.0), against Klein and Swift
+    (1977) at L band and Stogryn et al. (1995) (tests/test_materials_reference.py).
+
     Parameters
     ----------
     f : array_like
@@ -201,8 +208,8 @@ def p527_water_permittivity(f, T, salinity=0.0):
     f_1 = 20.20 - 146.4 * theta + 316.0 * theta**2  # eq. (12) [GHz]
     f_2 = 39.8 * f_1  # eq. (13) [GHz]
     eps_ss = eps_s * np.exp(-3.33330e-3 * s + 4.74868e-6 * s**2)  # eq. (17)
-    f_1s = f_1 * (1.0 + s * (2.3232e-3 - 7.9208e-5 * t + 3.6764e-6 * t**2 + 3.5594e-7 * t**3
-                             + 8.9795e-9 * t**4))  # eq. (18)
+    f_1s = f_1 * (1.0 + s * (2.3232e-3 - 7.9208e-5 * t + 3.6764e-6 * t**2 - 3.5594e-7 * t**3
+                             + 8.9795e-9 * t**4))  # eq. (18), the t^3 sign corrected (docstring)
     eps_1s = eps_1 * np.exp(-6.28908e-3 * s + 1.76032e-4 * s**2 - 9.22144e-5 * t * s)  # eq. (19)
     f_2s = f_2 * (1.0 + s * (-1.99723e-2 + 1.81176e-4 * t))  # eq. (20)
     eps_infs = eps_inf * (1.0 + s * (-2.04265e-3 + 1.57883e-4 * t))  # eq. (21)

@@ -13,10 +13,13 @@ Per cell, at the cell's midpoint height:
   profile of `Atmosphere.profile` (`pmmw_cli.atmosphere.itu`); they absorb only (omega = 0);
 * fog and cloud slabs (`Layer`): liquid water, P.840 at the cell's temperature; the droplets are
   Rayleigh scatterers (omega < 1e-3 at 95 GHz), counted as absorbing only (omega = 0);
-* rain slabs: P.838 extinction for an unpolarized wave (mean of H and V), of which the Mie
-  fraction omega (about 0.37 at 35 GHz and 0.50 at 95 GHz for 10 mm/h) is scattering, with the
-  asymmetry parameter g of the drop distribution (-0.03 and 0.27), both tabulated from Mie
-  theory (`itu.rain_single_scattering_albedo`, `itu.rain_asymmetry_parameter`).
+* rain slabs: P.838 extinction for an unpolarized wave (mean of H and V), or a power law
+  A = a R^b [dB/km] with coefficients given for the frequency (`Layer.power_law`: Murakowski 2014
+  Table 3.5's, Olsen et al. 1978 at 20 C), of which the Mie fraction omega (about 0.37 at 35 GHz
+  and 0.50 at 95 GHz for 10 mm/h) is scattering, with the asymmetry parameter g of the drop
+  distribution (-0.03 and 0.27), both tabulated from Mie theory
+  (`itu.rain_single_scattering_albedo`, `itu.rain_asymmetry_parameter`). The power law sets the
+  total only: its scattering part is the same fraction omega of it, its g the same.
 
 Scattering (`scattering_source`). Rain scatters about half of what it removes from a ray, and
 the same amount of radiation from other directions is scattered into the ray: the source
@@ -114,13 +117,20 @@ class Layer:
     Attributes
     ----------
     kind : str
-        "fog" or "cloud" (liquid water droplets, P.840) or "rain" (P.838).
+        "fog" or "cloud" (liquid water droplets, P.840) or "rain" (P.838, or `power_law`).
     base, top : float
         Heights of the slab above the ground [m], 0 <= base < top.
     liquid_water : float
         Liquid water content of fog or cloud [kg/m^3] (1 g/m^3 = 1e-3 kg/m^3).
     rain_rate : float
         Rain rate [mm/h].
+    power_law : tuple of float or None
+        Rain only: ``(a, b)`` of the specific attenuation A = a R^b [dB/km] (a in
+        (dB/km)/(mm/h)^b, b dimensionless) at the frequency the model is built for, in place of
+        ITU-R P.838; None: P.838.
+    scattering : bool
+        Rain only: the drops scatter their Mie single-scattering albedo's share of the extinction
+        (default); False: all of it is absorbed, as Murakowski 2014 sec. 3.3.1 modelled rain.
     """
 
     kind: str
@@ -128,6 +138,8 @@ class Layer:
     top: float
     liquid_water: float = 0.0
     rain_rate: float = 0.0
+    power_law: tuple[float, float] | None = None
+    scattering: bool = True
 
     def __post_init__(self):
         if self.kind not in LAYER_KINDS:
@@ -144,6 +156,12 @@ class Layer:
             raise ValueError("rain layer: give rain_rate [mm/h], not liquid_water")
         if self.kind != "rain" and self.rain_rate:
             raise ValueError(f"{self.kind} layer: give liquid_water [kg/m^3], not rain_rate")
+        if self.power_law is not None:
+            if self.kind != "rain":
+                raise ValueError(f"{self.kind} layer: a power law is for rain only")
+            a, b = self.power_law
+            if not (math.isfinite(a) and a > 0.0 and math.isfinite(b) and b > 0.0):
+                raise ValueError(f"rain layer: power law A = a R^b needs finite a > 0 and b > 0, got a {a}, b {b}")
 
 
 @dataclass(frozen=True)
@@ -191,6 +209,21 @@ class Atmosphere:
             raise ValueError(f"ground_temperature must be > 0 K, got {self.ground_temperature}")
         if self.humidity is not None and not self.humidity >= 0.0:
             raise ValueError(f"humidity must be >= 0 kg/m^3, got {self.humidity}")
+
+
+def rain_power_law_db_km(rain_rate_mm_h, a, b):
+    """Rain specific attenuation A = a R^b [dB/km] (Murakowski 2014 sec. 3.3.4, Table 3.5).
+
+    Parameters
+    ----------
+    rain_rate_mm_h : array_like
+        Rain rate R [mm/h].
+    a : float
+        [(dB/km)/(mm/h)^b]: the attenuation at 1 mm/h.
+    b : float
+        Exponent [-].
+    """
+    return a * np.asarray(rain_rate_mm_h, dtype=np.float64) ** b
 
 
 def atmosphere_profile(atm: Atmosphere, z):
@@ -526,8 +559,11 @@ class AtmosphereModel:
         for layer in atm.layers:
             inside = (zm > layer.base) & (zm < layer.top)
             if layer.kind == "rain":
-                a = itu.rain_specific_attenuation_db_km(layer.rain_rate, f) * NP_M_PER_DB_KM
-                a_sca = a * itu.rain_single_scattering_albedo(f, layer.rain_rate)
+                if layer.power_law is None:
+                    a = itu.rain_specific_attenuation_db_km(layer.rain_rate, f) * NP_M_PER_DB_KM
+                else:
+                    a = rain_power_law_db_km(layer.rain_rate, *layer.power_law) * NP_M_PER_DB_KM
+                a_sca = a * itu.rain_single_scattering_albedo(f, layer.rain_rate) if layer.scattering else 0.0
                 alpha_ext[inside] += a
                 alpha_sca[inside] += a_sca
                 alpha_sca_g[inside] += a_sca * itu.rain_asymmetry_parameter(f, layer.rain_rate)

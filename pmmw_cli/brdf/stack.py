@@ -11,13 +11,12 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from pmmw_cli.constants import C0 as _C0
 from pmmw_cli.errors import UserError, UserErrors
 from pmmw_cli.io.yamlio import read_yaml
 from pmmw_cli.physics import roughness as rough
 
 __all__ = ["Layer", "Stack", "load_stack", "parse_complex"]
-
-_C0 = 299_792_458.0  # [m/s]
 
 
 @dataclass(frozen=True)

@@ -95,9 +95,14 @@ def plain(value):
 
 
 def _split_key(key: str) -> list:
-    """``scene[0].material`` or ``scene.0.material`` -> ['scene', 0, 'material']."""
+    """``scene[0].material`` or ``scene.0.material`` -> ['scene', 0, 'material']; a segment in double
+    quotes is one key, dots included, as pmmw's messages print it: ``materials."murakowski2014.water".
+    temperature`` -> ['materials', 'murakowski2014.water', 'temperature']."""
     parts = []
-    for part in key.split("."):
+    for quoted, part in _segments(key):
+        if quoted:
+            parts.append(part)
+            continue
         if not part:
             raise ValueError("empty key segment")
         idx = []
@@ -110,6 +115,31 @@ def _split_key(key: str) -> list:
             parts.append(int(part) if part.isdigit() else part)
         parts.extend(idx)
     return parts
+
+
+def _segments(key: str) -> list[tuple[bool, str]]:
+    """A key path's dot-separated segments as (quoted, text); ValueError on unbalanced quotes."""
+    out, i = [], 0
+    while True:
+        if key.startswith('"', i):
+            end = key.find('"', i + 1)
+            if end < 0 or key[end + 1:end + 2] not in ("", "."):
+                raise ValueError("malformed quoting")
+            out.append((True, key[i + 1:end]))
+            i = end + 1
+        else:
+            end = key.find(".", i)
+            end = len(key) if end < 0 else end
+            if '"' in key[i:end]:
+                raise ValueError("malformed quoting")
+            out.append((False, key[i:end]))
+            i = end
+        if i >= len(key):
+            return out
+        i += 1  # the dot
+        if i == len(key):
+            out.append((False, ""))
+            return out
 
 
 def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = None) -> dict:
@@ -344,7 +374,12 @@ def scenario_to_display(scn: Scenario) -> dict:
             "layers": [
                 {"kind": l.kind, "base": _qty(l.base, "m"), "top": _qty(l.top, "m"),
                  **({"liquid_water": _qty(l.liquid_water * 1e3, "g/m3")} if l.kind != "rain" else
-                    {"rain_rate": _qty(l.rain_rate, "mm/h")})}
+                    {"rain_rate": _qty(l.rain_rate, "mm/h")}),
+                 # a power law only: P.838 (the default) keeps the display, and the hash, it had
+                 **({"attenuation": {"model": "power_law", "coefficients": {
+                     _qty(f, "GHz", 1e9): {"a": a, "b": b} for f, a, b in l.attenuation.table()}}}
+                    if l.attenuation.model == "power_law" else {}),
+                 **({"scattering": False} if not l.scattering else {})}
                 for l in atm.layers
             ],
         }),

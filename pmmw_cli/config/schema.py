@@ -288,6 +288,95 @@ PROFILES = ("standard", "low_latitude", "mid_latitude_summer", "mid_latitude_win
             "high_latitude_summer", "high_latitude_winter")
 
 
+POWER_LAW_B_MAX = 2.0  # [-] largest exponent b: every ITU-R P.838-3 exponent (0.63-1.70 at 1-1000 GHz) fits
+SAME_FREQUENCY_REL = 1e-6  # frequencies within this relative difference are one (the 6 digits of output names)
+
+
+class PowerLawCoefficients(_Model):
+    """One frequency's rain power law A = a R^b [dB/km], R the rain rate [mm/h]."""
+
+    a: float  # [(dB/km)/(mm/h)^b]: the attenuation at 1 mm/h
+    b: float  # [-]
+
+    @field_validator("a", "b", mode="before")
+    @classmethod
+    def _number(cls, v):
+        return _finite_number(v)
+
+    @field_validator("a")
+    @classmethod
+    def _a(cls, a):
+        if not a > 0.0:
+            raise ConfigValueError(f"a (the attenuation in dB/km at 1 mm/h) must be > 0, got {a:g}")
+        return a
+
+    @field_validator("b")
+    @classmethod
+    def _b(cls, b):
+        if not 0.0 < b <= POWER_LAW_B_MAX:
+            raise ConfigValueError(f"b (the exponent of the rain rate) must be within 0 < b <= {POWER_LAW_B_MAX:g} "
+                                   f"(ITU-R P.838's span 0.63-1.70), got {b:g}")
+        return b
+
+
+class RainAttenuation(_Model):
+    """How a rain layer's specific attenuation A [dB/km] follows from its rain rate R [mm/h].
+
+    ``model: p838`` (the default): ITU-R P.838-3, ``k R^alpha`` with k and alpha of the
+    frequency (the mean of H and V). ``model: power_law``: ``A = a R^b`` with ``coefficients``
+    given per frequency, ``{95 GHz: {a: 1.06, b: 0.745}, ...}`` (Murakowski 2014 sec. 3.3.4,
+    Table 3.5: Olsen et al. 1978 at 20 C); every frequency of the scenario needs an entry, and an
+    entry holds across the imager's band around it. Either way the rain's Mie single-scattering
+    albedo and asymmetry parameter (`pmmw_cli.atmosphere.itu`) split the total into absorption
+    and scattering.
+    """
+
+    model: Literal["p838", "power_law"] = "p838"
+    coefficients: dict[str, PowerLawCoefficients] = {}  # frequency as written ('95 GHz') -> (a, b)
+
+    @field_validator("coefficients", mode="before")
+    @classmethod
+    def _frequencies(cls, v):
+        example = "e.g. {35 GHz: {a: 0.235, b: 1.009}, 95 GHz: {a: 1.06, b: 0.745}}"
+        if not isinstance(v, dict) or not v:
+            raise ConfigValueError(f"expected a mapping of frequency -> {{a: ..., b: ...}}, {example}")
+        seen: dict[str, str] = {}
+        for key in v:
+            if not isinstance(key, str):
+                raise ConfigValueError(f"key {key!r}: give a frequency with its unit, {example}")
+            f = _q(key, "frequency")
+            why = frequency_problem(f)
+            if why:
+                raise ConfigValueError(f"key {key!r}: {why}")
+            label = f"{f / 1e9:.6g}"
+            if label in seen:
+                raise ConfigValueError(f"keys {seen[label]!r} and {key!r} are the same frequency")
+            seen[label] = key
+        return v
+
+    @model_validator(mode="after")
+    def _of_model(self):
+        if self.model == "power_law" and not self.coefficients:
+            raise ConfigValueError("model: power_law needs coefficients per frequency, e.g. "
+                                   "coefficients: {95 GHz: {a: 1.06, b: 0.745}}")
+        if self.model == "p838" and self.coefficients:
+            raise ConfigValueError("coefficients belong to model: power_law; ITU-R P.838 (model: p838) takes none")
+        return self
+
+    def table(self) -> tuple[tuple[float, float, float], ...]:
+        """``(f [Hz], a, b)`` of each entry, by frequency."""
+        return tuple(sorted((parse_quantity(k, "frequency"), c.a, c.b) for k, c in self.coefficients.items()))
+
+    def coefficients_at(self, f: float, half_band: float = 0.0) -> tuple[float, float] | None:
+        """``(a, b)`` of the entry nearest f [Hz] if it lies within ``half_band`` [Hz] (and
+        `SAME_FREQUENCY_REL`) of f, else None."""
+        rows = [(abs(fk - f), a, b) for fk, a, b in self.table()]
+        if not rows:
+            return None
+        d, a, b = min(rows)
+        return (a, b) if d <= half_band + SAME_FREQUENCY_REL * f else None
+
+
 class WeatherLayer(_Model):
     """A fog, cloud or rain slab between two heights above the ground."""
 
@@ -296,6 +385,10 @@ class WeatherLayer(_Model):
     top: Length
     liquid_water: Annotated[float, Quantity("density")] = 0.0  # [kg/m^3]
     rain_rate: Annotated[float, Quantity("rate", unit="mm/h")] = 0.0  # [mm/h], as ITU-R P.838 takes it
+    attenuation: RainAttenuation = RainAttenuation()  # rain: P.838 or a power law
+    # rain: the drops scatter (their Mie albedo's share of the extinction); false: they only absorb,
+    # as Murakowski 2014 sec. 3.3.1 modelled rain ("we do not model ... scattering in the atmosphere")
+    scattering: bool = True
 
     @field_validator("base", "top")
     @classmethod
@@ -326,7 +419,25 @@ class WeatherLayer(_Model):
             raise ConfigValueError("a rain layer takes rain_rate (e.g. '10 mm/h'), not liquid_water")
         if self.kind != "rain" and self.rain_rate:
             raise ConfigValueError(f"a {self.kind} layer takes liquid_water (e.g. '0.3 g/m3'), not rain_rate")
+        if self.kind != "rain" and "scattering" in self.model_fields_set:
+            raise ConfigValueError(f"scattering is a rain layer's; a {self.kind} layer's droplets only absorb "
+                                   "(Rayleigh: ITU-R P.840)")
+        if self.kind != "rain" and "attenuation" in self.model_fields_set:
+            raise ConfigValueError(f"attenuation is a rain layer's; a {self.kind} layer's follows from liquid_water "
+                                   "(ITU-R P.840)")
         return self
+
+    def model_layer(self, f: float, half_band: float = 0.0):
+        """This slab as the atmosphere model takes it at frequency f [Hz] (`pmmw_cli.atmosphere.model.Layer`);
+        None where its power law has no coefficients within ``half_band`` [Hz] of f."""
+        from pmmw_cli.atmosphere.model import Layer
+
+        power_law = None
+        if self.kind == "rain" and self.attenuation.model == "power_law":
+            power_law = self.attenuation.coefficients_at(f, half_band)
+            if power_law is None:
+                return None
+        return Layer(self.kind, self.base, self.top, self.liquid_water, self.rain_rate, power_law, self.scattering)
 
 
 class Atmosphere(_Model):
@@ -375,6 +486,26 @@ class Atmosphere(_Model):
             raise ConfigValueError("loss/temperature set a uniform atmosphere (model: uniform); the layered "
                                    "model takes profile, ground_temperature, humidity and layers")
         return self
+
+    def weather_at(self, f: float, half_band: float = 0.0, file=None) -> tuple:
+        """The weather layers as `pmmw_cli.atmosphere.model.Layer` records at frequency f [Hz], a
+        rain power law's entry taken within ``half_band`` [Hz] of f (a sub-band of the imager's band).
+
+        Raises
+        ------
+        UserError
+            A power law with no entry for f, named by ``file`` and the layer's key.
+        """
+        out = []
+        for i, layer in enumerate(self.layers):
+            m = layer.model_layer(f, half_band)
+            if m is None:
+                listed = ", ".join(layer.attenuation.coefficients)
+                raise UserError(f"no power-law coefficients for {f / 1e9:.6g} GHz (given for {listed}): add "
+                                f"'{f / 1e9:.6g} GHz: {{a: ..., b: ...}}' or use model: p838", file,
+                                f"atmosphere.layers[{i}].attenuation.coefficients")
+            out.append(m)
+        return tuple(out)
 
 
 def _positive_temperature(t, hint: str = ""):
@@ -617,6 +748,14 @@ class Scenario(_Model):
         elif self.sky.model == "atmosphere" and not layered:
             raise ConfigValueError("sky model 'atmosphere' needs a layered atmosphere (atmosphere: {profile: ...}), "
                                    "not 'none' or model: uniform")
+        return self
+
+    @model_validator(mode="after")
+    def _rain_coefficients(self):
+        """A rain power law covers every frequency of the scenario (no silent fallback to P.838)."""
+        if self.atmosphere is not None and self.atmosphere.model == "layered":
+            for f in self.frequencies:
+                self.atmosphere.weather_at(f)
         return self
 
     @model_validator(mode="after")

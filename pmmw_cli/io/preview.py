@@ -132,17 +132,73 @@ MIN_DISPLAY_WIDTH = 480
 
 def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: float = CLIP_FRACTION,
                  units: str = "K", quantity: str = "brightness temperature") -> tuple[float, float]:
-    """A preview a person reads: the image(s) in grey on one display range, with a colour bar in
-    kelvin and a title; small images scaled up with nearest neighbour, pixels never smoothed.
+    """A preview a person reads: the image(s) in grey, each on its own display range with its own
+    colour bar in kelvin stating that range, and a title; small images scaled up with nearest
+    neighbour, pixels never smoothed.
+
+    Each panel has its own range (`panel_ranges`: Murakowski 2014 sec. 3.2's clipping of each
+    image), so an ideal image's few kelvin of structure stay readable beside a sensor image whose
+    noise spans tens.
 
     Parameters
     ----------
     panels : list of (label, (H, W) array)
-        Images side by side (e.g. ``[("ideal", a), ("sensor", b)]``) sharing one display range
-        (`display_range` of them all, Murakowski 2014 sec. 3.2's clipping); one unlabelled panel
-        for a single channel (label None).
+        Images side by side (e.g. ``[("ideal", a), ("sensor", b)]``); one unlabelled panel for a
+        single channel (label None).
     title : str
         E.g. ``"landing_95ghz: Ey2, 95 GHz"``.
+
+    Returns
+    -------
+    (low, high) : the temperatures [K] shown as black and white in the first panel.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    imgs = [np.asarray(img, dtype=np.float64) for _, img in panels]
+    ranges = panel_ranges(imgs, clip_fraction)
+    fig, axes = figure_for(plt, *imgs[0].shape, len(imgs), extra_w=1.6 * len(imgs))
+    if len(imgs) > 1:  # room for each panel's colour bar and its label
+        fig.set_layout_engine("constrained")
+    for ax, (label, _), img, (low, high) in zip(axes[0], panels, imgs, ranges):
+        shown = ax.imshow(img, cmap="gray", vmin=low, vmax=high, interpolation="nearest")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        if label:
+            ax.set_title(label, fontsize=9)
+        bar = fig.colorbar(shown, ax=ax, fraction=0.05, pad=0.02)
+        bar.set_label(f"{quantity} [{units}]" + (f"\nblack {low:.4g}, white {high:.4g}" if len(imgs) > 1 else ""),
+                      fontsize=8)
+        bar.ax.tick_params(labelsize=7)
+    fig.suptitle(title, fontsize=10)
+    save_figure(fig, path)
+    return ranges[0]
+
+
+def panel_ranges(imgs, clip_fraction: float = CLIP_FRACTION) -> list[tuple[float, float]]:
+    """The display range [K] of each image of a figure (`usable_range` of each on its own)."""
+    return [usable_range(np.asarray(img, dtype=np.float64), clip_fraction) for img in imgs]
+
+
+REGION_COLOURS = ("#ff3b30", "#34c759", "#0a84ff", "#ffcc00", "#ff2dfc", "#00e5ff")  # outlines on grey
+
+
+def write_regions_figure(path: str | os.PathLike, img, shapes, *, title: str, caption: str | None = None,
+                         units: str = "K", quantity: str = "brightness temperature") -> tuple[float, float]:
+    """The image with its report's regions outlined and named, each in its own colour.
+
+    Parameters
+    ----------
+    img : (H, W) array
+        Temperatures [K], on its display range (`usable_range`) with a colour bar.
+    shapes : dict of str -> tuple or None
+        Region name -> ``("circle", u, v, radius)`` or ``("box", x0, y0, x1, y1)`` in pixels (x
+        right, y down, pixel k spanning [k, k + 1): `pipeline.region_shapes`); None (behind the
+        imager) is not drawn.
+    caption : str, optional
+        A line under the image (the report's first verdict).
 
     Returns
     -------
@@ -151,22 +207,43 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
     import matplotlib
 
     matplotlib.use("Agg")
+    import matplotlib.patches as mpatches
     import matplotlib.pyplot as plt
 
-    imgs = [np.asarray(img, dtype=np.float64) for _, img in panels]
-    low, high = usable_range(np.concatenate([i.ravel() for i in imgs]), clip_fraction)
-    fig, axes = figure_for(plt, *imgs[0].shape, len(imgs))
-    for ax, (label, _), img in zip(axes[0], panels, imgs):
-        shown = ax.imshow(img, cmap="gray", vmin=low, vmax=high, interpolation="nearest")
-        ax.set_xticks([])
-        ax.set_yticks([])
-        if label:
-            ax.set_title(label, fontsize=9)
-    bar = fig.colorbar(shown, ax=axes[0].tolist(), fraction=0.05, pad=0.02)
+    img = np.asarray(img, dtype=np.float64)
+    low, high = usable_range(img)
+    h, w = img.shape
+    fig, axes = figure_for(plt, h, w)
+    ax = axes[0, 0]
+    shown = ax.imshow(img, cmap="gray", vmin=low, vmax=high, interpolation="nearest")
+    for k, (name, shape) in enumerate(shapes.items()):
+        if shape is None:
+            continue
+        colour = REGION_COLOURS[k % len(REGION_COLOURS)]
+        if shape[0] == "circle":  # imshow puts pixel k's centre at k: the image coordinate minus 0.5
+            _, u, v, r = shape
+            patch, at = mpatches.Circle((u - 0.5, v - 0.5), r, fill=False, ec=colour, lw=1.5), (u - 0.5, v - 0.5 - r)
+        else:
+            _, x0, y0, x1, y1 = shape
+            patch, at = (mpatches.Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, ec=colour, lw=1.5),
+                         ((x0 + x1) / 2 - 0.5, y0 - 0.5))
+        ax.add_patch(patch)
+        # names staggered upwards, each joined to its region: close regions' names stay apart
+        ax.annotate(name, at, xytext=(0, 4 + 11 * k), textcoords="offset points", ha="center", va="bottom",
+                    color=colour, fontsize=8, fontweight="bold", annotation_clip=False,
+                    bbox={"boxstyle": "round,pad=0.15", "fc": "black", "alpha": 0.65, "lw": 0},
+                    arrowprops={"arrowstyle": "-", "color": colour, "lw": 0.8, "shrinkA": 0, "shrinkB": 0})
+    ax.set_xlim(-0.5, w - 0.5)
+    ax.set_ylim(h - 0.5, -0.5)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    bar = fig.colorbar(shown, ax=ax, fraction=0.05, pad=0.02)
     bar.set_label(f"{quantity} [{units}]", fontsize=8)
     bar.ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
-    save_figure(fig, path)
+    if caption:
+        ax.set_xlabel(caption, fontsize=7, wrap=True)
+    save_figure(fig, path, bbox_inches="tight")
     return low, high
 
 

@@ -4,7 +4,9 @@ Expected report keys (any may be absent): ``name``, ``version``, ``frequency_hz`
 ``channels`` {name: {min, mean, max, display_low, display_high}} [K], ``timing`` {step: seconds},
 ``rays``, ``pixels``, ``spp``, ``workers``, ``warnings`` [str], ``scenario`` (the resolved scenario
 as plain data), ``atmosphere`` (`pipeline.atmosphere_summary`: dB/km at the ground, zenith opacity
-and sky, path loss to the target). Other keys go into the JSON only.
+and sky, path loss to the target), ``regions`` (`pipeline.region_stats`: the detection criterion,
+each contrast's verdict in words, region means and contrasts), ``regions_preview`` (the PNG with the
+regions outlined), ``side_by_side`` {channel: PNG}. Other keys go into the JSON only.
 """
 
 from __future__ import annotations
@@ -61,6 +63,16 @@ def _pm(x) -> str:
     return "n/a" if x is None else _num(x, ".2g")
 
 
+def _snr_cell(contrast: Mapping) -> str:
+    """``7.2 ± 0.3 (yes)``: a contrast's SNR by the detection criterion, ``-`` without one."""
+    snr = contrast.get("snr")
+    if snr is None:
+        return "-"
+    err = contrast.get("snr_stderr")
+    return f"{_num(snr, '.3g')}" + (f" ± {_pm(err)}" if err is not None else "") + \
+        (" (yes)" if contrast.get("detectable") else " (no)")
+
+
 def _cell(text) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
@@ -97,6 +109,23 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
     if facts:
         lines += facts + [""]
 
+    regions = report.get("regions") or {}
+    if regions.get("verdicts") is not None or report.get("regions_preview"):
+        lines += ["## Detection", ""]
+        if regions.get("criterion"):
+            lines += [f"Criterion: a target is {regions['criterion']}; the SNR of a pair of regions \"a - b\" "
+                      "is the contrast of their means in the ideal image times the norm of a's footprint "
+                      "blurred by the imager's PSF, over the channel's noise per pixel "
+                      f"({_num(regions.get('noise_K'))} K in Ex2 and Ey2, sqrt(2) times it in I); ± its "
+                      "Monte Carlo standard error.", ""]
+        lines += [f"- {_cell(v)}" for v in (regions.get("verdicts") or {}).values()]
+        if regions.get("verdicts"):
+            lines.append("")
+        if report.get("regions_preview"):
+            rel = str(report["regions_preview"])
+            lines += [f"![regions]({_md_link(rel)})", "",
+                      f"The regions on the sensor image ({regions.get('channel', 'Ey2')}).", ""]
+
     channels = report.get("channels") or {}
     if channels:
         lines += [
@@ -127,11 +156,11 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
 
     if report.get("side_by_side"):
         lines += ["## Ideal and sensor", "",
-                  "Left: the ideal image; right: after the imager's PSF and noise (same display scale).", ""]
+                  "Left: the ideal image; right: after the imager's PSF and noise. Each on its own display "
+                  "range (the coldest and hottest 1/256 of its pixels clip), stated on its colour bar.", ""]
         for name, rel in report["side_by_side"].items():
             lines += [f"### {name}", "", f"![{name}: ideal | sensor]({_md_link(str(rel))})", ""]
 
-    regions = report.get("regions") or {}
     if regions.get("means"):
         chans = list(next(iter(regions["means"].values())).keys())
         errors, trunc = regions.get("stderr") or {}, regions.get("truncation") or {}
@@ -150,16 +179,16 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
             lines.append(f"| {_cell(name)} | {regions['pixels'][name]} | " + " | ".join(cells) + f" | {tcell} |")
         lines.append("")
         if regions.get("contrasts"):
-            lines += ["Contrast between regions (first minus second), in kelvin ± its Monte Carlo standard "
-                      "error and in units of the imager noise sigma "
-                      f"({_num(regions.get('noise_K'))} K per pixel); figures above "
-                      f"{_num(regions.get('limit_K'), '.3g')} K are warned about:", "",
-                      "| regions | " + " | ".join(f"{c} [K] | {c} [sigma]" for c in chans) + " | truncation bound [K] |",
+            lines += ["Contrast between regions (first minus second) in the sensor image, in kelvin ± its "
+                      "Monte Carlo standard error (figures above "
+                      f"{_num(regions.get('limit_K'), '.3g')} K are warned about), and its SNR by the detection "
+                      "criterion above (yes: detectable):", "",
+                      "| regions | " + " | ".join(f"{c} [K] | {c} SNR" for c in chans) + " | truncation bound [K] |",
                       "| --- | " + " | ".join("---: | ---:" for _ in chans) + " | ---: |"]
             for pair, cs in regions["contrasts"].items():
                 first = cs[chans[0]] if chans else {}
                 lines.append(f"| {_cell(pair)} | " + " | ".join(
-                    f"{_num(cs[c]['K'])} ± {_pm(cs[c].get('stderr_K'))} | {_num(cs[c]['sigma'])}" for c in chans)
+                    f"{_num(cs[c]['K'])} ± {_pm(cs[c].get('stderr_K'))} | {_snr_cell(cs[c])}" for c in chans)
                     + f" | {_num(first.get('truncation_bound_K'), '.3g')} |")
             lines.append("")
 

@@ -55,11 +55,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from pmmw_cli.constants import C0  # [m/s]
 from pmmw_cli.po import kernels
 from pmmw_cli.surface import surface_response
 from pmmw_cli.trace.intersect import make_intersector, offset_origins
 
-C0 = 299_792_458.0  # [m/s]
 ETA0 = 376.730313668  # [ohm] impedance of free space
 
 #: Facet x direction terms per thread in one call of a compiled sum (`kernels.direction_sums`,

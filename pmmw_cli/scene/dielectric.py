@@ -10,6 +10,10 @@ Registry (`MODELS`, chosen by ``model.name``):
 * ``water``: liquid water, the double-Debye model of Liebe, Hufford and Manabe (1991) as ITU-R
   P.840-8 eqs. 4-10 give it (the same code as the atmosphere's fog and cloud,
   `pmmw_cli.atmosphere.itu.water_permittivity`); 1-1000 GHz, 263-373 K.
+* ``pure_water``, ``sea_water``: liquid water by ITU-R P.527-6 sec. 5.1
+  (`pmmw_cli.atmosphere.itu.p527_water_permittivity`): pure water (sec. 5.1.1), and saline water
+  of ``salinity`` [g/kg] (sec. 5.1.2, default 35 g/kg, the open ocean's); the Recommendation
+  states -4 to 40 C, 0-40 g/kg, to 1000 GHz.
 * ``ice``: pure ice, Maetzler (2006) (Hufford 1991 with the Mishima et al. 1983 correction):
   eps' = 3.1884 + 9.1e-4 (T - 273.15), eps'' = alpha / f + beta f with f in GHz; 0.01-3000 GHz,
   20-273.15 K.
@@ -36,8 +40,17 @@ Registry (`MODELS`, chosen by ``model.name``):
   with Peplinski et al. (1995)'s conductivities, free water by P.527-6's pure water; ``sand``,
   ``clay`` [%] (silt the rest), volumetric ``moisture`` [1], ``bulk_density`` [g/cm^3] (default
   P.527-6 eq. (57)), ``particle_density`` [g/cm^3] (default 2.66). The mixing exponents were
-  fitted at 1.4-18 GHz (Dobson et al.) and the conductivities at 0.3-1.3 GHz (Peplinski et al.):
-  stated 0.3-18 GHz, so at 35-300 GHz the model is extrapolated, with a warning.
+  fitted at 1.4-18 GHz (Dobson et al.) and the conductivities at 0.3-1.3 GHz (Peplinski et al.);
+  the Recommendation applies the model to 1000 GHz (the limit of MathWorks'
+  ``earthSurfacePermittivity``, an implementation of P.527-6), and so does pmmw: at millimetre
+  waves the free water's double Debye carries the frequency dependence, the conductivity terms
+  fall as 1/f.
+* ``p2040``: a building material of ITU-R P.2040-4 Table 3 (``material``: concrete, brick, glass,
+  ...; `pmmw_cli.scene.itu_materials`): each row's power laws inside its range; between rows
+  interpolated, outside every row extrapolated, both warned.
+* ``vegetation``: ITU-R P.527-6 sec. 5.3 by ``gravimetric_moisture`` (0.1-0.7; below 0.1 the fit
+  gives a gain at millimetre waves), above and at or below 0 C (between -6.5 and 0 C the frozen
+  fit is unbounded: warned); measured at 0.2-20 GHz, applied by the Recommendation to 1000 GHz.
 
 Time dependence exp(-i w t) as everywhere in pmmw: eps'' >= 0 is loss.
 """
@@ -47,7 +60,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-EPS0 = 8.8541878128e-12  # [F/m]
+from pmmw_cli.constants import EPS0  # [F/m]
 
 
 @dataclass(frozen=True)
@@ -65,6 +78,8 @@ class ModelSpec:
     parsers: dict = field(default_factory=dict, repr=False, compare=False)  # name -> parse(v, file, key)
     example: str = ""  # a complete ``model:`` mapping, for error messages
     check: object = field(default=None, repr=False, compare=False)  # check(params, file, key): cross-parameter rules
+    outside: object = field(default=None, repr=False, compare=False)  # outside(f, T, params) -> reason or None
+    ranges: object = field(default=None, repr=False, compare=False)  # ranges(params) -> text of the valid range
 
 
 @dataclass(frozen=True)
@@ -80,21 +95,100 @@ class DielectricModel:
 
     def in_range(self, f: float, temperature: float) -> bool:
         """Whether f [Hz] and temperature [K] lie in the model's stated validity."""
+        return self.outside(f, temperature) is None
+
+    def outside(self, f: float, temperature: float) -> str | None:
+        """None inside the model's stated validity, else what is done there (for the warning)."""
+        if self.spec.outside is not None:
+            reason = self.spec.outside(float(f), float(temperature), self.params)
+            if reason is not None:
+                return reason
         (f0, f1), (t0, t1) = self.spec.f_range, self.spec.t_range
-        return f0 <= f <= f1 and t0 <= temperature <= t1
+        if f0 <= f <= f1 and t0 <= temperature <= t1:
+            return None
+        return "the model is extrapolated"
 
     def describe(self) -> str:
-        extra = ", ".join(f"{k} {v:g}" for k, v in self.params.items())
+        extra = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in self.params.items())
         (f0, f1), (t0, t1) = self.spec.f_range, self.spec.t_range
         f_text = f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e8 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
+        if self.spec.ranges is not None:
+            f_text = self.spec.ranges(self.params)
+        t_text = "at any temperature" if t0 <= 0.0 and t1 >= 1e4 else f"{t0:g}-{t1:g} K"
         return (f"model {self.spec.name}{' (' + extra + ')' if extra else ''}: {self.spec.source}; valid "
-                f"{f_text}, {t0:g}-{t1:g} K")
+                f"{f_text}, {t_text}")
 
 
 def _water(f, T):
     from pmmw_cli.atmosphere.itu import water_permittivity
 
     return complex(water_permittivity(f, T))
+
+
+def _p527_water(f, T, salinity=0.0):
+    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+
+    return complex(p527_water_permittivity(f, T, salinity))
+
+
+def _sea_water(f, T, salinity=35.0):
+    return _p527_water(f, T, salinity)
+
+
+def _p2040(f, T, material):
+    from pmmw_cli.scene.itu_materials import p2040_permittivity
+
+    return p2040_permittivity(f, material)[0]
+
+
+def _p2040_outside(f, T, params):
+    from pmmw_cli.scene.itu_materials import p2040_permittivity
+
+    status = p2040_permittivity(f, params["material"])[1]
+    return None if status.startswith("in row") else f"ITU-R P.2040-4's value is {status}"
+
+
+def _p2040_ranges(params):
+    from pmmw_cli.scene.itu_materials import p2040_valid_ranges
+
+    rows = sorted(p2040_valid_ranges(params["material"]))
+    return "the rows " + ", ".join(f"{lo / 1e9:g}-{hi / 1e9:g} GHz" for lo, hi in rows)
+
+
+def _p2040_material(v, file, key):
+    from pmmw_cli.errors import UserError
+    from pmmw_cli.scene.itu_materials import P2040_BUILDING_MATERIALS
+
+    if v not in P2040_BUILDING_MATERIALS:
+        raise UserError(f"unknown ITU-R P.2040 material {v!r}; known: {', '.join(P2040_BUILDING_MATERIALS)}",
+                        file, key)
+    return str(v)
+
+
+def _vegetation(f, T, gravimetric_moisture):
+    from pmmw_cli.scene.itu_materials import p527_vegetation_permittivity
+
+    eps = p527_vegetation_permittivity(f, T, gravimetric_moisture)
+    if eps.imag < 0.0:  # the fit's free-water fraction turns negative for dry vegetation
+        from pmmw_cli.errors import warn
+
+        warn(f"ITU-R P.527-6's vegetation fit gives a gain (eps'' {eps.imag:.3g}) at {f / 1e9:g} GHz, {T:g} K for "
+             f"gravimetric moisture {gravimetric_moisture:g}; taken as lossless")
+        eps = complex(eps.real, 0.0)
+    return eps
+
+
+def _vegetation_outside(f, T, params):
+    from pmmw_cli.scene.itu_materials import (
+        P527_VEGETATION_T_FREEZE,
+        P527_VEGETATION_T_RANGE_FROZEN_PHYSICAL,
+    )
+
+    t_lo, t_hi = P527_VEGETATION_T_RANGE_FROZEN_PHYSICAL
+    if t_hi < T <= P527_VEGETATION_T_FREEZE:
+        return (f"{T:g} K lies between -6.5 and 0 C, where P.527-6's frozen-vegetation fit grows without bound; "
+                "the value is computed all the same")
+    return None
 
 
 def _ice(f, T):
@@ -168,7 +262,7 @@ def _soil(f, T, sand, clay, moisture, bulk_density=None, particle_density=2.66):
 
     The Recommendation's conductivity terms can leave free water unphysical where they dominate:
     a negative loss conductivity sigma_eff'' (the regression's sigma_2 is negative for sandy,
-    loose soils; `make_dielectric` warns) is taken as 0, and eps_fw' is kept >= 1 (dry soils below
+    loose soils; a warning says so) is taken as 0, and eps_fw' is kept >= 1 (dry soils below
     a few GHz). The sign of sigma_eff' in eps_fw' is the Recommendation's, as MathWorks' and an
     independent P.527-4 implementation transcribe it; it falls as 1/f^2, to -0.12 in eps_fw' (about
     20) at 35 GHz for a loam at mv 0.05.
@@ -187,7 +281,14 @@ def _soil(f, T, sand, clay, moisture, bulk_density=None, particle_density=2.66):
     sigma_1, sigma_2 = p527_conductivities(sand, clay, rho_b)
     x = f_ghz / 1.35
     sigma_eff_r = x * (sigma_1 - sigma_2) / (1.0 + x**2)  # eq. (67)
-    sigma_eff_i = max(sigma_2 + (sigma_1 - sigma_2) / (1.0 + x**2), 0.0)  # eq. (68)
+    sigma_eff_i = sigma_2 + (sigma_1 - sigma_2) / (1.0 + x**2)  # eq. (68)
+    if sigma_eff_i < 0.0:
+        from pmmw_cli.errors import warn
+
+        warn(f"ITU-R P.527-6's effective conductivity of soil with sand {sand:g} %, clay {clay:g} %, bulk density "
+             f"{rho_b:.3g} g/cm3 is negative (sigma_2 {sigma_2:.3g} S/m: Dobson's regression outside its data); the "
+             "soil's conduction loss is taken as 0")
+        sigma_eff_i = 0.0
     eps_pw = complex(p527_water_permittivity(f, T))
     # eqs. (69)-(70), eps_fw = eps_pw + 18 (rho_s - rho_b) / (f rho_s mv) sigma_eff, enter eqs. (63)-(64)
     # as mv^(beta/alpha) eps_fw: written so, nothing divides by mv (beta/alpha > 1 for every texture)
@@ -228,7 +329,7 @@ _siemens_per_metre = _number(0.0, math.inf, "S/m", "'3.77e7 S/m'", above=True)  
 
 
 def _check_soil(params, file, key):
-    from pmmw_cli.errors import UserError, warn
+    from pmmw_cli.errors import UserError
 
     sand, clay = params["sand"], params["clay"]
     if sand + clay > 100.0:
@@ -238,12 +339,6 @@ def _check_soil(params, file, key):
     if rho_b >= rho_s:
         raise UserError(f"bulk density {rho_b:g} g/cm3 must be below the particle density {rho_s:g} g/cm3 "
                         "(no pore space left)", file, key)
-    sigma_2 = p527_conductivities(sand, clay, rho_b)[1]
-    if sigma_2 < 0.0:
-        where = f"{file}: {key}: " if file else ""
-        warn(f"{where}ITU-R P.527-6's effective conductivity sigma_2 of soil with sand {sand:g} %, clay {clay:g} %, "
-             f"bulk density {rho_b:.3g} g/cm3 is negative ({sigma_2:.3g} S/m: Dobson's regression outside its "
-             "data); above a few GHz the soil's conduction loss is taken as 0")
 
 
 _PERCENT = _number(0.0, 100.0, "%", "'40 %'")
@@ -253,6 +348,14 @@ _DENSITY = _number(0.5, 3.0, "g/cm3", "'1.5 g/cm3'")
 MODELS = {
     "water": ModelSpec("water", _water, (1e9, 1e12), (263.0, 373.0), 293.15, (),
                        "Liebe, Hufford and Manabe 1991 double-Debye model as ITU-R P.840-8 eqs. 4-10"),
+    "pure_water": ModelSpec("pure_water", _p527_water, (1e9, 1e12), (269.15, 313.15), 293.15, (),
+                            "ITU-R P.527-6 sec. 5.1.1 (Liebe, Hufford and Manabe 1991 double Debye)"),
+    "sea_water": ModelSpec("sea_water", _sea_water, (1e9, 1e12), (269.15, 313.15), 293.15, (),
+                           "ITU-R P.527-6 sec. 5.1.2 (Meissner and Wentz 2004 salinity terms, Stogryn et al. "
+                           "1995 conductivity)",
+                           optional=("salinity",),
+                           parsers={"salinity": _number(0.0, 40.0, "g/kg", "'35 g/kg'")},
+                           example="{name: sea_water, salinity: 35 g/kg}"),
     "ice": ModelSpec("ice", _ice, (1e7, 3e12), (20.0, 273.15), 263.15, (),
                      "Maetzler 2006 (Hufford 1991, Mishima et al. 1983)"),
     "conductor": ModelSpec("conductor", _conductor, (1e6, 1e12), (0.0, 1e4), 293.15, ("conductivity",),
@@ -269,9 +372,20 @@ MODELS = {
                         parsers={"dry_matter": _number(0.0, 0.75, "", "0.35"),
                                  "salinity": _number(0.0, 40.0, "g/kg", "'10 g/kg'")},
                         example="{name: leaves, dry_matter: 0.35, salinity: 10}"),
-    "soil": ModelSpec("soil", _soil, (0.3e9, 18e9), (273.15, 313.15), 293.15, ("sand", "clay", "moisture"),
+    "p2040": ModelSpec("p2040", _p2040, (1e6, 450e9), (0.0, 1e4), 293.15, ("material",),
+                       "ITU-R P.2040-4 (2025) Table 3: eps' = a f^b, sigma = c f^d (f in GHz), per row",
+                       parsers={"material": _p2040_material}, example="{name: p2040, material: concrete}",
+                       outside=_p2040_outside, ranges=_p2040_ranges),
+    "vegetation": ModelSpec("vegetation", _vegetation, (0.2e9, 1e12), (253.15, 313.15), 293.15,
+                            ("gravimetric_moisture",),
+                            "ITU-R P.527-6 sec. 5.3 (Ulaby and El-Rayes 1987 above 0 C, with P.527-6's pure water; "
+                            "sec. 5.3.2's fit at or below 0 C), applied by the Recommendation to 1000 GHz; its "
+                            "fits rest on 0.2-20 GHz measurements",
+                            parsers={"gravimetric_moisture": _number(0.1, 0.7, "", "0.5")},
+                            example="{name: vegetation, gravimetric_moisture: 0.5}", outside=_vegetation_outside),
+    "soil": ModelSpec("soil", _soil, (0.3e9, 1e12), (273.15, 313.15), 293.15, ("sand", "clay", "moisture"),
                       "ITU-R P.527-6 sec. 5.2 (Dobson et al. 1985 mixing, Peplinski et al. 1995 conductivities), "
-                      "fitted at 0.3-18 GHz",
+                      "applied by the Recommendation to 1000 GHz; its fits rest on 0.3-18 GHz measurements",
                       optional=("bulk_density", "particle_density"),
                       parsers={"sand": _PERCENT, "clay": _PERCENT, "moisture": _number(0.0, 0.6, "", "0.2"),
                                "bulk_density": _DENSITY, "particle_density": _DENSITY},

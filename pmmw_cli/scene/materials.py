@@ -54,9 +54,10 @@ from pmmw_cli.units import parse_quantity
 
 KINDS = ("dielectric", "metal", "blackbody", "opaque", "thin")
 _NO_EPS_KINDS = ("metal", "blackbody")
-_ID_RE = re.compile(r"^[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
+# lower_snake_case, optionally in one named set: ``water``, ``murakowski2014.water``
+_ID_RE = re.compile(r"^(?:[a-z][a-z0-9]*\.)?[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
 _ENTRY_KEYS = ("name", "eps", "model", "temperature", "kind", "source", "coating", "thickness", "roughness",
-               "bump")
+               "bump", "same_as")
 _LAYER_KEYS = ("material", "thickness", "temperature", "roughness")
 _EPS_EXAMPLE = "[eps', eps''] or {35 GHz: [eps', eps''], 95 GHz: [eps', eps'']}"
 _LAYER_EXAMPLE = "{material: ID, thickness: '0.8 mm', temperature: '300 K'}"
@@ -165,12 +166,13 @@ class Material:
         """
         value, outside = self._lookup(f, temperature)
         if outside and self.model is not None:
-            warn(f"material {self.id!r}: {f / 1e9:g} GHz at {self.model_temperature(temperature):g} K is outside "
-                 f"the {self.model.describe()}; the model is extrapolated")
+            t = self.model_temperature(temperature)
+            warn(f"material {self.id!r}: {f / 1e9:g} GHz at {t:g} K is outside the {self.model.describe()}; "
+                 f"{self.model.outside(f, t)}")
         elif outside:
             warn(
-                f"material {self.id!r}: permittivity is tabulated only {_range_text(self.freqs)}; "
-                "the nearest tabulated value is used outside that range"
+                f"material {self.id!r}: {f / 1e9:g} GHz is outside its table ({_range_text(self.freqs)}); "
+                "the nearest tabulated value is used"
             )
         return value
 
@@ -367,6 +369,7 @@ class _EntryIn(BaseModel):
     roughness: Any = None  # checked by roughness.make_model
     bump: Any = None  # checked by bump.make_bump
     model: Any = None  # checked by dielectric.make_dielectric
+    same_as: Optional[StrictStr] = None  # another id whose fields this entry takes (resolved by _same_as)
 
 
 def _suggest(word: str, choices: Iterable[str], n: int = 5) -> str:
@@ -505,8 +508,28 @@ def _check_id(mid, file, base_key: str) -> list[UserError]:
     if not isinstance(mid, str):
         return [UserError(f"a material id must be a string, got {mid!r}", file, base_key)]
     if not _ID_RE.match(mid):
-        return [UserError(f"material id {mid!r} must be lower_snake_case (e.g. moist_soil)", file, base_key)]
+        return [UserError(f"material id {mid!r} must be lower_snake_case, optionally in a named set (e.g. "
+                          "moist_soil, murakowski2014.water)", file, base_key)]
     return []
+
+
+def _same_as(mid: str, fields: dict, known: dict[str, dict], file, base_key: str) -> tuple[dict | None, list]:
+    """The fields of an entry with ``same_as: OTHER``: OTHER's fields, then the entry's own on top
+    (e.g. a `name`, a `temperature`); the source says where the values come from. `known` maps ids
+    to their resolved fields. Entries without ``same_as`` are returned as they are."""
+    target = fields.get("same_as")
+    if target is None:
+        return fields, []
+    if target not in known:
+        return None, [UserError(f"unknown material {target!r} in same_as{_suggest(target, known, 3)}", file,
+                                _join(base_key, "same_as"))]
+    own = {k: v for k, v in fields.items() if k != "same_as"}
+    merged = {k: v for k, v in known[target].items() if k != "same_as"}
+    merged.update(own)
+    if "source" not in own:
+        base = known[target].get("source") or ""
+        merged["source"] = f"as {target}: {base}" if base else f"as {target}"
+    return merged, []
 
 
 def _raise(errors: list[UserError]) -> None:
@@ -617,11 +640,33 @@ class MaterialDB:
                 if errs:
                     errors += errs
                     continue
-                mat, errs = _build(mid, f, str(path), base_key)
+                fields[mid], keys[mid] = f, base_key
+        # entries with same_as, in any file order: resolve those whose target is resolved until none is left
+        pending = {mid for mid, f in fields.items() if f.get("same_as") is not None}
+        while pending:
+            ready = [mid for mid in pending if fields[mid]["same_as"] not in pending]
+            if not ready:
+                for mid in sorted(pending):
+                    errors.append(UserError(f"same_as {fields[mid]['same_as']!r} goes round in a circle", where[mid],
+                                            _join(keys[mid], "same_as")))
+                    del fields[mid]
+                break
+            for mid in ready:
+                pending.discard(mid)
+                f, errs = _same_as(mid, fields[mid], fields, where[mid], keys[mid])
                 if errs:
                     errors += errs
-                    continue
-                materials[mid], fields[mid], keys[mid] = mat, f, base_key
+                    del fields[mid]
+                else:
+                    fields[mid] = f
+        for mid in list(fields):
+            mat, errs = _build(mid, fields[mid], str(where[mid]), keys[mid])
+            if errs:
+                errors += errs
+                del fields[mid]
+                continue
+            materials[mid] = mat
+        keys = {mid: keys[mid] for mid in materials}
         db = cls(materials, fields, keys)
         errors += db._problems()
         _raise(errors)
@@ -660,10 +705,17 @@ class MaterialDB:
                 errors += id_errors
                 continue
             new, errs = _parse_entry(mid, entry, file, base_key)
+            if not errs and new.get("same_as") is not None:
+                new, errs = _same_as(mid, new, fields, file, base_key)
+                if not errs:
+                    new["source"] = f"{new['source']} (in {file})"
+                    merged_whole = True
+            else:
+                merged_whole = False
             if errs:
                 errors += errs
                 continue
-            if mid in self._materials:
+            if mid in self._materials and not merged_whole:
                 merged = dict(self._fields[mid])
                 merged.update(new)
                 kind = merged.get("kind") or "dielectric"
@@ -806,7 +858,8 @@ def format_material_table(db: MaterialDB, f: float | None = None) -> str:
         lines.append("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + "  " + r[4])
     lines.insert(1, "  ".join("-" * w for w in widths) + "  " + "-" * 6)
     if any_clamped:
-        lines.append(f"* {_fmt_f(f)} is outside the tabulated range: nearest tabulated value")
+        lines.append(f"* {_fmt_f(f)} is outside the entry's stated range (a table's nearest value, a model "
+                     "extrapolated or interpolated): `pmmw materials show ID` says which")
     lines.append("T '-': the scenario's temperature applies")
     return "\n".join(line.rstrip() for line in lines)
 
@@ -829,7 +882,8 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
         row("eps", f"{mat.model.describe()}; at {mat.model_temperature():g} K:")
         for f_ in (35e9, 95e9, 140e9, 220e9, 300e9):
             value, outside = mat._lookup(f_)
-            row("", f"{_fmt_f(f_):>8}  {_fmt_eps(value)}{'  (outside the range: extrapolated)' if outside else ''}")
+            why = f"  (outside the range: {mat.model.outside(f_, mat.model_temperature())})" if outside else ""
+            row("", f"{_fmt_f(f_):>8}  {_fmt_eps(value)}{why}")
     elif not mat.freqs:
         row("eps", f"{_fmt_eps(mat.eps[0])} at every frequency")
     else:

@@ -11,13 +11,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pmmw_cli.constants import C0
 from pmmw_cli.scene.camera import Camera
 
 # Material kind codes (Murakowski 2014 sec. 2.2.9).
 DIELECTRIC, METAL, BLACKBODY, OPAQUE, THIN = 0, 1, 2, 3, 4
 KIND_CODES = {"dielectric": DIELECTRIC, "metal": METAL, "blackbody": BLACKBODY, "opaque": OPAQUE, "thin": THIN}
-
-C0 = 299_792_458.0  # speed of light [m/s]
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,7 @@ import numpy as np
 import trimesh
 
 from pmmw_cli.scene.export import check_glb, export_glb
+from pmmw_cli.scene.shapes import box, cell_block
 
 STYLES = ("plate", "brackets")
 MATERIALS = {"runway", "ground", "beacon"}
@@ -46,61 +47,6 @@ GROUND_STEPS = (30.0, 100.0, 300.0, 1000.0, 3000.0)
 
 
 # -- meshes -------------------------------------------------------------------------------------
-
-def box(lo, hi) -> trimesh.Trimesh:
-    """Closed, outward-oriented box between the corners lo and hi [m]."""
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    m = trimesh.creation.box(extents=hi - lo)
-    m.apply_translation((lo + hi) / 2)
-    return m
-
-
-def cells_mesh(xs, ys, zs, occupied) -> trimesh.Trimesh:
-    """Closed mesh of a set of cells of a rectilinear grid.
-
-    Every face lies on the grid, so neighbouring faces share whole edges: the surface is closed,
-    with outward counter-clockwise winding, for any set whose cells never meet along an edge only.
-
-    Parameters
-    ----------
-    xs, ys, zs : sequence of float, lengths nx + 1, ny + 1, nz + 1
-        Grid lines [m], increasing.
-    occupied : ndarray, shape (nx, ny, nz), bool
-        Cells that are solid.
-    """
-    xs, ys, zs = (np.asarray(a, float) for a in (xs, ys, zs))
-    nx, ny, nz = len(xs) - 1, len(ys) - 1, len(zs) - 1
-    occ = np.zeros((nx + 2, ny + 2, nz + 2), dtype=bool)
-    occ[1:-1, 1:-1, 1:-1] = occupied
-    gi, gj, gk = np.meshgrid(np.arange(nx + 1), np.arange(ny + 1), np.arange(nz + 1), indexing="ij")
-    vertices = np.column_stack([xs[gi.ravel()], ys[gj.ravel()], zs[gk.ravel()]])
-
-    def vid(i, j, k):
-        return (i * (ny + 1) + j) * (nz + 1) + k
-
-    quads = []
-    # Faces normal to x at grid line i, between cells i - 1 and i (padded indices i and i + 1).
-    lo, hi = occ[:-1, 1:-1, 1:-1], occ[1:, 1:-1, 1:-1]
-    for sign, mask in ((1, lo & ~hi), (-1, hi & ~lo)):
-        i, j, k = np.nonzero(mask)
-        q = np.stack([vid(i, j, k), vid(i, j + 1, k), vid(i, j + 1, k + 1), vid(i, j, k + 1)], axis=1)
-        quads.append(q if sign > 0 else q[:, ::-1])
-    lo, hi = occ[1:-1, :-1, 1:-1], occ[1:-1, 1:, 1:-1]
-    for sign, mask in ((1, lo & ~hi), (-1, hi & ~lo)):
-        i, j, k = np.nonzero(mask)
-        q = np.stack([vid(i, j, k), vid(i, j, k + 1), vid(i + 1, j, k + 1), vid(i + 1, j, k)], axis=1)
-        quads.append(q if sign > 0 else q[:, ::-1])
-    lo, hi = occ[1:-1, 1:-1, :-1], occ[1:-1, 1:-1, 1:]
-    for sign, mask in ((1, lo & ~hi), (-1, hi & ~lo)):
-        i, j, k = np.nonzero(mask)
-        q = np.stack([vid(i, j, k), vid(i + 1, j, k), vid(i + 1, j + 1, k), vid(i, j + 1, k)], axis=1)
-        quads.append(q if sign > 0 else q[:, ::-1])
-    q = np.concatenate(quads)
-    faces = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
-    mesh = trimesh.Trimesh(vertices, faces, process=False)
-    mesh.remove_unreferenced_vertices()
-    return mesh
-
 
 def extrude_x(profile, caps, x0: float, x1: float) -> trimesh.Trimesh:
     """Closed prism of a simple polygon in the (y, z) plane, from x = x0 to x = x1.
@@ -137,7 +83,7 @@ def ground_mesh(args) -> trimesh.Trimesh:
     zs = [-args.ground_thickness, -args.runway_depth - g, 0.0]
     occ = np.ones((len(xs) - 1, len(ys) - 1, 2), dtype=bool)
     occ[xs.index(notch_x[0]), ys.index(notch_y[0]), 1] = False
-    return cells_mesh(xs, ys, zs, occ)
+    return cell_block(xs, ys, zs, occ)
 
 
 def plate(args) -> trimesh.Trimesh:

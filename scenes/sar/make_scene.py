@@ -37,6 +37,7 @@ import numpy as np
 import trimesh
 
 from pmmw_cli.scene.export import check_glb, export_glb
+from pmmw_cli.scene.shapes import box
 
 TARGETS = ("cessna", "blanket", "beacon")
 TARGET_MATERIAL = {"cessna": "aircraft", "blanket": "blanket", "beacon": "blanket"}
@@ -60,14 +61,6 @@ FUSELAGE_RING = 20  # points per fuselage cross-section
 
 
 # -- mesh helpers -----------------------------------------------------------------------------------
-
-def box(lo, hi) -> trimesh.Trimesh:
-    """Closed, outward-oriented box between the corners lo and hi [m]."""
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    m = trimesh.creation.box(extents=hi - lo)
-    m.apply_translation((lo + hi) / 2)
-    return m
-
 
 def loft(rings) -> trimesh.Trimesh:
     """Closed mesh through a sequence of closed rings of equal point count, capped at both ends

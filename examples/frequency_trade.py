@@ -1,0 +1,71 @@
+"""Which frequency? The frequency trade studies of the concealed-weapon scenes and the landing.
+
+Six sweeps (configs/*_frequency.yaml, *_frequency_scaled.yaml), each at 35, 94, 140, 220 and 300
+GHz, of scenes whose materials are valid across that band (docs/materials.md): the concealed
+weapon outdoors and indoors (the gun's grip against the torso) and the landing in extreme fog (the
+row of beacons against the runway). Each scene twice: the aperture fixed (the beam narrows as the
+wavelength shortens) and scaled with the wavelength (the same beam at every frequency, so only the
+materials and the atmosphere change). The SNR is the reports' one detection criterion (README
+"Detection": matched-filter SNR >= 5) in the channel the reports lead with.
+
+    python examples/frequency_trade.py [OUT_DIR]   # 30 renders, about 10 minutes on 2 cores;
+                                                   # writes frequency_trade.csv and .png in OUT_DIR
+
+Sweeps already rendered (``pmmw sweep configs/cwd_outdoor_frequency.yaml`` into out/...) are
+reused: each variant whose inputs are unchanged is skipped.
+"""
+
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
+import yaml  # noqa: E402
+
+import pmmw  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+out = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "out" / "examples"
+out.mkdir(parents=True, exist_ok=True)
+
+STUDIES = {  # title -> (sweep file stem, the pair whose SNR is plotted)
+    "concealed weapon, outdoors": ("cwd_outdoor_frequency", "gun - torso"),
+    "concealed weapon, indoors": ("cwd_indoor_frequency", "gun - torso"),
+    "landing, extreme fog, 1000 m": ("landing_frequency", "beacons - runway"),
+}
+
+rows = ["study,aperture,frequency_GHz,aperture_m,channel,contrast_K,snr,detectable"]
+fig, axes = plt.subplots(1, len(STUDIES), figsize=(13.0, 3.8), dpi=110)
+for ax, (title, (stem, pair)) in zip(axes, STUDIES.items()):
+    for suffix, how, style in (("", "fixed", "o-"), ("_scaled", "scaled with the wavelength", "s--")):
+        spec = yaml.safe_load((ROOT / "configs" / f"{stem}{suffix}.yaml").read_text())
+        table = pmmw.sweep(ROOT / "configs" / spec["scenario"], spec["grid"], out=out / f"{stem}{suffix}",
+                           zip=spec.get("zip", False), resume=True)
+        snr_col = next(c for c in table.columns if c.startswith(f"snr {pair} "))
+        channel = snr_col.rsplit(" ", 1)[1]
+        freqs = [float(str(f).split()[0]) for f in table["frequency"]]
+        apertures = table["imager.aperture_diameter"] if "imager.aperture_diameter" in table else [None] * len(freqs)
+        for f, a, k, snr, det in zip(freqs, apertures, table[f"contrast {pair} {channel} [K]"], table[snr_col],
+                                     table[f"detectable {pair} {channel}"]):
+            rows.append(f"{stem},{how},{f:g},{a if a is not None else ''},{channel},{k:.3f},{snr:.2f},{det}")
+        ax.plot(freqs, table[snr_col], style, label=f"aperture {how}")
+    ax.axhline(5.0, color="k", lw=0.8, ls=":", label="detection threshold (SNR 5)")
+    ax.set_xscale("log")
+    ax.set_yscale("log" if stem.startswith("landing") else "linear")  # the landing spans 3 decades
+    ax.set_xticks([35, 94, 140, 220, 300], ["35", "94", "140", "220", "300"])
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.yaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_xlabel("frequency [GHz]")
+    ax.set_ylabel(f"SNR of {pair} ({channel})")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+axes[0].legend(fontsize=7)
+fig.tight_layout()
+fig.savefig(out / "frequency_trade.png")
+(out / "frequency_trade.csv").write_text("\n".join(rows) + "\n")
+print("\n".join(rows))
+print(f"wrote {out / 'frequency_trade.csv'} and {out / 'frequency_trade.png'}")
