@@ -7,7 +7,7 @@ BIN     = $(VENV)/bin
 SCENARIO ?= configs/landing_95ghz.yaml
 PYTEST_ARGS ?=
 
-.PHONY: render test test-full install install-test clean
+.PHONY: render test test-full lint install install-test clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -29,6 +29,10 @@ render: install
 
 test: install-test
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
+
+# ruff's rules of pyproject.toml ([tool.ruff]): pyflakes, pycodestyle's errors, import order
+lint: install-test
+	$(BIN)/ruff check pmmw_cli pmmw tests examples scenes
 
 # also the longest convergence renders of the shipped configs (about 2.5 minutes more)
 test-full: install-test

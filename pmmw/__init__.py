@@ -7,13 +7,14 @@
 
 Every misuse raises `UserError` naming the argument or the scenario key (`UserErrors` for
 several at once); `EnvironmentProblem` (a `UserError` too) is the machine refusing (a disk full, a
-folder that cannot be written). See `pmmw_cli.api` (the functions' documentation and their errors)
+folder that cannot be written). Results to read with care (a material outside its stated range, a
+noisy region) come as `PmmwWarning` through Python's `warnings`, and in each report. See `pmmw_cli.api` (the functions' documentation and their errors)
 and the README's "Python API".
 """
 
 from pmmw_cli import __version__
 from pmmw_cli.api import Scenario, brdf, po, render, sky, sweep, validate
-from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors
+from pmmw_cli.errors import EnvironmentProblem, PmmwWarning, UserError, UserErrors
 
 __all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "UserError", "UserErrors",
-           "EnvironmentProblem", "__version__"]
+           "EnvironmentProblem", "PmmwWarning", "__version__"]

@@ -100,7 +100,7 @@ def machine() -> str:
         pass
     mem = ""
     try:
-        kb = int(next(l for l in Path("/proc/meminfo").read_text().splitlines() if l.startswith("MemTotal")).split()[1])
+        kb = int(next(line for line in Path("/proc/meminfo").read_text().splitlines() if line.startswith("MemTotal")).split()[1])
         mem = f", {kb / 2**20:.0f} GiB"
     except (OSError, StopIteration, ValueError):
         pass
@@ -189,12 +189,9 @@ def _section(scn, job, ref_desc, t_ref, rows, plot_name, workers):
 
 
 def _plot(rows, path: Path, name: str, noise: float):
-    import matplotlib
+    from pmmw_cli.io.preview import subplots
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=110)
+    fig, ax = subplots(figsize=(6.4, 4.4), dpi=110)
     for strategy in dict.fromkeys(r["strategy"] for r in rows):
         rs = [r for r in rows if r["strategy"] == strategy]
         ax.loglog([r["wall_s"] for r in rs], [max(r["ideal_rms"], 1e-6) for r in rs], "o-", label=f"{strategy}: ideal")

@@ -84,7 +84,8 @@ def render(
 ):
     """Render a scenario to an EXR polarization stack and a report."""
     from pmmw_cli import memory
-    from pmmw_cli.pipeline import parse_shard, render as run
+    from pmmw_cli.pipeline import parse_shard
+    from pmmw_cli.pipeline import render as run
 
     with memory.overridable("--force", force):  # --force also reads a mesh or sky texture past the memory check
         run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
@@ -430,7 +431,8 @@ def bench(
         run_po_bench(target, command="pmmw bench " + " ".join(sys.argv[2:]))
         typer.echo(f"wrote {target}")
         return
-    from pmmw_cli.bench import STRATEGIES, bench as run
+    from pmmw_cli.bench import STRATEGIES
+    from pmmw_cli.bench import bench as run
 
     try:
         spp_list = tuple(int(v) for v in spp.split(","))

@@ -9,6 +9,7 @@ way with status 1. Everything else is a bug and may show one.
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 
@@ -71,14 +72,36 @@ class EnvironmentProblem(UserError):
     exit_status = 1
 
 
+class PmmwWarning(UserWarning):
+    """A result to read with care (a material outside its stated range, a region too noisy to
+    compare, a mesh that is not watertight): issued with `warnings.warn`, so a notebook can filter
+    it or make it an error (``warnings.simplefilter("error", pmmw.PmmwWarning)``); the command line
+    prints it as one ``warning: ...`` line (`show_warnings_as_lines`)."""
+
+
 _WARNINGS: list[str] = []
 
 
 def warn(message: str) -> None:
-    """Record a warning for the report and print it to stderr once."""
+    """Record a warning for the report (`collected_warnings`) and issue it once as a `PmmwWarning`."""
     if message not in _WARNINGS:
         _WARNINGS.append(message)
-        print(f"warning: {message}", file=sys.stderr)
+        warnings.warn(message, PmmwWarning, stacklevel=2)
+
+
+def show_warnings_as_lines() -> None:
+    """For the command line: every distinct `PmmwWarning` as one ``warning: MESSAGE`` line on
+    stderr (Python's own format names a file and line of pmmw's code); other warnings as before."""
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, PmmwWarning):
+            print(f"warning: {message}", file=sys.stderr)
+        else:
+            default(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show
+    warnings.simplefilter("always", PmmwWarning)  # `warn` already gives each message once
 
 
 def collected_warnings() -> list[str]:

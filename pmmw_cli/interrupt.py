@@ -167,30 +167,17 @@ def _unraisable(hook_args, default=sys.unraisablehook):
 NATIVE_MODULES = ("numpy", "OpenImageIO")
 
 
-def import_native() -> None:
-    """Import `NATIVE_MODULES` with SIGINT and SIGTERM held back (`deferred`): a signal that comes
-    meanwhile is raised as `Interrupted` right after, at a safe point."""
-    with deferred():
-        for name in NATIVE_MODULES:
-            importlib.import_module(name)
-
-
-def main() -> None:
-    """The ``pmmw`` console entry point: the signal handlers first, then the typer app.
-
-    It lives here rather than in `pmmw_cli.cli` because importing that module (typer) takes
-    about 0.1 s, during which a signal would otherwise end the process with a traceback (SIGINT)
-    or with no message at all (SIGTERM).
-    """
+def run(command) -> None:
+    """Run ``command()`` (the typer app) as the process's main work: signal handlers installed, the
+    native modules imported with signals held back, and a signal's `Interrupted` (or what it broke)
+    ended with its one line and exit status; any other exception propagates."""
     install()
     sys.unraisablehook = _unraisable
     outcome(COMMAND_OUTCOMES.get(sys.argv[1] if len(sys.argv) > 1 else "", RENDER_OUTCOME))
     try:
         try:
             import_native()
-            from pmmw_cli.cli import app
-
-            app()
+            command()
         finally:  # the outcome is decided: a signal now would only garble the exit
             for s in SIGNALS:
                 signal.signal(s, signal.SIG_IGN)
@@ -205,3 +192,11 @@ def main() -> None:
         if not _reported:
             report(stop)
         sys.exit(stop.status)
+
+
+def import_native() -> None:
+    """Import `NATIVE_MODULES` with SIGINT and SIGTERM held back (`deferred`): a signal that comes
+    meanwhile is raised as `Interrupted` right after, at a safe point."""
+    with deferred():
+        for name in NATIVE_MODULES:
+            importlib.import_module(name)

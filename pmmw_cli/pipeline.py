@@ -30,15 +30,26 @@ from pmmw_cli.io.progress import StatusLine
 from pmmw_cli.io.report import write_report
 from pmmw_cli.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
 from pmmw_cli.io.tilestore import (
-    TILE_ROOT, claim, deletable, own_folders, remove_folder, remove_root_if_empty,
+    TILE_ROOT,
+    claim,
+    deletable,
+    own_folders,
+    remove_folder,
+    remove_root_if_empty,
 )
 from pmmw_cli.physics.jones import stokes_images
 from pmmw_cli.scene.camera import Camera
 from pmmw_cli.scene.geometry import asset_files, build_geometry, file_up_axis
 from pmmw_cli.scene.materials import MaterialDB
 from pmmw_cli.scene.sky import make_sky
-from pmmw_cli.trace.job import (
-    BLACKBODY, C0, DIELECTRIC, KIND_CODES, METAL, THIN, Media, RenderSettings, TraceJob, split_coating,
+from pmmw_cli.trace.job import (  # build_media: pipeline.build_media as before
+    BLACKBODY,
+    C0,
+    KIND_CODES,
+    METAL,
+    RenderSettings,
+    TraceJob,
+    build_media,
 )
 from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
 
@@ -95,42 +106,6 @@ def check_material_ids(entries, db: MaterialDB, file) -> None:
                 errors.append(e)
     if errors:
         raise UserErrors(errors)
-
-
-def build_media(db: MaterialDB, material_ids, f: float, t_default: float = 290.0, atm=None) -> Media:
-    """Optical properties of the ambient medium and every material at frequency f [Hz]:
-    ``t_default`` [K] for materials without a temperature, ``atm`` the scenario's atmosphere
-    (a uniform one fills the ambient medium; None or layered: lossless air)."""
-    k0 = 2.0 * np.pi * f / C0
-    ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
-    rough, bump, stacks = [None], [None], [()]
-    uniform = atm is not None and atm.model == "uniform"  # the layered model lives on the job
-    temp.append(atm.temperature if uniform else t_default)
-    alpha.append(atm.loss if uniform else 0.0)
-    for mid in material_ids:
-        m = db.get(mid)
-        code = KIND_CODES[m.kind]
-        t_m = m.temperature if m.temperature is not None else t_default
-        e = m.eps_at(f, t_m) if m.has_eps() else 1.0 + 0j
-        ids.append(mid)
-        kind.append(code)
-        eps.append(complex(e))
-        temp.append(t_m)
-        alpha.append(2.0 * k0 * np.sqrt(complex(e)).imag if code == DIELECTRIC else 0.0)
-        rough.append(m.roughness)
-        bump.append(m.bump)
-        layers = []
-        for layer in m.coating:
-            lm = db.get(layer.material)
-            t_l = layer.temperature if layer.temperature is not None else (lm.temperature if lm.temperature is not None else t_m)
-            layers.append((lm.eps_at(f, t_l), layer.thickness, t_l, layer.roughness))
-        if code == THIN:
-            layers.append((e, m.thickness or 0.0, t_m, None))
-        rough_layers, films = split_coating(layers, k0)
-        coat.append(films)
-        stacks.append(rough_layers)
-    return Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp, float), np.array(alpha, float),
-                 tuple(coat), tuple(rough), tuple(bump), tuple(stacks))
 
 
 def aux_channels(img, aux) -> dict:

@@ -10,11 +10,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from pmmw_cli.io.yamlio import read_yaml
 from pydantic import ValidationError
 
 from pmmw_cli.errors import UserError
 from pmmw_cli.io.preview import save_figure
+from pmmw_cli.io.yamlio import read_yaml
 from pmmw_cli.units import parse_quantity
 
 # Weathers of Murakowski 2014 ch. 3: fog 0-600 m of 0.02 and 0.06 g/cm2 (sec. 3.1.1: 200 and
@@ -104,7 +104,7 @@ def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], g
 def _model(atm, f, layers=None):
     from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
 
-    lay = atm.weather_at(f, file="pmmw sky") if layers is None else tuple(Layer(*l) for l in layers)
+    lay = atm.weather_at(f, file="pmmw sky") if layers is None else tuple(Layer(*layer) for layer in layers)
     return AtmosphereModel(Atmosphere(profile=atm.profile, ground_temperature=atm.ground_temperature,
                                       humidity=atm.humidity, layers=lay, ground_altitude=atm.ground_altitude), f)
 
@@ -137,13 +137,10 @@ def write_map(path: Path, atm, f: float, width: int = 720, ground_temperature: f
 
 
 def write_plot(path: Path, atm, f: float):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from pmmw_cli.io.preview import subplots
 
     el = np.linspace(0.0, 90.0, 361)
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=110)
+    fig, ax = subplots(figsize=(6.4, 4.4), dpi=110)
     ax.plot(el, _model(atm, f).sky_temperature(np.radians(el)), "k-", lw=2, label="this atmosphere")
     for name, layers in PRESETS.items():
         ax.plot(el, _model(atm, f, layers=layers).sky_temperature(np.radians(el)), lw=1, label=f"{atm.profile}, {name}")

@@ -16,7 +16,7 @@ import numpy as np
 from pmmw_cli.imaging.detection import CRITERION, ROSE_SNR
 from pmmw_cli.io.atomic import atomic_path, write_text_atomic
 from pmmw_cli.io.preview import save_figure
-from pmmw_cli.sweep import _NUMBER_UNIT, SweepSpec, _label, zipped_keys
+from pmmw_cli.sweep_spec import _NUMBER_UNIT, SweepSpec, _label, zipped_keys
 
 MAX_ANIMATIONS = 12  # GIFs per sweep (one per combination of the keys not side by side)
 FRAME_MS = 600  # display time of one animation frame [ms]
@@ -138,10 +138,7 @@ def _detection_lines(spec: SweepSpec, table: list[dict], snr_cols: list[str]) ->
 def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -> list[Path]:
     """Per contrast, its SNR against the first numeric axis, one line per value of the other
     keys, the criterion's threshold drawn; detectable variants filled, the others open."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from pmmw_cli.io.preview import subplots
 
     axes = _numeric_axes(spec)
     if not axes or not snr_cols:
@@ -157,7 +154,7 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
                 groups.setdefault(", ".join(str(r[k]) for k in line_keys), []).append(r)
         if not groups:
             continue
-        fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+        fig, ax = subplots(figsize=(6.4, 4.2), dpi=110)
         values = []
         for label, rows in groups.items():
             rows = sorted(rows, key=lambda r: x_of[r[x_key]])
@@ -182,11 +179,9 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
 
 
 def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.image as mpimg
-    import matplotlib.pyplot as plt
+
+    from pmmw_cli.io.preview import subplots
 
     shots = []
     for r in table:
@@ -199,7 +194,7 @@ def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None
         return None
     cols = min(4, len(shots))
     rows = math.ceil(len(shots) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.8 * rows), dpi=100, squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(3.2 * cols, 2.8 * rows), dpi=100, squeeze=False)
     keys = [k for k, _ in spec.grid]
     for ax in axes.ravel():
         ax.axis("off")
@@ -261,10 +256,9 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]
     axes = _numeric_axes(spec)
     if len(axes) < 2 or not snr_cols:
         return []
-    import matplotlib
+    from matplotlib.patches import Rectangle
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from pmmw_cli.io.preview import subplots
 
     (x_key, x_pos), (y_key, y_pos) = axes[:2]
     panel_keys = _other_keys(spec, [x_key, y_key])
@@ -282,7 +276,7 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]
         if not panels:
             continue
         top = max(2.0 * ROSE_SNR, max(float(np.nanmax(z)) for z in panels.values()))
-        fig, axs = plt.subplots(1, len(panels), figsize=(0.6 + 3.6 * len(panels), 3.6), dpi=110, squeeze=False)
+        fig, axs = subplots(1, len(panels), figsize=(0.6 + 3.6 * len(panels), 3.6), dpi=110, squeeze=False)
         for ax, (label, z) in zip(axs[0], panels.items()):
             shown = ax.imshow(z, cmap="viridis", vmin=0.0, vmax=top, origin="lower", aspect="auto")
             for (i, j), v in np.ndenumerate(z):
@@ -291,7 +285,7 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]
                             fontweight="bold" if v >= ROSE_SNR else "normal",
                             color="k" if v > 0.6 * top else "w")
                     if v >= ROSE_SNR:
-                        ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, lw=1.4, ec="r"))
+                        ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, lw=1.4, ec="r"))
             ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs], fontsize=7)
             ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys], fontsize=7)
             ax.set_xlabel(_axis_label(spec, x_key), fontsize=8)
@@ -314,10 +308,6 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
     zipped = zipped_keys(spec)
     if not zipped or len(dict(spec.grid)[zipped[0]]) < 2:
         return []
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from PIL import Image
 
     from pmmw_cli.io.exr import read_exr
@@ -335,7 +325,7 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
         imgs = [np.asarray(read_exr(out / r["exr"])[0]["I"], float) for r in rows]
         low, high = usable_range(np.concatenate([i.ravel() for i in imgs]))
         h, w = imgs[0].shape
-        fig, axes = figure_for(plt, h, w)
+        fig, axes = figure_for(h, w)
         ax = axes[0, 0]
         shown = ax.imshow(imgs[0], cmap="gray", vmin=low, vmax=high, interpolation="nearest")
         ax.set_xticks([])
@@ -350,7 +340,6 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
                          + (f" ({label})" if label else ""), fontsize=8)
             fig.canvas.draw()
             frames.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()))
-        plt.close(fig)
         path = out / ("sequence_" + (re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "all") + ".gif")
         with atomic_path(path) as tmp:
             frames[0].save(tmp, format="GIF", save_all=True, append_images=frames[1:], duration=FRAME_MS, loop=0)

@@ -67,7 +67,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pmmw_cli.imaging.detection import ROSE_SNR, channel_sigma, replicate_snr, region_snr
+from pmmw_cli.imaging.detection import ROSE_SNR, channel_sigma, region_snr, replicate_snr
 from pmmw_cli.trace.job import C0
 
 REPO = Path(__file__).resolve().parents[1]

@@ -8,8 +8,8 @@ import trimesh
 import yaml
 
 import pmmw
-from tests.scenes import ground_and_block
 from pmmw_cli.io.exr import read_exr
+from tests.scenes import ground_and_block
 
 SCENE = {
     "name": "tiny",

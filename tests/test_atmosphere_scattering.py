@@ -183,7 +183,7 @@ def _discrete_ordinates_sky(tau, omega, g, T, t_ground, t_top, n_mu=16, dtau=0.0
     up, dn = mu > 0.0, mu < 0.0
     S = np.full((nz, mu.size), T)
     for _ in range(300):
-        I = np.zeros((nz + 1, mu.size))
+        I = np.zeros((nz + 1, mu.size))  # noqa: E741  (the radiance of the equation)
         I[0, up] = t_ground
         for k in range(nz):
             I[k + 1, up] = I[k, up] * att[up] + S[k, up] * (1.0 - att[up])

@@ -10,9 +10,9 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from tests.scenes import ground_and_block
 from pmmw_cli.cli import app
 from pmmw_cli.io.exr import read_exr
+from tests.scenes import ground_and_block
 
 runner = CliRunner()
 

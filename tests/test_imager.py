@@ -71,8 +71,8 @@ def test_noise_has_the_stated_sigma_and_is_seeded():
 def _edge_scene(focus, aperture_radius, z_obj=10.0):
     """A hot/cold edge (two blackbody half-planes) facing a camera at distance z_obj."""
     from pmmw_cli.scene.camera import Camera
-    from tests.scenes import UniformSky, box, make_job, material
     from pmmw_cli.trace.job import RenderSettings
+    from tests.scenes import UniformSky, box, make_job, material
 
     hot = (box([-20, z_obj, -20], [0, z_obj + 1, 20]), material(kind="blackbody", temperature=300.0))
     cold = (box([0, z_obj, -20], [20, z_obj + 1, 20]), material(kind="blackbody", temperature=100.0))
@@ -108,7 +108,8 @@ def test_depth_of_field_blurs_as_the_thin_lens_predicts():
 def test_band_is_the_mean_over_sub_band_frequencies(tmp_path):
     """imager.bandwidth: the image is the average of renders at the sub-band midpoints."""
     from pmmw_cli.io.exr import read_exr
-    from pmmw_cli.pipeline import band_frequencies, render as run
+    from pmmw_cli.pipeline import band_frequencies
+    from pmmw_cli.pipeline import render as run
     from tests.test_cli import _scene
 
     assert band_frequencies(95e9, 10e9, 5) == [91e9, 93e9, 95e9, 97e9, 99e9]

@@ -192,3 +192,53 @@ def test_frequency_trade_studies_use_materials_valid_across_the_band(stem):
             warned.add(m.group(1))
         expected = TRADE_GAPS[stem] if params["frequency"] in ("140 GHz", "220 GHz", "300 GHz") else set()
         assert warned == expected, (params["frequency"], warned)
+
+
+def test_warnings_are_python_warnings_and_lines_on_the_command_line(db, tmp_path):
+    """The library issues `PmmwWarning` (a notebook can filter it or make it an error); `pmmw`
+    prints each as one ``warning:`` line (the control: no line for a frequency inside the range)."""
+    import subprocess
+    import sys
+
+    import pmmw
+
+    clear_warnings()
+    with pytest.warns(pmmw.PmmwWarning, match="'human_skin': 220 GHz"):
+        db.get("human_skin").eps_at(220e9)
+    from tests.scenes import ground_and_block
+
+    ground_and_block(tmp_path)
+    out = {}
+    for f in ("220", "94"):
+        (tmp_path / "s.yaml").write_text(f"""
+name: skin
+frequency: {f} GHz
+imager: {{position: [0, 0, 1.5], look_at: [0, 4, 0.1], fov: 20 deg, resolution: [24, 16]}}
+scene:
+  - {{mesh: ground.obj, material: concrete}}
+  - {{mesh: block.obj, material: human_skin}}
+sky: {{model: uniform, temperature: 40 K}}
+""")
+        res = subprocess.run([sys.executable, "-m", "pmmw_cli", "validate", str(tmp_path / "s.yaml")],
+                             capture_output=True, text=True, timeout=120)
+        assert res.returncode == 0, res.stderr
+        out[f] = [line for line in res.stderr.splitlines() if line.startswith("warning: ")]
+    assert len(out["220"]) == 1 and "'human_skin': 220 GHz" in out["220"][0] and out["94"] == [], out
+
+
+def test_show_says_why_a_value_is_outside_its_range():
+    """`pmmw materials show ID --frequency F` outside a model's range says what is done there (it
+    raised IndexError for a model entry); a table's clamp and a P.2040 gap, each in its words."""
+    from typer.testing import CliRunner
+
+    from pmmw_cli.cli import app
+
+    runner = CliRunner()
+    for mid, f, words in (("human_skin", "220 GHz", "outside the model's range: the model is extrapolated"),
+                          ("brick", "94 GHz", "interpolated between rows 1-40 GHz and 110-330 GHz"),
+                          ("denim", "140 GHz", "outside the table: nearest tabulated value"),
+                          ("concrete", "140 GHz", "")):
+        res = runner.invoke(app, ["materials", "show", mid, "--frequency", f])
+        assert res.exit_code == 0, res.output
+        line = next(x for x in res.output.splitlines() if x.strip().startswith(f"eps at {f}"))
+        assert (words in line) if words else "outside" not in line, line

@@ -64,12 +64,12 @@ def test_reference_sign_conventions():
     water, ice and soil return eps'' > 0, pyrtlib's dilec12 eps'' < 0; SMRT's salinity is in kg/kg
     (PSU = 1e-3: 35 g/kg is 0.035, and passing 35 would put the static term far off); pmmw's own
     models return eps'' >= 0."""
+    from pyrtlib.utils import dilec12
     from smrt import PSU
     from smrt.permittivity.ice import ice_permittivity_maetzler06
     from smrt.permittivity.saline_water import seawater_permittivity_klein76, seawater_permittivity_stogryn95
     from smrt.permittivity.soil import soil_permittivity_dobson85_original
     from smrt.permittivity.water import water_permittivity_maetzler87
-    from pyrtlib.utils import dilec12
 
     assert PSU == 1e-3
     assert complex(water_permittivity_maetzler87(94e9, 293.15)).imag > 0
@@ -251,8 +251,9 @@ T_ICE = (243.15, 253.15, 263.15, 268.15, 273.15)
 def test_ice_equals_smrt_maetzler06(f_ghz, t_k):
     """pmmw's ``ice`` (Maetzler 2006) against `smrt.permittivity.ice.ice_permittivity_maetzler06`
     (Maetzler 2006 pp. 456-461; 0.01-3000 GHz by the source): the same formula, 1e-12 relative."""
-    from pmmw_cli.scene.dielectric import MODELS
     from smrt.permittivity.ice import ice_permittivity_maetzler06
+
+    from pmmw_cli.scene.dielectric import MODELS
 
     ours = complex(MODELS["ice"].fn(f_ghz * 1e9, t_k))
     theirs = complex(ice_permittivity_maetzler06(f_ghz * 1e9, t_k))
@@ -269,8 +270,9 @@ def test_ice_against_smrt_hufford91(f_ghz, t_k):
     offset: 2e-4 absolute. eps'': Maetzler 2006 keeps Hufford's alpha/f and refits beta with
     Mishima et al. 1983's data; ice-loss measurements at millimetre waves scatter by tens of per cent,
     so 20 % relative."""
-    from pmmw_cli.scene.dielectric import MODELS
     from smrt.permittivity.ice import ice_permittivity_hufford91_maetzler87
+
+    from pmmw_cli.scene.dielectric import MODELS
 
     ours = complex(MODELS["ice"].fn(f_ghz * 1e9, t_k))
     theirs = complex(ice_permittivity_hufford91_maetzler87(f_ghz * 1e9, t_k))

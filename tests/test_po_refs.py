@@ -6,9 +6,9 @@ symmetry and reciprocity, energy conservation, direct numerical PO integrals and
 corner-reflector ray count. Each tolerance is named with the reason for it.
 """
 
+import miepython
 import numpy as np
 import pytest
-import miepython
 from numpy.polynomial.legendre import leggauss
 from scipy.special import spherical_jn, spherical_yn
 

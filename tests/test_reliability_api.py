@@ -444,7 +444,7 @@ def test_sigint_stops_po_soon_with_its_own_line(tmp_path):
            "method": "direct"}
     (tmp_path / "big.yaml").write_text(yaml.safe_dump(job))
     out = tmp_path / "out"
-    proc = subprocess.Popen([PYTHON, "-c", "from pmmw_cli.interrupt import main; main()", "po", tmp_path / "big.yaml",
+    proc = subprocess.Popen([PYTHON, "-c", "from pmmw_cli.__main__ import main; main()", "po", tmp_path / "big.yaml",
                              "--out", out], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
     time.sleep(6.0)  # past the imports, the mesh and the currents: in the far-field sum
     assert proc.poll() is None, proc.communicate()

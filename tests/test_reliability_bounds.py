@@ -63,7 +63,7 @@ def _bounded(*args, cwd=ROOT) -> subprocess.CompletedProcess:
     def limit():
         resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_LIMIT, ADDRESS_LIMIT))
 
-    return subprocess.run([sys.executable, "-c", "from pmmw_cli.interrupt import main; main()", *map(str, args)],
+    return subprocess.run([sys.executable, "-c", "from pmmw_cli.__main__ import main; main()", *map(str, args)],
                           cwd=cwd, preexec_fn=limit, capture_output=True, text=True, timeout=DEADLINE,
                           check=False)
 
@@ -373,7 +373,7 @@ render: {{spp: 1, max_depth: 2, tile: 8, workers: 2}}
 output: {{dir: '{tmp_path / "out"}', previews: false}}
 """)
     estimate = estimate_resources(load_scenario(scn), triangles, 2)["memory_bytes"]
-    peak, res = _peak_memory([sys.executable, "-c", "from pmmw_cli.interrupt import main; main()",
+    peak, res = _peak_memory([sys.executable, "-c", "from pmmw_cli.__main__ import main; main()",
                               "render", str(scn), "--quiet"], ROOT)
     assert res.returncode == 0, res.stderr[-2000:]
     assert (tmp_path / "out" / "sheet.exr").exists()

@@ -28,7 +28,7 @@ from tests.scenes import ground_and_block
 
 #: The ``pmmw`` console entry point, run so that it imports the package of the current folder (as
 #: the Dask processes, started with ``-m``, do), not whichever one is installed.
-PMMW = [sys.executable, "-c", "from pmmw_cli.interrupt import main; main()"]
+PMMW = [sys.executable, "-c", "from pmmw_cli.__main__ import main; main()"]
 
 #: A wrong address must be told within this [s]: pmmw's deadline is 10 s of silence (then 2 s for
 #: an HTTP request), plus the start of pmmw and the scene's resolution on a loaded 2-core machine.

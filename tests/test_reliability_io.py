@@ -314,13 +314,13 @@ def test_stale_tile_folders_are_removed(tmp_path):
 def test_a_tile_is_traced_in_waves_of_bounded_size(monkeypatch):
     """spp 4096 on one 32x32 tile took 4.8 GB: a pass is now split so no wave exceeds MAX_WAVE
     camera rays, and the estimate is unchanged (same pixels, same sample numbers)."""
-    from tests.scenes import box, make_job, material
     from pmmw_cli.scene.camera import Camera
     from pmmw_cli.scene.sky import UniformSky
     from pmmw_cli.trace import integrator
     from pmmw_cli.trace.integrator import Integrator
     from pmmw_cli.trace.intersect import make_intersector
     from pmmw_cli.trace.job import RenderSettings
+    from tests.scenes import box, make_job, material
 
     cam = Camera.look_at((0, -3, 0.5), (0, 0, 0.5), (0, 0, 1), np.radians(30), (8, 8))
     job = make_job([(box((-1, -0.1, 0), (1, 0.1, 1)), material("dielectric", 4 + 0.2j, 310.0))], cam,

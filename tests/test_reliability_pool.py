@@ -54,7 +54,7 @@ def killing(self, tile):
 Integrator.render_tile = killing
 sys.argv = ["pmmw", *sys.argv[4:]]
 try:
-    from pmmw_cli.interrupt import main
+    from pmmw_cli.__main__ import main
 except ImportError:  # a pmmw without one
     from pmmw_cli.cli import app as main
 main()

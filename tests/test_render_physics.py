@@ -11,7 +11,14 @@ import tmm
 
 from pmmw_cli.trace.job import RenderSettings
 from tests.scenes import (
-    UniformSky, box, hollow_box, looking_down_at, make_job, material, render, sphere,
+    UniformSky,
+    box,
+    hollow_box,
+    looking_down_at,
+    make_job,
+    material,
+    render,
+    sphere,
 )
 
 F35 = 35e9

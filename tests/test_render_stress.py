@@ -7,7 +7,8 @@ Ex2 and Ey2 lie within [min T, max T]; |U|, |V| <= I; nothing self-intersects at
 
 import numpy as np
 import trimesh
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from pmmw_cli.scene.camera import Camera
 from pmmw_cli.trace.job import RenderSettings

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from pmmw_cli.config.schema import Region
-from pmmw_cli.pipeline import atmosphere_model, make_job, region_masks, resolve, validate
 from pmmw_cli.physics.jones import stokes_images
+from pmmw_cli.pipeline import atmosphere_model, make_job, region_masks, resolve, validate
 from pmmw_cli.trace.pool import assemble, render_tiles
 
 REPO = Path(__file__).resolve().parents[1]
@@ -191,8 +191,8 @@ def test_landing_fogs_are_the_thesis_columns():
     for name in ("landing_sweep.yaml", "landing_trade.yaml"):
         fogs = dict(load_sweep_file(REPO / "configs" / name).grid)["atmosphere.layers"][1:]
         columns = [[WeatherLayer(**w) for w in layers] for layers in fogs]
-        g_cm2 = [l.liquid_water * (l.top - l.base) * 0.1 for (l,) in columns]  # [kg/m2] -> [g/cm2]
-        assert [(l.base, l.top) for (l,) in columns] == [(0.0, 600.0)] * 2
+        g_cm2 = [w.liquid_water * (w.top - w.base) * 0.1 for (w,) in columns]  # [kg/m2] -> [g/cm2]
+        assert [(w.base, w.top) for (w,) in columns] == [(0.0, 600.0)] * 2
         assert g_cm2 == pytest.approx([0.02, 0.06], rel=1e-6), (name, g_cm2)
     heavy = _yaml_value(dict(load_sweep_file(REPO / "configs/landing_sweep.yaml").grid)["atmosphere.layers"][1])
     fog = atmosphere_model(resolve(LANDING, [f"atmosphere.layers={heavy}"]).scenario, 95e9)

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from tests.scenes import ground_and_block
 from pmmw_cli import pipeline
 from pmmw_cli.cli import app
 from pmmw_cli.errors import UserError
 from pmmw_cli.io.exr import read_exr
 from pmmw_cli.sweep import SweepSpec, linspace, parse_grid_options, variants
+from tests.scenes import ground_and_block
 
 runner = CliRunner()
 

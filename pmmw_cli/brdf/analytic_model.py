@@ -12,8 +12,7 @@ import math
 
 import numpy as np
 
-from pmmw_cli.brdf.grid import (N_PHI, N_THETA, _cells, _hv, grid_directions, mueller_from_jones,
-                                projected_solid_angle)
+from pmmw_cli.brdf.grid import N_PHI, N_THETA, _cells, _hv, grid_directions, mueller_from_jones, projected_solid_angle
 from pmmw_cli.brdf.optics import _TINY, _amplitude, _facet_basis, _Interface
 from pmmw_cli.brdf.stack import Stack
 from pmmw_cli.errors import UserError

@@ -63,12 +63,8 @@ def write_outputs(out: Path, results, summary, wi, mueller, plots):
 
 
 def _plot_maps(path: Path, res: MethodResult, title: str):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from pmmw_cli.io.atomic import atomic_path
+    from pmmw_cli.io.preview import subplots
 
     dop, aop = _dop_aop(res.stokes)
     maps = [("I [1/sr]", res.stokes[0], "viridis"), ("Q [1/sr]", res.stokes[1], "RdBu_r"),
@@ -76,7 +72,7 @@ def _plot_maps(path: Path, res: MethodResult, title: str):
             ("DoP", dop, "magma"), ("AoP [deg]", aop, "twilight")]
     th_edges = np.concatenate([[0.0], np.arange(N_THETA - 1) + 0.5, [90.0]])
     ph_edges = np.radians(np.arange(N_PHI + 1) - 0.5)
-    fig, axes = plt.subplots(2, 3, figsize=(12, 8), subplot_kw={"projection": "polar"})
+    fig, axes = subplots(2, 3, figsize=(12, 8), subplot_kw={"projection": "polar"})
     for ax, (name, data, cmap) in zip(axes.ravel(), maps):
         # colour limits from the 99.5th percentile: Monte Carlo cells near the pole and the
         # horizon have tiny projected solid angles and carry the largest noise
@@ -97,20 +93,15 @@ def _plot_maps(path: Path, res: MethodResult, title: str):
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=80, format="png")
-    plt.close(fig)
 
 
 def _plot_inplane(path: Path, results, wi):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from pmmw_cli.io.atomic import atomic_path
+    from pmmw_cli.io.preview import subplots
 
     phi_s = round(math.degrees(math.atan2(-wi[1], -wi[0]))) % 360
     phi_b = (phi_s + 180) % 360
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = subplots(figsize=(7, 4.5))
     proj = projected_solid_angle()
     theta = np.arange(N_THETA - 1)  # the horizon row holds the singular cos -> 0 cells
 
@@ -139,4 +130,3 @@ def _plot_inplane(path: Path, results, wi):
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=90, format="png")
-    plt.close(fig)

@@ -372,15 +372,15 @@ def scenario_to_display(scn: Scenario) -> dict:
             **({"humidity": _qty(atm.humidity * 1e3, "g/m3")} if atm.humidity is not None else {}),
             "ground_altitude": _qty(atm.ground_altitude, "m"),
             "layers": [
-                {"kind": l.kind, "base": _qty(l.base, "m"), "top": _qty(l.top, "m"),
-                 **({"liquid_water": _qty(l.liquid_water * 1e3, "g/m3")} if l.kind != "rain" else
-                    {"rain_rate": _qty(l.rain_rate, "mm/h")}),
+                {"kind": w.kind, "base": _qty(w.base, "m"), "top": _qty(w.top, "m"),
+                 **({"liquid_water": _qty(w.liquid_water * 1e3, "g/m3")} if w.kind != "rain" else
+                    {"rain_rate": _qty(w.rain_rate, "mm/h")}),
                  # a power law only: P.838 (the default) keeps the display, and the hash, it had
                  **({"attenuation": {"model": "power_law", "coefficients": {
-                     _qty(f, "GHz", 1e9): {"a": a, "b": b} for f, a, b in l.attenuation.table()}}}
-                    if l.attenuation.model == "power_law" else {}),
-                 **({"scattering": False} if not l.scattering else {})}
-                for l in atm.layers
+                     _qty(f, "GHz", 1e9): {"a": a, "b": b} for f, a, b in w.attenuation.table()}}}
+                    if w.attenuation.model == "power_law" else {}),
+                 **({"scattering": False} if not w.scattering else {})}
+                for w in atm.layers
             ],
         }),
         "sky": {

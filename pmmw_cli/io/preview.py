@@ -152,14 +152,10 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
     -------
     (low, high) : the temperatures [K] shown as black and white in the first panel.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     imgs = [np.asarray(img, dtype=np.float64) for _, img in panels]
     ranges = panel_ranges(imgs, clip_fraction)
-    fig, axes = figure_for(plt, *imgs[0].shape, len(imgs), extra_w=1.6 * len(imgs))
+    fig, axes = figure_for(*imgs[0].shape, len(imgs), extra_w=1.6 * len(imgs))
     if len(imgs) > 1:  # room for each panel's colour bar and its label
         fig.set_layout_engine("constrained")
     for ax, (label, _), img, (low, high) in zip(axes[0], panels, imgs, ranges):
@@ -204,16 +200,12 @@ def write_regions_figure(path: str | os.PathLike, img, shapes, *, title: str, ca
     -------
     (low, high) : the temperatures [K] shown as black and white.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.patches as mpatches
-    import matplotlib.pyplot as plt
 
     img = np.asarray(img, dtype=np.float64)
     low, high = usable_range(img)
     h, w = img.shape
-    fig, axes = figure_for(plt, h, w)
+    fig, axes = figure_for(h, w)
     ax = axes[0, 0]
     shown = ax.imshow(img, cmap="gray", vmin=low, vmax=high, interpolation="nearest")
     for k, (name, shape) in enumerate(shapes.items()):
@@ -247,13 +239,22 @@ def write_regions_figure(path: str | os.PathLike, img, shapes, *, title: str, ca
     return low, high
 
 
-def save_figure(fig, path: str | os.PathLike, **savefig) -> Path:
-    """Write a matplotlib figure as PNG (`_PNG`) to ``path`` atomically and close it."""
-    import matplotlib.pyplot as plt
+def subplots(*args, figsize=None, dpi=None, **kwargs):
+    """`matplotlib.pyplot.subplots` without pyplot: a `Figure` that pyplot does not know, so no
+    backend is chosen or changed (a notebook's stays as it was) and nothing is left to close.
+    ``figsize`` [in] and ``dpi`` make the figure, the rest goes to `Figure.subplots`."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
+    fig = Figure(figsize=figsize, dpi=dpi)
+    FigureCanvasAgg(fig)  # its own raster canvas (animations read its pixels), the global backend untouched
+    return fig, fig.subplots(*args, **kwargs)
+
+
+def save_figure(fig, path: str | os.PathLike, **savefig) -> Path:
+    """Write a matplotlib figure as PNG (`_PNG`) to ``path`` atomically."""
     with atomic_path(path) as tmp:
         fig.savefig(tmp, **{**_PNG, **savefig})
-    plt.close(fig)
     return Path(path)
 
 
@@ -266,13 +267,13 @@ def usable_range(values, clip_fraction: float = CLIP_FRACTION) -> tuple[float, f
     return low, high
 
 
-def figure_for(plt, h: int, w: int, panels: int = 1, extra_w: float = 1.6):
+def figure_for(h: int, w: int, panels: int = 1, extra_w: float = 1.6):
     """A figure for ``panels`` images of h x w pixels side by side, small ones scaled up."""
     scale = max(1.0, MIN_DISPLAY_WIDTH / (w * panels))
     dpi = 100
     fig_w = max(4.0, (w * panels * scale) / dpi + extra_w)
     fig_h = max(2.5, (h * scale) / dpi + 0.9)
-    return plt.subplots(1, panels, figsize=(fig_w, fig_h), dpi=dpi, squeeze=False)
+    return subplots(1, panels, figsize=(fig_w, fig_h), dpi=dpi, squeeze=False)
 
 
 def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
@@ -280,11 +281,8 @@ def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
     pixels whose every sample saw the sky in light blue."""
     import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     d = np.asarray(depth, dtype=np.float64)
-    fig, axes = figure_for(plt, *d.shape)
+    fig, axes = figure_for(*d.shape)
     ax = axes[0, 0]
     cmap = matplotlib.colormaps["viridis"].with_extremes(bad="#bcd7ee")
     finite = d[np.isfinite(d)]
@@ -304,10 +302,7 @@ def write_material_figure(path: str | os.PathLike, material, names, *, title: st
     """``aux.material`` as a picture: each material of the first hit in its own colour, with a
     legend of the database ids (``names[i]`` for index i; -1 is the sky)."""
     import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.patches as mpatches
-    import matplotlib.pyplot as plt
 
     m = np.rint(np.asarray(material, dtype=np.float64)).astype(int)
     present = [int(i) for i in np.unique(m)]
@@ -316,7 +311,7 @@ def write_material_figure(path: str | os.PathLike, material, names, *, title: st
     rgb = np.zeros(m.shape + (3,))
     for i, c in colours.items():
         rgb[m == i] = c
-    fig, axes = figure_for(plt, *m.shape, extra_w=2.6)
+    fig, axes = figure_for(*m.shape, extra_w=2.6)
     ax = axes[0, 0]
     ax.imshow(rgb, interpolation="nearest")
     ax.set_xticks([])

@@ -1,2 +1,2 @@
 """Wave physics of pmmw: interface and coating coefficients (`fresnel`, `multilayer`), polarization
-bookkeeping (`jones`). Conventions: docs/ARCHITECTURE.md and shared/spec/PHYSICS.md."""
+bookkeeping (`jones`). Conventions: docs/ARCHITECTURE.md and docs/PHYSICS.md."""

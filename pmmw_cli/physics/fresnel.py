@@ -1,6 +1,6 @@
 """Fresnel coefficients of one smooth interface, vectorized over rays (Murakowski 2014 sec. 2.2.1-2.2.4).
 
-Conventions (docs/ARCHITECTURE.md, shared/spec/PHYSICS.md)
+Conventions (docs/ARCHITECTURE.md, docs/PHYSICS.md)
 -----------------------------------------------------------
 * Time dependence exp(-i w t); relative permittivity eps = eps' + i eps'' with eps'' >= 0 lossy.
 * Every ray is a homogeneous wave (Murakowski 2014 sec. 2.2.4): in the incident medium 1 its direction
@@ -28,15 +28,13 @@ The private helpers ``_incident``, ``_normal_below`` and ``_close`` are shared w
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import cmath
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from pmmw_cli.jit import inline, njit
-
 
 __all__ = ["Fresnel", "normal_component", "interface"]
 

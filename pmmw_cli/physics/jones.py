@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 
+
 def basis_change(s_old, p_old, s_new, p_new):
     """Matrix taking components in (s_new, p_new) to components in (s_old, p_old).
 

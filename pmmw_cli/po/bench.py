@@ -101,14 +101,9 @@ def run(out_md: Path, cases=CASES, command: str = "pmmw bench --po") -> Path:
 
 def _plot(rows, path: Path) -> Path:
     """Time against directions, both methods, one colour per target."""
-    import matplotlib
+    from pmmw_cli.io.preview import save_figure, subplots
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from pmmw_cli.io.preview import save_figure
-
-    fig, ax = plt.subplots(figsize=(6.8, 4.4), dpi=110)
+    fig, ax = subplots(figsize=(6.8, 4.4), dpi=110)
     targets = list(dict.fromkeys((f, rw) for f, _, rw, *_ in rows))
     for i, (f, rw) in enumerate(targets):
         sel = sorted((r for r in rows if (r[0], r[2]) == (f, rw)), key=lambda r: r[3])

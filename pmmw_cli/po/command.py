@@ -290,13 +290,10 @@ def write_map(res: Result, thetas, phis, path: Path) -> Path:
 
 def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
     """RCS in dBsm against theta, one line per phi cut and polarization."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from pmmw_cli.io.preview import subplots
 
     s = res.summary
-    fig, ax = plt.subplots(figsize=(7.0, 4.4), dpi=110)
+    fig, ax = subplots(figsize=(7.0, 4.4), dpi=110)
     thetas, phis = np.unique(res.theta), np.unique(res.phi)
     # x: theta, one line per phi cut; an azimuth cut (one theta) runs along phi instead
     along, across, x_name = ((res.phi, res.theta, "phi") if thetas.size == 1 and phis.size > 1

@@ -1,6 +1,6 @@
 """Octree aggregation of the physical-optics far field (Xia et al. 2023, supplement sec. 1.2.2).
 
-`far_field_octree` returns what `pmmw_cli.po.solver.far_field` returns (same conventions, stated
+`far_field_octree` returns what `pmmw_cli.po.currents.far_field` returns (same conventions, stated
 in that module), to a relative accuracy ``tol`` of the pattern's peak. The direct sum costs
 O(F D); this costs O(F M_leaf^2 + (boxes x M^2 log M per level) + D), so it wins from about
 1e8 facet-directions on (docs/benchmarks_po.md).
@@ -38,7 +38,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from pmmw_cli.po import kernels
-from pmmw_cli.po.solver import ETA0, call_slices, direction, theta_phi_hats
+from pmmw_cli.po.currents import ETA0, call_slices, direction, theta_phi_hats
 
 _LEAF_WAVELENGTHS = 1.5  # leaf side [wavelengths]; 1.5 is 7 % faster than 3 and 20 % than 1 (82k-facet sphere)
 _OVERSAMPLE = 2  # root grid upsampling before the local interpolation to the requested directions

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from pmmw_cli.errors import UserError
-from pmmw_cli.po import solver
+from pmmw_cli.po import currents as solver
 from pmmw_cli.trace.intersect import offset_origins
 
 MAX_TUBES = 4_000_000

@@ -36,10 +36,10 @@ from urllib.parse import unquote
 import numpy as np
 import trimesh
 
+from pmmw_cli.constants import DEGENERATE_REL
 from pmmw_cli.errors import UserError, UserErrors, warn
 from pmmw_cli.io.inputs import format_suffix, no_extension
 from pmmw_cli.memory import check_fits, release_freed_memory
-from pmmw_cli.trace.intersect import DEGENERATE_REL
 
 MESH_FORMATS = {".glb": "gltf", ".gltf": "gltf", ".obj": "obj", ".ply": "ply", ".stl": "stl"}
 _FORMAT_NAMES = {"gltf": "glTF", "obj": "OBJ", "ply": "PLY", "stl": "STL"}

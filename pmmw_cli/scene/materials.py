@@ -892,7 +892,9 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
     if f is not None and mat.kind not in _NO_EPS_KINDS:
         value, clamped = mat._lookup(f)
         how = ""
-        if clamped:
+        if clamped and mat.model is not None:
+            how = f" (outside the model's range: {mat.model.outside(f, mat.model_temperature())})"
+        elif clamped:
             how = f" (outside the table: nearest tabulated value; tabulated {_range_text(mat.freqs)})"
         elif mat.freqs and not any(abs(f - g) <= _REL_TOL * g for g in mat.freqs):
             how = " (interpolated linearly)"
@@ -920,14 +922,9 @@ def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | No
     """eps' and eps'' of materials against frequency [GHz] (log axes), 35-300 GHz shaded: a model
     as a curve (at ``temperature`` [K], else the material's), a table as its points (circles)
     joined by the interpolation, and the nearest-value extension outside the table dashed."""
-    import matplotlib
+    from pmmw_cli.io.preview import save_figure, subplots
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from pmmw_cli.io.preview import save_figure
-
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10.0, 4.2), dpi=110)
+    fig, (a1, a2) = subplots(1, 2, figsize=(10.0, 4.2), dpi=110)
     fs = np.geomspace(*f_range, 200)
     for i, mid in enumerate(ids):
         mat = db.get(mid, key="--compare" if i else "ID")

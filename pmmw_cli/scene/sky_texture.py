@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from pmmw_cli.errors import UserError
-from pmmw_cli.units import TEMPERATURE_MAX
 from pmmw_cli.io.exr import read_exr, write_exr
+from pmmw_cli.units import TEMPERATURE_MAX
 
 #: Channel names of a sky texture: vertical and horizontal polarization [K].
 SKY_CHANNELS = ("Tv", "Th")

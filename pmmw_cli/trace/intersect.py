@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from pmmw_cli.constants import DEGENERATE_REL
 from pmmw_cli.jit import njit
-
 
 EMBREE_DTYPE = np.float32  # precision at the Embree boundary; shading is float64
 
@@ -34,10 +34,6 @@ NUMPY_PAIRS = 1 << 18  # ray-face pairs per NumPy chunk: about 6 MB per (pairs, 
 RAY_EPS_ULPS = 8
 RAY_EPS_FLOOR = 1e-9  # [m]
 
-# A face is degenerate when |e1 x e2| <= this x (longest edge)^2: below it the float64 cross
-# product is rounding noise and the face has no usable plane. Such a face gets a zero normal and
-# is never hit by `NumpyIntersector`; `pmmw_cli.scene.geometry` drops them on load.
-DEGENERATE_REL = 1e-12
 
 # Distances come from the face plane in float64 when |cos(ray, normal)| exceeds this; at more
 # grazing incidence the plane equation amplifies rounding and Embree's float32 tfar is used.

@@ -1,0 +1,182 @@
+"""The import graph of `pmmw_cli` (docs/ARCHITECTURE.md, "Layers"): no circle, and no import up a
+layer beyond the ones listed here to be removed.
+
+Every import counts, at module level or inside a function (a lazy import is still a dependency),
+except those under ``if TYPE_CHECKING:``; ``from package import module`` is an edge to the module.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "pmmw_cli"
+
+# Lowest first: a module may import its own layer and the ones below (docs/ARCHITECTURE.md).
+LAYERS = (
+    {"__init__", "constants", "errors", "units", "jit", "memory", "interrupt"},
+    {"io", "distributed"},
+    {"physics", "atmosphere", "config", "sweep_spec"},
+    {"scene", "surface", "imaging"},
+    {"trace"},
+    {"pipeline"},
+    {"brdf", "po", "sweep_report", "sweep", "validation", "bench", "skycmd"},
+    {"api"},
+    {"cli"},
+    {"__main__"},
+)
+
+# Imports up a layer still to be removed: the surface's response reaches into the tracer's media
+# records and compiled kernels (their shared pieces want a home below both).
+KNOWN_UPWARD = {
+    ("pmmw_cli.surface.surfaces", "pmmw_cli.trace.job"),
+    ("pmmw_cli.surface.surfaces", "pmmw_cli.trace.kernels"),
+    ("pmmw_cli.surface.tables", "pmmw_cli.trace.job"),
+    ("pmmw_cli.surface.tables", "pmmw_cli.trace.kernels"),
+}
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for p in PACKAGE.rglob("*.py"):
+        name = ".".join(("pmmw_cli", *p.relative_to(PACKAGE).with_suffix("").parts))
+        out[name.removesuffix(".__init__")] = p
+    return out
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    t = node.test
+    return (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING") or (
+        isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING")
+
+
+def _imports(tree: ast.AST) -> list:
+    found = []
+
+    def visit(node):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and _is_type_checking(child):
+                continue
+            if isinstance(child, (ast.Import, ast.ImportFrom)):
+                found.append(child)
+            visit(child)
+
+    visit(tree)
+    return found
+
+
+def _graph() -> dict[str, set[str]]:
+    mods = _modules()
+    edges = {}
+    for name, path in mods.items():
+        targets = set()
+        for node in _imports(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                base = node.module or ""
+                if node.level:
+                    parts = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+                    parts = parts[:len(parts) - (node.level - 1)]
+                    base = ".".join(parts + ([node.module] if node.module else []))
+                names = [f"{base}.{a.name}" if f"{base}.{a.name}" in mods else base for a in node.names]
+            for t in names:
+                while t and t not in mods:
+                    t = t.rpartition(".")[0]
+                if t.startswith("pmmw_cli") and t != name:
+                    targets.add(t)
+        edges[name] = targets
+    return edges
+
+
+def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan, iterative)."""
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+    for root in sorted(edges):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(edges[root])))]
+        index[root] = low[root] = counter[0]
+        counter[0] += 1
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = counter[0]
+                    counter[0] += 1
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(edges[w]))))
+                elif w in on:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.append(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    out.append(sorted(comp))
+    return out
+
+
+def _layer(module: str) -> int:
+    top = module.split(".")[1] if module.count(".") else "__init__"
+    return next(i for i, layer in enumerate(LAYERS) if top in layer)
+
+
+def test_every_module_has_a_layer():
+    tops = {m.split(".")[1] if m.count(".") else "__init__" for m in _modules()}
+    assert tops - set().union(*LAYERS) == set()
+
+
+def test_no_import_circle():
+    assert _cycles(_graph()) == []
+
+
+def test_no_import_up_a_layer_but_the_known_ones():
+    up = {(m, t) for m, ts in _graph().items() for t in ts if _layer(t) > _layer(m)}
+    assert up == KNOWN_UPWARD
+
+
+def test_the_analysis_finds_a_circle_and_an_upward_import():
+    """Controls: a circle and an upward edge put into a copy of the graph are found."""
+    edges = _graph()
+    edges["pmmw_cli.errors"] = edges["pmmw_cli.errors"] | {"pmmw_cli.cli"}
+    assert any("pmmw_cli.errors" in c and "pmmw_cli.cli" in c for c in _cycles(edges))
+    assert _layer("pmmw_cli.cli") > _layer("pmmw_cli.errors")
+
+
+def test_the_library_draws_without_pyplot(tmp_path):
+    """Previews and plots come from figures pyplot does not know: drawing them neither imports
+    pyplot nor chooses a backend, so a notebook's backend stays as it was (in a fresh process; the
+    control: importing pyplot there does load it)."""
+    import subprocess
+    import sys
+
+    code = f"""
+import sys
+import numpy as np
+import matplotlib
+from pmmw_cli.io.preview import write_figure
+from pmmw_cli.scene.materials import MaterialDB, plot_materials
+before = matplotlib.rcParams._get_backend_or_none()
+write_figure({str(tmp_path / 'a.png')!r}, [('I', np.random.default_rng(1).random((20, 30)) * 300)], title='t')
+plot_materials(MaterialDB.load(), ['water', 'murakowski2014.water'], {str(tmp_path / 'b.png')!r})
+assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'
+assert matplotlib.rcParams._get_backend_or_none() == before, 'backend changed'
+import matplotlib.pyplot
+assert 'matplotlib.pyplot' in sys.modules
+"""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert (tmp_path / "a.png").stat().st_size > 1000 and (tmp_path / "b.png").stat().st_size > 10_000
