@@ -3,7 +3,7 @@
     import pmmw
     scn = pmmw.Scenario.load("configs/landing_95ghz.yaml").set({"imager.noise": "2 K"})
     ds = pmmw.render(scn, spp=4)          # xarray.Dataset of I, Q, U, V, Ex2, Ey2 [K]
-    ds["I"].sel(frequency=95e9).plot()
+    ds["I"].sel(frequency=95e9).plot(yincrease=False)   # row 0, the top of the image, on top
 
 Every misuse raises `UserError` naming the argument or the scenario key (`UserErrors` for
 several at once); `EnvironmentProblem` (a `UserError` too) is the machine refusing (a disk full, a
