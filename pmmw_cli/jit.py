@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numba
 
-__all__ = ["SOURCES", "clear_stale_caches", "inline", "njit"]
+__all__ = ["SOURCES", "clear_stale_caches", "is_cached", "inline", "njit"]
 
 ROOT = Path(__file__).resolve().parent
 #: Every module with compiled code (paths relative to the package).
@@ -45,6 +45,15 @@ def _digest() -> str:
         h.update(rel.encode())
         h.update((ROOT / rel).read_bytes())
     return h.hexdigest()
+
+
+def is_cached(rel: str) -> bool:
+    """Whether the compiled code of the source ``rel`` (one of `SOURCES`) is cached on disk next to
+    it, so that loading it takes a second rather than compiling it (about a minute for the tracer's
+    kernels on 2 cores, once after an install or an update). False also where numba caches
+    elsewhere (a read-only install): the caller then says it may compile."""
+    path = ROOT / rel
+    return any((path.parent / "__pycache__").glob(f"{path.stem}.*.nbi"))
 
 
 def clear_stale_caches() -> bool:

@@ -274,6 +274,11 @@ class _Progress:
         self.label = label
         self.line = None if quiet else StatusLine()
 
+    def note(self, text: str) -> None:
+        """One line of its own (the kernels being compiled), unless quiet."""
+        if self.line is not None:
+            self.line.say(f"{self.label}: {text}")
+
     def __call__(self, done, total, rays, elapsed):
         if self.line is None:
             return
@@ -504,13 +509,15 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
         counts: dict = {}
         if shard is not None:
             mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0] - 1]
+            bar = _Progress(label, quiet)
             render_tiles(job, workers=workers, tile_dir=tile_dir, resume=True,
-                         progress=_Progress(label, quiet), tiles=mine, counts=counts)
+                         progress=bar, tiles=mine, counts=counts, notify=bar.note)
             print(f"{label}: shard {shard[0]}/{shard[1]}: {counts['rendered']} tiles rendered, {counts['reused']} "
                   f"already there, in {tile_dir}; assemble with `pmmw render ... --resume` once every shard is done")
             continue
+        bar = _Progress(label, quiet)
         results = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=resume,
-                               progress=_Progress(label, quiet), counts=counts, client=client)
+                               progress=bar, counts=counts, client=client, notify=bar.note)
         if resume:
             print(f"{label}: --resume: {counts['reused']} tiles found, {counts['rendered']} rendered",
                   file=sys.stderr)

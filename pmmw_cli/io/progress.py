@@ -14,6 +14,10 @@ class StatusLine:
         self.tty = sys.stderr.isatty()
         self.last = -float("inf")
 
+    def say(self, msg: str) -> None:
+        """A line of its own, at once (on a terminal it does not overwrite the status line)."""
+        print(msg, file=sys.stderr, flush=True)
+
     def show(self, msg: str, elapsed: float, final: bool) -> None:
         """Show ``msg`` at ``elapsed`` seconds into the job; ``final`` for the last update."""
         if self.tty:

@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pmmw_cli import interrupt
+from pmmw_cli import interrupt, jit
 from pmmw_cli.errors import EnvironmentProblem, exception_text
 from pmmw_cli.io.atomic import save_npz_atomic
 from pmmw_cli.trace import kernels
@@ -241,7 +241,7 @@ def default_workers() -> int:
 
 def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | None = None,
                  resume: bool = False, intersector: str = "embree", progress=None,
-                 tiles=None, counts: dict | None = None, client=None) -> list[TileResult]:
+                 tiles=None, counts: dict | None = None, client=None, notify=None) -> list[TileResult]:
     """Render ``tiles`` (default: all of the job's tiles) and return their results.
 
     Parameters
@@ -256,6 +256,9 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
         Filled with ``reused`` (tiles loaded from ``tile_dir``) and ``rendered``.
     client : dask.distributed.Client, optional
         Render the tiles as tasks on its cluster's workers instead (`_render_on_dask`).
+    notify : callable(str), optional
+        Told when the kernels are compiled here first (`prepare_kernels`), so that a first run
+        does not look hung; the time-left estimate of ``progress`` starts after that.
 
     Raises
     ------
@@ -278,6 +281,8 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
         counts.update(reused=len(tiles) - len(todo), rendered=len(todo))
     workers = default_workers() if workers is None else max(1, int(workers))
     workers = min(workers, max(1, len(todo)))
+    if todo and client is None:
+        prepare_kernels(job, notify)
     start = time.perf_counter()
     rays = sum(r.rays for r in results.values())
 
@@ -304,6 +309,22 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     elif todo:
         _render_on_workers(job, intersector, todo, workers, _collect)
     return [results[t[0]] for t in tiles]
+
+
+def prepare_kernels(job: TraceJob, notify=None) -> float:
+    """Compile (once after an install or an update) or load the tracer's kernels in this process,
+    telling ``notify`` (a callable taking one line) before and after when they are not cached yet.
+    Returns the seconds it took."""
+    cold = not jit.is_cached("trace/kernels.py")
+    if cold and notify is not None:
+        notify("compiling the tracer's kernels: once after an install or an update of pmmw, about a minute "
+               "on 2 cores ...")
+    t0 = time.perf_counter()
+    kernels.warm(job.settings.stack_size)
+    took = time.perf_counter() - t0
+    if cold and notify is not None:
+        notify(f"kernels compiled in {took:.0f} s; rendering")
+    return took
 
 
 class _Worker:
