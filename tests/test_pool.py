@@ -136,12 +136,16 @@ def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(mo
         time.sleep(1.5)
 
     monkeypatch.setattr(kernels, "warm", slow_warm)
+    images = []
     for cached in (False, True):
         monkeypatch.setattr(jit, "is_cached", lambda rel, cached=cached: cached)
         said, elapsed = [], []
-        pool.render_tiles(job, workers=1, notify=said.append, progress=lambda d, t, r, e: elapsed.append(e))
+        tiles = pool.render_tiles(job, workers=1, notify=said.append, progress=lambda d, t, r, e: elapsed.append(e))
+        images.append([t.mean for t in tiles])
         if cached:
             assert said == []
         else:
             assert len(said) == 2 and "compiling the tracer's kernels" in said[0] and "compiled in" in said[1]
         assert len(elapsed) == 2 and elapsed[0] < 1.5, elapsed
+    for a, b in zip(*images):  # the pixel traced to compile the rest changes no random number of the image
+        np.testing.assert_array_equal(a, b)

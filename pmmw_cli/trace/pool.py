@@ -313,14 +313,18 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
 
 def prepare_kernels(job: TraceJob, notify=None) -> float:
     """Compile (once after an install or an update) or load the tracer's kernels in this process,
-    telling ``notify`` (a callable taking one line) before and after when they are not cached yet.
-    Returns the seconds it took."""
+    telling ``notify`` (a callable taking one line) before and after when they are not cached yet;
+    then one pixel of the job is traced here, so that the camera's, sky's and atmosphere's compiled
+    code is ready too and the first tile's time is its own. Returns the seconds it took."""
     cold = not jit.is_cached("trace/kernels.py")
     if cold and notify is not None:
         notify("compiling the tracer's kernels: once after an install or an update of pmmw, about a minute "
                "on 2 cores ...")
     t0 = time.perf_counter()
     kernels.warm(job.settings.stack_size)
+    if cold:  # the camera's, sky's and atmosphere's compiled code too, with this job's types: one pixel
+        idx, x0, y0 = job.tiles()[0][:3]
+        Integrator(job, make_intersector(job.vertices, job.faces)).render_tile((idx, x0, y0, x0 + 1, y0 + 1))
     took = time.perf_counter() - t0
     if cold and notify is not None:
         notify(f"kernels compiled in {took:.0f} s; rendering")
