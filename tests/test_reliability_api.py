@@ -1,4 +1,4 @@
-"""Reliability of the Python API and of small input-handling paths (issue 26).
+"""Reliability of the Python API and of small input-handling paths.
 
 Every misuse of ``import pmmw`` (wrong types, wrong kinds of values, unknown keywords, ...) is a
 `pmmw.UserError` naming the argument, never a raw TypeError/AttributeError/ValueError; numpy

@@ -1,5 +1,5 @@
 """Memory that no check saw: every input that drives an allocation is sized and bounded before the
-allocation (issue 26). Each test reproduces what a probe found on an earlier version (an image, a
+allocation. Each test reproduces what a probe found on an earlier version (an image, a
 mesh, a material library, a physical-optics solve or a sweep grid that took gigabytes before any
 check ran) and checks the one-line refusal that replaced it, or, for the render's estimate, checks
 it against a measured peak.

@@ -1,4 +1,4 @@
-"""The Dask paths of `pmmw render` and `pmmw sweep` against real services on 127.0.0.1 (issue 26).
+"""The Dask paths of `pmmw render` and `pmmw sweep` against real services on 127.0.0.1.
 
 A wrong ``--scheduler`` (an HTTP server, a service that sends other bytes, a port that accepts and
 says nothing, a closed port) is one ``error:`` line naming the address and the cause, exit status

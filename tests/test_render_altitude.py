@@ -1,4 +1,4 @@
-"""Imagers high up in the layered atmosphere (issue 26): what their rays that miss every mesh see.
+"""Imagers high up in the layered atmosphere: what their rays that miss every mesh see.
 
 A ray going down that misses every face meets the sky model's ground (a blackbody at
 ``sky.ground_temperature`` on z = 0) through the air between its height and the ground; a ray

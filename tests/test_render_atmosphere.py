@@ -1,4 +1,4 @@
-"""The layered atmosphere inside renders (issue 3): sky through a mirror, paths through fog."""
+"""The layered atmosphere inside renders: sky through a mirror, paths through fog."""
 
 import numpy as np
 import trimesh

@@ -1,4 +1,4 @@
-"""Rough and bumped surfaces in the renderer (issue 4).
+"""Rough and bumped surfaces in the renderer.
 
 References: energy conservation (isothermal enclosures read their temperature; a rough lossless
 dielectric reflects plus transmits 1), `pmmw_cli.brdf.monte_carlo` (the renderer's surface code,
