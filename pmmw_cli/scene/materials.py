@@ -168,13 +168,18 @@ class Material:
         if outside and self.model is not None:
             t = self.model_temperature(temperature)
             warn(f"material {self.id!r}: {f / 1e9:g} GHz at {t:g} K is outside the {self.model.describe()}; "
-                 f"{self.model.outside(f, t)}")
+                 f"{self.outside_note(f, temperature)}")
         elif outside:
-            warn(
-                f"material {self.id!r}: {f / 1e9:g} GHz is outside its table ({_range_text(self.freqs)}); "
-                "the nearest tabulated value is used"
-            )
+            warn(f"material {self.id!r}: {f / 1e9:g} GHz is outside its table ({_range_text(self.freqs)}); "
+                 f"{self.outside_note(f, temperature)}")
         return value
+
+    def outside_note(self, f: float, temperature: float | None = None) -> str:
+        """What is done at f [Hz] (and a model's temperature [K]) outside the stated range: a
+        table's nearest value, a model extrapolated, a P.2040 gap interpolated between its rows."""
+        if self.model is not None:
+            return self.model.outside(f, self.model_temperature(temperature)) or "inside the model's range"
+        return "the nearest tabulated value is used"
 
     def _lookup(self, f: float, temperature: float | None = None) -> tuple[complex, bool]:
         """(eps at f [Hz] and temperature [K] (a model's; default the material's), whether f or the
@@ -705,17 +710,15 @@ class MaterialDB:
                 errors += id_errors
                 continue
             new, errs = _parse_entry(mid, entry, file, base_key)
-            if not errs and new.get("same_as") is not None:
+            whole = not errs and new.get("same_as") is not None  # a same_as entry replaces the whole entry
+            if whole:
                 new, errs = _same_as(mid, new, fields, file, base_key)
-                if not errs:
-                    new["source"] = f"{new['source']} (in {file})"
-                    merged_whole = True
-            else:
-                merged_whole = False
             if errs:
                 errors += errs
                 continue
-            if mid in self._materials and not merged_whole:
+            if whole:
+                new["source"] = f"{new['source']} (in {file})"
+            elif mid in self._materials:
                 merged = dict(self._fields[mid])
                 merged.update(new)
                 kind = merged.get("kind") or "dielectric"
@@ -882,7 +885,7 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
         row("eps", f"{mat.model.describe()}; at {mat.model_temperature():g} K:")
         for f_ in (35e9, 95e9, 140e9, 220e9, 300e9):
             value, outside = mat._lookup(f_)
-            why = f"  (outside the range: {mat.model.outside(f_, mat.model_temperature())})" if outside else ""
+            why = f"  (outside the range: {mat.outside_note(f_)})" if outside else ""
             row("", f"{_fmt_f(f_):>8}  {_fmt_eps(value)}{why}")
     elif not mat.freqs:
         row("eps", f"{_fmt_eps(mat.eps[0])} at every frequency")
@@ -893,7 +896,7 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
         value, clamped = mat._lookup(f)
         how = ""
         if clamped and mat.model is not None:
-            how = f" (outside the model's range: {mat.model.outside(f, mat.model_temperature())})"
+            how = f" (outside the model's range: {mat.outside_note(f)})"
         elif clamped:
             how = f" (outside the table: nearest tabulated value; tabulated {_range_text(mat.freqs)})"
         elif mat.freqs and not any(abs(f - g) <= _REL_TOL * g for g in mat.freqs):

@@ -282,7 +282,7 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     workers = default_workers() if workers is None else max(1, int(workers))
     workers = min(workers, max(1, len(todo)))
     if todo and client is None:
-        prepare_kernels(job, notify)
+        prepare_kernels(job, notify, intersector)
     start = time.perf_counter()
     rays = sum(r.rays for r in results.values())
 
@@ -311,7 +311,7 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     return [results[t[0]] for t in tiles]
 
 
-def prepare_kernels(job: TraceJob, notify=None) -> float:
+def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
     """Compile (once after an install or an update) or load the tracer's kernels in this process,
     telling ``notify`` (a callable taking one line) before and after when they are not cached yet;
     then one pixel of the job is traced here, so that the camera's, sky's and atmosphere's compiled
@@ -324,7 +324,7 @@ def prepare_kernels(job: TraceJob, notify=None) -> float:
     kernels.warm(job.settings.stack_size)
     if cold:  # the camera's, sky's and atmosphere's compiled code too, with this job's types: one pixel
         idx, x0, y0 = job.tiles()[0][:3]
-        Integrator(job, make_intersector(job.vertices, job.faces)).render_tile((idx, x0, y0, x0 + 1, y0 + 1))
+        Integrator(job, make_intersector(job.vertices, job.faces, kind=kind)).render_tile((idx, x0, y0, x0 + 1, y0 + 1))
     took = time.perf_counter() - t0
     if cold and notify is not None:
         notify(f"kernels compiled in {took:.0f} s; rendering")
@@ -403,8 +403,7 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
     """Render the tiles ``todo`` on ``n`` worker processes, calling ``collect`` with each result."""
     ctx = mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
     forked = ctx.get_start_method() == "fork"
-    if forked:
-        kernels.warm(job.settings.stack_size)  # compiled or loaded once here, inherited by every worker
+    if forked:  # the kernels are compiled or loaded here already (`prepare_kernels`): every worker inherits them
         prime(job)
     pixels = max((x1 - x0) * (y1 - y0) for _, x0, y0, x1, y1 in todo)
     queue = deque(_by_cost(job, todo))
