@@ -184,7 +184,7 @@ def _vegetation_outside(f, T, params):
         P527_VEGETATION_T_RANGE_FROZEN_PHYSICAL,
     )
 
-    t_lo, t_hi = P527_VEGETATION_T_RANGE_FROZEN_PHYSICAL
+    t_hi = P527_VEGETATION_T_RANGE_FROZEN_PHYSICAL[1]
     if t_hi < T <= P527_VEGETATION_T_FREEZE:
         return (f"{T:g} K lies between -6.5 and 0 C, where P.527-6's frozen-vegetation fit grows without bound; "
                 "the value is computed all the same")
