@@ -1,5 +1,6 @@
-"""The import graph of `pmmw_cli` (docs/ARCHITECTURE.md, "Layers"): no circle, and no import up a
-layer beyond the ones listed here to be removed.
+"""The import graph of `pmmw` (the library) and `pmmw_cli` (the command line on top of it;
+docs/ARCHITECTURE.md, "Layers"): no circle, no import up a layer beyond the ones listed here to be
+removed, and nothing in the library importing the command line.
 
 Every import counts, at module level or inside a function (a lazy import is still a dependency),
 except those under ``if TYPE_CHECKING:``; ``from package import module`` is an edge to the module.
@@ -10,20 +11,24 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parents[1] / "pmmw_cli"
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("pmmw", "pmmw_cli")
 
-# Lowest first: a module may import its own layer and the ones below (docs/ARCHITECTURE.md).
+# Lowest first: a module may import its own layer and the ones below (docs/ARCHITECTURE.md). A
+# module's layer is that of its package's first-level name (``pmmw.trace.pool`` -> ``trace``);
+# the command line's modules are named with their package (``pmmw_cli.cli``).
 LAYERS = (
     {"__init__", "constants", "errors", "units", "jit", "memory", "interrupt"},
     {"io", "distributed"},
-    {"physics", "atmosphere", "config", "sweep_spec"},
+    {"physics", "atmosphere", "config", "sweeps.spec"},
     {"scene", "surface", "imaging"},
     {"trace"},
     {"pipeline"},
-    {"brdf", "po", "sweep_report", "sweep", "validation", "bench", "skycmd"},
+    {"reflectance", "physical_optics", "sweeps", "sky_table"},
     {"api"},
-    {"cli"},
-    {"__main__"},
+    {"pmmw_cli", "pmmw_cli.validation", "pmmw_cli.bench", "pmmw_cli.bench_po"},
+    {"pmmw_cli.cli"},
+    {"pmmw_cli.__main__"},
 )
 
 # Imports up a layer still to be removed: the surface's response reaches into the tracer's media
@@ -38,9 +43,10 @@ KNOWN_UPWARD = {
 
 def _modules() -> dict[str, Path]:
     out = {}
-    for p in PACKAGE.rglob("*.py"):
-        name = ".".join(("pmmw_cli", *p.relative_to(PACKAGE).with_suffix("").parts))
-        out[name.removesuffix(".__init__")] = p
+    for package in PACKAGES:
+        for p in (ROOT / package).rglob("*.py"):
+            name = ".".join((package, *p.relative_to(ROOT / package).with_suffix("").parts))
+            out[name.removesuffix(".__init__")] = p
     return out
 
 
@@ -83,7 +89,7 @@ def _graph() -> dict[str, set[str]]:
             for t in names:
                 while t and t not in mods:
                     t = t.rpartition(".")[0]
-                if t.startswith("pmmw_cli") and t != name:
+                if t.split(".")[0] in PACKAGES and t != name:
                     targets.add(t)
         edges[name] = targets
     return edges
@@ -129,14 +135,32 @@ def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
+def _top(module: str) -> str:
+    """The name `LAYERS` places a module by."""
+    parts = module.split(".")
+    if parts[0] == "pmmw_cli":
+        return ".".join(parts[:2])
+    if parts[1:3] == ["sweeps", "spec"]:
+        return "sweeps.spec"
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
 def _layer(module: str) -> int:
-    top = module.split(".")[1] if module.count(".") else "__init__"
-    return next(i for i, layer in enumerate(LAYERS) if top in layer)
+    return next(i for i, layer in enumerate(LAYERS) if _top(module) in layer)
 
 
 def test_every_module_has_a_layer():
-    tops = {m.split(".")[1] if m.count(".") else "__init__" for m in _modules()}
+    tops = {_top(m) for m in _modules()}
     assert tops - set().union(*LAYERS) == set()
+
+
+def test_the_library_never_imports_the_command_line():
+    """`pmmw` is usable without `pmmw_cli`: no module of the library imports it (at any depth,
+    lazily or not); the control: the command line does import the library."""
+    edges = _graph()
+    assert {(m, t) for m, ts in edges.items() if m.startswith("pmmw.") or m == "pmmw"
+            for t in ts if t.startswith("pmmw_cli")} == set()
+    assert any(t.startswith("pmmw.") for t in edges["pmmw_cli.cli"])
 
 
 def test_no_import_circle():

@@ -10,8 +10,8 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from pmmw_cli.cli import app
 from pmmw.io.exr import read_exr
+from pmmw_cli.cli import app
 from tests.scenes import ground_and_block
 
 runner = CliRunner()

@@ -14,11 +14,11 @@ from typer.testing import CliRunner
 
 import pmmw
 from pmmw import pipeline
-from pmmw_cli.cli import app
 from pmmw.imaging import detection
 from pmmw.imaging.imager import psf_kernel
 from pmmw.io.exr import read_exr
 from pmmw.io.preview import write_figure
+from pmmw_cli.cli import app
 from tests.scenes import ground_and_block
 
 runner = CliRunner()

@@ -24,8 +24,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from pmmw_cli.cli import app
 from pmmw.io.exr import read_exr
+from pmmw_cli.cli import app
 
 runner = CliRunner()
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")  # numpy's warnings must not leak to users

@@ -43,5 +43,5 @@ def test_every_module_with_compiled_code_is_watched():
     import re
 
     found = sorted(str(p.relative_to(jit.ROOT)) for p in jit.ROOT.rglob("*.py")
-                   if p.name != "jit.py" and re.search(r"from pmmw_cli\.jit import|numba\.njit", p.read_text()))
+                   if p.name != "jit.py" and re.search(r"from pmmw\.jit import|numba\.njit", p.read_text()))
     assert found == sorted(jit.SOURCES)

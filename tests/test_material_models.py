@@ -16,11 +16,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from pmmw_cli.cli import app
 from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings
 from pmmw.physics.fresnel import interface
 from pmmw.scene.dielectric import EPS0
 from pmmw.scene.materials import MaterialDB
+from pmmw_cli.cli import app
 
 runner = CliRunner()
 

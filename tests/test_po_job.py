@@ -8,8 +8,8 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from pmmw_cli.cli import app
 from pmmw.io.exr import read_exr
+from pmmw_cli.cli import app
 
 runner = CliRunner()
 C0 = 299_792_458.0

@@ -5,9 +5,9 @@ import numpy as np
 import OpenImageIO as oiio
 from typer.testing import CliRunner
 
-from pmmw_cli.cli import app
 from pmmw.io.exr import write_exr
 from pmmw.io.preview import MIN_DISPLAY_WIDTH, display_range, write_figure
+from pmmw_cli.cli import app
 
 runner = CliRunner()
 

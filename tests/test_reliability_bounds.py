@@ -24,9 +24,9 @@ import trimesh
 from typer.testing import CliRunner
 
 from pmmw import pipeline
-from pmmw_cli.cli import app
 from pmmw.errors import UserError
 from pmmw.io.exr import write_exr
+from pmmw_cli.cli import app
 
 try:
     from pmmw import memory

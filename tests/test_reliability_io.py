@@ -17,11 +17,11 @@ import trimesh
 from typer.testing import CliRunner
 
 from pmmw import pipeline
-from pmmw_cli.cli import app
 from pmmw.config import load_scenario
 from pmmw.errors import UserError
 from pmmw.io.exr import write_exr
 from pmmw.io.yamlio import MAX_NODES, load_yaml
+from pmmw_cli.cli import app
 
 runner = CliRunner()
 

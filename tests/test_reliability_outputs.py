@@ -16,10 +16,10 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from pmmw_cli.cli import app
 from pmmw.io import lock as lockmod
 from pmmw.io.exr import read_exr
 from pmmw.io.rundir import Staging
+from pmmw_cli.cli import app
 from tests.scenes import ground_and_block
 
 runner = CliRunner()

@@ -301,7 +301,7 @@ def test_a_signal_during_the_native_imports_waits_for_them():
     back, and the signal is raised right after them."""
     code = (
         "import os, signal, sys\n"
-        "from pmmw_cli import interrupt\n"
+        "from pmmw import interrupt\n"
         "interrupt.install()\n"
         "interrupt.NATIVE_MODULES = ('os',) + interrupt.NATIVE_MODULES\n"
         "real = interrupt.importlib.import_module\n"

@@ -10,10 +10,10 @@ import pytest
 from typer.testing import CliRunner
 
 from pmmw import pipeline
-from pmmw_cli.cli import app
 from pmmw.errors import UserError
 from pmmw.io.exr import read_exr
 from pmmw.sweeps.run import SweepSpec, linspace, parse_grid_options, variants
+from pmmw_cli.cli import app
 from tests.scenes import ground_and_block
 
 runner = CliRunner()

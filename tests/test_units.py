@@ -21,7 +21,6 @@ import pytest
 from pydantic import BaseModel
 from typer.testing import CliRunner
 
-from pmmw_cli.cli import app
 from pmmw.config import load_scenario
 from pmmw.config.schema import Quantity, Scenario
 from pmmw.errors import UserError
@@ -30,6 +29,7 @@ from pmmw.scene import materials as mat_mod
 from pmmw.scene.materials import MaterialDB
 from pmmw.sky_table import parse_layer
 from pmmw.units import parse_quantity
+from pmmw_cli.cli import app
 
 UNIT_RTOL = 1e-12  # pure unit arithmetic: rounding only (module docstring)
 REF = pint.UnitRegistry()  # independent of pmmw's registry

@@ -17,8 +17,8 @@ shipped imagers' noise and PSFs, so a target far above the threshold at full siz
 import numpy as np
 import pytest
 
-from pmmw_cli import validation as v
 from pmmw.imaging.detection import ROSE_SNR
+from pmmw_cli import validation as v
 
 SMALL = ["imager.resolution=[96, 96]", "render.spp=4", "render.target_error=null"]
 # the clothed body's Monte Carlo noise is large (skin reflects about half: each sample either mirrors

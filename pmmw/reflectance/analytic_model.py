@@ -12,13 +12,21 @@ import math
 
 import numpy as np
 
-from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, grid_directions, mueller_from_jones, projected_solid_angle
-from pmmw.reflectance.optics import _TINY, _amplitude, _facet_basis, _Interface
-from pmmw.reflectance.stack import Stack
 from pmmw.errors import UserError
 from pmmw.physics import roughness as rough
 from pmmw.physics.jones import basis_change
 from pmmw.physics.vec import cross, dot, unit
+from pmmw.reflectance.grid import (
+    N_PHI,
+    N_THETA,
+    _cells,
+    _hv,
+    grid_directions,
+    mueller_from_jones,
+    projected_solid_angle,
+)
+from pmmw.reflectance.optics import _TINY, _amplitude, _facet_basis, _Interface
+from pmmw.reflectance.stack import Stack
 
 __all__ = ["SHADOWING", "analytic", "analytic_mueller", "analytic_totals"]
 

@@ -12,14 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
+from pmmw.errors import UserError, UserErrors
+from pmmw.physics import roughness as rough
 from pmmw.reflectance.analytic_model import SHADOWING, analytic, analytic_totals
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, projected_solid_angle
 from pmmw.reflectance.montecarlo import monte_carlo
 from pmmw.reflectance.optics import flat_reflectance
 from pmmw.reflectance.outputs import write_outputs
 from pmmw.reflectance.stack import _C0, Layer, Stack, _frequency, _medium_eps, load_stack
-from pmmw.errors import UserError, UserErrors
-from pmmw.physics import roughness as rough
 
 __all__ = ["METHODS", "BrdfResult", "MethodResult", "roughness_spec_from_options", "run_brdf"]
 

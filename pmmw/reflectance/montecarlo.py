@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pmmw.physics.jones import basis_change
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jones
 from pmmw.reflectance.stack import Stack
-from pmmw.physics.jones import basis_change
 from pmmw.surface import Surfaces, Wave
 from pmmw.trace import kernels
 from pmmw.trace.job import DIELECTRIC, METAL, OPAQUE, Coating, Media, RoughLayer

@@ -10,9 +10,9 @@ import math
 
 import numpy as np
 
-from pmmw.reflectance.stack import Stack
 from pmmw.physics import fresnel, multilayer
 from pmmw.physics.vec import cross, dot, unit
+from pmmw.reflectance.stack import Stack
 
 __all__ = ["flat_reflectance"]
 
