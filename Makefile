@@ -30,9 +30,11 @@ render: install
 test: install-test
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
 
-# ruff's rules of pyproject.toml ([tool.ruff]): pyflakes, pycodestyle's errors, import order
+# ruff's rules of pyproject.toml ([tool.ruff]): pyflakes, pycodestyle's errors, import order; mypy on
+# the pure-numerics modules ([tool.mypy])
 lint: install-test
 	$(BIN)/ruff check pmmw pmmw_cli tests examples scenes
+	$(BIN)/mypy
 
 # also the longest convergence renders of the shipped configs (about 2.5 minutes more)
 test-full: install-test

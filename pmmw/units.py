@@ -43,7 +43,7 @@ _NEPER_PER_DB = math.log(10.0) / 10.0  # power: 1 dB = ln(10)/10 Np
 
 @lru_cache(maxsize=1)
 def ureg() -> pint.UnitRegistry:
-    reg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    reg: pint.UnitRegistry = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
     reg.define(f"{_NEPER} = [pmmw_power_level]")
     reg.define(f"{_DECIBEL} = {_NEPER_PER_DB!r} * {_NEPER}")
     return reg

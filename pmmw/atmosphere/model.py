@@ -260,13 +260,13 @@ def vertical_grid(top: float, dz: float = DZ_GROUND, breaks=()) -> np.ndarray:
     Every height in ``breaks`` strictly inside (0, top) becomes an edge exactly; grid edges
     closer than a third of the local spacing to one are dropped (no sliver cells).
     """
-    edges = [0.0]
+    grid = [0.0]
     step = dz
-    while edges[-1] < top:
-        edges.append(min(edges[-1] + step, top))
-        cap = DZ_MAX_TROPOSPHERE if edges[-1] < DZ_SPLIT_HEIGHT else DZ_MAX_ALOFT
+    while grid[-1] < top:
+        grid.append(min(grid[-1] + step, top))
+        cap = DZ_MAX_TROPOSPHERE if grid[-1] < DZ_SPLIT_HEIGHT else DZ_MAX_ALOFT
         step = min(step * DZ_GROWTH, max(cap, dz))
-    edges = np.array(edges)
+    edges = np.array(grid)
     b = np.unique([x for x in breaks if 0.0 < x < top])
     if b.size:
         spacing = np.gradient(edges)

@@ -58,6 +58,7 @@ Time dependence exp(-i w t) as everywhere in pmmw: eps'' >= 0 is loss.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from pmmw.constants import EPS0  # [F/m]
@@ -68,7 +69,7 @@ class ModelSpec:
     """One registered model: its function eps(f [Hz], T [K], **params), ranges and source."""
 
     name: str
-    fn: object = field(repr=False, compare=False)  # repr: the scenario hash holds repr(material), no address
+    fn: Callable[..., complex] = field(repr=False, compare=False)  # repr: the scenario hash holds repr(material), no address
     f_range: tuple[float, float]  # [Hz]
     t_range: tuple[float, float]  # [K]
     t_ref: float  # [K] temperature when the material gives none
@@ -77,9 +78,9 @@ class ModelSpec:
     optional: tuple[str, ...] = ()  # parameters with defaults in `fn`
     parsers: dict = field(default_factory=dict, repr=False, compare=False)  # name -> parse(v, file, key)
     example: str = ""  # a complete ``model:`` mapping, for error messages
-    check: object = field(default=None, repr=False, compare=False)  # check(params, file, key): cross-parameter rules
-    outside: object = field(default=None, repr=False, compare=False)  # outside(f, T, params) -> reason or None
-    ranges: object = field(default=None, repr=False, compare=False)  # ranges(params) -> text of the valid range
+    check: Callable[[dict, object, str], None] | None = field(default=None, repr=False, compare=False)  # check(params, file, key): cross-parameter rules
+    outside: Callable[[float, float, dict], str | None] | None = field(default=None, repr=False, compare=False)  # outside(f, T, params) -> reason or None
+    ranges: Callable[[dict], str] | None = field(default=None, repr=False, compare=False)  # ranges(params) -> text of the valid range
 
 
 @dataclass(frozen=True)
