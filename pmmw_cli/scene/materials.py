@@ -938,8 +938,7 @@ def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | No
             e = np.array([mat._lookup(f, temperature)[0] for f in fs])
             t_used = mat.model_temperature(temperature)
             label = f"{mid} (model {mat.model.spec.name}, {t_used:g} K)"
-            lo, hi = mat.model.spec.f_range
-            inside = (fs >= lo) & (fs <= hi)
+            inside = np.array([mat.model.in_range(f, t_used) for f in fs])
             for ax, part in ((a1, e.real), (a2, e.imag)):
                 ax.plot(fs[inside] / 1e9, part[inside], "-", color=colour, label=label)
                 ax.plot(fs[~inside] / 1e9, part[~inside], ":", color=colour)
