@@ -80,3 +80,28 @@ def test_show_gives_the_parameters_and_the_range():
              "valid": ["10 GHz", "1 THz"]}).get("fit")
     text = m.model.describe()
     assert "relaxations 10 at tau 8 ps + 1 at tau 0.2 ps" in text and "valid 10-1000 GHz" in text
+
+
+@pytest.mark.parametrize("f_ghz", [35.0, 94.0, 140.0, 220.0, 300.0])
+def test_a_published_double_debye_entered_as_printed_gives_itur(f_ghz):
+    """Liebe, Hufford & Manabe 1991's water as ITU-R P.840-8 eqs. 4-10 print it, at 20 C: theta =
+    300/T, eps0 = 77.66 + 103.3 (theta - 1), eps1 = 0.0671 eps0, eps2 = 3.52, f_p = 20.20 - 146
+    (theta - 1) + 316 (theta - 1)^2 GHz, f_s = 39.8 f_p: a double Debye with d_eps = eps0 - eps1 at
+    tau = 1/(2 pi f_p) and eps1 - eps2 at 1/(2 pi f_s). Entered in the ``debye`` model, it must
+    give the `itur` package's P.840 liquid-water K_l = 0.819 f / (eps'' (1 + eta^2)), eta = (2 +
+    eps') / eps'' [(dB/km)/(g/m^3)]. The same published equations in double precision: 1e-9."""
+    import itur.models.itu840 as p840
+
+    t_k = 293.15
+    th = 300.0 / t_k - 1.0
+    eps0 = 77.66 + 103.3 * th
+    eps1, eps2 = 0.0671 * eps0, 3.52
+    fp = (20.20 - 146.0 * th + 316.0 * th**2) * 1e9  # [Hz]
+    fs = 39.8 * fp
+    m = _db({"name": "debye", "eps_inf": eps2, "valid": ["1 GHz", "1 THz"],
+             "terms": [[eps0 - eps1, 1.0 / (2.0 * math.pi * fp)], [eps1 - eps2, 1.0 / (2.0 * math.pi * fs)]]}).get("fit")
+    e = m.eps_at(f_ghz * 1e9)
+    eta = (2.0 + e.real) / e.imag
+    ours = 0.819 * f_ghz / (e.imag * (1.0 + eta**2))
+    theirs = float(p840.specific_attenuation_coefficients(f_ghz, t_k - 273.15))
+    assert ours == pytest.approx(theirs, rel=1e-9)
