@@ -13,8 +13,8 @@ import math
 import pytest
 from scipy.constants import epsilon_0
 
-from pmmw_cli.errors import UserError, clear_warnings, collected_warnings
-from pmmw_cli.scene.materials import MaterialDB
+from pmmw.errors import UserError, clear_warnings, collected_warnings
+from pmmw.scene.materials import MaterialDB
 
 # Closed forms evaluated in double precision: agreement to rounding (1e-12 relative) is expected.
 REL = 1e-12

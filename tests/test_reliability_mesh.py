@@ -16,8 +16,8 @@ import trimesh
 from typer.testing import CliRunner
 
 from pmmw_cli.cli import app
-from pmmw_cli.errors import UserError
-from pmmw_cli.scene.geometry import asset_files
+from pmmw.errors import UserError
+from pmmw.scene.geometry import asset_files
 
 runner = CliRunner()
 
