@@ -242,3 +242,19 @@ def test_show_says_why_a_value_is_outside_its_range():
         assert res.exit_code == 0, res.output
         line = next(x for x in res.output.splitlines() if x.strip().startswith(f"eps at {f}"))
         assert (words in line) if words else "outside" not in line, line
+
+
+def test_an_id_without_a_printed_source_says_so(db):
+    """`cotton`, `wool`, `abs`, `polycarbonate` have no entry (docs/materials.md, "Not found"): the
+    error says no printed measurement was found and points there; the control, a misspelt id,
+    still gets its close matches; a scenario may define `cotton` itself."""
+    for mid in ("cotton", "wool", "abs", "polycarbonate"):
+        with pytest.raises(UserError) as ei:
+            db.get(mid, file="s.yaml", key="scene.0.material")
+        assert "no printed measurement" in ei.value.message and "docs/materials.md" in ei.value.message, mid
+        assert ei.value.key == "scene.0.material"
+    with pytest.raises(UserError) as ei:
+        db.get("concret")
+    assert "no printed measurement" not in ei.value.message and "'concrete'" in ei.value.message
+    own = db.with_overrides({"cotton": {"eps": [1.8, 0.1], "source": "pmmw: test entry"}}, file="s.yaml")
+    assert own.get("cotton").eps_at(94e9) == 1.8 + 0.1j

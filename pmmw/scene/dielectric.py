@@ -52,6 +52,14 @@ Registry (`MODELS`, chosen by ``model.name``):
   gives a gain at millimetre waves), above and at or below 0 C (between -6.5 and 0 C the frozen
   fit is unbounded: warned); measured at 0.2-20 GHz, applied by the Recommendation to 1000 GHz.
 
+* ``debye``: a sum of Debye relaxations with ionic conduction, with the parameters and the valid
+  range the entry states (a published fit entered as it is printed): eps = eps_inf + sum_k d_eps_k
+  / (1 - i omega tau_k) + i sigma / (eps0 omega) (exp(-i w t); Debye 1929, as the double-Debye
+  fits of water and tissue at millimetre and terahertz waves are written). ``eps_inf`` [1],
+  ``terms`` (a list of ``[d_eps, tau]``, tau with its unit: '8 ps'), optional ``conductivity``
+  [S/m], and ``valid`` (``[lo, hi]``, the fit's stated frequency range, e.g. ``[10 GHz, 1 THz]``;
+  outside it the value is still computed and warned). eps does not follow the temperature.
+
 Time dependence exp(-i w t) as everywhere in pmmw: eps'' >= 0 is loss.
 """
 
@@ -81,6 +89,7 @@ class ModelSpec:
     check: Callable[[dict, object, str], None] | None = field(default=None, repr=False, compare=False)  # check(params, file, key): cross-parameter rules
     outside: Callable[[float, float, dict], str | None] | None = field(default=None, repr=False, compare=False)  # outside(f, T, params) -> reason or None
     ranges: Callable[[dict], str] | None = field(default=None, repr=False, compare=False)  # ranges(params) -> text of the valid range
+    params_text: Callable[[dict], str] | None = field(default=None, repr=False, compare=False)  # params_text(params) -> their text
 
 
 @dataclass(frozen=True)
@@ -111,6 +120,8 @@ class DielectricModel:
 
     def describe(self) -> str:
         extra = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in self.params.items())
+        if self.spec.params_text is not None:
+            extra = self.spec.params_text(self.params)
         (f0, f1), (t0, t1) = self.spec.f_range, self.spec.t_range
         f_text = f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e8 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
         if self.spec.ranges is not None:
@@ -232,6 +243,84 @@ def _skin_dry(f, T):
 
 def _skin_wet(f, T):
     return _cole_cole(f, *GABRIEL_1996["skin_wet"])
+
+
+def _debye(f, T, eps_inf, terms, valid, conductivity=0.0):
+    """eps_inf + sum_k d_eps_k / (1 - i omega tau_k) + i sigma / (eps0 omega): the Debye form in
+    pmmw's exp(-i w t) (eps'' >= 0 is loss)."""
+    omega = 2.0 * math.pi * f
+    eps = complex(eps_inf) + 1j * conductivity / (EPS0 * omega)
+    for d_eps, tau in terms:
+        eps += d_eps / (1.0 - 1j * omega * tau)
+    return eps
+
+
+def _debye_outside(f, T, params):
+    lo, hi = params["valid"]
+    return None if lo <= f <= hi else "the fit is extrapolated"
+
+
+def _debye_text(params):
+    terms = " + ".join(f"{d:g} at tau {tau * 1e12:g} ps" for d, tau in params["terms"])
+    sigma = params.get("conductivity", 0.0)
+    return f"eps_inf {params['eps_inf']:g}, relaxations {terms}" + (f", conductivity {sigma:g} S/m" if sigma else "")
+
+
+def _debye_ranges(params):
+    lo, hi = params["valid"]
+    return f"{lo / 1e9:g}-{hi / 1e9:g} GHz (the entry's stated range)"
+
+
+_SECONDS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "ps": 1e-12, "fs": 1e-15}
+
+
+def _time(v, file, key):
+    """A relaxation time [s]: a bare number in seconds or text with its unit ('8 ps')."""
+    from pmmw.errors import UserError
+
+    x = None
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        x = float(v)
+    elif isinstance(v, str):
+        parts = v.split()
+        if len(parts) == 2 and parts[1] in _SECONDS:
+            try:
+                x = float(parts[0]) * _SECONDS[parts[1]]
+            except ValueError:
+                x = None
+    if x is None or not (math.isfinite(x) and x > 0.0):
+        raise UserError(f"expected a relaxation time above 0 with its unit ({', '.join(_SECONDS)}), e.g. "
+                        f"'8 ps', got {v!r}", file, key)
+    return x
+
+
+def _debye_terms(v, file, key):
+    """``[[d_eps, tau], ...]`` -> a tuple of (d_eps [1], tau [s]) pairs."""
+    from pmmw.errors import UserError
+
+    if not isinstance(v, (list, tuple)) or not v:
+        raise UserError(f"expected a list of [d_eps, tau] pairs, e.g. [[10.0, 8 ps], [1.0, 0.2 ps]], got {v!r}",
+                        file, key)
+    terms = []
+    for i, term in enumerate(v):
+        if not isinstance(term, (list, tuple)) or len(term) != 2:
+            raise UserError(f"expected a pair [d_eps, tau], e.g. [10.0, 8 ps], got {term!r}", file, f"{key}.{i}")
+        d_eps = _number(0.0, math.inf, "", "10.0")(term[0], file, f"{key}.{i}.0")
+        terms.append((d_eps, _time(term[1], file, f"{key}.{i}.1")))
+    return tuple(terms)
+
+
+def _frequency_range(v, file, key):
+    """``[lo, hi]`` with units -> (lo, hi) [Hz], lo < hi."""
+    from pmmw.errors import UserError
+    from pmmw.units import parse_quantity
+
+    if not isinstance(v, (list, tuple)) or len(v) != 2:
+        raise UserError(f"expected the fit's range [lo, hi], e.g. [10 GHz, 1 THz], got {v!r}", file, key)
+    lo, hi = (parse_quantity(x, "frequency", file=file, key=f"{key}.{i}") for i, x in enumerate(v))
+    if not 0.0 < lo < hi:
+        raise UserError(f"expected 0 < lo < hi, got {v!r}", file, key)
+    return (lo, hi)
 
 
 def _leaves(f, T, dry_matter, salinity=10.0):
@@ -367,6 +456,13 @@ MODELS = {
                           "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (dry)', at 37 C"),
     "skin_wet": ModelSpec("skin_wet", _skin_wet, (10.0, 100e9), (298.15, 313.15), 310.15, (),
                           "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (wet)', at 37 C"),
+    "debye": ModelSpec("debye", _debye, (0.0, math.inf), (0.0, 1e4), 293.15, ("eps_inf", "terms", "valid"),
+                       "a sum of Debye relaxations (Debye 1929) with the entry's published parameters",
+                       optional=("conductivity",),
+                       parsers={"eps_inf": _number(1.0, math.inf, "", "2.0"), "terms": _debye_terms,
+                                "valid": _frequency_range, "conductivity": _number(0.0, math.inf, "S/m", "'0.5 S/m'")},
+                       example="{name: debye, eps_inf: 2.0, terms: [[10.0, 8 ps]], valid: [10 GHz, 1 THz]}",
+                       outside=_debye_outside, ranges=_debye_ranges, params_text=_debye_text),
     "leaves": ModelSpec("leaves", _leaves, (1e9, 100e9), (273.15, 313.15), 293.15, ("dry_matter",),
                         "Maetzler 1994 leaf model with ITU-R P.527-6 saline water as the sap",
                         optional=("salinity",),

@@ -583,6 +583,13 @@ def _database_files(paths) -> list[Path]:
     return files
 
 
+
+# Ids a user may look for that have no entry because no printed source was found
+# (docs/materials.md, "Not found"): the error says so instead of only "unknown".
+UNSOURCED = {"cotton": "cotton fabric", "wool": "wool fabric", "nylon_fabric": "nylon fabric",
+             "abs": "ABS plastic", "polycarbonate": "polycarbonate"}
+
+
 class MaterialDB:
     """The material database: immutable; `with_overrides` returns a new one.
 
@@ -751,6 +758,11 @@ class MaterialDB:
             return self._materials[mid]
         except (KeyError, TypeError):
             pass
+        if str(mid).lower() in UNSOURCED:
+            raise UserError(
+                f"no material {mid!r}: no printed measurement of {UNSOURCED[str(mid).lower()]} at 35-300 GHz was found "
+                "(docs/materials.md, 'Not found'); a scenario's `materials:` map can define it with its source",
+                file, key)
         close = difflib.get_close_matches(str(mid), list(self._materials), n=5, cutoff=0.6)
         hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
         raise UserError(
@@ -938,8 +950,7 @@ def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | No
             e = np.array([mat._lookup(f, temperature)[0] for f in fs])
             t_used = mat.model_temperature(temperature)
             label = f"{mid} (model {mat.model.spec.name}, {t_used:g} K)"
-            lo, hi = mat.model.spec.f_range
-            inside = (fs >= lo) & (fs <= hi)
+            inside = np.array([mat.model.in_range(f, t_used) for f in fs])
             for ax, part in ((a1, e.real), (a2, e.imag)):
                 ax.plot(fs[inside] / 1e9, part[inside], "-", color=colour, label=label)
                 ax.plot(fs[~inside] / 1e9, part[~inside], ":", color=colour)
