@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import trimesh
 
@@ -119,3 +121,23 @@ def ground_and_block(folder):
     block.apply_translation([0, 4, 0.1])
     ground.export(folder / "ground.obj")
     block.export(folder / "block.obj")
+
+
+def tiny_scenario(tmp_path: Path, extra: str = "", render: str = "{spp: 2, max_depth: 4, tile: 8}") -> Path:
+    """A 24 x 16 pixel scenario of `ground_and_block` (concrete ground, metal block) under a 40 K
+    sky, written to ``tmp_path/tiny.yaml``; ``extra`` is appended YAML, ``render`` the render block."""
+    ground_and_block(tmp_path)
+    yaml = f"""
+name: tiny
+frequency: 35 GHz
+imager: {{position: [0, 0, 1.5], look_at: [0, 4, 0.1], fov: 20 deg, resolution: [24, 16]}}
+scene:
+  - {{mesh: ground.obj, material: concrete}}
+  - {{mesh: block.obj, material: metal}}
+sky: {{model: uniform, temperature: 40 K}}
+render: {render}
+{extra}
+"""
+    path = tmp_path / "tiny.yaml"
+    path.write_text(yaml)
+    return path
