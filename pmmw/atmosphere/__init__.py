@@ -9,8 +9,8 @@ from pmmw.atmosphere.model import (
     PROFILES,
     T_CMB,
     Atmosphere,
+    AtmosphereLayer,
     AtmosphereModel,
-    Layer,
 )
 
-__all__ = ["PROFILES", "T_CMB", "Atmosphere", "AtmosphereModel", "Layer"]
+__all__ = ["PROFILES", "T_CMB", "Atmosphere", "AtmosphereModel", "AtmosphereLayer"]
