@@ -66,3 +66,24 @@ def test_display_loads_back_to_the_same_hardware(tmp_path):
     plain = scenario_to_display(_load(tmp_path))
     assert "receiver" not in plain["imager"] and "antenna" not in plain["imager"]
     assert "false_alarm" not in plain["output"]
+
+
+def test_report_states_netd_beam_and_pd():
+    import numpy as np
+
+    from pmmw_cli.imaging.antenna import Aperture, beam_report
+    from pmmw_cli.imaging.receiver import Receiver
+    from pmmw_cli.io.report import render_markdown
+
+    rx = Receiver(t_rec=865.0, bandwidth=1e10, tau=1e-3)
+    beam = beam_report(Aperture(), 2 * np.pi / 3.2e-3, 0.5, 4e-3)  # 4 mrad > lambda / 2D = 3.2 mrad
+    contrast = {"K": -5.0, "snr": 6.0, "snr_stderr": 0.5, "detectable": True, "pd": 0.994}
+    text = render_markdown({"name": "t", "imager": {"receiver": rx.summary(), "beam": beam},
+                            "regions": {"criterion": "c", "channel": "Ey2", "noise_K": 0.37, "false_alarm": 1e-3,
+                                        "verdicts": {"gun - torso": "gun - torso: detectable"},
+                                        "contrasts": {"gun - torso": {"Ey2": contrast}}}}, {})
+    # NETD = (300 + 865) / sqrt(1e7) = 0.368 K
+    assert "NETD: 0.368 K at a 300 K scene" in text
+    assert "under-sampled" in text and "energy budget: main beam 0.838" in text
+    assert "false-alarm probability of 0.001" in text and "gun - torso 0.994" in text
+    assert "the receiver's, pixel by pixel" in text

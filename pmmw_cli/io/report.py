@@ -118,8 +118,11 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
             lines += [f"Criterion: a target is {regions['criterion']}; the SNR of a pair of regions \"a - b\" "
                       "is the contrast of their means in the ideal image times the norm of a's footprint "
                       "blurred by the imager's PSF, over the channel's noise per pixel "
-                      f"({_num(regions.get('noise_K'))} K in Ex2 and Ey2, sqrt(2) times it in I); ± its "
-                      "Monte Carlo standard error.", ""]
+                      + (f"({_num(regions.get('noise_K'))} K in Ex2 and Ey2, sqrt(2) times it in I)"
+                         if not (report.get("imager") or {}).get("receiver") else
+                         "(the receiver's, pixel by pixel, whitened over the footprint; "
+                         f"{_num(regions.get('noise_K'))} K on average in Ex2 and Ey2)")
+                      + "; ± its Monte Carlo standard error.", ""]
         lines += [f"- {_cell(v)}" for v in (regions.get("verdicts") or {}).values()]
         if regions.get("verdicts"):
             lines.append("")
