@@ -2,8 +2,8 @@
 spillover, and the beam's energy budget.
 
 The aperture of radius a carries the field f(rho), rho = r / a in [0, 1], zero inside a central
-blockage of diameter ratio b. Its far field is the Hankel transform (Silver 1949, eq. 6.63;
-Goldsmith 1998, eq. 6.6)
+blockage of diameter ratio b. Its far field is the Hankel transform (Silver 1949, ch. 6, the
+circular aperture; Balanis 2016, ch. 12, circular apertures)
 
     F(u) = int_b^1 f(rho) J0(u rho) rho d rho,      u = k a sin(theta)                  (`pattern`)
 
@@ -11,15 +11,15 @@ and the power pattern |F(u) / F(0)|^2. The illuminations (`illumination`), with 
 C = 10^(-T_e / 20) for an edge taper T_e [dB]:
 
 - ``uniform``: f = 1: F(u) = J1(u) / u, the Airy pattern of Murakowski 2014 eq. 2.41.
-- ``parabolic`` (parabolic on a pedestal): f = C + (1 - C)(1 - rho^2) (Balanis 2016, sec. 12.9;
-  Silver 1949, Table 6.2 for C = 0).
+- ``parabolic`` (parabolic on a pedestal): f = C + (1 - C)(1 - rho^2) (Balanis 2016, ch. 12, circular apertures;
+  Silver 1949, Table 6.2, for C = 0).
 - ``gaussian`` (a Gaussian feed beam truncated at the rim): f = exp(-ln(1/C) rho^2) (Goldsmith
-  1998, sec. 6.4).
+  1998, the Gaussian illumination of an antenna).
 
 Energy budget: the feed sends a fraction ``spillover`` of its power past the reflector, where the
 beam sees ``spillover_temperature`` (the instrument, the ground, the sky); for a Gaussian feed it is
-the edge taper in power, 10^(-T_e / 10) (Goldsmith 1998, eq. 6.17: the power of a Gaussian beam
-outside radius a is exp(-2 a^2 / w^2), the edge taper). The rest forms the beam, whose energy
+the edge taper in power, 10^(-T_e / 10) (Goldsmith 1998: the power of a Gaussian beam outside
+radius a is exp(-2 a^2 / w^2), which is the edge taper). The rest forms the beam, whose energy
 within angle u is (Parseval's theorem for the Hankel transform)
 
     EE(u) = int_0^u |F(u')|^2 u' du' / int_b^1 |f(rho)|^2 rho d rho                  (`encircled_energy`)
@@ -27,11 +27,12 @@ within angle u is (Parseval's theorem for the Hankel transform)
 (for the uniform aperture Rayleigh's 1 - J0(u)^2 - J1(u)^2; Born & Wolf 1999, sec. 8.5.2, 0.838 at
 the first null). The main-beam efficiency is (1 - spillover) EE(first null). The aperture
 (taper) efficiency is eta_a = 2 |int f rho d rho|^2 / int |f|^2 rho d rho over the whole disc
-(Goldsmith 1998, eq. 6.23; 1 for the uniform aperture, 1 - b^2 with a blockage b).
+(Balanis 2016, ch. 12, circular apertures; 1 for the uniform aperture, 0.75 for 1 - rho^2 as Silver 1949, Table 6.2,
+1 - b^2 with a blockage b).
 
 Sampling: an aperture of diameter D passes angular frequencies up to D / lambda [cycles/rad], so
 the image is sampled without aliasing when the pixel pitch is at most lambda / (2 D) (the Nyquist
-pitch; Goodman 2005, sec. 2.4 and 6.3). A coarser pitch under-samples the beam and aliases.
+pitch; Goodman 2005, sec. 2.4). A coarser pitch under-samples the beam and aliases.
 
 The sensor image is T_sensor = (1 - spillover) (PSF * T) + spillover T_spill in Ex2 and Ey2 (an
 unpolarized spillover: none in U and V).

@@ -1,8 +1,8 @@
 """The receiver behind the antenna: per-pixel noise from the hardware by the radiometer equation.
 
 A radiometer that integrates a pre-detection bandwidth B [Hz] for a time tau [s] measures its
-antenna temperature T_A with a 1-sigma error (Ulaby & Long 2014, ch. 7, "radiometer sensitivity";
-Skou & Le Vine 2006, ch. 3)
+antenna temperature T_A with a 1-sigma error (Ulaby & Long 2014, the radiometer chapter's
+sensitivity of total-power and Dicke receivers with gain fluctuations; Skou & Le Vine 2006)
 
     total power:  dT = (T_A + T_rec) sqrt(1 / (B tau) + (dG/G)^2)                 (`radiometer_sigma`)
     Dicke:        dT = sqrt( (2 (T_A + T_rec)^2 + 2 (T_ref + T_rec)^2) / (B tau)
