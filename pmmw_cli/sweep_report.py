@@ -188,12 +188,11 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
             ax.scatter(xs, ys, s=28, zorder=3, edgecolors=line.get_color(),
                        facecolors=[line.get_color() if y >= ROSE_SNR else "white" for y in ys])
             lim = _limit(rows, col, x_key, x_of) if len(rows) > 1 else {"kind": "all"}
-            if lim["kind"] == "limit":  # the detection limit and its uncertainty
-                ax.axvspan(lim["crossing_x"] - lim["error"], lim["crossing_x"] + lim["error"],
-                           color=line.get_color(), alpha=0.15, lw=0)
-                ax.axvline(lim["crossing_x"], color=line.get_color(), lw=0.9, ls=":")
+            if lim["kind"] == "limit":  # the detection limit and its uncertainty, on the threshold
+                ax.errorbar([lim["crossing_x"]], [ROSE_SNR], xerr=[lim["error"]], fmt="D", ms=5, capsize=3,
+                            color=line.get_color(), zorder=4)
         ax.axhline(ROSE_SNR, color="k", lw=0.9, ls="--",
-                   label=f"SNR {ROSE_SNR:g}: detectable above (Rose); dotted, shaded: detection limit ± error")
+                   label=f"SNR {ROSE_SNR:g}: detectable above (Rose); diamonds: detection limit ± error")
         if min(values) > 0 and max(values) > 20 * min(values):
             ax.set_yscale("log")
         ax.set_xlabel(_axis_label(spec, x_key))
