@@ -134,7 +134,7 @@ def _detection_lines(spec: SweepSpec, table: list[dict], snr_cols: list[str]) ->
                      + (f"; not {there} {', '.join(no)}" if yes and no else f" {at} {', '.join(no)}" if no else ""))
             lines.append(f"- {pair} ({chan}{', ' + label if label else ''}): {words}")
             if x_key and len(rows) > 1:
-                lines[-1] += f"; {_limit_words(x_key, _limit(rows, col, x_key, x_of))}"
+                lines[-1] += f"; {_limit_words(_axis_label(spec, x_key), _limit(rows, col, x_key, x_of))}"
     return lines + [""]
 
 

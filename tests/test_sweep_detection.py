@@ -20,7 +20,7 @@ def test_report_states_the_detection_range_and_draws_it(tmp_path):
     snrs = [150 / x ** 1.2 for x in (5, 10, 15, 20)]
     text = write_report(tmp_path, spec, _table(ranges, snrs)).read_text()
     line = next(ln for ln in text.splitlines() if ln.startswith("- gun - torso"))
-    assert "detection limit (largest imager.position[1] detected)" in line
+    assert "detection limit (largest imager.position[1] [m] detected)" in line
     assert "between 15, detected, and 20" in line and "from the Monte Carlo" in line
     assert (tmp_path / "plot_gun_torso.png").stat().st_size > 5_000
 
