@@ -1,4 +1,4 @@
-"""The antenna's beam (`pmmw_cli.imaging.antenna`) against closed forms and published tables."""
+"""The antenna's beam (`pmmw.imaging.antenna`) against closed forms and published tables."""
 
 from types import SimpleNamespace
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.special import j0, j1, jv
 
-from pmmw_cli.imaging.antenna import Aperture, antenna_kernel, beam_report, gaussian_feed_spillover
-from pmmw_cli.imaging.imager import blur, psf_kernel
+from pmmw.imaging.antenna import Aperture, antenna_kernel, beam_report, gaussian_feed_spillover
+from pmmw.imaging.imager import blur, psf_kernel
 
 U = np.linspace(0.01, 30.0, 3001)
 
@@ -109,7 +109,7 @@ def test_spillover_in_the_energy_budget_and_the_image():
 
 def test_renders_without_an_antenna_block_keep_their_image():
     # pipeline.imager_model without imager.antenna or receiver: the Airy blur and scalar noise of before
-    from pmmw_cli import pipeline
+    from pmmw import pipeline
 
     rng = np.random.default_rng(0)
     ideal = {c: rng.uniform(50, 300, (16, 16)) for c in ("Ex2", "Ey2", "U", "V")}

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from pmmw_cli.imaging import detection
+from pmmw.imaging import detection
 
 
 def _binomial_tolerance(p, n, z=5.0):

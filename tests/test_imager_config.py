@@ -4,9 +4,9 @@ resolved receiver, and the display that loads back."""
 import pytest
 import yaml
 
-from pmmw_cli import pipeline
-from pmmw_cli.config import load_scenario, scenario_to_display
-from pmmw_cli.errors import UserError
+from pmmw import pipeline
+from pmmw.config import load_scenario, scenario_to_display
+from pmmw.errors import UserError
 
 BASE = """
 name: t
@@ -71,9 +71,9 @@ def test_display_loads_back_to_the_same_hardware(tmp_path):
 def test_report_states_netd_beam_and_pd():
     import numpy as np
 
-    from pmmw_cli.imaging.antenna import Aperture, beam_report
-    from pmmw_cli.imaging.receiver import Receiver
-    from pmmw_cli.io.report import render_markdown
+    from pmmw.imaging.antenna import Aperture, beam_report
+    from pmmw.imaging.receiver import Receiver
+    from pmmw.io.report import render_markdown
 
     rx = Receiver(t_rec=865.0, bandwidth=1e10, tau=1e-3)
     beam = beam_report(Aperture(), 2 * np.pi / 3.2e-3, 0.5, 4e-3)  # 4 mrad > lambda / 2D = 3.2 mrad

@@ -1,12 +1,12 @@
-"""The receiver's noise (`pmmw_cli.imaging.receiver`) against the radiometer equation's closed
+"""The receiver's noise (`pmmw.imaging.receiver`) against the radiometer equation's closed
 forms (Ulaby & Long 2014, ch. 7) and the pixel noise of `apply_imager` against its formula."""
 
 import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from pmmw_cli.imaging.imager import apply_imager
-from pmmw_cli.imaging.receiver import Receiver, dwell_time, noise_temperature, radiometer_sigma
+from pmmw.imaging.imager import apply_imager
+from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature, radiometer_sigma
 
 
 def test_total_power_radiometer_equation():

@@ -3,8 +3,8 @@ from a results table: no rendering."""
 
 from pathlib import Path
 
-from pmmw_cli.sweep_report import write_report
-from pmmw_cli.sweep_spec import SweepSpec
+from pmmw.sweeps.report import write_report
+from pmmw.sweeps.spec import SweepSpec
 
 
 def _table(ranges, snrs, err=0.2):
