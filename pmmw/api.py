@@ -342,7 +342,8 @@ def render(scenario, *, spp: int | None = None, workers: int | None = None, seed
         images = pipeline.frequency_images(scn, f, job, img, shash)
         per_f.append((f, images["channels"], images["attrs"]))
         if scn.output.regions:
-            regions[f"{f / 1e9:g} GHz"] = pipeline.region_stats(scn, job.camera, images["sensor"], img, images["kernel"])
+            regions[f"{f / 1e9:g} GHz"] = pipeline.region_stats(scn, job.camera, images["sensor"], img, images["kernel"],
+                                                                 noise_maps=images["noise_maps"])
     ds = _dataset(per_f, regions)
     ds.attrs["warnings"] = list(pipeline.collected_warnings())
     return ds

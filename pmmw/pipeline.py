@@ -14,6 +14,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -22,7 +23,9 @@ from pmmw.config import load_scenario
 from pmmw.config.load import scenario_to_display
 from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
 from pmmw.imaging import detection
+from pmmw.imaging.antenna import Aperture, antenna_kernel, beam_report, gaussian_feed_spillover
 from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
+from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature
 from pmmw.io.exr import write_exr
 from pmmw.io.lock import FolderLock
 from pmmw.io.preview import write_depth_figure, write_figure, write_material_figure, write_regions_figure
@@ -343,7 +346,7 @@ def region_limit(noise: float) -> float:
     return TRUNCATION_NOISE_FRACTION * noise if noise > 0 else TRUNCATION_LIMIT_NO_NOISE
 
 
-def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None) -> dict:
+def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps=None) -> dict:
     """Per region: mean sensor temperature, its Monte Carlo standard error and truncation bound;
     per pair of regions: the contrast in K and noise sigmas, with the same two figures, and its
     detection by the one criterion (`imaging.detection`).
@@ -354,6 +357,9 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None) -> dict:
     in the channel's noise (`detection.channel_sigma`); ``snr_stderr`` its Monte Carlo standard
     error (that of the ideal contrast, weights mask / N, times footprint norm / noise);
     ``detectable`` ``snr >= 5``. All three None without imager noise (or without the ideal image).
+    With a receiver the noise differs from pixel to pixel (``noise_maps``: channel -> (H, W) [K],
+    from `imager_model`): the matched filter's noise is then `detection.effective_sigma` over the
+    target's blurred footprint, and ``noise_K`` the mean of Ex2's and Ey2's per-pixel noise.
     ``verdicts`` gives each pair in words over its channels (`detection.contrast_verdict`),
     ``channel`` the one the report leads with (`report_channel`), ``criterion`` the criterion.
 
@@ -371,9 +377,12 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None) -> dict:
     masks = region_masks(scn.output.regions, cam)
     chans = [c for c in REGION_CHANNELS if c in sensor]
     sigma = scn.imager.noise
+    if noise_maps:
+        sigma = float(np.mean([np.mean(noise_maps["Ex2"]), np.mean(noise_maps["Ey2"])]))
     if ideal is None and img is not None:
         ideal = stokes_images(img.mean)
     limit = region_limit(sigma)
+    pfa = getattr(scn.output, "false_alarm", 1e-3)  # a bare record (tests, validation) has the default
     st = scn.render
     weights = {name: ((blur_adjoint(m / m.sum(), kernel) if kernel is not None else m / m.sum())
                       if m.any() else None) for name, m in masks.items()}
@@ -426,7 +435,8 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None) -> dict:
             pair = {}
             for c in chans:
                 k = means[a][c] - means[b_name][c]
-                scale = detection.channel_sigma(sigma, c)  # I carries sqrt(2) sigma
+                scale = (detection.effective_sigma(masks[a], kernel, noise_maps[c]) if noise_maps
+                         else detection.channel_sigma(sigma, c))  # I carries sqrt(2) sigma
                 err = mc_error(dw, c)
                 snr = snr_err = k_ideal = None
                 if dw_ideal is not None and ideal is not None:
@@ -438,7 +448,8 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None) -> dict:
                 pair[c] = {"K": k, "ideal_K": k_ideal, "sigma": k / scale if sigma > 0 else float("nan"),
                            "stderr_K": err,
                            "truncation_bound_K": None if tb is None else tb * (2.0 if c == "I" else 1.0),
-                           "snr": snr, "snr_stderr": snr_err, "detectable": detection.detectable(snr)}
+                           "snr": snr, "snr_stderr": snr_err, "detectable": detection.detectable(snr),
+                           "pd": None if snr is None else detection.probability_of_detection(snr, pfa)}
                 if err is not None and 2.0 * err > limit * (np.sqrt(2.0) if c == "I" else 1.0):
                     warn(f"output.regions: the contrast {a} - {b_name} in {c} has a Monte Carlo standard error "
                          f"of {err:.3g} K: seeds will differ by more than {limit:.3g} K; raise render.spp "
@@ -447,6 +458,7 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None) -> dict:
             verdicts[f"{a} - {b_name}"] = detection.contrast_verdict(
                 f"{a} - {b_name}", {c: (v["snr"], v["snr_stderr"], v["ideal_K"]) for c, v in pair.items()})
     return {"criterion": detection.CRITERION, "channel": report_channel(scn), "verdicts": verdicts,
+            "false_alarm": pfa,
             "means": means, "pixels": pixels, "stderr": errors, "truncation": truncation,
             "contrasts": contrasts, "noise_K": sigma, "limit_K": limit}
 
@@ -529,14 +541,70 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
     return make_job(res, f), average_images(imgs), dirs
 
 
-def imager_model(scn, job, ideal: dict):
-    """The sensor image (`apply_imager` with the scenario's aperture, noise and seed) and the PSF
-    kernel it blurred with (None without an aperture)."""
+def receiver_of(scn):
+    """The scenario's `imaging.receiver.Receiver`, or None without ``imager.receiver``."""
+    rx, im = scn.imager.receiver, scn.imager
+    if rx is None:
+        return None
+    t_rec = rx.noise_temperature if rx.noise_temperature is not None else noise_temperature(rx.noise_figure)
+    if rx.integration_time is not None:
+        tau = rx.integration_time
+    else:
+        per = rx.pixels_per_receiver or -(-im.resolution[0] * im.resolution[1] // rx.receivers)
+        tau = dwell_time(rx.frame_rate, per)
+    return Receiver(t_rec=t_rec, bandwidth=rx.bandwidth if rx.bandwidth is not None else im.bandwidth, tau=tau,
+                    mode=rx.mode, gain_fluctuation=rx.gain_fluctuation, t_ref=rx.reference_temperature)
+
+
+def aperture_of(scn):
+    """The scenario's `imaging.antenna.Aperture` (a uniform one without ``imager.antenna``), or
+    None without an aperture."""
     im = scn.imager
-    kernel = psf_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter) if im.aperture_diameter > 0.0 else None
+    if not im.aperture_diameter > 0:
+        return None
+    a = im.antenna
+    if a is None:
+        return Aperture()
+    spill = a.spillover if a.spillover is not None else (
+        gaussian_feed_spillover(a.edge_taper) if a.illumination == "gaussian" else 0.0)
+    return Aperture(kind=a.illumination, edge_taper_db=a.edge_taper or 0.0, blockage=a.blockage, spillover=spill,
+                    spillover_temperature=a.spillover_temperature)
+
+
+def imager_model(scn, job, ideal: dict, noise_maps: dict | None = None):
+    """The sensor image (`apply_imager` with the scenario's aperture, antenna, noise or receiver and
+    seed) and the PSF kernel of the scene's signal: the unit-sum PSF times (1 - spillover) (None
+    without an aperture). ``noise_maps`` is filled with the per-pixel noise of each channel when
+    the imager has a receiver."""
+    im = scn.imager
+    ap = aperture_of(scn) if im.antenna is not None else None
+    if ap is not None:
+        kernel = antenna_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter, ap)
+    else:
+        kernel = psf_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter) if im.aperture_diameter > 0.0 else None
+    spill = ap.spillover if ap is not None else 0.0
     sensor = apply_imager(ideal, pixel_angle=job.camera.pixel_angle, k0=job.k0, aperture_diameter=im.aperture_diameter,
-                          noise=im.noise, seed=scn.render.seed, kernel=kernel)
-    return sensor, kernel
+                          noise=im.noise, seed=scn.render.seed, kernel=kernel, spillover=spill,
+                          spillover_temperature=ap.spillover_temperature if ap is not None else 0.0,
+                          receiver=receiver_of(scn), noise_maps=noise_maps)
+    return sensor, (None if kernel is None else kernel * (1.0 - spill))
+
+
+def imager_summary(scn, job, noise_maps: dict | None = None) -> dict:
+    """What a report states about the imager: ``receiver`` (NETD, per-pixel noise range: 
+    `imaging.receiver.Receiver.summary`) and ``beam`` (`imaging.antenna.beam_report`), each when
+    the imager has it."""
+    out = {}
+    rx = receiver_of(scn)
+    if rx is not None:
+        out["receiver"] = rx.summary(noise_maps)
+    ap = aperture_of(scn)
+    if ap is not None:
+        out["beam"] = beam_report(ap, job.k0, scn.imager.aperture_diameter, job.camera.pixel_angle)
+        if out["beam"]["pitch_over_nyquist"] > 1.0 + 1e-9:
+            out["beam"]["sampling"] += (f" ({out['beam']['pitch_over_nyquist']:.3g} x the Nyquist pitch: "
+                                        "raise imager.resolution or narrow imager.fov to sample the beam)")
+    return out
 
 
 def _stem(scn, f: float) -> str:
@@ -855,7 +923,8 @@ def frequency_images(scn, f, job, img, shash: str = "") -> dict:
     polarization channels [K], float64), the PSF ``kernel``, and what the EXR holds: ``channels``
     (float32: the sensor's, ``ideal.*``, ``aux.*``) with its header ``attrs``."""
     ideal = stokes_images(img.mean)
-    sensor, kernel = imager_model(scn, job, ideal)
+    noise_maps = {}
+    sensor, kernel = imager_model(scn, job, ideal, noise_maps)
     if not all(np.isfinite(sensor[c]).all() for c in scn.output.channels):
         raise RuntimeError(f"non-finite pixels in the {f / 1e9:g} GHz image: a bug, please report it")
     channels = {c: sensor[c].astype(np.float32) for c in scn.output.channels}
@@ -875,7 +944,8 @@ def frequency_images(scn, f, job, img, shash: str = "") -> dict:
         "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (Murakowski 2014 eq. 2.12)",
         "pmmw:materials": ",".join(job.media.ids),
     }
-    return {"ideal": ideal, "sensor": sensor, "kernel": kernel, "channels": channels, "attrs": attrs}
+    return {"ideal": ideal, "sensor": sensor, "kernel": kernel, "channels": channels, "attrs": attrs,
+            "noise_maps": noise_maps or None}
 
 
 def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
@@ -885,7 +955,7 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     images = frequency_images(scn, f, job, img, shash)
     ideal, sensor, kernel = images["ideal"], images["sensor"], images["kernel"]
     cam = job.camera
-    regions = region_stats(scn, cam, sensor, img, kernel, ideal) if scn.output.regions else None
+    regions = region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
     try:
         write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
         stats = {}
@@ -916,6 +986,7 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     t_total = time.perf_counter() - t1 + t_trace
     return {
         "truncation": truncation_summary(img, scn),
+        **({"imager": summary} if (summary := imager_summary(scn, job, images["noise_maps"])) else {}),
         **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
         **({"regions": regions} if regions else {}),
         **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
@@ -964,6 +1035,12 @@ def validate(path, overrides=(), data=None, values=None) -> dict:
             }
             for i, mid in enumerate(media.ids)
         }
+    im = scn.imager
+    pixel = SimpleNamespace(pixel_angle=2.0 * np.arctan(np.tan(im.fov / 2.0) / im.resolution[0]))
+    imager = {f"{f / 1e9:g} GHz": imager_summary(scn, SimpleNamespace(k0=2.0 * np.pi * f / C0, camera=pixel))
+              for f in scn.frequencies}
+    if any(imager.values()):  # NETD and the beam, as the render's report states them
+        out["imager"] = imager
     if scn.sky.model == "texture":  # read and check it now, as render would
         make_sky(scn.sky, scn.frequencies[0])
     if scn.sky.model == "slab":  # the values the render takes, defaults included

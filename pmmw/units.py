@@ -76,11 +76,12 @@ _KINDS: dict[str, tuple[str, str | None, str, str]] = {
     "density": ("kg/m**3", "g/m**3", "'0.3 g/m3'", "mass density"),
     "rate": ("m/s", "mm/h", "'10 mm/h'", "rain rate"),
     "attenuation": (f"{_NEPER}/m", f"{_DECIBEL}/km", "'0.9 dB/km' or '0.2 Np/km'", "attenuation"),
+    "time": ("s", "s", "'10 ms' or '2 us'", "duration"),
 }
 
 # units a misspelt one is compared with, case-insensitively ('95 Ghz' -> did you mean 'GHz'?)
 _COMMON_UNITS = ("Hz", "kHz", "MHz", "GHz", "THz", "nm", "um", "mm", "cm", "m", "km", "deg", "rad", "mrad", "K",
-                 "mK", "degC", "degF", "g/m3", "kg/m3", "mm/h", "dB/km", "Np/km", "dB/m")
+                 "mK", "degC", "degF", "g/m3", "kg/m3", "mm/h", "dB/km", "Np/km", "dB/m", "s", "ms", "us")
 
 
 def _case_hint(text: str) -> str:

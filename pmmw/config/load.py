@@ -311,6 +311,30 @@ def _qty(value: float, unit: str, scale: float = 1.0) -> str:
     return f"{value / scale:.12g} {unit}"
 
 
+def _receiver_display(rx) -> dict:
+    """``imager.receiver`` with its units, only the keys given (the choices exclude each other)."""
+    out = {
+        "noise_temperature": None if rx.noise_temperature is None else _qty(rx.noise_temperature, "K"),
+        "noise_figure": None if rx.noise_figure is None else f"{rx.noise_figure:.12g} dB",
+        "bandwidth": None if rx.bandwidth is None else _qty(rx.bandwidth, "GHz", 1e9),
+        "integration_time": None if rx.integration_time is None else _qty(rx.integration_time, "s"),
+        "frame_rate": None if rx.frame_rate is None else _qty(rx.frame_rate, "Hz"),
+        "receivers": rx.receivers if rx.frame_rate is not None else None,
+        "pixels_per_receiver": rx.pixels_per_receiver,
+        "mode": rx.mode, "gain_fluctuation": rx.gain_fluctuation,
+        "reference_temperature": None if rx.reference_temperature is None else _qty(rx.reference_temperature, "K"),
+    }
+    return {k: v for k, v in out.items() if v is not None}
+
+
+def _antenna_display(a) -> dict:
+    """``imager.antenna`` with its units."""
+    return {"illumination": a.illumination,
+            **({"edge_taper": f"{a.edge_taper:.12g} dB"} if a.edge_taper is not None else {}),
+            "blockage": a.blockage, **({"spillover": a.spillover} if a.spillover is not None else {}),
+            "spillover_temperature": _qty(a.spillover_temperature, "K")}
+
+
 def scenario_to_display(scn: ScenarioConfig) -> dict:
     """The resolved scenario as plain YAML-able data, with units re-attached as strings.
 
@@ -331,6 +355,8 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
         **({"focus_distance": _qty(im.focus_distance, "m")} if im.focus_distance is not None else {}),
         "bandwidth": _qty(im.bandwidth, "GHz", 1e9),
         "band_samples": im.band_samples,
+        **({"receiver": _receiver_display(im.receiver)} if im.receiver is not None else {}),
+        **({"antenna": _antenna_display(im.antenna)} if im.antenna is not None else {}),
     }
     scene = []
     for e in scn.scene:
@@ -394,6 +420,7 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
         "output": {
             "dir": str(scn.output.dir) if scn.output.dir is not None else None,
             "channels": list(scn.output.channels), "previews": scn.output.previews, "aux": list(scn.output.aux),
+            **({"false_alarm": scn.output.false_alarm} if scn.output.false_alarm != 1e-3 else {}),
             **({"regions": {n: ({"center": [_qty(v, "m") for v in r.center], "radius": r.radius}
                                 if r.center is not None else {"box": list(r.box)})
                             for n, r in scn.output.regions.items()}} if scn.output.regions else {}),

@@ -159,6 +159,103 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True)
 
 
+def _decibels(value, what="level"):
+    """A level in dB: a number or a string ``'10 dB'``."""
+    if isinstance(value, str) and value.strip().lower().endswith("db"):
+        value = value.strip()[:-2]
+    return _finite_number(value, f"{what} in dB ('10 dB' or 10)")
+
+
+class Receiver(_Model):
+    """``imager.receiver``: the radiometer behind each pixel (`pmmw.imaging.receiver`)."""
+
+    noise_temperature: Annotated[Optional[float], Quantity("temperature")] = None
+    noise_figure: Optional[float] = None  # [dB]
+    bandwidth: Annotated[Optional[float], Quantity("frequency")] = None  # pre-detection; default imager.bandwidth
+    integration_time: Annotated[Optional[float], Quantity("time")] = None
+    frame_rate: Annotated[Optional[float], Quantity("frequency")] = None
+    receivers: int = Field(1, ge=1)
+    pixels_per_receiver: Optional[int] = Field(None, ge=1)
+    mode: Literal["total_power", "dicke"] = "total_power"
+    gain_fluctuation: float = Field(0.0, ge=0.0, lt=1.0)
+    reference_temperature: Annotated[Optional[float], Quantity("temperature")] = None
+
+    @field_validator("receivers", "pixels_per_receiver", mode="before")
+    @classmethod
+    def _ints(cls, v):
+        return None if v is None else _integer(v)
+
+    @field_validator("noise_figure", mode="before")
+    @classmethod
+    def _nf(cls, v):
+        if v is None:
+            return None
+        nf = _decibels(v, "noise figure")
+        if not 0.0 < nf <= 30.0:
+            raise ConfigValueError(f"noise figure must be > 0 and <= 30 dB, got {nf:g} dB")
+        return nf
+
+    @field_validator("gain_fluctuation", mode="before")
+    @classmethod
+    def _gain(cls, v):
+        return _finite_number(v, "fraction dG/G")
+
+    @field_validator("noise_temperature", "integration_time", "frame_rate", "bandwidth")
+    @classmethod
+    def _positive(cls, v, info):
+        if v is not None and not v > 0:
+            raise ConfigValueError(f"{info.field_name} must be > 0, got {v:g}")
+        return v
+
+    @model_validator(mode="after")
+    def _choices(self):
+        if (self.noise_temperature is None) == (self.noise_figure is None):
+            raise ConfigValueError("give one of noise_temperature (e.g. '600 K') or noise_figure (e.g. '5 dB')")
+        if (self.integration_time is None) == (self.frame_rate is None):
+            raise ConfigValueError("give one of integration_time (per pixel, e.g. '10 ms') or frame_rate "
+                                   "(e.g. '10 Hz', with receivers and the pixels each scans)")
+        if self.integration_time is not None and (self.receivers != 1 or self.pixels_per_receiver is not None):
+            raise ConfigValueError("receivers and pixels_per_receiver go with frame_rate, not integration_time")
+        if self.reference_temperature is not None and self.mode != "dicke":
+            raise ConfigValueError("reference_temperature is the Dicke reference load: it needs mode: dicke")
+        return self
+
+
+class Antenna(_Model):
+    """``imager.antenna``: the aperture's illumination, blockage and spillover
+    (`pmmw.imaging.antenna`)."""
+
+    illumination: Literal["uniform", "gaussian", "parabolic"] = "uniform"
+    edge_taper: Optional[float] = None  # [dB] below the centre, > 0; tapered illuminations only
+    blockage: float = Field(0.0, ge=0.0, lt=0.9)  # central blockage diameter / aperture diameter
+    spillover: Optional[float] = Field(None, ge=0.0, lt=1.0)  # fraction of the feed's power off the reflector
+    spillover_temperature: Annotated[float, Quantity("temperature")] = 290.0
+
+    @field_validator("edge_taper", mode="before")
+    @classmethod
+    def _taper(cls, v):
+        if v is None:
+            return None
+        t = _decibels(v, "edge taper")
+        if not 0.0 < t <= 60.0:
+            raise ConfigValueError(f"edge taper must be > 0 and <= 60 dB (the edge's level below the centre), "
+                                   f"got {t:g} dB")
+        return t
+
+    @field_validator("blockage", mode="before")
+    @classmethod
+    def _ratio(cls, v):
+        return _finite_number(v, "ratio of diameters")
+
+    @model_validator(mode="after")
+    def _taper_needed(self):
+        if self.illumination == "uniform" and self.edge_taper is not None:
+            raise ConfigValueError("edge_taper needs illumination: gaussian or parabolic (a uniform aperture has none)")
+        if self.illumination != "uniform" and self.edge_taper is None:
+            raise ConfigValueError(f"illumination {self.illumination} needs an edge_taper, e.g. '10 dB'")
+        return self
+
+
 class Imager(_Model):
     position: Length3
     look_at: Length3
@@ -170,6 +267,8 @@ class Imager(_Model):
     focus_distance: Annotated[Optional[float], Quantity("length")] = None
     bandwidth: Annotated[float, Quantity("frequency")] = 0.0
     band_samples: int = Field(5, ge=1, le=64)
+    receiver: Optional[Receiver] = None
+    antenna: Optional[Antenna] = None
     frequency: Optional[Any] = Field(default=None, exclude=True)  # alias of the top-level key
 
     @field_validator("band_samples", mode="before")
@@ -222,6 +321,17 @@ class Imager(_Model):
         if t < 0:
             raise ConfigValueError(f"noise must be >= 0 K, got {t:g} K")
         return t
+
+    @model_validator(mode="after")
+    def _hardware(self):
+        if self.receiver is not None and self.noise > 0:
+            raise ConfigValueError("give imager.noise (one sigma for every pixel) or imager.receiver (the noise "
+                                   "from the hardware), not both")
+        if self.receiver is not None and self.receiver.bandwidth is None and not self.bandwidth > 0:
+            raise ConfigValueError("imager.receiver needs a bandwidth (pre-detection), or imager.bandwidth")
+        if self.antenna is not None and not self.aperture_diameter > 0:
+            raise ConfigValueError("imager.antenna needs an aperture_diameter > 0")
+        return self
 
     @model_validator(mode="after")
     def _pose(self):
@@ -640,6 +750,12 @@ class OutputConfig(_Model):
     channels: tuple[str, ...] = CHANNELS
     previews: bool = True
     aux: tuple[str, ...] = ()
+    false_alarm: float = Field(1e-3, gt=0.0, lt=0.5)  # per target-sized test: the regions' probability of detection
+
+    @field_validator("false_alarm", mode="before")
+    @classmethod
+    def _pfa(cls, v):
+        return _finite_number(v, "probability")
 
     @field_validator("dir", mode="before")
     @classmethod

@@ -26,7 +26,12 @@ around it) must fail the criterion.
 The noise sigma is that of the channel as `imaging.imager.apply_imager` makes it: the imager's
 per-pixel noise for Ex2, Ey2, U and V (each detected with its own noise), sqrt(2) times it for I
 and Q (the sum and difference of the noisy Ex2 and Ey2). Without imager noise the SNR is infinite
-and the criterion says nothing (None).
+and the criterion says nothing (None). With a receiver (`imaging.receiver`) each pixel has its own
+noise; the matched filter then whitens it (`effective_sigma`).
+
+The criterion as a probability: a matched filter thresholded for a false-alarm probability Pfa per
+target-sized test detects with probability Pd = Q(Q^-1(Pfa) - SNR) (Kay 1998, eq. 4.14;
+`probability_of_detection`); SNR 5 is Pd = 0.97 at Pfa = 1e-3 per test.
 """
 
 from __future__ import annotations
@@ -97,6 +102,37 @@ def region_snr(contrast: float, mask, kernel, sigma: float, norm: float | None =
     return abs(float(contrast)) * (footprint_norm(mask, kernel) if norm is None else float(norm)) / sigma
 
 
+def effective_sigma(mask, kernel, sigma_map) -> float:
+    """The one noise sigma [K] of a matched filter for the target ``mask`` blurred by ``kernel`` in
+    independent noise whose sigma differs from pixel to pixel (``sigma_map`` (H, W) [K], a
+    receiver's: `imaging.receiver`). The prewhitened matched filter's SNR is
+    sqrt(sum_k s_k^2 / sigma_k^2) (Barrett & Myers 2004, sec. 13.2), which equals
+    `region_snr`'s ``|dT| norm / sigma_eff`` with sigma_eff = norm / sqrt(sum_k (fp_k / sigma_k)^2),
+    fp the blurred footprint and norm its `footprint_norm`; uniform noise gives sigma_eff = sigma."""
+    fp = footprint(mask, kernel)
+    norm = np.sqrt(np.sum(fp * fp))
+    return float(norm / np.sqrt(np.sum(np.square(fp / np.asarray(sigma_map, dtype=float)))))
+
+
+def probability_of_detection(snr, pfa: float):
+    """Probability of detection [-] of a matched filter at matched-filter SNR ``snr`` (float or
+    ndarray) and false-alarm probability ``pfa`` [-] per test, for a known signal in white
+    Gaussian noise: Pd = Q(Q^-1(Pfa) - SNR), Q the Gaussian tail probability (Kay 1998, eq. 4.14).
+    Rose's SNR of 5 gives Pd = 0.5 at Pfa = Q(5) = 2.9e-7 and Pd = 0.97 at Pfa = 1e-3."""
+    from scipy.stats import norm as gaussian
+
+    out = gaussian.sf(gaussian.isf(pfa) - np.asarray(snr, dtype=float))
+    return out if np.ndim(out) else float(out)
+
+
+def required_snr(pd: float, pfa: float) -> float:
+    """The matched-filter SNR that gives detection probability ``pd`` at false-alarm probability
+    ``pfa`` (the inverse of `probability_of_detection`): Q^-1(Pfa) - Q^-1(Pd)."""
+    from scipy.stats import norm as gaussian
+
+    return float(gaussian.isf(pfa) - gaussian.isf(pd))
+
+
 def detectable(snr: float | None) -> bool | None:
     """The criterion: ``snr >= ROSE_SNR`` (None when the SNR is undefined)."""
     return None if snr is None else bool(snr >= ROSE_SNR)
@@ -139,3 +175,53 @@ def contrast_verdict(pair: str, by_channel) -> str:
     if near:
         words += f" ({', '.join(near)} within the Monte Carlo error of the threshold: render more samples)"
     return f"{pair}: {words}"
+
+
+def detection_limit(xs, snrs, snr_stderrs=None) -> dict:
+    """Where along a swept axis a contrast stops being detected (`ROSE_SNR`): its detection range
+    (or frequency, aperture, integration time).
+
+    Parameters
+    ----------
+    xs : sequence of float
+        The swept values, increasing.
+    snrs : sequence of float
+        The contrast's SNR at each.
+    snr_stderrs : sequence of float or None, optional
+        Their Monte Carlo standard errors.
+
+    Returns
+    -------
+    dict
+        ``kind``: ``"all"`` (detected at every value), ``"none"`` (at none), ``"limit"``;
+        for a limit: ``detected_x`` (the last detected value before the threshold is crossed,
+        going in the direction the SNR falls), ``missed_x`` (the next value, not detected),
+        ``crossing_x`` (SNR = `ROSE_SNR` by linear interpolation of the SNR between the two),
+        ``spacing_error`` (half the bracket: the interpolation's share), ``mc_error`` (the SNR's
+        standard error at the two ends, interpolated, over the slope |dSNR/dx|: the Monte Carlo's
+        share), ``error`` (the two in quadrature), ``falls_with_x`` (True: the SNR falls as x
+        grows, the limit is a maximum, as a range; False: a minimum, as an aperture).
+    """
+    x = np.asarray(xs, dtype=float)
+    s = np.asarray(snrs, dtype=float)
+    e = np.zeros_like(s) if snr_stderrs is None else np.array([np.nan if v is None else v for v in snr_stderrs],
+                                                               dtype=float)
+    det = s >= ROSE_SNR
+    if det.all():
+        return {"kind": "all"}
+    if not det.any():
+        return {"kind": "none"}
+    falls = bool(s[-1] < s[0]) if s[-1] != s[0] else bool(det[0])
+    order = np.arange(x.size) if falls else np.arange(x.size)[::-1]
+    # the first step, going the way the SNR falls, from a detected value to a missed one
+    i = next(int(order[k]) for k in range(len(order) - 1) if det[order[k]] and not det[order[k + 1]])
+    j = int(order[list(order).index(i) + 1])
+    slope = (s[j] - s[i]) / (x[j] - x[i])
+    t = (ROSE_SNR - s[i]) / (s[j] - s[i])
+    crossing = x[i] + t * (x[j] - x[i])
+    spacing = abs(x[j] - x[i]) / 2.0
+    e_at = (1 - t) * e[i] + t * e[j]
+    mc = float(e_at / abs(slope)) if np.isfinite(e_at) and slope != 0 else float("nan")
+    return {"kind": "limit", "detected_x": float(x[i]), "missed_x": float(x[j]), "crossing_x": float(crossing),
+            "spacing_error": float(spacing), "mc_error": mc,
+            "error": float(np.hypot(spacing, mc)) if np.isfinite(mc) else float(spacing), "falls_with_x": falls}

@@ -122,7 +122,8 @@ def blur_adjoint(weights, kernel):
 
 
 def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diameter: float,
-                 noise: float, seed: int, kernel=None):
+                 noise: float, seed: int, kernel=None, spillover: float = 0.0, spillover_temperature: float = 0.0,
+                 receiver=None, noise_maps: dict | None = None):
     """The sensor image from the ideal one.
 
     Parameters
@@ -135,7 +136,17 @@ def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diamete
         1-sigma Gaussian noise [K] per polarization channel; none when 0.
     seed : int
     kernel : ndarray, optional
-        The `psf_kernel` of these arguments, when the caller has it already.
+        The PSF (`psf_kernel` of these arguments, or an antenna's `imaging.antenna.antenna_kernel`),
+        when the caller has it already.
+    spillover, spillover_temperature : float
+        Fraction [-] of the beam that sees ``spillover_temperature`` [K] instead of the scene
+        (`imaging.antenna`): Ex2 and Ey2 become (1 - s) PSF * T + s T_spill, U and V (1 - s) PSF * T.
+    receiver : imaging.receiver.Receiver, optional
+        Noise per pixel from its own antenna temperature by the radiometer equation, instead of
+        ``noise`` (which must then be 0).
+    noise_maps : dict, optional
+        Filled with the per-pixel 1-sigma noise [K] of every channel (``I, Q, U, V, Ex2, Ey2``)
+        when a ``receiver`` is given.
 
     Returns
     -------
@@ -146,7 +157,16 @@ def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diamete
     if aperture_diameter > 0.0:
         kern = kernel if kernel is not None else psf_kernel(pixel_angle, k0, aperture_diameter)
         base = {c: blur(v, kern) for c, v in base.items()}
-    if noise > 0.0:
+    if spillover > 0.0:
+        base = {c: (1.0 - spillover) * v + (spillover * spillover_temperature if c in ("Ex2", "Ey2") else 0.0)
+                for c, v in base.items()}
+    if receiver is not None:
+        maps = receiver.sigma_maps(base)
+        if noise_maps is not None:
+            noise_maps.update(maps)
+        rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, 0x5EED])))
+        base = {c: v + rng.normal(0.0, maps[c]) for c, v in base.items()}
+    elif noise > 0.0:
         rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, 0x5EED])))
         base = {c: v + rng.normal(0.0, noise, v.shape) for c, v in base.items()}
     ex2, ey2 = base["Ex2"], base["Ey2"]

@@ -109,6 +109,8 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
     if facts:
         lines += facts + [""]
 
+    lines += _imager_lines(report.get("imager") or {})
+
     regions = report.get("regions") or {}
     if regions.get("verdicts") is not None or report.get("regions_preview"):
         lines += ["## Detection", ""]
@@ -116,11 +118,22 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
             lines += [f"Criterion: a target is {regions['criterion']}; the SNR of a pair of regions \"a - b\" "
                       "is the contrast of their means in the ideal image times the norm of a's footprint "
                       "blurred by the imager's PSF, over the channel's noise per pixel "
-                      f"({_num(regions.get('noise_K'))} K in Ex2 and Ey2, sqrt(2) times it in I); ± its "
-                      "Monte Carlo standard error.", ""]
+                      + (f"({_num(regions.get('noise_K'))} K in Ex2 and Ey2, sqrt(2) times it in I)"
+                         if not (report.get("imager") or {}).get("receiver") else
+                         "(the receiver's, pixel by pixel, whitened over the footprint; "
+                         f"{_num(regions.get('noise_K'))} K on average in Ex2 and Ey2)")
+                      + "; ± its Monte Carlo standard error.", ""]
         lines += [f"- {_cell(v)}" for v in (regions.get("verdicts") or {}).values()]
         if regions.get("verdicts"):
             lines.append("")
+        lead = regions.get("channel", "Ey2")
+        pds = {pair: ch[lead]["pd"] for pair, ch in (regions.get("contrasts") or {}).items()
+               if ch.get(lead, {}).get("pd") is not None}
+        if pds:
+            lines += [f"Probability of detection in {lead} by the matched filter at a false-alarm probability of "
+                      f"{_num(regions.get('false_alarm'), 'g')} per target-sized test (Pd = Q(Q^-1(Pfa) - SNR), "
+                      "Kay 1998, eq. 4.14; `output.false_alarm`): "
+                      + "; ".join(f"{_cell(p)} {_num(v, '.3g')}" for p, v in pds.items()) + ".", ""]
         if report.get("regions_preview"):
             rel = str(report["regions_preview"])
             lines += [f"![regions]({_md_link(rel)})", "",
@@ -231,6 +244,40 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
         lines += ["## Resolved scenario", "", "```yaml", text.rstrip("\n"), "```", ""]
 
     return "\n".join(lines)
+
+
+def _imager_lines(imager: Mapping) -> list[str]:
+    """``## Imager``: the receiver's NETD and per-pixel noise, the beam and its energy budget."""
+    rx, beam = imager.get("receiver"), imager.get("beam")
+    if not rx and not beam:
+        return []
+    lines = ["## Imager", ""]
+    if rx:
+        lines += [f"- receiver: {_num(rx.get('noise_temperature_K'), '.4g')} K noise temperature, "
+                  f"{_num(rx.get('bandwidth_GHz'), '.4g')} GHz pre-detection bandwidth, "
+                  f"{_num(rx.get('integration_time_s'), '.3g')} s per pixel, {rx.get('mode')}, "
+                  f"dG/G {_num(rx.get('gain_fluctuation'), '.3g')}",
+                  f"- NETD: {_num(rx.get('netd_K'), '.3g')} K at a {_num(rx.get('netd_scene_K'), 'g')} K scene "
+                  "(radiometer equation)"]
+        px = rx.get("pixel_noise_K")
+        if px:
+            lines.append(f"- per-pixel noise in this image (Ex2, Ey2): {_num(px['min'], '.3g')} to "
+                         f"{_num(px['max'], '.3g')} K, mean {_num(px['mean'], '.3g')} K")
+    if beam:
+        eb = beam.get("energy_budget") or {}
+        lines += [f"- beam: {beam.get('illumination')} illumination"
+                  + (f", {_num(beam['edge_taper_dB'], 'g')} dB edge taper" if "edge_taper_dB" in beam else "")
+                  + f", blockage {_num(beam.get('blockage'), 'g')}; half-power width "
+                  f"{_num(beam.get('hpbw_mrad'), '.3g')} mrad ({_num(beam.get('hpbw_lambda_over_D'), '.4g')} "
+                  f"lambda/D), first sidelobe {_num(beam.get('first_sidelobe_dB'), '.3g')} dB",
+                  f"- energy budget: main beam {_num(eb.get('main_beam'), '.3f')}, sidelobes "
+                  f"{_num(eb.get('sidelobes'), '.3f')}, spillover {_num(eb.get('spillover'), '.3f')} (seeing "
+                  f"{_num(eb.get('spillover_temperature_K'), 'g')} K); main-beam efficiency "
+                  f"{_num(beam.get('main_beam_efficiency'), '.3f')}, taper efficiency "
+                  f"{_num(beam.get('taper_efficiency'), '.3f')}",
+                  f"- sampling: pixel pitch {_num(beam.get('pixel_pitch_mrad'), '.3g')} mrad, Nyquist pitch "
+                  f"{_num(beam.get('nyquist_pitch_mrad'), '.3g')} mrad: {beam.get('sampling')}"]
+    return lines + [""]
 
 
 def write_report(out_dir: str | os.PathLike, report: Mapping, previews: Mapping[str, str], *,

@@ -1,5 +1,6 @@
 """The trade-study report of a sweep: ``DIR/report.md`` with the results table, which variants
-are detectable by the one detection criterion (`imaging.detection`: SNR >= 5), a plot of each
+are detectable by the one detection criterion (`imaging.detection`: SNR >= 5), each contrast's
+detection limit along the first numeric axis (`imaging.detection.detection_limit`), a plot of each
 contrast's SNR against the swept values with that threshold, a heat map for two numeric axes, a
 contact sheet of the previews and, for a sweep with keys side by side (a flight path), an
 animation of the sequence.
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pmmw.imaging.detection import CRITERION, ROSE_SNR
+from pmmw.imaging.detection import CRITERION, ROSE_SNR, detection_limit
 from pmmw.io.atomic import atomic_path, write_text_atomic
 from pmmw.io.preview import save_figure
 from pmmw.sweeps.spec import _NUMBER_UNIT, SweepSpec, _label, zipped_keys
@@ -132,7 +133,30 @@ def _detection_lines(spec: SweepSpec, table: list[dict], snr_cols: list[str]) ->
             words = ((f"detectable {at} {', '.join(yes)}" if yes else "not detectable")
                      + (f"; not {there} {', '.join(no)}" if yes and no else f" {at} {', '.join(no)}" if no else ""))
             lines.append(f"- {pair} ({chan}{', ' + label if label else ''}): {words}")
+            if x_key and len(rows) > 1:
+                lines[-1] += f"; {_limit_words(_axis_label(spec, x_key), _limit(rows, col, x_key, x_of))}"
     return lines + [""]
+
+
+def _limit(rows: list[dict], col: str, x_key: str, x_of: dict) -> dict:
+    """`detection_limit` of one line of the sweep (rows sorted along ``x_key``)."""
+    err_col = col.replace("snr ", "snr_stderr ", 1)
+    errs = [r.get(err_col) if _finite(r.get(err_col)) else None for r in rows]
+    return detection_limit([x_of[r[x_key]] for r in rows], [r[col] for r in rows], errs)
+
+
+def _limit_words(x_key: str, lim: dict) -> str:
+    """The detection limit in words: ``detection limit 12.3 ± 1.1 (between 10 and 15; ± 1 from the
+    spacing, ± 0.2 from the Monte Carlo)``."""
+    if lim["kind"] == "all":
+        return f"detected over the whole swept {x_key}: the limit lies beyond it"
+    if lim["kind"] == "none":
+        return f"detected nowhere on the swept {x_key}"
+    mc = lim["mc_error"]
+    return (f"detection limit ({'largest' if lim['falls_with_x'] else 'smallest'} {x_key} detected) "
+            f"{lim['crossing_x']:.3g} ± {lim['error']:.2g} (SNR {ROSE_SNR:g} crossed between {lim['detected_x']:g}, "
+            f"detected, and {lim['missed_x']:g}; ± {lim['spacing_error']:.2g} from the spacing"
+            + (f", ± {mc:.2g} from the Monte Carlo" if math.isfinite(mc) else "") + ")")
 
 
 def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -> list[Path]:
@@ -163,7 +187,12 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
             line, = ax.plot(xs, ys, "-", label=label or None)
             ax.scatter(xs, ys, s=28, zorder=3, edgecolors=line.get_color(),
                        facecolors=[line.get_color() if y >= ROSE_SNR else "white" for y in ys])
-        ax.axhline(ROSE_SNR, color="k", lw=0.9, ls="--", label=f"SNR {ROSE_SNR:g}: detectable above (Rose)")
+            lim = _limit(rows, col, x_key, x_of) if len(rows) > 1 else {"kind": "all"}
+            if lim["kind"] == "limit":  # the detection limit and its uncertainty, on the threshold
+                ax.errorbar([lim["crossing_x"]], [ROSE_SNR], xerr=[lim["error"]], fmt="D", ms=5, capsize=3,
+                            color=line.get_color(), zorder=4)
+        ax.axhline(ROSE_SNR, color="k", lw=0.9, ls="--",
+                   label=f"SNR {ROSE_SNR:g}: detectable above (Rose); diamonds: detection limit ± error")
         if min(values) > 0 and max(values) > 20 * min(values):
             ax.set_yscale("log")
         ax.set_xlabel(_axis_label(spec, x_key))

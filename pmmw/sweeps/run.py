@@ -7,9 +7,12 @@ into ``DIR/<variant>/``; ``DIR/sweep.csv`` has one row per variant: ``variant``,
 grid key, ``status``, ``exr``, ``wall_s``, then every region's mean and every pairwise contrast
 in K and in noise sigmas from the variant's report, and per contrast its ``snr`` and
 ``detectable`` by the one detection criterion (`imaging.detection`) in the channel the report
-leads with (``snr beacon - runway Ey2``). ``DIR/report.md`` adds plots of the SNRs against the
-swept values with the criterion's threshold, which variants are detectable, and a contact sheet
-of the previews.
+leads with (``snr beacon - runway Ey2``), the SNR's Monte Carlo standard error (``snr_stderr``)
+and the probability of detection at the scenario's ``output.false_alarm`` (``pd``).
+``DIR/report.md`` adds plots of the SNRs against the swept values with the criterion's threshold,
+which variants are detectable, the detection limit along the first numeric axis (the largest range,
+or smallest aperture, ... at which each contrast is still detected, with its uncertainty:
+`imaging.detection.detection_limit`), and a contact sheet of the previews.
 
 Executors: ``local`` renders the variants one after another, each on all cores (variants and
 tiles share the machine without oversubscribing it); ``dask`` sends each variant to a Dask
@@ -319,6 +322,8 @@ def _row(spec, out: Path, name: str, params: dict, result: dict) -> dict:
             if lead in chans and "snr" in chans[lead]:  # the detection criterion in the report's channel
                 row[f"snr {pair} {lead}"] = chans[lead]["snr"]
                 row[f"detectable {pair} {lead}"] = chans[lead]["detectable"]
+                row[f"snr_stderr {pair} {lead}"] = chans[lead].get("snr_stderr")
+                row[f"pd {pair} {lead}"] = chans[lead].get("pd")
     return row
 
 

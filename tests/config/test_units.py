@@ -50,6 +50,9 @@ atmosphere:
     - {kind: rain, base: 0 m, top: 3 km, rain_rate: 10 mm/h}
 output: {regions: {r: {center: [0, 0, 0]}}}
 """
+RECEIVER = BASE.replace("noise: 1 K}", "receiver: {noise_temperature: 600 K, bandwidth: 2 GHz, integration_time: 1 ms, "
+                        "mode: dicke, reference_temperature: 300 K},\n         antenna: {spillover: 0.05}}")
+SCANNED = BASE.replace("noise: 1 K}", "receiver: {noise_figure: 5 dB, bandwidth: 2 GHz, frame_rate: 10 Hz}}")
 UNIFORM = (BASE.split("atmosphere:")[0] + "atmosphere: {loss: 0.9 dB/km, temperature: 288 K}\n"
            + "output:" + BASE.split("output:")[1])
 
@@ -76,11 +79,12 @@ BANDWIDTHS = ["1 GHz", "500 MHz", "0.002 THz", "2e9 Hz", 0]
 DENSITIES = [("7.5 g/m3", "7.5 g/m**3"), ("0.3 g/m^3", "0.3 g/m**3"), "0.0075 kg/m**3", "7.5 mg/L", "3e-4 kg/m**3",
              "0.5 g/L", 0.3]
 RATES = ["10 mm/h", "10 mm/hr", "0.5 in/h", "1e-6 m/s", "25 mm/hour", "2.4 cm/day", 10]
+TIMES = ["1 ms", "20 us", "0.5 s", "2e-3 s", "1 minute", 0.01]
 ATTENUATIONS = ["0.9 dB/km", "0.0009 dB/m", "0.2 Np/km", "2e-4 Np/m", "1 dB/mi", "0.9 dB/kilometer", 0.9]
 
-BARE = {"length": "m", "angle": "deg", "temperature": "K", "temperature_difference": "K",
+BARE = {"time": "s", "length": "m", "angle": "deg", "temperature": "K", "temperature_difference": "K",
         "density": "g/m**3", "rate": "mm/h"}
-SI = {"frequency": "Hz", "length": "m", "angle": "rad", "temperature": "K", "temperature_difference": "K",
+SI = {"time": "s", "frequency": "Hz", "length": "m", "angle": "rad", "temperature": "K", "temperature_difference": "K",
       "density": "kg/m**3", "rate": "m/s"}
 
 
@@ -128,6 +132,20 @@ TABLE = {
     "imager.noise": Row("temperature_difference", "imager.noise", lambda s: s.imager.noise, DIFFERENCES),
     "imager.focus_distance": Row("length", "imager.focus_distance", lambda s: s.imager.focus_distance, LENGTHS),
     "imager.bandwidth": Row("frequency", "imager.bandwidth", lambda s: s.imager.bandwidth, BANDWIDTHS),
+    "imager.receiver.noise_temperature": Row("temperature", "imager.receiver.noise_temperature",
+                                             lambda s: s.imager.receiver.noise_temperature, TEMPERATURES, RECEIVER),
+    "imager.receiver.bandwidth": Row("frequency", "imager.receiver.bandwidth", lambda s: s.imager.receiver.bandwidth,
+                                     FREQUENCIES, RECEIVER),
+    "imager.receiver.integration_time": Row("time", "imager.receiver.integration_time",
+                                            lambda s: s.imager.receiver.integration_time, TIMES, RECEIVER),
+    "imager.receiver.frame_rate": Row("frequency", "imager.receiver.frame_rate", lambda s: s.imager.receiver.frame_rate,
+                                      ["30 Hz", "0.03 kHz", "1e-5 GHz"], SCANNED),
+    "imager.receiver.reference_temperature": Row("temperature", "imager.receiver.reference_temperature",
+                                                 lambda s: s.imager.receiver.reference_temperature, TEMPERATURES,
+                                                 RECEIVER),
+    "imager.antenna.spillover_temperature": Row("temperature", "imager.antenna.spillover_temperature",
+                                                lambda s: s.imager.antenna.spillover_temperature, TEMPERATURES,
+                                                RECEIVER),
     "scene[].transform.translate": Row("length", "scene[0].transform.translate",
                                        lambda s: s.scene[0].transform.translate[2], LENGTHS),
     "scene[].transform.rotate_deg": Row("angle", "scene[0].transform.rotate_deg",
@@ -326,8 +344,8 @@ def test_display_round_trips_any_units(tmp_path, base, overrides):
     for path, row in TABLE.items():
         try:
             a, b = row.get(s), row.get(again)
-        except IndexError:
-            continue  # no such layer in this scenario
+        except (IndexError, AttributeError):
+            continue  # no such layer, or no receiver block, in this scenario
         if a is not None or b is not None:
             assert math.isclose(a, b, rel_tol=DISPLAY_RTOL), (path, a, b)
             checked += 1

@@ -1,0 +1,124 @@
+"""The antenna's beam (`pmmw.imaging.antenna`) against closed forms and published tables."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy.special import j0, j1, jv
+
+from pmmw.imaging.antenna import Aperture, antenna_kernel, beam_report, gaussian_feed_spillover
+from pmmw.imaging.imager import blur, psf_kernel
+
+U = np.linspace(0.01, 30.0, 3001)
+
+
+def test_uniform_aperture_is_the_airy_pattern():
+    # F(u) = J1(u)/u: the quadrature is exact to rounding for this smooth integrand (1e-9)
+    ap = Aperture()
+    assert ap.power(U) == pytest.approx((2 * j1(U) / U) ** 2, abs=1e-9)
+    s = ap.beam_shape()
+    # HPBW 1.029 lambda/D (u_half = 1.6163, Born & Wolf 1999 sec. 8.5.2): printed to 4 digits
+    assert s["hpbw_u"] / np.pi == pytest.approx(1.029, abs=5e-4)
+    # first sidelobe -17.57 dB (printed to 0.01 dB) at u = 5.1356
+    assert s["first_sidelobe_dB"] == pytest.approx(-17.57, abs=0.005)
+    # first null at u = 3.8317 (table step 0.0025); Airy encircled energy 0.838 there (3 digits)
+    assert s["first_null_u"] == pytest.approx(3.8317, abs=0.003)
+    assert ap.encircled_energy(3.8317)[0] == pytest.approx(0.838, abs=5e-4)
+    # and Rayleigh's closed form 1 - J0^2 - J1^2 along u (trapezoid on a 0.0025 grid: 1e-5)
+    uu = np.array([1.0, 3.8317, 7.0156, 12.0])
+    assert ap.encircled_energy(uu) == pytest.approx(1 - j0(uu) ** 2 - j1(uu) ** 2, abs=1e-5)
+    assert ap.taper_efficiency() == pytest.approx(1.0, abs=1e-12)
+
+
+def test_parabolic_taper_matches_its_closed_form_and_silver_table():
+    # f = 1 - rho^2 (no pedestal): F(u) = 2 J2(u) / u^2, normalized 8 J2(u) / u^2
+    ap = Aperture("parabolic", edge_taper_db=400.0)
+    assert ap.power(U) == pytest.approx((8 * jv(2, U) / U ** 2) ** 2, abs=1e-9)
+    s = ap.beam_shape()
+    # Silver 1949, Table 6.2, (1 - r^2)^1: HPBW 72.8 lambda/D deg, first sidelobe 24.6 dB down, gain
+    # factor 0.75; printed to 0.1 deg and 0.1 dB. The closed form above gives 72.75 deg: the table's
+    # own rounding reaches a full unit of its last digit for the width (0.1 deg), half a unit for the lobe
+    assert np.degrees(s["hpbw_u"] / np.pi) == pytest.approx(72.8, abs=0.1)
+    assert s["first_sidelobe_dB"] == pytest.approx(-24.6, abs=0.05)
+    assert ap.taper_efficiency() == pytest.approx(0.75, abs=1e-12)
+
+
+def test_parabolic_on_pedestal_is_the_sum_of_its_parts():
+    # f = C + (1 - C)(1 - rho^2): F = C J1(u)/u + (1 - C) 2 J2(u)/u^2 (linearity of the transform)
+    te = 10.0
+    c = 10 ** (-te / 20)
+    f = c * j1(U) / U + (1 - c) * 2 * jv(2, U) / U ** 2
+    f0 = c / 2 + (1 - c) / 4
+    ap = Aperture("parabolic", edge_taper_db=te)
+    assert ap.power(U) == pytest.approx((f / f0) ** 2, abs=1e-9)
+    # a tapered beam is wider with lower sidelobes than the uniform one, less than the full taper
+    s, s0, s1 = ap.beam_shape(), Aperture().beam_shape(), Aperture("parabolic", edge_taper_db=400.0).beam_shape()
+    assert s0["hpbw_u"] < s["hpbw_u"] < s1["hpbw_u"]
+    assert s0["first_sidelobe_dB"] > s["first_sidelobe_dB"] > s1["first_sidelobe_dB"]
+
+
+def test_blockage_raises_the_first_sidelobe_as_the_annulus_closed_form():
+    # annulus b < rho < 1: F(u) = J1(u)/u - b^2 J1(b u)/(b u); F(0) = (1 - b^2) / 2
+    b = 0.2
+    f = j1(U) / U - b ** 2 * j1(b * U) / (b * U)
+    ap = Aperture(blockage=b)
+    assert ap.power(U) == pytest.approx((f / ((1 - b * b) / 2)) ** 2, abs=1e-9)
+    closed = 10 * np.log10(np.max(((f / ((1 - b * b) / 2)) ** 2)[(U > 4.0) & (U < 7.0)]))
+    s = ap.beam_shape()
+    assert s["first_sidelobe_dB"] == pytest.approx(closed, abs=0.01)  # table step: 0.01 dB
+    assert s["first_sidelobe_dB"] > -17.57 + 1.0  # the rise (control: the unblocked aperture's level)
+    assert ap.taper_efficiency() == pytest.approx(1 - b * b, abs=1e-12)
+
+
+def test_gaussian_feed_spillover_is_the_power_outside_the_rim():
+    # a Gaussian beam exp(-2 r^2 / w^2) in power with its edge taper T_e at r = a: the fraction of
+    # its power outside a, by quadrature (1e-9), equals 10^(-T_e/10) (Goldsmith 1998)
+    te = 12.0
+    w = np.sqrt(2.0 / (te / 10 * np.log(10)))  # a = 1: exp(-2/w^2) = 10^(-Te/10)
+    r = np.linspace(0, 12, 240001)  # the rim r = 1 on the grid
+    p = np.exp(-2 * r ** 2 / w ** 2) * r
+    outside = np.trapezoid(p[r >= 1.0], r[r >= 1.0]) / np.trapezoid(p, r)
+    assert gaussian_feed_spillover(te) == pytest.approx(outside, rel=1e-6)
+    g = Aperture("gaussian", edge_taper_db=te).beam_shape()
+    assert g["hpbw_u"] > Aperture().beam_shape()["hpbw_u"] and g["first_sidelobe_dB"] < -17.57
+
+
+def test_uniform_antenna_kernel_is_the_airy_kernel():
+    # the table's linear interpolation (step 0.01 in u) against the closed-form Airy: 1e-4 of the peak
+    for pitch in (0.5e-3, 3e-3):
+        k_airy = psf_kernel(pitch, 2 * np.pi / 3.2e-3, 0.5)
+        k_ant = antenna_kernel(pitch, 2 * np.pi / 3.2e-3, 0.5, Aperture())
+        assert k_ant.shape == k_airy.shape
+        assert np.max(np.abs(k_ant - k_airy)) < 1e-4 * k_airy.max()
+
+
+def test_nyquist_sampling_is_reported():
+    lam, d = 3.2e-3, 0.5  # Nyquist pitch lambda / 2D = 3.2 mrad
+    k0 = 2 * np.pi / lam
+    assert "under-sampled" in beam_report(Aperture(), k0, d, 4e-3)["sampling"]
+    assert "under-sampled" not in beam_report(Aperture(), k0, d, 3e-3)["sampling"]  # control
+
+
+def test_spillover_in_the_energy_budget_and_the_image():
+    ap = Aperture("gaussian", edge_taper_db=10.0, spillover=0.1, spillover_temperature=290.0)
+    rep = beam_report(ap, 2 * np.pi / 3.2e-3, 0.5, 1e-3)
+    eb = rep["energy_budget"]
+    assert eb["main_beam"] + eb["sidelobes"] + eb["spillover"] == pytest.approx(1.0, abs=1e-12)
+    assert rep["main_beam_efficiency"] < 0.9
+
+
+def test_renders_without_an_antenna_block_keep_their_image():
+    # pipeline.imager_model without imager.antenna or receiver: the Airy blur and scalar noise of before
+    from pmmw import pipeline
+
+    rng = np.random.default_rng(0)
+    ideal = {c: rng.uniform(50, 300, (16, 16)) for c in ("Ex2", "Ey2", "U", "V")}
+    im = SimpleNamespace(aperture_diameter=0.3, noise=4.0, antenna=None, receiver=None, resolution=(16, 16))
+    scn = SimpleNamespace(imager=im, render=SimpleNamespace(seed=7))
+    job = SimpleNamespace(camera=SimpleNamespace(pixel_angle=2e-3), k0=2 * np.pi / 3.2e-3)
+    sensor, kernel = pipeline.imager_model(scn, job, ideal)
+    k = psf_kernel(2e-3, job.k0, 0.3)
+    noise = np.random.Generator(np.random.PCG64(np.random.SeedSequence([7, 0x5EED])))
+    want = {c: blur(ideal[c], k) + noise.normal(0.0, 4.0, (16, 16)) for c in ("Ex2", "Ey2", "U", "V")}
+    assert np.array_equal(sensor["Ex2"], want["Ex2"]) and np.array_equal(sensor["V"], want["V"])
+    assert np.array_equal(kernel, k)
