@@ -15,7 +15,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "pmmw_cli"
 # Lowest first: a module may import its own layer and the ones below (docs/ARCHITECTURE.md).
 LAYERS = (
     {"__init__", "constants", "errors", "units", "jit", "memory", "interrupt"},
-    {"io", "distributed"},
+    {"io", "distributed", "blender"},
     {"physics", "atmosphere", "config", "sweep_spec"},
     {"scene", "surface", "imaging"},
     {"trace"},
