@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import bpy
+from mathutils import Vector
 
 OUT = Path(__file__).resolve().with_name("example.blend")
 
@@ -60,9 +61,7 @@ def main(out: Path = OUT) -> Path:
     bpy.ops.object.camera_add(location=(0.0, -3.0, 1.6))
     cam = bpy.context.object
     cam.name = "Imager"
-    direction = (bpy.context.scene.cursor.location.copy() * 0)  # (0, 0, 0)
-    direction.x, direction.y, direction.z = 0.0, 6.0, -1.0
-    cam.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
+    cam.rotation_euler = Vector((0.0, 6.0, -1.0)).to_track_quat("-Z", "Y").to_euler()
     cam.data.lens, cam.data.sensor_width, cam.data.sensor_fit = 35.0, 36.0, "HORIZONTAL"
     scene.camera = cam
     scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 40, 30, 100
@@ -72,7 +71,8 @@ def main(out: Path = OUT) -> Path:
     scene["pmmw:atmosphere"] = "none"
     scene["pmmw:render.spp"] = 4
     scene["pmmw:render.seed"] = 1
-    bpy.ops.wm.save_as_mainfile(filepath=str(out), compress=False)
+    bpy.context.preferences.filepaths.save_version = 0  # no example.blend1 backup
+    bpy.ops.wm.save_as_mainfile(filepath=str(out), compress=True)
     return out
 
 

@@ -134,11 +134,11 @@ def imager(camera: dict, scale: float = 1.0) -> dict:
         "position": [_num(c) for c in position],
         "look_at": [_num(p + f) for p, f in zip(position, forward)],
         "up": [_num(c) for c in up],
-        "fov": f"{_num(math.degrees(fov))} deg",
+        "fov": f"{math.degrees(fov):.7g} deg",
         "resolution": [w, h],
     }
     if camera.get("focus_distance"):
-        out["focus_distance"] = f"{_num(camera['focus_distance'] * scale)} m"
+        out["focus_distance"] = f"{camera['focus_distance'] * scale:.7g} m"
     return out
 
 
@@ -154,7 +154,7 @@ def _quantity(value, unit: str, what: str, key: str) -> str:
     if isinstance(value, bool):
         raise ExportError(f"{what} is a number [{unit}] or a quantity like '300 K', got {value!r}", key)
     if isinstance(value, (int, float)):
-        return f"{_num(float(value))} {unit}"
+        return f"{float(value):.7g} {unit}"
     if isinstance(value, str) and value.strip():
         return value.strip()
     raise ExportError(f"{what} is a number [{unit}] or a quantity like '300 K', got {value!r}", key)

@@ -12,7 +12,7 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from . import exporter, mapping
+from . import exporter, exr, mapping
 
 ADDON = __package__
 
@@ -73,18 +73,55 @@ def _work_folder() -> Path:
     return Path(tempfile.mkdtemp(prefix="pmmw-blender-"))
 
 
-def show_image(context, path: Path):
-    """Load (or reload) an EXR and show it in an image editor, if the screen has one."""
-    image = bpy.data.images.get(path.name)
-    if image is not None and Path(bpy.path.abspath(image.filepath)) == path:
-        image.reload()
-    else:
-        image = bpy.data.images.load(str(path), check_existing=False)
+CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
+
+
+def load_result(context, path: Path) -> list:
+    """pmmw's EXR as Blender images, one per sensor channel (``"example I [K]"``: float pixels in
+    kelvin, grey, row 0 of the EXR at the top), and its display-scaled preview of I shown in an
+    image editor if the screen has one.
+
+    Blender's own EXR reader takes only R, G, B, A-like channel names, so the EXR is read by
+    `exr.read` and the images are made from its arrays.
+
+    Returns
+    -------
+    list of bpy.types.Image
+        The channel images, then the preview if pmmw wrote one.
+    """
+    import numpy as np
+
+    channels = exr.read(path)
+    images = []
+    for name in CHANNELS:
+        if name not in channels:
+            continue
+        a = channels[name]
+        h, w = a.shape
+        title = f"{path.stem} {name} [K]"
+        image = bpy.data.images.get(title)
+        if image is not None and tuple(image.size) != (w, h):
+            bpy.data.images.remove(image)
+            image = None
+        if image is None:
+            image = bpy.data.images.new(title, w, h, alpha=False, float_buffer=True)
+        image.colorspace_settings.name = "Non-Color"
+        rgba = np.ones((h, w, 4), np.float32)
+        rgba[..., :3] = a[::-1, :, None]  # Blender's rows go bottom up
+        image.pixels.foreach_set(rgba.ravel())
+        image.update()
+        images.append(image)
+    preview = path.parent / "previews" / f"{path.stem}_I.png"
+    shown = images[0] if images else None
+    if preview.is_file():
+        shown = bpy.data.images.load(str(preview), check_existing=True)
+        shown.reload()
+        images.append(shown)
     for area in (context.screen.areas if context.screen else []):
-        if area.type == "IMAGE_EDITOR":
-            area.spaces.active.image = image
+        if area.type == "IMAGE_EDITOR" and shown is not None:
+            area.spaces.active.image = shown
             break
-    return image
+    return images
 
 
 class PMMW_OT_render(bpy.types.Operator):
@@ -133,10 +170,13 @@ class PMMW_OT_render(bpy.types.Operator):
         if self._proc.returncode != 0:
             self.report({"ERROR"}, log[-1] if log else f"pmmw exited with status {self._proc.returncode}")
             return {"CANCELLED"}
-        images = sorted(self._out.glob("*.exr"))
-        for path in images:
-            show_image(context, path)
-        self.report({"INFO"}, f"{log[-1] if log else 'pmmw finished'}; {len(images)} image(s) loaded")
+        loaded = []
+        for path in sorted(self._out.glob("*.exr")):
+            try:
+                loaded += load_result(context, path)
+            except (OSError, exr.ExrError) as e:
+                self.report({"WARNING"}, f"{path.name}: {e}")
+        self.report({"INFO"}, f"{log[-1] if log else 'pmmw finished'}; {len(loaded)} image(s) loaded")
         return {"FINISHED"}
 
 
