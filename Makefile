@@ -1,13 +1,14 @@
 # pmmw: two commands on a fresh machine.
 #   make render   create .venv, install pmmw, render the shipped landing scenario (Murakowski 2014, sec. 3.1)
 #   make test     create .venv, install pmmw with test extras, run the test suite
+#   make blender-addon   the Blender add-on as dist/pmmw_blender.zip (Blender: Preferences > Install from Disk)
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
 SCENARIO ?= configs/landing_95ghz.yaml
 PYTEST_ARGS ?=
 
-.PHONY: render test test-full lint install install-test clean
+.PHONY: render test test-full lint install install-test clean blender-addon
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -37,6 +38,10 @@ lint: install-test
 # also the longest convergence renders of the shipped configs (about 2.5 minutes more)
 test-full: install-test
 	PMMW_TEST_FULL=1 $(BIN)/python -m pytest $(PYTEST_ARGS)
+
+# the Blender add-on's zip (docs/blender.md); needs only Python's standard library
+blender-addon:
+	$(PYTHON) -m pmmw_cli.blender dist/pmmw_blender.zip
 
 clean:
 	rm -rf out .pytest_cache .hypothesis

@@ -361,8 +361,16 @@ bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / 'nocam.blend')!r})
     assert "nocam.blend" in run.stderr
 
 
+# Blender's two ways to install from a zip: a legacy add-on (bl_info) and, in 4.2+, an extension (the manifest)
+INSTALLS = {"addon": ('bpy.ops.preferences.addon_install(filepath=ZIP)\n'
+                      'addon_utils.enable("pmmw_blender", default_set=True)', "pmmw_blender"),
+            "extension": ('bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default", '
+                          'enable_on_install=True)', "bl_ext.user_default.pmmw_blender")}
+
+
 @needs_bpy
-def test_addon_installs_from_its_zip_exports_and_loads_an_exr(tmp_path, monkeypatch):
+@pytest.mark.parametrize("how", sorted(INSTALLS))
+def test_addon_installs_from_its_zip_exports_and_loads_an_exr(tmp_path, monkeypatch, how):
     from pmmw_cli.io.exr import write_exr
 
     zip_path = addon_zip(tmp_path / "pmmw_blender.zip")
@@ -373,13 +381,13 @@ def test_addon_installs_from_its_zip_exports_and_loads_an_exr(tmp_path, monkeypa
     got = _bpy(f"""
 import bpy, addon_utils, sys, numpy as np
 sys.path.remove({str(ADDON.parent)!r})  # the add-on as Blender installs it, not from the source tree
-bpy.ops.preferences.addon_install(filepath={str(zip_path)!r})
-addon_utils.enable("pmmw_blender", default_set=True)
+ZIP = {str(zip_path)!r}
+{INSTALLS[how][0]}
 bpy.ops.wm.open_mainfile(filepath={str(EXAMPLE)!r})
 done = bpy.ops.export_scene.pmmw(filepath={str(tmp_path / 'op' / 'example.yaml')!r})
-operators = sys.modules["pmmw_blender.operators"]
+operators = sys.modules[{INSTALLS[how][1] + ".operators"!r}]
 images = operators.load_result(bpy.context, __import__("pathlib").Path({str(tmp_path / 'out' / 'r.exr')!r}))
-result = {{"done": list(done), "where": sys.modules["pmmw_blender"].__file__,
+result = {{"done": list(done), "where": sys.modules[{INSTALLS[how][1]!r}].__file__,
           "images": {{im.name: np.array(im.pixels[:]).reshape(im.size[1], im.size[0], 4)[::-1, :, 0].tolist()
                      for im in images}}}}
 """, tmp_path)

@@ -66,9 +66,10 @@ def horizontal_fov(lens_mm: float, sensor_width_mm: float, sensor_height_mm: flo
                    width_px: int, height_px: int, pixel_aspect_x: float = 1.0, pixel_aspect_y: float = 1.0) -> float:
     """The horizontal field of view [rad] of a perspective Blender camera on its rendered image.
 
-    Blender fits the sensor to the image: ``HORIZONTAL`` fits the sensor width across the image,
-    ``VERTICAL`` the sensor height up it, and ``AUTO`` the sensor width along the image's longer
-    side. The other side follows from the image's aspect ratio (pixels times pixel aspect).
+    Blender fits the sensor to the image (Blender manual, Camera, "Sensor Fit"): ``HORIZONTAL``
+    fits the sensor width across the image, ``VERTICAL`` the sensor height up it, and ``AUTO`` the
+    sensor width along the image's longer side. The other side follows from the image's aspect
+    ratio (pixels times pixel aspect).
 
     Parameters
     ----------
