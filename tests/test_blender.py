@@ -227,14 +227,14 @@ def test_a_blend_without_bpy_names_the_extra():
 
 # -- with bpy -------------------------------------------------------------------------------------
 
-def _bpy(code: str, tmp_path) -> dict:
+def _bpy(code: str, tmp_path, env=None) -> dict:
     """Run ``code`` in Blender's Python (the add-on importable as ``pmmw_blender``, Blender's user
     folders in ``tmp_path``); it leaves its answer in ``result``, returned from JSON."""
     script = tmp_path / "script.py"
     script.write_text(f"import sys, json\nsys.path.insert(0, {str(ADDON.parent)!r})\nresult = None\n{code}\n"
                       "print('RESULT ' + json.dumps(result))\n")
     env = {**os.environ, **{f"BLENDER_USER_{k}": str(tmp_path / "blender" / k.lower())
-                            for k in ("RESOURCES", "CONFIG", "SCRIPTS", "EXTENSIONS", "DATAFILES")}}
+                            for k in ("RESOURCES", "CONFIG", "SCRIPTS", "EXTENSIONS", "DATAFILES")}, **(env or {})}
     run = subprocess.run([BPY_PYTHON, str(script)], capture_output=True, text=True, cwd=tmp_path, env=env)
     assert run.returncode == 0, run.stderr[-3000:]
     return json.loads(next(line[7:] for line in run.stdout.splitlines() if line.startswith("RESULT ")))
@@ -398,3 +398,29 @@ result = {{"done": list(done), "where": sys.modules[{INSTALLS[how][1]!r}].__file
     assert sorted(got["images"]) == sorted(f"r {n} [K]" for n in ("I", "Q", "U", "V", "Ex2", "Ey2"))
     for n in ("I", "Ex2"):  # float32 kelvin in Blender's float image: exact
         assert np.array_equal(np.float32(got["images"][f"r {n} [K]"]), channels[n].astype(np.float32)), n
+
+
+@needs_bpy
+def test_render_with_pmmw_from_blender(tmp_path):
+    """The add-on's Render with pmmw, as a script runs it (no window: it waits for pmmw): the
+    scene exported beside the saved .blend, rendered by this pmmw, its channels loaded in kelvin."""
+    zip_path = addon_zip(tmp_path / "pmmw_blender.zip")
+    got = _bpy(f"""
+import bpy, addon_utils, sys, numpy as np
+sys.path.remove({str(ADDON.parent)!r})
+bpy.ops.preferences.addon_install(filepath={str(zip_path)!r})
+addon_utils.enable("pmmw_blender", default_set=True)
+prefs = bpy.context.preferences.addons["pmmw_blender"].preferences
+prefs.command, prefs.extra = {f"{sys.executable} -m pmmw_cli"!r}, "--spp 1 --workers 1 --seed 5"
+bpy.ops.wm.open_mainfile(filepath={str(EXAMPLE)!r})
+bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / 'example.blend')!r})
+done = bpy.ops.render.pmmw()
+im = bpy.data.images["example I [K]"]
+result = {{"done": list(done), "I": np.array(im.pixels[:]).reshape(im.size[1], im.size[0], 4)[::-1, :, 0].tolist()}}
+""", tmp_path, env={"PYTHONPATH": str(REPO)})
+    assert got["done"] == ["FINISHED"]
+    out = tmp_path / "example_pmmw"
+    assert (out / "example.yaml").is_file() and (out / "example_meshes" / "Box.glb").is_file()
+    ref = exr.read(out / "out" / "example.exr")["I"]
+    assert np.array_equal(np.float32(got["I"]), ref)  # the image Blender shows is pmmw's, in kelvin
+    assert ref.shape == (30, 40) and 100.0 < ref.min() and ref.max() < 700.0  # I = Ex2 + Ey2 of 60..310 K scenes

@@ -156,6 +156,9 @@ class PMMW_OT_render(bpy.types.Operator):
             self.report({"ERROR"}, f"cannot run {command[0]!r} ({e.strerror}): set the pmmw command in the "
                                    "add-on's preferences")
             return {"CANCELLED"}
+        if bpy.app.background or context.window is None:  # no window to wait in (a script): wait here
+            self._proc.wait()
+            return self._finish(context)
         self.report({"INFO"}, f"pmmw is rendering {self._scenario.name} (log: {folder / 'pmmw.log'})")
         self._timer = context.window_manager.event_timer_add(0.5, window=context.window)
         context.window_manager.modal_handler_add(self)
@@ -165,6 +168,9 @@ class PMMW_OT_render(bpy.types.Operator):
         if event.type != "TIMER" or self._proc.poll() is None:
             return {"PASS_THROUGH"}
         context.window_manager.event_timer_remove(self._timer)
+        return self._finish(context)
+
+    def _finish(self, context):
         self._log.close()
         log = Path(self._log.name).read_text(errors="replace").strip().splitlines()
         if self._proc.returncode != 0:
