@@ -14,6 +14,7 @@ import importlib.util
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -424,3 +425,23 @@ result = {{"done": list(done), "I": np.array(im.pixels[:]).reshape(im.size[1], i
     ref = exr.read(out / "out" / "example.exr")["I"]
     assert np.array_equal(np.float32(got["I"]), ref)  # the image Blender shows is pmmw's, in kelvin
     assert ref.shape == (30, 40) and 100.0 < ref.min() and ref.max() < 700.0  # I = Ex2 + Ey2 of 60..310 K scenes
+
+
+@needs_bpy
+def test_every_process_reads_a_blend_as_the_same_scenario(tmp_path):
+    """Shards and --resume compare the scenario hash across processes: two processes that export
+    the .blend each (Blender run twice, the exports' folder emptied between) hash alike."""
+    code = ("from pmmw_cli.blender import scenario_of_blend; from pmmw_cli.config import load_scenario; "
+            "from pmmw_cli.pipeline import scenario_hash; import sys; p = sys.argv[1]; "
+            "print(scenario_of_blend(p), scenario_hash(load_scenario(p)))")
+    env = {**os.environ, "PMMW_BLENDER_PYTHON": BPY_PYTHON, "TMPDIR": str(tmp_path)}
+    got = []
+    for _ in range(2):
+        run = subprocess.run([sys.executable, "-c", code, str(EXAMPLE)], capture_output=True, text=True, cwd=REPO,
+                             env=env)
+        assert run.returncode == 0, run.stderr[-2000:]
+        got.append(run.stdout.split())
+        folder = Path(got[-1][0]).parent
+        assert folder.parent == tmp_path / f"pmmw-blend-{os.getuid()}"
+        shutil.rmtree(folder)
+    assert got[0] == got[1]

@@ -1,6 +1,7 @@
 """Blender, both ways: the add-on (`pmmw_cli.blender.pmmw_blender`, which runs inside Blender and
 imports nothing of pmmw) and pmmw's side of it: a ``.blend`` read as a scenario by running the
-add-on's exporter headless, with Blender's ``bpy`` package, in a subprocess (`scenario_of_blend`),
+add-on's exporter headless, with Blender's ``bpy`` package, in a subprocess, into a folder pmmw owns
+in the temporary folder (`scenario_of_blend`),
 and the add-on's zip for Blender's preferences (`addon_zip`).
 
 The exporter runs in its own process, not imported here: ``bpy`` is a whole Blender (about 1 GB,
@@ -10,16 +11,18 @@ be the one pmmw runs in (``PMMW_BLENDER_PYTHON``).
 
 from __future__ import annotations
 
-import atexit
+import hashlib
 import importlib.util
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
+import time
 import zipfile
 from pathlib import Path
 
+from pmmw_cli import __version__
 from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors
 
 ADDON = Path(__file__).resolve().parent / "pmmw_blender"
@@ -29,7 +32,7 @@ INSTALL_HINT = ("reading a .blend needs Blender's bpy package: install pmmw's bl
                 "(pip install 'pmmw[blender]', with Python 3.11), or set PMMW_BLENDER_PYTHON to a Python that "
                 "has bpy; or export the scene from Blender with the pmmw add-on (docs/blender.md)")
 
-_exported: dict[tuple, Path] = {}  # (blend, mtime, size) -> its scenario, for this process's life
+KEEP_DAYS = 7  # exports of .blend files unused this long are removed when another is made
 
 
 def blender_python() -> str:
@@ -51,8 +54,10 @@ def blender_python() -> str:
 
 
 def scenario_of_blend(path) -> Path:
-    """The pmmw scenario of a ``.blend``: exported by the add-on's exporter into a temporary folder
-    that pmmw owns (removed when this process exits), once per version of the file.
+    """The pmmw scenario of a ``.blend``, exported by the add-on's exporter into a folder that pmmw
+    owns in the temporary folder, named after the file's content: every process that reads the same
+    file reads the same scenario at the same paths (the same scenario hash: shards and ``--resume``
+    of a .blend work), and Blender runs once per version of the file.
 
     Parameters
     ----------
@@ -73,14 +78,39 @@ def scenario_of_blend(path) -> Path:
         that is not a database id, ...): each named by the .blend and what it is on.
     """
     path = Path(path).resolve()
-    st = path.stat()
-    known = _exported.get((path, st.st_mtime_ns, st.st_size))
-    if known is not None and known.is_file():
-        return known
+    digest = hashlib.sha256(__version__.encode())
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    root = export_root()
+    final = root / f"{digest.hexdigest()[:20]}"
+    out = final / f"{path.stem}.yaml"
+    if out.is_file():
+        os.utime(final)
+        return out
     python = blender_python()
-    folder = Path(tempfile.mkdtemp(prefix="pmmw-blend-"))
-    atexit.register(_remove, folder, os.getpid())
-    out = folder / f"{path.stem}.yaml"
+    root.mkdir(parents=True, exist_ok=True)
+    _prune(root)
+    work = Path(tempfile.mkdtemp(prefix=".export-", dir=root))
+    try:
+        _export(python, path, work / out.name)
+        try:
+            os.rename(work, final)  # whole, or not at all; another process's identical export may be first
+        except OSError:
+            if not out.is_file():
+                raise
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return out
+
+
+def export_root() -> Path:
+    """Where pmmw keeps the scenarios of .blend files: ``pmmw-blend-<user id>`` in the temporary
+    folder."""
+    return Path(tempfile.gettempdir()) / f"pmmw-blend-{os.getuid() if hasattr(os, 'getuid') else 0}"
+
+
+def _export(python: str, path: Path, out: Path) -> None:
     try:
         run = subprocess.run([python, str(HEADLESS), str(path), str(out)], capture_output=True, text=True,
                              errors="replace", stdin=subprocess.DEVNULL)
@@ -94,13 +124,17 @@ def scenario_of_blend(path) -> Path:
     if run.returncode != 0 or not out.is_file():
         tail = " | ".join(line.strip() for line in lines[-3:] if line.strip())
         raise EnvironmentProblem(f"Blender's export of {path.name} failed (exit {run.returncode}): {tail}", file=path)
-    _exported[(path, st.st_mtime_ns, st.st_size)] = out
-    return out
 
 
-def _remove(folder: Path, pid: int) -> None:
-    if os.getpid() == pid:  # not from a forked worker
-        shutil.rmtree(folder, ignore_errors=True)
+def _prune(root: Path) -> None:
+    """Remove the exports (pmmw's own folders here) unused for `KEEP_DAYS`."""
+    old = time.time() - KEEP_DAYS * 86400
+    for d in root.iterdir():
+        try:
+            if d.is_dir() and not d.is_symlink() and d.stat().st_mtime < old:
+                shutil.rmtree(d, ignore_errors=True)
+        except OSError:
+            pass
 
 
 def addon_zip(dest) -> Path:
