@@ -360,6 +360,17 @@ bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / 'nocam.blend')!r})
     run = _cli("validate", str(tmp_path / "nocam.blend"), env=env)
     assert run.returncode == 2 and "no active camera" in run.stderr and "'Material.001'" in run.stderr, run.stderr
     assert "nocam.blend" in run.stderr
+    # what is left out is said: a text object (the example, control, has none)
+    _bpy(f"""
+import bpy
+bpy.ops.wm.open_mainfile(filepath={str(EXAMPLE)!r})
+bpy.ops.object.text_add()
+bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / 'text.blend')!r})
+""", tmp_path)
+    run = _cli("validate", str(tmp_path / "text.blend"), env=env)
+    assert run.returncode == 0 and "warning: text.blend: object 'Text' (font) is not a mesh: left out" in run.stderr, \
+        run.stderr
+    assert "left out" not in _cli("validate", str(EXAMPLE), env=env).stderr
 
 
 # Blender's two ways to install from a zip: a legacy add-on (bl_info) and, in 4.2+, an extension (the manifest)

@@ -23,7 +23,7 @@ import zipfile
 from pathlib import Path
 
 from pmmw_cli import __version__
-from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors
+from pmmw_cli.errors import EnvironmentProblem, UserError, UserErrors, warn
 
 ADDON = Path(__file__).resolve().parent / "pmmw_blender"
 HEADLESS = ADDON / "headless.py"
@@ -121,6 +121,9 @@ def _export(python: str, path: Path, out: Path) -> None:
               for key, msg in (line.split("\t", 2)[1:] for line in lines if line.startswith("pmmw-error\t"))]
     if run.returncode == 2 and errors:
         raise errors[0] if len(errors) == 1 else UserErrors(errors)
+    for line in lines:
+        if line.startswith("pmmw-note\t"):
+            warn(f"{path.name}: {line.split(chr(9), 1)[1]}")
     if run.returncode != 0 or not out.is_file():
         tail = " | ".join(line.strip() for line in lines[-3:] if line.strip())
         raise EnvironmentProblem(f"Blender's export of {path.name} failed (exit {run.returncode}): {tail}", file=path)

@@ -139,8 +139,10 @@ def export(context, yaml_path) -> tuple[Path, list[str]]:
     scene = context.scene
     yaml_path = Path(yaml_path).resolve()
     folder = yaml_path.parent / f"{yaml_path.stem}_meshes"
-    notes = [f"object {o.name!r} ({o.type.lower()}) is not a mesh: left out" for o in scene.objects
-             if o.type in ("CURVE", "SURFACE", "META", "FONT") and not o.hide_render]
+    notes = [f"object {o.name!r} ({o.type.lower()}) is not a mesh: left out (Object > Convert > Mesh)"
+             for o in scene.objects if o.type in ("CURVE", "SURFACE", "META", "FONT") and not o.hide_render]
+    notes += [f"object {o.name!r} instances a collection: left out (Object > Apply > Make Instances Real)"
+              for o in scene.objects if o.type == "EMPTY" and o.instance_type == "COLLECTION" and not o.hide_render]
     objects = mesh_objects(scene, context.view_layer)
     records, taken = [], set()
     for obj in objects:
