@@ -215,14 +215,15 @@ def _cli(*args, env=None):
 
 
 @pytest.mark.skipif(importlib.util.find_spec("bpy") is not None, reason="this Python has bpy")
-def test_a_blend_without_bpy_names_the_extra():
-    env = {k: v for k, v in os.environ.items() if k != "PMMW_BLENDER_PYTHON"}
+def test_a_blend_without_bpy_names_the_extra(tmp_path):
+    # TMPDIR: no export of the example made by another test (an export once made needs no Blender)
+    env = {**{k: v for k, v in os.environ.items() if k != "PMMW_BLENDER_PYTHON"}, "TMPDIR": str(tmp_path)}
     run = subprocess.run([sys.executable, "-m", "pmmw_cli", "validate", str(EXAMPLE)], capture_output=True,
                          text=True, cwd=REPO, env=env)
     assert run.returncode == 1, run.stderr
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and "pmmw[blender]" in lines[0] and "Traceback" not in run.stderr, run.stderr
-    run = _cli("validate", str(EXAMPLE), env={"PMMW_BLENDER_PYTHON": "/nonexistent/python"})
+    run = _cli("validate", str(EXAMPLE), env={"PMMW_BLENDER_PYTHON": "/nonexistent/python", "TMPDIR": str(tmp_path)})
     assert run.returncode == 1 and "no such program" in run.stderr, run.stderr
 
 
