@@ -55,9 +55,10 @@ def blender_python() -> str:
 
 def scenario_of_blend(path) -> Path:
     """The pmmw scenario of a ``.blend``, exported by the add-on's exporter into a folder that pmmw
-    owns in the temporary folder, named after the file's content: every process that reads the same
-    file reads the same scenario at the same paths (the same scenario hash: shards and ``--resume``
-    of a .blend work), and Blender runs once per version of the file.
+    owns in the temporary folder, named after the file's content (and the exporter's code and the
+    Python with ``bpy`` that runs it): every process that reads the same file reads the same
+    scenario at the same paths (the same scenario hash: shards and ``--resume`` of a .blend work),
+    and Blender runs once per version of the file.
 
     Parameters
     ----------
@@ -78,7 +79,11 @@ def scenario_of_blend(path) -> Path:
         that is not a database id, ...): each named by the .blend and what it is on.
     """
     path = Path(path).resolve()
-    digest = hashlib.sha256(__version__.encode())
+    python = blender_python()
+    # the file, the exporter's code and the Blender that runs it make the export
+    digest = hashlib.sha256(f"{__version__}\0{python}\0".encode())
+    for source in sorted(ADDON.glob("*.py")):
+        digest.update(source.read_bytes())
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
             digest.update(block)
@@ -88,7 +93,6 @@ def scenario_of_blend(path) -> Path:
     if out.is_file():
         os.utime(final)
         return out
-    python = blender_python()
     root.mkdir(parents=True, exist_ok=True)
     _prune(root)
     work = Path(tempfile.mkdtemp(prefix=".export-", dir=root))
