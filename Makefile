@@ -42,7 +42,7 @@ test-full: install-test
 
 # the Blender add-on's zip (docs/blender.md); needs only Python's standard library
 blender-addon:
-	$(PYTHON) -m pmmw_cli.blender dist/pmmw_blender.zip
+	$(PYTHON) -m pmmw.blender dist/pmmw_blender.zip
 
 # Blender's bpy in a venv of its own (its wheels need Python 3.11 up to Blender 5.0), for tests/test_blender.py
 BPY_PYTHON ?= python3.11

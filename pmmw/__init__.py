@@ -8,13 +8,38 @@
 Every misuse raises `UserError` naming the argument or the scenario key (`UserErrors` for
 several at once); `EnvironmentProblem` (a `UserError` too) is the machine refusing (a disk full, a
 folder that cannot be written). Results to read with care (a material outside its stated range, a
-noisy region) come as `PmmwWarning` through Python's `warnings`, and in each report. See `pmmw_cli.api` (the functions' documentation and their errors)
-and the README's "Python API".
+noisy region) come as `PmmwWarning` through Python's `warnings`, and in each report. See
+`pmmw.api` (the functions' documentation and their errors) and the README's "Python API".
+
+This package is the library: it returns data, raises and warns, and never imports the command
+line (`pmmw_cli`, the ``pmmw`` command, is a layer on top of it; docs/ARCHITECTURE.md). Its
+subpackages: `config`, `scene`, `atmosphere`, `physics`, `surface`, `trace`, `imaging`, `io`,
+`physical_optics` (``pmmw po``), `reflectance` (``pmmw brdf``), `sweeps` (``pmmw sweep``). The
+names below are loaded on first use, so that importing one subpackage (as the command line does)
+does not load them all.
 """
 
-from pmmw_cli import __version__
-from pmmw_cli.api import Scenario, brdf, po, render, sky, sweep, validate
-from pmmw_cli.errors import EnvironmentProblem, PmmwWarning, UserError, UserErrors
+import importlib
+
+__version__ = "0.1.0"
+
+_API = {"Scenario", "render", "validate", "sky", "brdf", "po", "sweep"}
+_ERRORS = {"EnvironmentProblem", "PmmwWarning", "UserError", "UserErrors"}
 
 __all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "UserError", "UserErrors",
            "EnvironmentProblem", "PmmwWarning", "__version__"]
+
+
+def __getattr__(name: str):
+    if name in _API:
+        value = getattr(importlib.import_module("pmmw.api"), name)
+    elif name in _ERRORS:
+        value = getattr(importlib.import_module("pmmw.errors"), name)
+    else:
+        raise AttributeError(f"module 'pmmw' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | _API | _ERRORS)

@@ -24,9 +24,9 @@ import numpy as np
 import pytest
 import yaml
 
-from pmmw_cli.blender import ADDON, addon_zip, scenario_of_blend
-from pmmw_cli.blender.pmmw_blender import exr, mapping
-from pmmw_cli.blender.pmmw_blender.mapping import ExportError
+from pmmw.blender import ADDON, addon_zip, scenario_of_blend
+from pmmw.blender.pmmw_blender import exr, mapping
+from pmmw.blender.pmmw_blender.mapping import ExportError
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "scenes" / "blender" / "example.blend"
@@ -139,7 +139,7 @@ def test_yaml_writer_round_trips():
 def test_exported_mapping_is_a_scenario_pmmw_takes(tmp_path):
     import trimesh
 
-    from pmmw_cli.pipeline import validate
+    from pmmw.pipeline import validate
 
     (tmp_path / "m").mkdir()
     for name in ("Ground", "Tank"):
@@ -273,7 +273,7 @@ for fit, lens, sw, sh, rx, ry, pct in [("AUTO", 35, 36, 24, 40, 30, 100), ("AUTO
 def test_meshes_land_where_blender_has_them(tmp_path):
     """Parented, rotated, scaled and mirrored objects: pmmw's vertices from the exported GLBs (glTF
     Y-up turned to Z-up on load) are Blender's world vertices, and a mirrored box stays outward."""
-    from pmmw_cli.scene.geometry import load_entry_mesh
+    from pmmw.scene.geometry import load_entry_mesh
 
     blender = _bpy(f"""
 import bpy, math
@@ -384,7 +384,7 @@ INSTALLS = {"addon": ('bpy.ops.preferences.addon_install(filepath=ZIP)\n'
 @needs_bpy
 @pytest.mark.parametrize("how", sorted(INSTALLS))
 def test_addon_installs_from_its_zip_exports_and_loads_an_exr(tmp_path, monkeypatch, how):
-    from pmmw_cli.io.exr import write_exr
+    from pmmw.io.exr import write_exr
 
     zip_path = addon_zip(tmp_path / "pmmw_blender.zip")
     rng = np.random.default_rng(1)
@@ -443,8 +443,8 @@ result = {{"done": list(done), "I": np.array(im.pixels[:]).reshape(im.size[1], i
 def test_every_process_reads_a_blend_as_the_same_scenario(tmp_path):
     """Shards and --resume compare the scenario hash across processes: two processes that export
     the .blend each (Blender run twice, the exports' folder emptied between) hash alike."""
-    code = ("from pmmw_cli.blender import scenario_of_blend; from pmmw_cli.config import load_scenario; "
-            "from pmmw_cli.pipeline import scenario_hash; import sys; p = sys.argv[1]; "
+    code = ("from pmmw.blender import scenario_of_blend; from pmmw.config import load_scenario; "
+            "from pmmw.pipeline import scenario_hash; import sys; p = sys.argv[1]; "
             "print(scenario_of_blend(p), scenario_hash(load_scenario(p)))")
     env = {**os.environ, "PMMW_BLENDER_PYTHON": BPY_PYTHON, "TMPDIR": str(tmp_path)}
     got = []
