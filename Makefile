@@ -1,13 +1,15 @@
 # pmmw: two commands on a fresh machine.
 #   make render   create .venv, install pmmw, render the shipped landing scenario (Murakowski 2014, sec. 3.1)
 #   make test     create .venv, install pmmw with test extras, run the test suite
+#   make blender-addon   the Blender add-on as dist/pmmw_blender.zip (Blender: Preferences > Install from Disk)
+#   make test-blender    the Blender tests with bpy in a venv of its own (Python 3.11; ~1 GB, ~80 s to install)
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
 SCENARIO ?= configs/landing_95ghz.yaml
 PYTEST_ARGS ?=
 
-.PHONY: render test test-full lint install install-test clean
+.PHONY: render test test-full lint install install-test clean blender-addon test-blender
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -39,6 +41,20 @@ lint: install-test
 # also the longest convergence renders of the shipped configs (about 2.5 minutes more)
 test-full: install-test
 	PMMW_TEST_FULL=1 $(BIN)/python -m pytest $(PYTEST_ARGS)
+
+# the Blender add-on's zip (docs/blender.md); needs only Python's standard library
+blender-addon:
+	$(PYTHON) -m pmmw.blender dist/pmmw_blender.zip
+
+# Blender's bpy in a venv of its own (its wheels need Python 3.11 up to Blender 5.0), for tests/blender/test_blender.py
+BPY_PYTHON ?= python3.11
+BPY_VENV   ?= .venv-bpy
+$(BPY_VENV)/bin/python:
+	$(BPY_PYTHON) -m venv $(BPY_VENV)
+	$(BPY_VENV)/bin/python -m pip install 'bpy==5.0.1'  # the version tested (pyproject's extra allows 4.2+)
+
+test-blender: install-test $(BPY_VENV)/bin/python
+	PMMW_BLENDER_PYTHON=$(BPY_VENV)/bin/python $(BIN)/python -m pytest tests/blender/test_blender.py $(PYTEST_ARGS)
 
 clean:
 	rm -rf out .pytest_cache .hypothesis

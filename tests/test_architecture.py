@@ -19,7 +19,7 @@ PACKAGES = ("pmmw", "pmmw_cli")
 # the command line's modules are named with their package (``pmmw_cli.cli``).
 LAYERS = (
     {"__init__", "constants", "errors", "units", "jit", "memory", "interrupt"},
-    {"io", "distributed"},
+    {"io", "distributed", "blender"},
     {"physics", "atmosphere", "config", "sweeps.spec"},
     {"scene", "surface", "imaging"},
     {"trace"},

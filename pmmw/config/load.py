@@ -54,6 +54,7 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
         Every problem, named by file and dotted key path.
     """
     path = Path(path)
+    blend = None
     if data is not None:
         raw = plain(data)
     else:
@@ -62,6 +63,10 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
             raise UserError("scenario file not found", file=path)
         if not path.is_file():
             raise UserError("is not a file (expected a scenario YAML)", file=path)
+        if path.suffix.lower() == ".blend":  # Blender's scene, exported by the pmmw add-on's exporter
+            from pmmw.blender import scenario_of_blend
+
+            blend, path = path, scenario_of_blend(path)
         raw = read_yaml(path, "scenario")
     if raw is None:
         raw = {}
@@ -75,7 +80,15 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
             raw = apply_overrides(raw, [], values={dotted: plain(cli[key])})
     if cli and cli.get("out") is not None:
         raw = apply_overrides(raw, [], values={"output.dir": str(Path(cli["out"]).expanduser().resolve())})
-    return _validate(raw, path.resolve())
+    if blend is None:
+        return _validate(raw, path.resolve())
+    try:
+        return _validate(raw, path.resolve())
+    except UserError as e:  # name the .blend, not the scenario exported from it into a temporary folder
+        for err in getattr(e, "errors", [e]):
+            if err.file == str(path.resolve()):
+                err.file = f"{blend} (as exported)"
+        raise UserErrors(list(getattr(e, "errors", [e]))) from None
 
 
 def plain(value):
