@@ -22,6 +22,7 @@ from pmmw.physics.jones import basis_change
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jones
 from pmmw.reflectance.stack import Stack
 from pmmw.surface import Surfaces, Wave
+from pmmw.surface.records import Faces, Hit, HitCode, Limits
 from pmmw.trace import kernels
 from pmmw.trace.job import DIELECTRIC, METAL, OPAQUE, Coating, Media, RoughLayer
 
@@ -110,9 +111,9 @@ def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, thres
         Sums over paths (divide by ``samples`` for fractions of the incident power).
     """
     media = stack_media(stack)
-    faces = (np.ones(1, np.int32), np.array([[0.0, 0.0, 1.0]]), np.full(1, _STEP))
+    faces = Faces(np.ones(1, np.int32), np.array([[0.0, 0.0, 1.0]]), np.full(1, _STEP))
     # the branch drawn by power (``stochastic``); depth counts facet events, ending at _MAX_EVENTS
-    surfaces = Surfaces(media, stack.frequency or 1.0, faces, (_MAX_EVENTS, float(threshold), True, 0.0, 0.0),
+    surfaces = Surfaces(media, stack.frequency or 1.0, faces, Limits(_MAX_EVENTS, float(threshold), True, 0.0, 0.0),
                         (kernels.STRATEGIES["stochastic"], 0), count_facets=True)
     tally = _Tally(by_order=np.zeros((3, N_THETA, N_PHI, 4, 4)))
     phi_i = math.atan2(wi[1], wi[0])
@@ -129,8 +130,8 @@ def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, thres
                     m=m, sid=np.arange(n), depth=np.zeros(n, np.int32), stack=np.zeros((n, _STACK), np.int16),
                     top=np.zeros(n, np.int32), last_t=np.full(n, _T_ABSORBER))
         # every ray meets the substrate's face (medium 1) from the ambient side, as `kernels.arrive` leaves it
-        hit = (np.zeros((n, 3)), np.tile(faces[1][0], (n, 1)), np.full(n, float(wi[2])), np.zeros(n, np.int64),
-               np.ones(n, np.int64), np.ones(n, np.int64), np.zeros(n, bool), np.full(n, 2, np.int8))
+        hit = Hit(np.zeros((n, 3)), np.tile(faces.normal[0], (n, 1)), np.full(n, float(wi[2])), np.zeros(n, np.int64),
+                  np.ones(n, np.int64), np.ones(n, np.int64), np.zeros(n, bool), np.full(n, HitCode.INTERACTS, np.int8))
         out = Wave.concat(surfaces.interact(wave, hit, np.zeros(n, np.int64), np.arange(n)))
         # the ended paths' power (`kernels.survive` at _MAX_EVENTS); the rest of what was deposited was absorbed
         lost = float(cut[:, 0].sum())

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from pmmw.physics.roughness import GGX_CODE, MAX_REHITS, OTHER_CODE
+from pmmw.surface.records import Hit, HitCode
 from pmmw.surface.tables import Pile, kernel_tables
 from pmmw.surface.wave import Wave
 from pmmw.trace import kernels
@@ -133,8 +134,9 @@ class Surfaces:
                                     u_choose, u_roul, self._limits, self.acc, self.cut, kids.arrays(), kernels.NO_SETTLE)
             return [kids.head(count)]
         # the interacting rays to the front of the wave, in place (its other rays are done with)
-        wv = wave.head(kernels.compact(wave.arrays(), hit[7] == 2))
-        pos, n_in, cur, face_med, other, leaving = (hit[k][rows] for k in (0, 1, 3, 4, 5, 6))
+        wv = wave.head(kernels.compact(wave.arrays(), hit.code == HitCode.INTERACTS))
+        pos, n_in, cur, face_med, other, leaving = (a[rows] for a in (hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other,
+                                                                     hit.leaving))
         prim = prim[rows]
         n_mac = self._bumped(pos, wv.d, n_in, face_med)
         layered = self.layered[face_med] if self.layered is not None else None
@@ -154,7 +156,7 @@ class Surfaces:
         order by every caller: the branch choice (one per ray; none with ``split``), then Russian
         roulette (two per ray; none without roulette)."""
         u_choose = self.rng.random(n) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
-        return u_choose, self.rng.random(2 * n) if self._limits[2] else _NO_RANDOM
+        return u_choose, self.rng.random(2 * n) if self._limits.roulette else _NO_RANDOM
 
     def _models(self, face_med):
         """The roughness models of the media in ``face_med``, {medium: model}, in ascending order
@@ -227,7 +229,7 @@ class Surfaces:
         n_mac = np.ascontiguousarray(n_mac, dtype=np.float64)
         n_fac, u1, u2 = self._draws(wv, n_mac, face_med)
         u_choose, u_roul = self._uniforms(nr)
-        hit = (np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
+        hit = Hit(np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         side = (np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64),
                 np.empty(2 * nr, bool), np.empty(2 * nr))
@@ -271,7 +273,7 @@ class Surfaces:
         """`_interact`'s step for scenes with a roughness model without compiled masking: facets
         (`_facets`), `kernels.scatter` about them (``AT_POINT``), `_settle` (which terminates the
         children that leave). Returns as `_scatter_masked`."""
-        step = self._faces[2][prim]
+        step = self._faces.offset[prim]
         n_fac, tangent, rough = n_mac, None, None
         if self.rough_scene:
             n_fac, tangent, rough = self._facets(wv, n_mac, face_med)
@@ -279,7 +281,7 @@ class Surfaces:
         cos1 = np.clip(-np.einsum("ij,ij->i", wv.d, n_fac), 0.0, 1.0)
         # the smooth code about the facets (`kernels.scatter`), its children left at the hit
         # points for the masking test
-        hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
+        hit = Hit(np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
         rows = np.arange(nr)
         u_choose, u_roul = self._uniforms(nr)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
@@ -370,8 +372,8 @@ class Surfaces:
             tangent = n_mac  # not read
         leave, back = Wave.empty(n, child.stack.shape[1]), Wave.empty(n, child.stack.shape[1])
         side = (np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, bool), np.empty(n))
-        hit = (pos, n_geo, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
-        t_face = self._media[2][face_med]
+        hit = Hit(pos, n_geo, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
+        t_face = self._media.temperature[face_med]
         chain_end = (np.full(len(pos), rehit + 1 > MAX_REHITS), np.stack([t_face, t_face], axis=1))
         nl, nb = kernels.settle(child.arrays(), i, branch, u, p_leave, hit, n_mac, tangent, step, chain_end,
                                 self._media, self._rough, self.wavelength, self.acc, leave.arrays(),
@@ -411,7 +413,7 @@ class Surfaces:
             pile = Pile(media, k, int(other[g[0]]) if lv else int(cur[g[0]]), self._layer_media[k])
             up = -1.0 if lv else 1.0  # side normals facing the outside
             w = wv.take(g)
-            n_up, g_up, p_g, step = up * n_mac[g], up * n_geo[g], pos[g], self._faces[2][prim[g]]
+            n_up, g_up, p_g, step = up * n_mac[g], up * n_geo[g], pos[g], self._faces.offset[prim[g]]
             tangent = _tangents(n_up)
             nr = len(w)
             lvl = np.full(nr, pile.n if lv else 0)
@@ -466,8 +468,8 @@ class Surfaces:
         cur, other = pile.index(j, a), pile.index(j, not a)
         fm = pile.index(j, False)  # the medium whose top surface interface j is
         cos1 = np.clip(-np.einsum("ij,ij->i", w.d, n_fac), 0.0, 1.0)
-        hit = (np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, np.full(nr, cur), np.full(nr, fm),
-               np.full(nr, other), np.full(nr, not a), _NO_CODE)
+        hit = Hit(np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, np.full(nr, cur), np.full(nr, fm),
+                  np.full(nr, other), np.full(nr, not a), _NO_CODE)
         u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
         kids = Wave.empty(2 * nr, w.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
@@ -546,7 +548,7 @@ class Surfaces:
         the others' power is emitted at the last object's temperature or, by Russian roulette,
         dropped with the survivors scaled up). Returns a boolean mask."""
         n = len(wv)
-        u = self.rng.random(n) if self._limits[2] else _NO_RANDOM
+        u = self.rng.random(n) if self._limits.roulette else _NO_RANDOM
         keep = np.empty(n, bool)
         kernels.survivors(wv.arrays(), u, self._limits, self.acc, self.cut, keep)
         return keep

@@ -11,6 +11,7 @@ import numpy as np
 
 from pmmw.physics import fresnel
 from pmmw.physics.roughness import NOT_ROUGH, OTHER_CODE
+from pmmw.surface.records import MediaTable
 from pmmw.trace import kernels
 from pmmw.trace.job import DIELECTRIC, Media
 
@@ -50,8 +51,8 @@ def kernel_tables(media: Media, k0: float):
             models.append(layer.roughness)
         layer_media.append(idx)
     eps = np.array(eps, complex)
-    media = (np.array(kind, np.int8), np.array(alpha, float), np.array(temp, float), np.sqrt(eps).real.copy(),
-             np.array([c is not None for c in coats]), eps)
+    media = MediaTable(np.array(kind, np.int8), np.array(alpha, float), np.array(temp, float), np.sqrt(eps).real.copy(),
+                       np.array([c is not None for c in coats]), eps)
     sizes = [0 if c is None else c.eps.size for c in coats]
     present = [c for c in coats if c is not None]
     films = (np.cumsum([0] + sizes[:-1]).astype(np.int64), np.array(sizes, np.int64),

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from pmmw.surface.records import WaveArrays
+
 __all__ = ["Wave"]
 
 
@@ -37,9 +39,9 @@ class Wave:
     def __len__(self):
         return self.o.shape[0]
 
-    def arrays(self):
-        """The fields as the tuple the compiled kernels take (`pmmw.trace.kernels`)."""
-        return tuple(getattr(self, k) for k in self.__slots__)
+    def arrays(self) -> WaveArrays:
+        """The fields as the record the compiled kernels take (`pmmw.trace.kernels`)."""
+        return WaveArrays(*(getattr(self, k) for k in self.__slots__))
 
     @staticmethod
     def empty(n, stack_size):

@@ -34,6 +34,7 @@ from scipy.ndimage import binary_dilation
 
 from pmmw.scene.camera import REPLICATES, pixel_samples
 from pmmw.surface import Surfaces, Wave
+from pmmw.surface.records import Faces, Hit, HitCode, Limits
 from pmmw.trace import kernels
 from pmmw.trace.job import TraceJob
 
@@ -215,13 +216,13 @@ class Integrator:
         bounds = brightness_bounds(job, atmosphere_source_range(job))
         # what a path ended on a guessed temperature could have brought instead (truncation bound)
         self.t_bounds = bounds if bounds is not None else (-np.inf, np.inf)
-        limits = (int(st.max_depth), float(st.threshold), st.termination == "roulette", float(self.t_bounds[0]),
-                  float(self.t_bounds[1]))
-        faces = (np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
-                 np.ascontiguousarray(intersector.face_offset, float))
+        limits = Limits(int(st.max_depth), float(st.threshold), st.termination == "roulette",
+                        float(self.t_bounds[0]), float(self.t_bounds[1]))
+        faces = Faces(np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
+                      np.ascontiguousarray(intersector.face_offset, float))
         # the surfaces' interactions (`pmmw.surface`); ``compiled=False`` sends smooth scenes
         # through the rough-surface steps (the reference of tests/trace/test_compiled_tracer.py)
-        self.roulette, self.threshold = limits[2], limits[1]
+        self.roulette, self.threshold = limits.roulette, limits.threshold
         self.surfaces = Surfaces(job.media, job.frequency, faces, limits,
                                  (kernels.STRATEGIES[st.strategy], int(st.split_depth)), compiled)
         self._faces, self._media = faces, self.surfaces.media_table
@@ -357,16 +358,15 @@ class Integrator:
                     job.atmosphere.walk_below(self.column, z0, z1, length, *atm)
                 else:
                     job.atmosphere.walk(z0, z1, length, *atm)
-        hit = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n, np.int64), np.empty(n, np.int64),
-               np.empty(n, np.int64), np.empty(n, bool), np.empty(n, np.int8))
+        hit = Hit.empty(n)
         arrays = wave.arrays()
         # Russian roulette where a segment's absorption left a ray below the threshold: it is
         # played before the interaction, which the ended rays (about half of those that would
         # interact, in the shipped scenes) then skip
         u = self.rng.random(n) if self.roulette else _NO_RANDOM
         kernels.arrive(arrays, t, prim, atm, self._faces, self._media, self.acc, hit, u, self.threshold)
-        rows = np.flatnonzero(hit[7] == 2)
-        passing = np.flatnonzero(hit[7] == 1)
+        rows = np.flatnonzero(hit.code == HitCode.INTERACTS)
+        passing = np.flatnonzero(hit.code == HitCode.PASSED)
         out = [wave.take(passing)] if passing.size else []
         if not rows.size:
             return Wave.concat(out)

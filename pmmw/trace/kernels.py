@@ -28,8 +28,9 @@ models without compiled code. Everything per ray between them runs here:
   rough-surface code's children; `scatter` applies the same `survive` to its own), and
   `compact` to drop the ended rays in place.
 
-A wave is passed as a tuple ``(o, d, s, p, m, sid, depth, stack, top, last_t)`` of arrays (the
-fields of `pmmw.surface.Wave`). Random numbers are drawn by the caller (one per ray that may need
+A wave is passed as a `WaveArrays` record (the fields of `pmmw.surface.Wave`), a hit as a `Hit`,
+the media, faces and termination limits as `MediaTable`, `Faces` and `Limits`
+(`pmmw.surface.records`: named tuples, read by name; ``Hit.code`` is a `HitCode`). Random numbers are drawn by the caller (one per ray that may need
 one), so the kernels are deterministic functions of their inputs. The compiled code is cached on
 disk (`pmmw.jit`): the first render after an install compiles it (`warm`), later ones load
 it; ``NUMBA_DISABLE_JIT=1`` runs the same code as Python.
@@ -44,9 +45,13 @@ import numpy as np
 from pmmw.jit import inline, njit
 from pmmw.physics import fresnel, multilayer, roughness
 from pmmw.scene import bump, camera
+from pmmw.surface.records import Faces, Hit, HitCode, Limits, MediaTable, WaveArrays
 from pmmw.trace.intersect import _plane_distance
 from pmmw.trace.job import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
 
+# `Hit.code` as compiled constants (numba reads a module's int globals as constants)
+_MISSED, _PASSED, _INTERACTS, _ENDED = (int(c) for c in (HitCode.MISSED, HitCode.PASSED, HitCode.INTERACTS,
+                                                          HitCode.ENDED))
 A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _TINY = 1e-12
 _NORMAL = 1e-9  # |n x k| below this: normal incidence, the ray keeps its own s
@@ -118,7 +123,7 @@ def sky_emit(rows, wave, ta, tb, polarized, acc):
     both columns. Polarized: each Jones matrix re-expressed in the sky's (h, v) basis about the
     ray (eq. 2.35; h = unit(z x k) with k = -d, the ray's own s at the zenith and nadir, v = k x
     h), columns (h, v) seeing (Th, Tv)."""
-    d, s, p, m, sid = wave[1], wave[2], wave[3], wave[4], wave[5]
+    d, s, p, m, sid = wave.d, wave.s, wave.p, wave.m, wave.sid
     for j in range(rows.shape[0]):
         i = rows[j]
         m00, m01, m10, m11 = m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1]
@@ -163,7 +168,7 @@ def _fate(m00, m01, m10, m11, depth, u, limits):
     """The termination rule of one ray after an interaction (`survive`), on the entries of its
     Jones matrix alone: the factor to scale them by (1 usually, > 1 after roulette), 0 when the
     ray ends silently, -1 when it ends on the temperature of its last object (`_end`)."""
-    max_depth, threshold, roulette = limits[0], limits[1], limits[2]
+    max_depth, threshold, roulette = limits.max_depth, limits.threshold, limits.roulette
     w = max(_row_powers(m00, m01, m10, m11))
     if w <= 0.0:
         return 0.0
@@ -186,7 +191,7 @@ def survive(acc, cut, k, m, i, depth, t_last, u, limits):
     m00, m01, m10, m11 = m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1]
     g = _fate(m00, m01, m10, m11, depth, u, limits)
     if g < 0.0:
-        _end(acc, cut, k, m00, m01, m10, m11, t_last, limits[3], limits[4])
+        _end(acc, cut, k, m00, m01, m10, m11, t_last, limits.t_lo, limits.t_hi)
     if g <= 0.0:
         return False
     if g != 1.0:
@@ -197,7 +202,7 @@ def survive(acc, cut, k, m, i, depth, t_last, u, limits):
 @_jit
 def survivors(wave, u, limits, acc, cut, keep):
     """`survive` for every ray of a wave (in place on its Jones matrices); ``keep`` is set."""
-    m, sid, depth, last_t = wave[4], wave[5], wave[6], wave[9]
+    m, sid, depth, last_t = wave.m, wave.sid, wave.depth, wave.last_t
     for i in range(sid.shape[0]):
         keep[i] = survive(acc, cut, sid[i], m, i, depth[i], last_t[i], u[i] if u.shape[0] else 1.0, limits)
 
@@ -210,7 +215,7 @@ def ambient_segments(wave, t, prim, skip, top_height, z0, z1, length):
     [m]) and length, and length 0 for every other ray; returns how many there are. The part of a
     segment above ``top_height`` crosses no air (an imager above the model's top): only the
     length below it counts, so that the walk's stretch L / |z1 - z0| stays the segment's own."""
-    o, d, stack, top = wave[0], wave[1], wave[7], wave[8]
+    o, d, stack, top = wave.o, wave.d, wave.stack, wave.top
     count = 0
     for i in range(t.shape[0]):
         ti = t[i]
@@ -260,17 +265,18 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
         before it interacts. It goes on with probability weight / threshold, scaled up by 1 / that
         (unbiased); otherwise it ends (code 3) and costs no interaction. Empty: no roulette here.
     """
-    o, d, m, sid, stack, top = wave[0], wave[1], wave[4], wave[5], wave[7], wave[8]
-    face_medium, face_normals, face_offset = faces
-    kind, alpha, temperature = media[0], media[1], media[2]
+    o, d, m, sid, stack, top = wave.o, wave.d, wave.m, wave.sid, wave.stack, wave.top
+    face_medium, face_normals, face_offset = faces.medium, faces.normal, faces.offset
+    kind, alpha, temperature = media.kind, media.alpha, media.temperature
     trans, emission = atm
-    pos, n_in, cos1, cur_o, fm_o, other_o, leaving_o, code = hit
+    pos, n_in, cos1, cur_o, fm_o, other_o, leaving_o = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving
+    code = hit.code
     cap = stack.shape[1]
     with_atm = trans.shape[0] > 0
     for i in range(t.shape[0]):
         f = prim[i]
         if f < 0:
-            code[i] = 0
+            code[i] = _MISSED
             continue
         k = sid[i]
         ti = t[i]
@@ -297,7 +303,7 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
             if w < threshold:
                 g = _roulette(w, threshold, u[i])
                 if g == 0.0:
-                    code[i] = 3
+                    code[i] = _ENDED
                     continue
                 for a in range(2):
                     for b in range(2):
@@ -324,7 +330,7 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
             else:
                 other_o[i] = stack[i, tp - 1] if tp > 0 else 0
             leaving_o[i] = (not entering) and diel
-            code[i] = 2
+            code[i] = _INTERACTS
         else:  # cross without interacting; drop the face's medium from the stack if it is there
             step = face_offset[f] if not entering else -face_offset[f]
             for c in range(3):
@@ -335,7 +341,7 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
                         stack[i, j] = stack[i, j + 1]
                     top[i] = tp - 1
                     break
-            code[i] = 1
+            code[i] = _PASSED
 
 
 @_inline
@@ -404,7 +410,7 @@ def off_surface(wave, g, step):
     """`_off_surface` for every ray of a wave (at the surface), side normals ``g`` (n, 3) and
     steps (n,) [m]; in place."""
     for c in range(g.shape[0]):
-        _off_surface(wave[0], wave[1], wave[2], wave[3], c, g[c, 0], g[c, 1], g[c, 2], step[c])
+        _off_surface(wave.o, wave.d, wave.s, wave.p, c, g[c, 0], g[c, 1], g[c, 2], step[c])
 
 
 @_inline
@@ -421,10 +427,10 @@ def _coefficients1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
     t_absorb) (`pmmw.surface.surface_coefficients` over arrays): `_coated1` under coherent
     films, else `_bare1`. ``q2``: the far medium's normal component for refraction (outgoing
     root; NaN for a conductor); ``t_absorb`` the temperature what is absorbed emits at."""
-    if media[4][fm]:
+    if media.has_coat[fm]:
         return _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d)
-    eps, temperature = media[5], media[2]
-    return _bare1(media[0][fm], eps[cur], eps[other], cos1, temperature[cur], temperature[fm])
+    eps, temperature = media.eps, media.temperature
+    return _bare1(media.kind[fm], eps[cur], eps[other], cos1, temperature[cur], temperature[fm])
 
 
 @_inline
@@ -445,7 +451,7 @@ def _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
     """`_coefficients1` of a face under coherent films (eq. 2.27-2.34): the stack from ``cur``
     through them (innermost first when leaving) to the far medium, its absorption emitting at
     the films' temperature."""
-    kind, eps = media[0], media[5]
+    kind, eps = media.kind, media.eps
     f_start, f_count, f_eps, f_d, f_temp, k0 = films
     kd = kind[fm]
     e1 = eps[cur]
@@ -552,16 +558,17 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
     numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
     6 % of an interaction as run-time branches)."""
     finish = mode == FINISH
-    d, s_old, p_old, m, sid, depth, stack, top = wave[1], wave[2], wave[3], wave[4], wave[5], wave[6], wave[7], wave[8]
-    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[2], hit[3], hit[4], hit[5], hit[6]
+    d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top
+    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving
     oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
     if facets is not None:
         draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts = facets
         r_code, r_ax, r_ay, r_orient = rough
         b_src, b_cur, b_other, b_leaving, b_sign = back_side
     buf_eps, buf_d = _film_buffers(films)
-    face_offset = faces[2]
-    kind, alpha, temperature, n1_real, has_coat, eps = media[0], media[1], media[2], media[3], media[4], media[5]
+    face_offset = faces.offset
+    kind, alpha, temperature, n1_real, has_coat, eps = (media.kind, media.alpha, media.temperature, media.n1_real,
+                                                        media.has_coat, media.eps)
     strategy, split_depth = choice
     roulette = u_roul.shape[0] > 0
     cap = stack.shape[1]
@@ -675,7 +682,7 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
             if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
                 g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
                 if g < 0.0:
-                    _end(acc, cut, k, m00, m01, m10, m11, t_body, limits[3], limits[4])
+                    _end(acc, cut, k, m00, m01, m10, m11, t_body, limits.t_lo, limits.t_hi)
                 if g <= 0.0:
                     continue
                 if g != 1.0:
@@ -835,8 +842,8 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
     (int, int)
         How many children leave and how many re-hit.
     """
-    pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit[0], hit[1], hit[3], hit[4], hit[5], hit[6]
-    kind, alpha, temperature = media[0], media[1], media[2]
+    pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
+    kind, alpha, temperature = media.kind, media.alpha, media.temperature
     b_src, b_cur, b_other, b_leaving, b_sign = back_side
     r_code, r_ax, r_ay, r_orient = rough
     over, t_end = chain_end
@@ -864,7 +871,7 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
                 g = _fate(m00, m01, m10, m11, k_depth[c], u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0,
                           limits)
                 if g < 0.0:
-                    _end(acc, cut, sid[c], m00, m01, m10, m11, k_last[c], limits[3], limits[4])
+                    _end(acc, cut, sid[c], m00, m01, m10, m11, k_last[c], limits.t_lo, limits.t_hi)
                 if g <= 0.0:
                     continue
                 if g != 1.0:
@@ -913,7 +920,7 @@ def cross_layer(wave, n, rows, alpha, thickness, temperature, acc):
     in place: each attenuated by exp(-alpha t / |cos|) (its direction against the layer's normal
     ``n[rows[c]]``, the cosine kept above 1e-6) and emitting what it loses at ``temperature``
     [K] (Murakowski 2014 eq. 2.37, 2.38); ``alpha`` [1/m], ``thickness`` [m]."""
-    d, m, sid = wave[1], wave[4], wave[5]
+    d, m, sid = wave.d, wave.m, wave.sid
     for c in range(d.shape[0]):
         i = rows[c]
         cos_t = max(abs(d[c, 0] * n[i, 0] + d[c, 1] * n[i, 1] + d[c, 2] * n[i, 2]), 1e-6)
@@ -1020,19 +1027,18 @@ def warm(stack_size: int = 8) -> None:
     _plane_distance(np.zeros((1, 3)), np.ones((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), np.zeros(1, np.int64),
                     np.zeros(1))
     n = 1
-    wave = (np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 2, 2), complex),
-            np.zeros(n, np.int64), np.zeros(n, np.int32), np.zeros((n, stack_size), np.int16), np.zeros(n, np.int32),
-            np.zeros(n))
+    wave = WaveArrays(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
+                      np.zeros((n, 2, 2), complex), np.zeros(n, np.int64), np.zeros(n, np.int32),
+                      np.zeros((n, stack_size), np.int16), np.zeros(n, np.int32), np.zeros(n))
     acc, cut = np.zeros((n, 4)), np.zeros((n, 2))
     t, prim = np.ones(n), np.full(n, -1, np.int64)
-    faces = (np.zeros(1, np.int32), np.zeros((1, 3)), np.zeros(1))
-    media = (np.zeros(1, np.int8), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1, bool), np.ones(1, complex))
-    hit = (np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), np.zeros(n, np.int64), np.zeros(n, np.int64),
-           np.zeros(n, np.int64), np.zeros(n, bool), np.zeros(n, np.int8))
+    faces = Faces(np.zeros(1, np.int32), np.zeros((1, 3)), np.zeros(1))
+    media = MediaTable(np.zeros(1, np.int8), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1, bool), np.ones(1, complex))
+    hit = Hit.empty(n)
     empty = np.zeros(0)
     arrive(wave, t, prim, (empty, empty), faces, media, acc, hit, empty, 1e-3)
     ambient_segments(wave, t, prim, 0.0, 1e3, np.zeros(n), np.zeros(n), np.zeros(n))
-    limits = (32, 1e-3, True, 0.0, 300.0)
+    limits = Limits(32, 1e-3, True, 0.0, 300.0)
     films = (np.zeros(1, np.int64), np.zeros(1, np.int64), np.ones(1, complex), np.zeros(1), np.zeros(1), 1.0)
     coefficients(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool), empty, media,
                  films, np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0, complex), empty)

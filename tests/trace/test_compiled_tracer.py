@@ -21,6 +21,7 @@ from scipy.stats import norm
 
 from pmmw import pipeline
 from pmmw.physics import roughness
+from pmmw.surface.records import WaveArrays
 from pmmw.trace.integrator import Integrator
 from pmmw.trace.intersect import make_intersector
 
@@ -193,7 +194,7 @@ def test_kernels_run_as_python_without_jit(tmp_path):
     for jit in ("0", "1"):
         env = dict(os.environ, NUMBA_DISABLE_JIT=jit)
         path = tmp_path / f"jit{jit}.npy"
-        subprocess.run([sys.executable, "-c", script, str(ROOT / "tests"), str(path)], check=True, env=env, cwd=ROOT)
+        subprocess.run([sys.executable, "-c", script, str(Path(__file__).resolve().parent), str(path)], check=True, env=env, cwd=ROOT)
         out[jit] = np.load(path)
     np.testing.assert_allclose(out["1"], out["0"], rtol=0, atol=1e-9)
 
@@ -441,8 +442,8 @@ def test_crossing_a_rough_coating_layer_is_beer_lambert():
     normals[0] = np.cross(d[along], [0.0, 0.0, 1.0])
     normals[0] /= np.linalg.norm(normals[0])
     m = rng.normal(size=(n, 2, 2)) + 1j * rng.normal(size=(n, 2, 2))
-    wave = (np.zeros((n, 3)), d, np.zeros((n, 3)), np.zeros((n, 3)), m.copy(), np.arange(n), np.zeros(n, np.int32),
-            np.zeros((n, 8), np.int16), np.zeros(n, np.int32), np.zeros(n))
+    wave = WaveArrays(np.zeros((n, 3)), d, np.zeros((n, 3)), np.zeros((n, 3)), m.copy(), np.arange(n),
+                      np.zeros(n, np.int32), np.zeros((n, 8), np.int16), np.zeros(n, np.int32), np.zeros(n))
     acc = np.zeros((n, 4))
     alpha, thickness, temp = 50.0, 2e-3, 300.0
     kernels.cross_layer(wave, normals, rows, alpha, thickness, temp, acc)
