@@ -96,11 +96,13 @@ def render(
 @app.command()
 @_user_errors
 def validate(
-    scenario: Path = typer.Argument(..., help="Scenario YAML file."),
+    scenario: Path = typer.Argument(..., metavar="FILE", help="A scenario, sweep file, physical-optics job, brdf "
+                                                              "stack file or Dask cluster file (YAML)."),
     set_: Optional[List[str]] = SetOpt,
 ):
-    """Check a scenario and every asset it names; print the resolved job. Renders nothing."""
-    from pmmw_cli.pipeline import validate as run
+    """Check any pmmw file as the kind it is (printed first) and every asset it names; print the
+    resolved job. Renders nothing."""
+    from pmmw_cli.filekinds import validate_file as run
 
     resolved = run(scenario, set_ or [])
     typer.echo(yaml.safe_dump(resolved, sort_keys=False, default_flow_style=None, width=100).rstrip())

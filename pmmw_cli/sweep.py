@@ -47,6 +47,7 @@ from pmmw_cli.sweep_spec import (  # noqa: F401
     SweepSpec,
     _label,
     _yaml_value,
+    check_variants,
     grid_values,
     linspace,
     load_sweep_file,
@@ -161,6 +162,7 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
         return 0
     if not spec.scenario.is_file():
         raise UserError("scenario file not found", spec.scenario)
+    check_variants(spec)  # every swept key and value against the schema, before anything is written
     out = (spec.out or Path.cwd() / "out" / f"{spec.scenario.stem}_sweep").resolve()
     with output_lock(out):  # one sweep per folder: a second is refused, naming this one
         return _sweep_into(spec, out, resume=resume, quiet=quiet)

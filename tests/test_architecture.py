@@ -20,7 +20,7 @@ LAYERS = (
     {"scene", "surface", "imaging"},
     {"trace"},
     {"pipeline"},
-    {"brdf", "po", "sweep_report", "sweep", "validation", "bench", "skycmd"},
+    {"brdf", "po", "sweep_report", "sweep", "validation", "bench", "skycmd", "filekinds"},
     {"api"},
     {"cli"},
     {"__main__"},

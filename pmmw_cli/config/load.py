@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import difflib
 import math
 import re
 import typing
@@ -256,7 +257,9 @@ def _user_error(err: dict, path: Path, freq_key: str, raw: dict) -> UserError:
     typ = err["type"]
     if typ == "extra_forbidden":
         allowed = _allowed_keys(loc[:-1])
-        msg = f"unknown key {loc[-1]!r}" + (f"; allowed: {', '.join(allowed)}" if allowed else "")
+        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
+        msg = (f"unknown key {loc[-1]!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+               + (f"; allowed: {', '.join(allowed)}" if allowed else ""))
     elif typ == "missing":
         msg = "required key missing"
     elif typ in ("value_error", "assertion_error"):
