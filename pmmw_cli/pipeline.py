@@ -844,10 +844,20 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
                 raise os_problem(e, out_dir, "write the report") from None
             staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
             print(
-                f"{report['name']}: {r['pixels']} px x {r['spp']} spp, {r['rays'] / 1e6:.2f} M rays, "
+                f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
+                f"{r['rays'] / 1e6:.2f} M rays, "
                 f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}"
             )
     return written, tile_dirs
+
+
+def spp_words(spp: int, mean: float) -> str:
+    """The samples per pixel of the render summary: ``256 spp``, or the mean actually averaged
+    when adaptive sampling (``render.target_error``) stopped early, e.g. ``9.8 spp averaged
+    (adaptive, up to 256)``."""
+    if mean < spp - 0.05:
+        return f"{mean:.3g} spp averaged (adaptive, up to {spp})"
+    return f"{spp} spp"
 
 
 def frequency_images(scn, f, job, img, shash: str = "") -> dict:
