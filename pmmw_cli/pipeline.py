@@ -293,13 +293,58 @@ def region_shapes(regions, cam) -> dict:
     spanning [k, k + 1)): ``("box", x0, y0, x1, y1)`` or ``("circle", u, v, radius)``, None for a
     centre behind the imager."""
     shapes = {}
+    focal = cam.width / 2.0 / np.tan(cam.fov / 2.0)  # [px] the pinhole's focal length
     for name, r in regions.items():
         if r.box is not None:
             shapes[name] = ("box", *(float(x) for x in r.box))
             continue
+        if getattr(r, "bounds", None) is not None:  # the rectangle the world box's corners project into
+            lo, hi = (np.asarray(c, float) for c in r.bounds)
+            corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
+                                for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+            u, v, depth = cam.image_coordinates(corners)
+            shapes[name] = (("box", float(np.floor(u.min())), float(np.floor(v.min())), float(np.ceil(u.max())),
+                             float(np.ceil(v.max()))) if (depth > 0).all() else None)
+            continue
         (u,), (v,), (depth,) = cam.image_coordinates(np.asarray(r.center, float)[None])
-        shapes[name] = ("circle", float(u), float(v), float(r.radius)) if depth > 0 else None
+        unit = getattr(r, "radius_unit", "px")
+        radius = {"px": r.radius, "m": focal * r.radius / depth, "rad": focal * np.tan(min(r.radius, 1.5))}[unit]
+        shapes[name] = ("circle", float(u), float(v), float(radius)) if depth > 0 else None
     return shapes
+
+
+def check_regions(scn) -> dict:
+    """``output.regions`` on the image, checked before rendering (`validate`): each region's
+    pixel shape and pixel count. A region behind the imager or wholly outside the image is a
+    `UserError` naming it; one partly outside is warned about.
+
+    Returns
+    -------
+    dict
+        name -> ``{"circle_px": [u, v, radius]}`` or ``{"box_px": [x0, y0, x1, y1]}``, with ``pixels``.
+    """
+    im = scn.imager
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)
+    masks = region_masks(scn.output.regions, cam)
+    out, errors = {}, []
+    for name, shape in region_shapes(scn.output.regions, cam).items():
+        key = f"output.regions.{name}"
+        if shape is None:
+            errors.append(UserError("lies behind the imager", scn.source_file, key))
+            continue
+        n = int(masks[name].sum())
+        out[name] = {f"{shape[0]}_px": [round(float(x), 2) for x in shape[1:]], "pixels": n}
+        if n == 0:
+            errors.append(UserError(f"falls outside the {cam.width} x {cam.height} image (its {shape[0]} in pixels: "
+                                    f"{[round(float(x), 1) for x in shape[1:]]}); move it into view", scn.source_file,
+                                    key))
+        elif shape[0] == "box" and (shape[1] < 0 or shape[2] < 0 or shape[3] > cam.width or shape[4] > cam.height) \
+                or shape[0] == "circle" and not (0 <= shape[1] - shape[3] and shape[1] + shape[3] <= cam.width
+                                                 and 0 <= shape[2] - shape[3] and shape[2] + shape[3] <= cam.height):
+            warn(f"{key} lies partly outside the {cam.width} x {cam.height} image: only its {n} pixels inside count")
+    if errors:
+        raise UserErrors(errors) if len(errors) > 1 else errors[0]
+    return out
 
 
 def region_masks(regions, cam) -> dict:
@@ -315,7 +360,9 @@ def region_masks(regions, cam) -> dict:
             masks[name] = (xx >= x0) & (xx < x1) & (yy >= y0) & (yy < y1)
         else:
             u, v, radius = shape[1:]
-            masks[name] = (xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= radius**2
+            # a circle smaller than a pixel is the pixel holding its centre
+            masks[name] = ((xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= radius**2) | (
+                (xx == np.floor(u)) & (yy == np.floor(v)))
     return masks
 
 
@@ -956,6 +1003,8 @@ def validate(path, overrides=(), data=None, values=None) -> dict:
         "watertight": dict(zip(geom.objects, map(bool, geom.object_watertight))),
         "bounds_m": [list(map(float, geom.bounds[0])), list(map(float, geom.bounds[1]))],
     }, "media": {}}
+    if scn.output.regions:
+        out["regions"] = check_regions(scn)
     for f in scn.frequencies:
         media = build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere)
         kinds = {v: k for k, v in KIND_CODES.items()}

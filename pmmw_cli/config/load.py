@@ -68,7 +68,12 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
         raw = {}
     if not isinstance(raw, dict):
         raise UserError(f"the top level must be a mapping of keys (name, frequency, imager, scene, ...), got a {type(raw).__name__}", file=path)
+    file_resolution = _file_resolution(raw)
     raw = apply_overrides(raw, list(overrides))
+    if file_resolution is not None and isinstance(raw.get("output"), dict) and raw["output"].get("regions") \
+            and "regions_resolution" not in raw["output"]:
+        # pixel regions are the file's pixels: on a resolution set from outside they scale with the image
+        raw["output"] = {**raw["output"], "regions_resolution": file_resolution}
     if values:
         raw = apply_overrides(raw, [], values=plain(dict(values)))
     for key, dotted in (("spp", "render.spp"), ("workers", "render.workers"), ("seed", "render.seed")):
@@ -141,6 +146,15 @@ def _segments(key: str) -> list[tuple[bool, str]]:
         if i == len(key):
             out.append((False, ""))
             return out
+
+
+def _file_resolution(raw: dict):
+    """The scenario file's own ``imager.resolution`` (before overrides), when it is two whole numbers."""
+    res = raw.get("imager", {}).get("resolution") if isinstance(raw.get("imager"), dict) else None
+    if isinstance(res, (list, tuple)) and len(res) == 2 and all(isinstance(v, int) and not isinstance(v, bool)
+                                                               for v in res):
+        return list(res)
+    return None
 
 
 def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = None) -> dict:
@@ -309,6 +323,16 @@ def _unwrap(tp):
     return tp
 
 
+def _region_display(r) -> dict:
+    """A region as the resolved scenario shows it (its pixel values scaled to the image)."""
+    if r.box is not None:
+        return {"box": list(r.box)}
+    if r.bounds is not None:
+        return {"bounds": [[_qty(v, "m") for v in corner] for corner in r.bounds]}
+    radius = {"px": round(r.radius, 4), "m": _qty(r.radius, "m"), "rad": _qty(math.degrees(r.radius), "deg")}
+    return {"center": [_qty(v, "m") for v in r.center], "radius": radius[r.radius_unit]}
+
+
 def _qty(value: float, unit: str, scale: float = 1.0) -> str:
     """An SI float as a unit string that `parse_quantity` reads back to (nearly) the same float."""
     return f"{value / scale:.12g} {unit}"
@@ -397,8 +421,7 @@ def scenario_to_display(scn: Scenario) -> dict:
         "output": {
             "dir": str(scn.output.dir) if scn.output.dir is not None else None,
             "channels": list(scn.output.channels), "previews": scn.output.previews, "aux": list(scn.output.aux),
-            **({"regions": {n: ({"center": [_qty(v, "m") for v in r.center], "radius": r.radius}
-                                if r.center is not None else {"box": list(r.box)})
-                            for n, r in scn.output.regions.items()}} if scn.output.regions else {}),
+            **({"regions": {n: _region_display(r) for n, r in scn.output.regions.items()}}
+               if scn.output.regions else {}),
         },
     }
