@@ -121,3 +121,10 @@ def test_region_masks_of_a_box_in_metres(tmp_path):
     m = region_masks(scn.output.regions, _camera(scn))["b"]
     _, x0, y0, x1, y1 = region_shapes(scn.output.regions, _camera(scn))["b"]
     assert m.sum() == (x1 - x0) * (y1 - y0) and np.all(m[int(y0):int(y1), int(x0):int(x1)])
+
+
+def test_pixel_regions_set_alongside_the_resolution_are_the_rendered_images():
+    """A region given with --set next to a new resolution is meant for that image: not scaled."""
+    scn = load_scenario(ROOT / "configs/landing_95ghz.yaml",
+                        ["imager.resolution=[100, 100]", "output.regions.runway.radius=2"])
+    assert scn.output.regions["runway"].radius == 2 and scn.output.regions["beacons"].box == (218, 247, 282, 254)

@@ -68,7 +68,10 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
         raw = {}
     if not isinstance(raw, dict):
         raise UserError(f"the top level must be a mapping of keys (name, frequency, imager, scene, ...), got a {type(raw).__name__}", file=path)
-    file_resolution = _file_resolution(raw)
+    keys = [str(o).split("=", 1)[0].strip() for o in overrides] + [str(k) for k in (values or {})]
+    # pixel regions set alongside the overrides are the rendered image's pixels, not the file's
+    file_resolution = None if any(k == "output" or k.startswith("output.regions") for k in keys) \
+        else _file_resolution(raw)
     raw = apply_overrides(raw, list(overrides))
     if file_resolution is not None and isinstance(raw.get("output"), dict) and raw["output"].get("regions") \
             and "regions_resolution" not in raw["output"]:
