@@ -275,9 +275,17 @@ def _scenario(s, where: str, name: str = "scenario") -> Scenario:
 @_api("validate")
 def validate(scenario) -> dict:
     """What ``pmmw validate`` prints: the resolved scenario, geometry, media per frequency, the
-    slab sky's values, resources and warnings."""
+    slab sky's values, resources and warnings; for the path of another pmmw file (a sweep file,
+    a physical-optics job, a brdf stack or a Dask cluster file) its check as that kind, ``kind``
+    first (`pmmw_cli.filekinds`)."""
     from pmmw_cli.pipeline import validate as run
 
+    if isinstance(scenario, (str, os.PathLike)) and Path(scenario).is_file():
+        from pmmw_cli.filekinds import SCENARIO, file_kind, validate_file
+        from pmmw_cli.io.yamlio import read_yaml
+
+        if file_kind(read_yaml(Path(scenario), "pmmw file")) != SCENARIO:
+            return validate_file(scenario)
     s = _scenario(scenario, "pmmw.validate")
     return run(s.path, **s._kw())
 

@@ -123,3 +123,11 @@ def test_bad_cluster_and_stack_files_are_named_by_key(tmp_path):
     res = runner.invoke(app, ["validate", str(stack)])
     assert res.exit_code == 2 and "s.yaml" in res.output and "thicknes" in res.output
     assert read_yaml(stack, "x")["layers"]  # the file is what the test meant
+
+
+def test_the_api_validates_every_kind_too():
+    import pmmw
+
+    assert pmmw.validate(ROOT / "configs/cwd_sweep.yaml")["kind"] == SWEEP
+    assert pmmw.validate(str(ROOT / "configs/examples/glass_on_copper.yaml"))["kind"] == STACK
+    assert "geometry" in pmmw.validate(ROOT / "configs/cinderblocks_35ghz.yaml")  # a scenario as before
