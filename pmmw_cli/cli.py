@@ -111,11 +111,14 @@ def validate(
     scenario: Path = typer.Argument(..., metavar="FILE", help="A scenario, sweep file, physical-optics job, brdf "
                                                               "stack file or Dask cluster file (YAML)."),
     set_: Optional[List[str]] = SetOpt,
+    preview: Optional[Path] = typer.Option(None, "--preview", metavar="FILE.png",
+                                           help="Also draw the view (distance to the first surface) with the "
+                                                "regions outlined and named."),
 ):
     """Check any pmmw file as its kind (printed first) and every asset it names. Renders nothing."""
     from pmmw_cli.filekinds import validate_file as run
 
-    resolved = run(scenario, set_ or [])
+    resolved = run(scenario, set_ or [], preview=preview)
     typer.echo(yaml.safe_dump(resolved, sort_keys=False, default_flow_style=None, width=100).rstrip())
 
 

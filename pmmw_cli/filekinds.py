@@ -51,7 +51,7 @@ def file_kind(raw) -> str:
     return SCENARIO
 
 
-def validate_file(path, overrides=()) -> dict:
+def validate_file(path, overrides=(), preview=None) -> dict:
     """Check ``path`` as the kind of pmmw file it is; what ``pmmw validate`` prints.
 
     Parameters
@@ -60,6 +60,9 @@ def validate_file(path, overrides=()) -> dict:
         A scenario, sweep file, physical-optics job, brdf stack file or Dask cluster file.
     overrides : list of str
         ``key.path=value`` items (``--set``): for a scenario, and for a sweep file's scenario.
+    preview : str or Path, optional
+        For a scenario (or a sweep file's scenario): a PNG of the view with its regions
+        outlined and named (`pipeline.view_preview`).
 
     Returns
     -------
@@ -77,10 +80,12 @@ def validate_file(path, overrides=()) -> dict:
         raise UserError("file not found" if not path.exists() else "is not a file", path)
     raw = read_yaml(path, "pmmw file")
     kind = file_kind(raw)
+    if kind not in (SCENARIO, SWEEP) and preview is not None:
+        raise UserError(f"--preview draws a scenario's view; {path.name} is a {kind}", "--preview")
     if kind != SCENARIO and overrides:
         raise UserError(f"--set overrides a scenario's keys; {path.name} is a {kind}", "--set")
     if kind == SWEEP:
-        return _sweep(path)
+        return _sweep(path, preview)
     if kind == PO_JOB:
         return _po_job(path)
     if kind == STACK:
@@ -90,7 +95,7 @@ def validate_file(path, overrides=()) -> dict:
     from pmmw_cli.pipeline import validate
 
     try:
-        return {"kind": SCENARIO, **validate(path, list(overrides))}
+        return {"kind": SCENARIO, **validate(path, list(overrides), preview=preview)}
     except UserError as exc:
         other = [k for k, mark in MARKS.items() if isinstance(raw, dict) and mark in raw]
         if not other:
@@ -100,7 +105,7 @@ def validate_file(path, overrides=()) -> dict:
         raise UserErrors([*getattr(exc, "errors", [exc]), hint]) from None
 
 
-def _sweep(path: Path) -> dict:
+def _sweep(path: Path, preview=None) -> dict:
     from pmmw_cli.pipeline import validate
     from pmmw_cli.sweep_spec import check_variants, load_sweep_file, zipped_keys
 
@@ -108,7 +113,7 @@ def _sweep(path: Path) -> dict:
     if not spec.scenario.is_file():
         raise UserError(f"scenario file not found: {spec.scenario}", path, "scenario")
     count = check_variants(spec)
-    base = validate(spec.scenario)
+    base = validate(spec.scenario, preview=preview)
     return {"kind": SWEEP, "scenario": str(spec.scenario), "variants": count,
             "grid": {k: list(v) for k, v in spec.grid}, "zipped": zipped_keys(spec),
             "executor": spec.executor, **({"cluster": str(spec.cluster)} if spec.cluster else {}),

@@ -347,6 +347,36 @@ def check_regions(scn) -> dict:
     return out
 
 
+def view_preview(scn, geom, path: Path) -> Path:
+    """What the imager sees, before any render: the first surface through each pixel centre,
+    shaded by how squarely it faces the imager (|cos| of the angle between the ray and the face
+    normal; the sky blank), with ``output.regions`` outlined and named
+    (`io.preview.write_regions_figure`)."""
+    from pmmw_cli.trace.intersect import make_intersector
+
+    im = scn.imager
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)
+    half = np.tan(cam.fov / 2.0)
+    v, u = np.mgrid[0:cam.height, 0:cam.width] + 0.5
+    # the pinhole direction through (u, v): the inverse of `Camera.image_coordinates`
+    d = (cam.k + np.multiply.outer((2.0 * u / cam.width - 1.0) * half, cam.x)
+         + np.multiply.outer((cam.height - 2.0 * v) / cam.width * half, cam.y)).reshape(-1, 3)
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    t, prim = make_intersector(geom.vertices, geom.faces).intersect(np.broadcast_to(cam.position, d.shape).copy(), d)
+    tri = geom.vertices[geom.faces[np.maximum(prim, 0)]]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    facing = np.abs(np.sum(n * d, axis=1)) / np.maximum(np.linalg.norm(n, axis=1), 1e-300)
+    shade = np.where(prim >= 0, facing, np.nan).reshape(cam.height, cam.width)
+    shapes = region_shapes(scn.output.regions, cam) if scn.output.regions else {}
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_regions_figure(path, shade, shapes, title=f"{scn.name}: the view and its regions", units="-",
+                             quantity="|cos| facing the imager")
+    except OSError as e:
+        raise os_problem(e, path.parent, "write the preview") from None
+    return path
+
+
 def region_masks(regions, cam) -> dict:
     """Boolean (H, W) masks of the named regions (`output.regions`) on the image."""
     h, w = cam.height, cam.width
@@ -986,12 +1016,16 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     }
 
 
-def validate(path, overrides=(), data=None, values=None) -> dict:
+def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
     """The ``pmmw validate`` job: the resolved scenario and, per frequency, the media (and the slab
-    sky's opacity and brightness, defaults included), the geometry and the resources."""
+    sky's opacity and brightness, defaults included), the geometry and the resources. With
+    ``preview`` (a PNG path) also the view's distance map with the regions outlined and named
+    (`view_preview`)."""
     clear_warnings()
     res = resolve(path, overrides, data=data, values=values)
     scn, geom = res.scenario, res.geometry
+    if preview is not None:
+        view_preview(scn, geom, Path(preview))
     per_object = {}
     for i, (name, entry) in enumerate(zip(geom.objects, scn.scene)):
         v = geom.vertices[np.unique(geom.faces[geom.face_object == i])]

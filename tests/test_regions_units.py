@@ -128,3 +128,30 @@ def test_pixel_regions_set_alongside_the_resolution_are_the_rendered_images():
     scn = load_scenario(ROOT / "configs/landing_95ghz.yaml",
                         ["imager.resolution=[100, 100]", "output.regions.runway.radius=2"])
     assert scn.output.regions["runway"].radius == 2 and scn.output.regions["beacons"].box == (218, 247, 282, 254)
+
+
+def _colour_pixels(png: Path, colour) -> int:
+    import matplotlib.image as mpimg
+
+    rgb = mpimg.imread(png)[..., :3]
+    # anti-aliased outlines: pixels within 0.08 of the colour in every channel
+    return int((np.abs(rgb - np.asarray(colour)).max(axis=2) < 0.08).sum())
+
+
+def test_validate_preview_draws_the_view_and_the_regions(tmp_path):
+    """`validate --preview` draws the view with each region outlined in its colour; the control
+    without regions has no pixel of that colour."""
+    from matplotlib.colors import to_rgb
+
+    from pmmw_cli.io.preview import REGION_COLOURS
+
+    path = _scenario(tmp_path, "{block: {bounds: [[-0.5, 4.9, 1.2], [0.5, 5.1, 1.8]]}}")
+    res = runner.invoke(app, ["validate", str(path), "--preview", str(tmp_path / "view.png")])
+    assert res.exit_code == 0, res.output
+    assert _colour_pixels(tmp_path / "view.png", to_rgb(REGION_COLOURS[0])) > 20
+    res = runner.invoke(app, ["validate", str(path), "--set", "output.regions={}", "--preview",
+                              str(tmp_path / "none.png")])
+    assert res.exit_code == 0, res.output
+    assert _colour_pixels(tmp_path / "none.png", to_rgb(REGION_COLOURS[0])) == 0
+    res = runner.invoke(app, ["validate", str(ROOT / "configs/po_sphere.yaml"), "--preview", str(tmp_path / "x.png")])
+    assert res.exit_code == 2 and "--preview" in res.output
