@@ -114,11 +114,37 @@ def _sweep(path: Path, preview=None) -> dict:
         raise UserError(f"scenario file not found: {spec.scenario}", path, "scenario")
     count = check_variants(spec)
     base = validate(spec.scenario, preview=preview)
+    _check_variant_regions(spec)
+    base["warnings"] = collected_warnings()
     return {"kind": SWEEP, "scenario": str(spec.scenario), "variants": count,
             "grid": {k: list(v) for k, v in spec.grid}, "zipped": zipped_keys(spec),
             "executor": spec.executor, **({"cluster": str(spec.cluster)} if spec.cluster else {}),
             "out": str(spec.out or Path.cwd() / "out" / f"{spec.scenario.stem}_sweep"),
             "scenario_check": {"geometry": base["geometry"], "warnings": base.get("warnings", [])}}
+
+
+def _check_variant_regions(spec) -> None:
+    """Every variant's regions in its view (`pipeline.check_regions`): a region out of view in
+    some variants is one warning per region naming them (their contrasts with it would be NaN),
+    not an error, since the other variants still compare it."""
+    from pmmw_cli.config import load_scenario
+    from pmmw_cli.errors import warn
+    from pmmw_cli.pipeline import check_regions
+    from pmmw_cli.sweep_spec import overrides_of, variants
+
+    out_of_view: dict[str, list[str]] = {}
+    for i, params in enumerate(variants(spec)):
+        scn = load_scenario(spec.scenario, overrides_of(params))
+        if not scn.output.regions:
+            continue
+        try:
+            check_regions(scn)
+        except UserError as exc:
+            for e in getattr(exc, "errors", [exc]):
+                out_of_view.setdefault(str(e.key), []).append(f"v{i:03d}")
+    for key, names in out_of_view.items():
+        warn(f"{spec.source}: {key} is behind the imager or outside the image in variant(s) {', '.join(names)}: "
+             "their contrasts with it will be NaN (pmmw validate with those values names the pixels)")
 
 
 def _po_job(path: Path) -> dict:

@@ -7,6 +7,7 @@ from typer.testing import CliRunner
 
 from pmmw_cli import pipeline
 from pmmw_cli.cli import app
+from pmmw_cli.errors import PmmwWarning
 from pmmw_cli.filekinds import CLUSTER, PO_JOB, SCENARIO, STACK, SWEEP, file_kind
 from pmmw_cli.io.yamlio import read_yaml
 from tests.scenes import ground_and_block
@@ -131,3 +132,19 @@ def test_the_api_validates_every_kind_too():
     assert pmmw.validate(ROOT / "configs/cwd_sweep.yaml")["kind"] == SWEEP
     assert pmmw.validate(str(ROOT / "configs/examples/glass_on_copper.yaml"))["kind"] == STACK
     assert "geometry" in pmmw.validate(ROOT / "configs/cinderblocks_35ghz.yaml")  # a scenario as before
+
+
+def test_a_sweeps_region_out_of_some_variants_view_is_one_warning(tmp_path):
+    scn = _tiny(tmp_path)
+    text = scn.read_text() + "output: {regions: {block: {center: [0, 4, 0.1], radius: 1}}}\n"
+    scn.write_text(text)
+    sweep = tmp_path / "sw.yaml"
+    sweep.write_text("scenario: tiny.yaml\ngrid:\n  imager.look_at: [[0, 4, 0.1], [0, -4, 0.1], [4, 0, 1.5]]\n")
+    import yaml
+
+    with pytest.warns(PmmwWarning) as caught:
+        res = runner.invoke(app, ["validate", str(sweep)])
+    assert res.exit_code == 0, res.output
+    warned = yaml.safe_load(res.stdout)["scenario_check"]["warnings"]
+    assert len(warned) == 1 and "output.regions.block" in warned[0] and "variant(s) v001, v002:" in warned[0], warned
+    assert any("variant(s) v001, v002" in str(w.message) for w in caught)
