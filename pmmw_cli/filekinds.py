@@ -20,6 +20,7 @@ checked as a scenario and fails names the other kinds when it has one of their k
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings
@@ -160,7 +161,7 @@ def _po_job(path: Path) -> dict:
     geom = build_geometry(job.targets, scenario_file=job.source_file)
     return {"kind": PO_JOB, "name": job.name, "frequencies_GHz": [f / 1e9 for f in job.frequencies],
             "polarization": list(job.polarization), "monostatic": job.monostatic,
-            **({"incidence_deg": [round(float(a) * 57.29577951308232, 6) for a in job.incidence]}
+            **({"incidence_deg": [round(math.degrees(float(a)), 6) for a in job.incidence]}
                if job.incidence is not None else {}),
             "observation": {"theta": job.observation.theta, "phi": job.observation.phi},
             "targets": {name: {"triangles": int((geom.face_object == i).sum())} for i, name in enumerate(geom.objects)},
