@@ -1,3 +1,7 @@
-"""pmmw: passive millimetre-wave imaging simulator."""
+"""The ``pmmw`` command line: the typer app (`cli`), its entry point with signal handling
+(`__main__`), and the commands' own modules (`bench`, `bench_po`, `validation`: the validation
+document's generator). The library is `pmmw`; nothing in it imports this package."""
 
-__version__ = "0.1.0"
+from pmmw import __version__
+
+__all__ = ["__version__"]

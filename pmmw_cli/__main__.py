@@ -1,4 +1,4 @@
-"""The ``pmmw`` console entry point (``python -m pmmw_cli`` too): `pmmw_cli.interrupt.run` installs
+"""The ``pmmw`` console entry point (``python -m pmmw_cli`` too): `pmmw.interrupt.run` installs
 the signal handlers, then the command line (`pmmw_cli.cli`, typer) is imported and run.
 
 This module is the top of the import graph. The handlers come first because importing typer takes
@@ -8,7 +8,7 @@ with no message at all (SIGTERM).
 
 from __future__ import annotations
 
-from pmmw_cli import interrupt
+from pmmw import interrupt
 
 
 def _app() -> None:
@@ -19,7 +19,7 @@ def _app() -> None:
 
 def main() -> None:
     """The ``pmmw`` command."""
-    from pmmw_cli.errors import show_warnings_as_lines
+    from pmmw.errors import show_warnings_as_lines
 
     show_warnings_as_lines()
     interrupt.run(_app)

@@ -20,14 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from pmmw_cli import __version__
-from pmmw_cli.constants import C0
-from pmmw_cli.imaging.imager import blur, psf_kernel
-from pmmw_cli.io.atomic import save_npz_atomic, write_text_atomic
-from pmmw_cli.io.preview import save_figure
-from pmmw_cli.pipeline import aux_channels, make_job, resolve, scenario_hash
-from pmmw_cli.trace import kernels
-from pmmw_cli.trace.pool import assemble, default_workers, render_tiles
+from pmmw import __version__
+from pmmw.constants import C0
+from pmmw.imaging.imager import blur, psf_kernel
+from pmmw.io.atomic import save_npz_atomic, write_text_atomic
+from pmmw.io.preview import save_figure
+from pmmw.pipeline import aux_channels, make_job, resolve, scenario_hash
+from pmmw.trace import kernels
+from pmmw.trace.pool import assemble, default_workers, render_tiles
 
 STRATEGIES = ("split", "stochastic", "hybrid")
 REFERENCE_THRESHOLD = 1e-6
@@ -189,7 +189,7 @@ def _section(scn, job, ref_desc, t_ref, rows, plot_name, workers):
 
 
 def _plot(rows, path: Path, name: str, noise: float):
-    from pmmw_cli.io.preview import subplots
+    from pmmw.io.preview import subplots
 
     fig, ax = subplots(figsize=(6.4, 4.4), dpi=110)
     for strategy in dict.fromkeys(r["strategy"] for r in rows):
@@ -220,10 +220,10 @@ def scaling(levels=(2, 3, 4, 5, 6, 7, 8), resolution=(128, 128), spp=4, workers=
     """
     import trimesh
 
-    from pmmw_cli.scene.camera import Camera
-    from pmmw_cli.scene.sky import UniformSky
-    from pmmw_cli.trace.intersect import make_intersector
-    from pmmw_cli.trace.job import Media, RenderSettings, TraceJob
+    from pmmw.scene.camera import Camera
+    from pmmw.scene.sky import UniformSky
+    from pmmw.trace.intersect import make_intersector
+    from pmmw.trace.job import Media, RenderSettings, TraceJob
 
     workers = workers or default_workers()
     rows = []
@@ -281,7 +281,7 @@ def _render_times_section(configs, workers):
     command."""
     import tempfile
 
-    from pmmw_cli.pipeline import render
+    from pmmw.pipeline import render
 
     lines = ["\n## Shipped scenarios at full resolution\n",
              f"Each config with its own settings, {workers} workers. *trace* is the tracing alone (the tiles "
@@ -365,8 +365,8 @@ class _RecordingSky:
 def _instrumented(job):
     """One in-process render that counts hits per medium, ambient segments sent to the layered
     atmosphere, and records the rays that reach the sky."""
-    from pmmw_cli.trace.integrator import Integrator
-    from pmmw_cli.trace.intersect import make_intersector
+    from pmmw.trace.integrator import Integrator
+    from pmmw.trace.intersect import make_intersector
 
     sky = _RecordingSky(job.sky)
     job = dataclasses.replace(job, sky=sky)
@@ -402,7 +402,7 @@ def _instrumented(job):
 def _sky_rt_cost(model, dirs, heights, chunk=20000):
     """Seconds of per-ray radiative transfer (Murakowski 2014 sec. 2.2.7) for these rays, each from its
     own height: the work the cached sky tables avoid."""
-    from pmmw_cli.atmosphere.model import layered_sky_temperature
+    from pmmw.atmosphere.model import layered_sky_temperature
 
     el = np.arcsin(np.clip(dirs[:, 2], -1.0, 1.0))
     up = el >= 0.0
@@ -427,11 +427,11 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
     """
     import tempfile
 
-    from pmmw_cli.imaging.imager import error_footprint
-    from pmmw_cli.scene.sky import AtmosphereSky
-    from pmmw_cli.trace.integrator import atmosphere_skip_length
-    from pmmw_cli.trace.intersect import make_intersector
-    from pmmw_cli.trace.job import BLACKBODY, METAL, OPAQUE
+    from pmmw.imaging.imager import error_footprint
+    from pmmw.scene.sky import AtmosphereSky
+    from pmmw.trace.integrator import atmosphere_skip_length
+    from pmmw.trace.intersect import make_intersector
+    from pmmw.trace.job import BLACKBODY, METAL, OPAQUE
 
     workers = workers or default_workers()
     out = {}
@@ -492,7 +492,7 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
 
         # no roughness sampling on smooth surfaces: the same scene with every surface given a
         # roughness that changes nothing visible (Blinn-Phong m = 1e6, facets within ~0.1 degree)
-        from pmmw_cli.physics.roughness import BlinnPhong
+        from pmmw.physics.roughness import BlinnPhong
 
         smooth_rough = BlinnPhong(1e6)
         rough_media = dataclasses.replace(job.media, roughness=(None,) + (smooth_rough,) * (len(job.media.ids) - 1))
@@ -508,8 +508,8 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
         # auxiliary channels: the whole command with and without all of them
         # auxiliary channels: the tracer keeps its per-pixel sums either way; asking adds the
         # channels to the EXR (the stderr images and writing them), timed here alone
-        from pmmw_cli.io.exr import write_exr
-        from pmmw_cli.physics.jones import stokes_images
+        from pmmw.io.exr import write_exr
+        from pmmw.physics.jones import stokes_images
 
         ideal = stokes_images(img.mean)
         chans = {c: ideal[c].astype(np.float32) for c in ("I", "Q", "U", "V", "Ex2", "Ey2")}

@@ -1,6 +1,6 @@
 """The ``pmmw`` command line (typer): parse arguments, call the pipeline; no physics here.
 
-User errors (`pmmw_cli.errors.UserError`) print one paragraph naming the file and key path and
+User errors (`pmmw.errors.UserError`) print one paragraph naming the file and key path and
 exit with status 2, never with a traceback.
 """
 
@@ -18,9 +18,9 @@ from typing import List, Optional
 import typer
 import yaml
 
-from pmmw_cli import __version__, interrupt
-from pmmw_cli.errors import UserError
-from pmmw_cli.io.inputs import check_input_path, format_suffix, name_too_long
+from pmmw import __version__, interrupt
+from pmmw.errors import UserError
+from pmmw.io.inputs import check_input_path, format_suffix, name_too_long
 
 app = typer.Typer(
     add_completion=False, no_args_is_help=True,
@@ -46,7 +46,7 @@ def _main(version: bool = typer.Option(False, "--version", "-V", callback=_print
 
 def _user_errors(fn):
     """One line and an exit status instead of a traceback: `UserError` 2, `EnvironmentProblem` 1,
-    a signal 128 + N (`pmmw_cli.interrupt`; a KeyboardInterrupt counts as SIGINT)."""
+    a signal 128 + N (`pmmw.interrupt`; a KeyboardInterrupt counts as SIGINT)."""
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
@@ -95,9 +95,9 @@ def render(
                                            help="With dask: a dask-jobqueue cluster file (as for pmmw sweep)."),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
-    from pmmw_cli import memory
-    from pmmw_cli.pipeline import parse_shard
-    from pmmw_cli.pipeline import render as run
+    from pmmw import memory
+    from pmmw.pipeline import parse_shard
+    from pmmw.pipeline import render as run
 
     with memory.overridable("--force", force):  # --force also reads a mesh or sky texture past the memory check
         run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
@@ -116,7 +116,7 @@ def validate(
                                                 "regions outlined and named."),
 ):
     """Check any pmmw file as its kind (printed first) and every asset it names. Renders nothing."""
-    from pmmw_cli.filekinds import validate_file as run
+    from pmmw.filekinds import validate_file as run
 
     resolved = run(scenario, set_ or [], preview=preview)
     typer.echo(yaml.safe_dump(resolved, sort_keys=False, default_flow_style=None, width=100).rstrip())
@@ -128,7 +128,7 @@ def materials_list(
     frequency: Optional[str] = typer.Option(None, "--frequency", "-f", help="e.g. '95 GHz': show eps there."),
 ):
     """List every material id with its kind, permittivity, temperature and source."""
-    from pmmw_cli.scene.materials import MaterialDB, format_material_table
+    from pmmw.scene.materials import MaterialDB, format_material_table
 
     f = _frequency(frequency) if frequency else None
     typer.echo(format_material_table(MaterialDB.load(), f))
@@ -147,8 +147,8 @@ def materials_show(
                                                                           "temperature, e.g. '280 K'."),
 ):
     """Show one material: its permittivity table (or value at a frequency), coating, source."""
-    from pmmw_cli.scene.materials import MaterialDB, format_material, plot_materials
-    from pmmw_cli.units import parse_quantity
+    from pmmw.scene.materials import MaterialDB, format_material, plot_materials
+    from pmmw.units import parse_quantity
 
     db = MaterialDB.load()
     f = _frequency(frequency) if frequency else None
@@ -176,7 +176,7 @@ def sky(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a PNG of T against elevation for several weathers."),
 ):
     """Sky brightness temperature against elevation and polarization, from the layered atmosphere."""
-    from pmmw_cli import skycmd
+    from pmmw import sky_table as skycmd
 
     f = _frequency(frequency)
     if fmt not in ("table", "csv"):
@@ -192,7 +192,7 @@ def sky(
 
 def _frequency(text: str, option: str = "--frequency") -> float:
     """A frequency option [Hz], within the range of pmmw's models."""
-    from pmmw_cli.config.schema import parse_frequency
+    from pmmw.config.schema import parse_frequency
 
     return parse_frequency(text, option)
 
@@ -285,7 +285,7 @@ def brdf(
     as_json: bool = typer.Option(False, "--json", metavar="", help="Print the JSON summary (brdf.json) instead of the text one."),
 ):
     """Polarized BRDF of a rough (layered) surface on Optics Express 2016's 1-degree hemispherical grid."""
-    from pmmw_cli.brdf import run_brdf
+    from pmmw.reflectance import run_brdf
 
     res = run_brdf(n=n, eps=eps, material=material, stack=stack, frequency=frequency, wavelength=wavelength,
                    incidence=incidence, azimuth=azimuth, stokes=_numbers(stokes, "--stokes", 4, "1,0,0,0"),
@@ -321,8 +321,8 @@ def sweep(
     quiet: bool = typer.Option(False, "--quiet", "-q", metavar="", help="No progress line."),
 ):
     """Render a grid of variants of a scenario; write sweep.csv and a trade-study report."""
-    from pmmw_cli.io.yamlio import read_yaml
-    from pmmw_cli.sweep import SweepSpec, load_sweep_file, parse_grid_options, run_sweep
+    from pmmw.io.yamlio import read_yaml
+    from pmmw.sweeps.run import SweepSpec, load_sweep_file, parse_grid_options, run_sweep
 
     raw = read_yaml(scenario, "scenario or sweep file") if scenario.is_file() else None
     if isinstance(raw, dict) and "grid" in raw:
@@ -375,11 +375,11 @@ def po(
                                                                   "frequency, ray tubes) exceeds what is available."),
 ):
     """Radar cross section of a mesh by physical optics (bistatic pattern or monostatic cuts)."""
-    from pmmw_cli.io.lock import output_lock
+    from pmmw.io.lock import output_lock
 
     check_input_path(mesh)
     if format_suffix(mesh) in (".yaml", ".yml"):
-        from pmmw_cli.po.job import run_job
+        from pmmw.physical_optics.job import run_job
 
         for path in run_job(mesh, out, force):
             typer.echo(f"wrote {path}")
@@ -402,8 +402,8 @@ WRITING_OUTCOME = "files already written in {out} are complete, the others missi
 def _po_run(mesh, material, eps, frequency, incidence, polarization, theta, phi, monostatic, bounces, tube, method,
             fmt, out, plot, force=False):
     """`po` on a mesh, its output folder (if any) locked."""
-    from pmmw_cli.po.command import format_rows, run_po, write_plot, write_report, write_run
-    from pmmw_cli.units import parse_quantity
+    from pmmw.physical_optics.command import format_rows, run_po, write_plot, write_report, write_run
+    from pmmw.units import parse_quantity
 
     res = run_po(mesh, material=material, eps=eps, frequency=_frequency(frequency), incidence=incidence,
                  polarization=polarization, theta=theta, phi=phi, monostatic=monostatic, bounces=bounces,
@@ -449,7 +449,7 @@ def bench(
     target = out or (Path("docs") / name if write_docs else Path("out") / "bench" / name)
     target.parent.mkdir(parents=True, exist_ok=True)
     if po:
-        from pmmw_cli.po.bench import run as run_po_bench
+        from pmmw_cli.bench_po import run as run_po_bench
 
         run_po_bench(target, command="pmmw bench " + " ".join(sys.argv[2:]))
         typer.echo(f"wrote {target}")
@@ -486,8 +486,8 @@ def view(
                                                            "<name>_<channel>.png)."),
 ):
     """Write any channel of an EXR as a preview with a colour bar and a title."""
-    from pmmw_cli.io.exr import image_size, read_exr
-    from pmmw_cli.io.preview import write_figure
+    from pmmw.io.exr import image_size, read_exr
+    from pmmw.io.preview import write_figure
 
     if not exr.is_file():
         raise UserError("file not found", exr)
@@ -498,7 +498,7 @@ def view(
     chans, attrs = read_exr(exr, channels=[channel], bytes_per_pixel=VIEW_BYTES_PER_PIXEL)
     f = attrs.get("pmmw:frequency_hz")
     title = f"{exr.stem}: {channel}" + (f", {float(f) / 1e9:g} GHz" if f is not None else "")
-    from pmmw_cli.pipeline import channel_quantity
+    from pmmw.pipeline import channel_quantity
 
     units = channel_quantity(channel)
     path = out or exr.with_name(f"{exr.stem}_{channel.replace('.', '_')}.png")

@@ -23,7 +23,7 @@ Tolerances (`printed`)
     as that range. A number pmmw measures by Monte Carlo widens the tolerance by twice its standard
     error.
 
-Detection (`pmmw_cli.imaging.detection`, Rose 1948)
+Detection (`pmmw.imaging.detection`, Rose 1948)
     "Visible", "recognisable", "a major feature", "shows up": the matched-filter signal-to-noise
     ratio of what the target changes in the sensor image is at least 5. The signal is measured by
     rendering the scene twice with the same seed and the imager's noise off: with the target and
@@ -67,8 +67,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pmmw_cli.imaging.detection import ROSE_SNR, channel_sigma, region_snr, replicate_snr
-from pmmw_cli.trace.job import C0
+from pmmw.imaging.detection import ROSE_SNR, channel_sigma, region_snr, replicate_snr
+from pmmw.trace.job import C0
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -204,7 +204,7 @@ class Render:
 
     def sensor(self, chan: str) -> np.ndarray:
         """The noiseless sensor image of ``chan`` (after the PSF) [K]."""
-        from pmmw_cli.imaging.imager import blur
+        from pmmw.imaging.imager import blur
 
         return self.ideal[chan] if self.kernel is None else blur(self.ideal[chan], self.kernel)
 
@@ -244,7 +244,7 @@ class Detection:
     def spread(self, chan: str, floor: float = 0.5) -> tuple[float, int]:
         """(rms [K], pixels) of the target's signal in the sensor image of ``chan`` where it exceeds
         ``floor`` [K]: what the matched filter sums (SNR ~ rms sqrt(pixels) / sigma)."""
-        from pmmw_cli.imaging.imager import blur
+        from pmmw.imaging.imager import blur
 
         s = self.with_target.ideal[chan] - self.without.ideal[chan]
         if self.with_target.kernel is not None:
@@ -296,10 +296,10 @@ class Measure:
         return self._cache[key]
 
     def _render(self, config, overrides) -> Render:
-        from pmmw_cli.imaging.imager import psf_kernel
-        from pmmw_cli.physics.jones import stokes_images
-        from pmmw_cli.pipeline import region_masks, resolve, trace_frequency
-        from pmmw_cli.trace.pool import default_workers
+        from pmmw.imaging.imager import psf_kernel
+        from pmmw.physics.jones import stokes_images
+        from pmmw.pipeline import region_masks, resolve, trace_frequency
+        from pmmw.trace.pool import default_workers
 
         t0 = time.perf_counter()
         quick = self.QUICK if self.quick else []
@@ -320,7 +320,7 @@ class Measure:
     def detect(self, config: str, overrides, without, chans=("Ex2", "Ey2", "I")) -> Detection:
         """The target's SNR per channel: ``overrides`` with it, ``overrides + without`` without it
         (same seed), and the control: ``without`` against ``without`` with another seed."""
-        from pmmw_cli.imaging.imager import blur
+        from pmmw.imaging.imager import blur
 
         a = self.render(config, list(overrides))
         b = self.render(config, list(overrides) + list(without))
@@ -357,14 +357,14 @@ class Measure:
 
     @staticmethod
     def atmosphere(config: str, overrides, f_ghz: float):
-        from pmmw_cli.pipeline import atmosphere_model, resolve
+        from pmmw.pipeline import atmosphere_model, resolve
 
         return atmosphere_model(resolve(REPO / config, list(overrides)).scenario, f_ghz * 1e9)
 
 
 def _setting(config, overrides, key):
     """A resolved scenario's value at dotted ``key`` (for the seed of a control render)."""
-    from pmmw_cli.pipeline import resolve
+    from pmmw.pipeline import resolve
 
     obj = resolve(REPO / config, list(overrides)).scenario
     for part in key.split("."):
@@ -422,7 +422,7 @@ def not_checked(rid, claim, thesis, where, why) -> Row:
 
 def _material(mid: str, f_ghz: float):
     """(eps, temperature [K]) of database material ``mid`` at f [GHz] (None for metals)."""
-    from pmmw_cli.scene.materials import MaterialDB
+    from pmmw.scene.materials import MaterialDB
 
     m = MaterialDB.load().get(mid)
     t = m.temperature if m.temperature is not None else 290.0
@@ -449,7 +449,7 @@ def table_row(rid, table, obj, mid, values, temperature, where):
 # sec. 2.3.1 ----------------------------------------------------------------------------------------
 
 def section_cart(m: Measure) -> list[Row]:
-    from pmmw_cli.config import load_scenario
+    from pmmw.config import load_scenario
 
     s = load_scenario(REPO / CINDERBLOCKS)
     im = s.imager
@@ -634,7 +634,7 @@ def section_truck_bikes(m: Measure) -> list[Row]:
 # sec. 3.1 ------------------------------------------------------------------------------------------
 
 def section_landing(m: Measure) -> list[Row]:
-    from pmmw_cli.config import load_scenario
+    from pmmw.config import load_scenario
 
     rows = []
     s = load_scenario(REPO / LANDING)
@@ -683,7 +683,7 @@ def section_landing(m: Measure) -> list[Row]:
                          f"{inc[0] / want[0] - 1:+.1%} / {inc[1] / want[1] - 1:+.1%} at 35 / 95 GHz",
                          command=f"pmmw render {LANDING} --set 'atmosphere.layers={LANDING_WEATHER[w]}' "
                          "(report: atmosphere, specific attenuation at the ground)"))
-    from pmmw_cli.atmosphere.itu import liquid_water_kl
+    from pmmw.atmosphere.itu import liquid_water_kl
 
     f35, f95 = float(liquid_water_kl(35e9, 288.15)), float(liquid_water_kl(95e9, 288.15))
     rows.append(fact("3.1-j", "fog specific attenuation per g/m3", "0.6-1.5 (35 GHz), 3-5 (95 GHz) dB/km", "sec. 3.1.1",
@@ -754,7 +754,7 @@ def section_landing(m: Measure) -> list[Row]:
                      "over the runway's length; at 95 GHz, closer permittivities, it stays below the "
                      "criterion".format(*rd[(35, 1000, "cloudy")].spread("Ey2"), rd[(35, 1000, "cloudy")].spread("Ex2")[0]),
                      command=rd[(95, 1000, "cloudy")].with_target.command()))
-    from pmmw_cli.physics.fresnel import interface
+    from pmmw.physics.fresnel import interface
 
     th = math.radians(86.0)
     refl = {}
@@ -840,7 +840,7 @@ def section_landing(m: Measure) -> list[Row]:
 # sec. 3.2 ------------------------------------------------------------------------------------------
 
 def section_cwd(m: Measure) -> list[Row]:
-    from pmmw_cli.config import load_scenario
+    from pmmw.config import load_scenario
 
     rows = []
     s = load_scenario(REPO / CWD["outdoor"])
@@ -862,7 +862,7 @@ def section_cwd(m: Measure) -> list[Row]:
                                    ("3.2-f", "Person", "dry_skin", {35: ("14", "16"), 95: ("5.9", "9.4")}, 310),
                                    ("3.2-g", "Ground", "cwd_ground", {35: ("2.5", "0.6"), 95: ("2.25", "0.18")}, 296)):
         rows.append(table_row(rid, "Table 3.3", obj, mid, vals, t, "Table 3.3"))
-    from pmmw_cli.scene.materials import MaterialDB
+    from pmmw.scene.materials import MaterialDB
 
     coat = MaterialDB.load().get("clothed_skin").coating[0]
     rows.append(fact("3.2-h", "denim 0.8 mm thick (leather holster 2 mm)", "0.8 mm", "sec. 3.2.1",
@@ -987,7 +987,7 @@ def section_cwd(m: Measure) -> list[Row]:
 # sec. 3.3 ------------------------------------------------------------------------------------------
 
 def section_sar(m: Measure) -> list[Row]:
-    from pmmw_cli.config import load_scenario
+    from pmmw.config import load_scenario
 
     rows = []
     s = load_scenario(REPO / SAR)
@@ -1032,7 +1032,7 @@ def section_sar(m: Measure) -> list[Row]:
                      f"0.3 dB clear + 1.5 km x 5.9 dB/km of its Table 3.5 + 5.3 dB of cloud = {sum95:.2f} dB, not "
                      f"11.7; pmmw's {p['rain'][1]:.2f} dB is that sum", command=f"pmmw render {SAR} --set 'atmosphere.layers={SAR_WEATHER['rain']}' "
                      "(report: atmosphere, path loss)"))
-    from pmmw_cli.atmosphere.itu import rain_specific_attenuation_db_km as p838
+    from pmmw.atmosphere.itu import rain_specific_attenuation_db_km as p838
 
     olsen = {35: (0.235, 1.009), 95: (1.06, 0.745)}
     got = {f: a * 10.0 ** b for f, (a, b) in olsen.items()}
@@ -1241,7 +1241,7 @@ def differences_table(m: Measure) -> str:
 
 def _cb_rough_materials(m: Measure, config: str, block: str) -> str:
     """The rough cinderblocks config's material map with its block material replaced by ``block``."""
-    from pmmw_cli.config import load_scenario
+    from pmmw.config import load_scenario
 
     mats = dict(load_scenario(REPO / config).scene[0].materials)
     for k in mats:
@@ -1326,7 +1326,7 @@ def main(argv=None) -> int:
         sections.append((title, fn(m)))
     differences = differences_table(m) if not a.only else ""
     text = document(sections, time.perf_counter() - t0, m.renders, differences)
-    from pmmw_cli.io.atomic import write_text_atomic
+    from pmmw.io.atomic import write_text_atomic
 
     write_text_atomic(Path(a.out), text + "\n")
     print(f"wrote {a.out}", file=sys.stderr)

@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from pmmw_cli.physics.jones import stokes_images
-from pmmw_cli.physics.roughness import make_model
-from pmmw_cli.scene.camera import Camera
-from pmmw_cli.scene.sky import UniformSky
-from pmmw_cli.trace.integrator import Integrator
-from pmmw_cli.trace.intersect import make_intersector
-from pmmw_cli.trace.job import C0, DIELECTRIC, KIND_CODES, Media, RenderSettings, TraceJob, split_coating
-from pmmw_cli.trace.pool import assemble
+from pmmw.physics.jones import stokes_images
+from pmmw.physics.roughness import make_model
+from pmmw.scene.camera import Camera
+from pmmw.scene.sky import UniformSky
+from pmmw.trace.integrator import Integrator
+from pmmw.trace.intersect import make_intersector
+from pmmw.trace.job import C0, DIELECTRIC, KIND_CODES, Media, RenderSettings, TraceJob, split_coating
+from pmmw.trace.pool import assemble
 
 
 def box(lo, hi):

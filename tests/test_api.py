@@ -8,7 +8,7 @@ import trimesh
 import yaml
 
 import pmmw
-from pmmw_cli.io.exr import read_exr
+from pmmw.io.exr import read_exr
 from tests.scenes import ground_and_block
 
 SCENE = {

@@ -13,7 +13,7 @@ import xarray as xr
 import yaml
 
 import pmmw
-from pmmw_cli.api import _dataset
+from pmmw.api import _dataset
 from tests.scenes import ground_and_block
 
 matplotlib.use("Agg")  # the test draws; the library never selects a backend

@@ -29,10 +29,10 @@ LAYERS = (
 # Imports up a layer still to be removed: the surface's response reaches into the tracer's media
 # records and compiled kernels (their shared pieces want a home below both).
 KNOWN_UPWARD = {
-    ("pmmw_cli.surface.surfaces", "pmmw_cli.trace.job"),
-    ("pmmw_cli.surface.surfaces", "pmmw_cli.trace.kernels"),
-    ("pmmw_cli.surface.tables", "pmmw_cli.trace.job"),
-    ("pmmw_cli.surface.tables", "pmmw_cli.trace.kernels"),
+    ("pmmw.surface.surfaces", "pmmw.trace.job"),
+    ("pmmw.surface.surfaces", "pmmw.trace.kernels"),
+    ("pmmw.surface.tables", "pmmw.trace.job"),
+    ("pmmw.surface.tables", "pmmw.trace.kernels"),
 }
 
 
@@ -151,9 +151,9 @@ def test_no_import_up_a_layer_but_the_known_ones():
 def test_the_analysis_finds_a_circle_and_an_upward_import():
     """Controls: a circle and an upward edge put into a copy of the graph are found."""
     edges = _graph()
-    edges["pmmw_cli.errors"] = edges["pmmw_cli.errors"] | {"pmmw_cli.cli"}
-    assert any("pmmw_cli.errors" in c and "pmmw_cli.cli" in c for c in _cycles(edges))
-    assert _layer("pmmw_cli.cli") > _layer("pmmw_cli.errors")
+    edges["pmmw.errors"] = edges["pmmw.errors"] | {"pmmw_cli.cli"}
+    assert any("pmmw.errors" in c and "pmmw_cli.cli" in c for c in _cycles(edges))
+    assert _layer("pmmw_cli.cli") > _layer("pmmw.errors")
 
 
 def test_the_library_draws_without_pyplot(tmp_path):
@@ -167,8 +167,8 @@ def test_the_library_draws_without_pyplot(tmp_path):
 import sys
 import numpy as np
 import matplotlib
-from pmmw_cli.io.preview import write_figure
-from pmmw_cli.scene.materials import MaterialDB, plot_materials
+from pmmw.io.preview import write_figure
+from pmmw.scene.materials import MaterialDB, plot_materials
 before = matplotlib.rcParams._get_backend_or_none()
 write_figure({str(tmp_path / 'a.png')!r}, [('I', np.random.default_rng(1).random((20, 30)) * 300)], title='t')
 plot_materials(MaterialDB.load(), ['water', 'murakowski2014.water'], {str(tmp_path / 'b.png')!r})

@@ -1,4 +1,4 @@
-"""ITU-R atmosphere equations (`pmmw_cli.atmosphere.itu`) against `itur`, PHYSICS.md and Murakowski 2014.
+"""ITU-R atmosphere equations (`pmmw.atmosphere.itu`) against `itur`, PHYSICS.md and Murakowski 2014.
 
 `itur` 0.4 is an independent implementation of the same Recommendations (P.676-12, P.835-6,
 P.840, P.838-3): where the equations and tables are the same, the agreement must be to rounding,
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pmmw_cli.atmosphere import Atmosphere, AtmosphereModel, Layer, itu
-from pmmw_cli.atmosphere.model import atmosphere_profile
+from pmmw.atmosphere import Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere.model import atmosphere_profile
 
 GHZ = 1e9
 SAME_EQUATIONS_RTOL = 1e-6  # same equations and tables, float64 rounding only

@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pmmw_cli.atmosphere import Atmosphere, AtmosphereModel, Layer, itu
-from pmmw_cli.atmosphere.itu import NP_M_PER_DB_KM
-from pmmw_cli.atmosphere.model import rain_power_law_db_km
-from pmmw_cli.config import load_scenario
-from pmmw_cli.config.load import scenario_to_display
-from pmmw_cli.errors import UserError
-from pmmw_cli.pipeline import atmosphere_model
+from pmmw.atmosphere import Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere.itu import NP_M_PER_DB_KM
+from pmmw.atmosphere.model import rain_power_law_db_km
+from pmmw.config import load_scenario
+from pmmw.config.load import scenario_to_display
+from pmmw.errors import UserError
+from pmmw.pipeline import atmosphere_model
 
 GHZ = 1e9
 REPO = Path(__file__).resolve().parents[1]

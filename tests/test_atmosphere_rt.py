@@ -1,4 +1,4 @@
-"""Layered radiative transfer of `pmmw_cli.atmosphere.model`: sky temperatures and in-scene paths.
+"""Layered radiative transfer of `pmmw.atmosphere.model`: sky temperatures and in-scene paths.
 
 The sky is checked against `pyrtlib` (an independent line-by-line radiative-transfer code with its
 own absorption model, Rosenkranz 2020, its own ray tracing with refraction, and Planck radiances)
@@ -14,8 +14,8 @@ import warnings
 import numpy as np
 import pytest
 
-from pmmw_cli.atmosphere import T_CMB, Atmosphere, AtmosphereModel, Layer, itu
-from pmmw_cli.atmosphere.model import atmosphere_profile, layered_sky_temperature, vertical_grid
+from pmmw.atmosphere import T_CMB, Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere.model import atmosphere_profile, layered_sky_temperature, vertical_grid
 
 GHZ = 1e9
 ELEVATIONS_DEG = np.array([90.0, 30.0, 10.0, 5.0])

@@ -1,4 +1,4 @@
-"""Scattering in rain: the delta-Eddington source of `pmmw_cli.atmosphere.model.scattering_source`.
+"""Scattering in rain: the delta-Eddington source of `pmmw.atmosphere.model.scattering_source`.
 
 Checks: the Mie asymmetry table against an independent Mie code; equilibrium (an isothermal
 scattering atmosphere between boundaries at its own temperature reads that temperature, in the
@@ -16,8 +16,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pmmw_cli.atmosphere import T_CMB, Atmosphere, AtmosphereModel, Layer, itu
-from pmmw_cli.atmosphere.model import layered_sky_temperature, scattering_source
+from pmmw.atmosphere import T_CMB, Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere.model import layered_sky_temperature, scattering_source
 
 GHZ = 1e9
 ELEVATIONS = np.radians([0.0, 1.0, 5.0, 10.0, 30.0, 60.0, 90.0])
@@ -142,7 +142,7 @@ def test_semi_infinite_isotropic_scatterer_matches_chandrasekhar(omega):
     mu: sqrt(1 - omega) H(mu, omega) exactly (Kirchhoff: 1 minus its plane albedo). Ours: the
     scattering source of a 60-optical-depth stack at 1 K (cells of `TAU_MAX_SCATTERING`, a 0 K
     vacuum on the observer's side), then the sky's formal solution looking into it."""
-    from pmmw_cli.atmosphere.model import TAU_MAX_SCATTERING
+    from pmmw.atmosphere.model import TAU_MAX_SCATTERING
 
     mu = np.array([0.05, 0.1, 0.2, 0.5, 0.8, 1.0])
     exact = np.sqrt(1.0 - omega) * _chandrasekhar_h(mu, omega)
@@ -297,9 +297,9 @@ def test_isothermal_box_full_of_rain_renders_its_temperature():
     deficit < 1e-5 K here): every pixel of an 8 x 8 render reads 285 K (1e-4 K), with every
     ambient segment evaluated (atmosphere_tolerance 0; the box is 0.9 optical depths across).
     With the former absorption-only source the same render reads tens of kelvin colder."""
-    from pmmw_cli.scene.camera import Camera
-    from pmmw_cli.scene.sky import AtmosphereSky
-    from pmmw_cli.trace.job import RenderSettings
+    from pmmw.scene.camera import Camera
+    from pmmw.scene.sky import AtmosphereSky
+    from pmmw.trace.job import RenderSettings
     from tests.scenes import hollow_box, make_job, material, render
 
     atm = Atmosphere(layers=(Layer("rain", 0.0, 5000.0, rain_rate=50.0),))

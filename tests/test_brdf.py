@@ -1,4 +1,4 @@
-"""`pmmw brdf` (pmmw_cli.brdf): energy balance, reciprocity, Monte Carlo against the analytic
+"""`pmmw brdf` (pmmw.reflectance): energy balance, reciprocity, Monte Carlo against the analytic
 model order by order, rough-to-smooth convergence, the Optics Express 2016 copper case (0.8692) and the
 numbers of its literal variants, NIST SCATMECH (pySCATMECH, slow, skipped when absent), the
 outputs and the user errors."""
@@ -11,10 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from pmmw_cli import brdf as B
-from pmmw_cli.errors import UserError
-from pmmw_cli.physics import fresnel
-from pmmw_cli.physics import roughness as R
+from pmmw import reflectance as B
+from pmmw.errors import UserError
+from pmmw.physics import fresnel
+from pmmw.physics import roughness as R
 
 COPPER_N = 0.23 + 3.46j  # Optics Express 2016 sec. 4.2, 635 nm
 Q_RECIP = np.diag([1.0, 1.0, -1.0, 1.0])  # Mueller reciprocity: M(wo->wi) = Q M(wi->wo)^T Q
@@ -373,7 +373,7 @@ def test_scatmech_hemispherical_integral():
 
 
 def test_minimal_call_writes_exr_png_and_json(tmp_path):
-    from pmmw_cli.io.exr import read_exr
+    from pmmw.io.exr import read_exr
 
     res = B.run_brdf(n="0.23+3.46j", incidence=40, ex=15, ey=15, samples=20_000, out=tmp_path, mueller=True)
     summary = json.loads((tmp_path / "brdf.json").read_text())
@@ -484,7 +484,7 @@ def test_material_option_uses_the_coating_and_roughness_of_the_database_entry():
     entry's roughness (none: smooth) is used unless roughness options are given."""
     import tmm
 
-    from pmmw_cli.scene.materials import MaterialDB
+    from pmmw.scene.materials import MaterialDB
 
     db = MaterialDB.load()
     f = 95e9
@@ -508,8 +508,8 @@ def test_a_stack_becomes_one_medium_of_the_renderers_tables():
     where a thickness is given, none without one, Optics Express 2016 assumption 3), each with
     its films and roughness; the substrate is a sink (``opaque``) when lossy, ``metal`` when a
     perfect conductor, a dielectric when lossless."""
-    from pmmw_cli.brdf.montecarlo import stack_media
-    from pmmw_cli.trace.job import DIELECTRIC, METAL, OPAQUE
+    from pmmw.reflectance.montecarlo import stack_media
+    from pmmw.trace.job import DIELECTRIC, METAL, OPAQUE
 
     f = 94e9
     top = B.Layer(eps=2.25 + 0.05j, roughness=R.GGX(0.3), thickness=2e-3, coating=((3.0 + 0.1j, 1e-4),))

@@ -1,4 +1,4 @@
-"""Sub-pixel samples and the hash they are drawn from (`pmmw_cli.scene.camera`, compiled): the
+"""Sub-pixel samples and the hash they are drawn from (`pmmw.scene.camera`, compiled): the
 hash against splitmix64 written with numpy's wrapping uint64 arrays, and the sample pattern
 against its definition (two R2 replicates per pixel, each rotated by its own hash)."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pmmw_cli.scene.camera import R2_ALPHA, REPLICATES, hash_uniform, pixel_samples
+from pmmw.scene.camera import R2_ALPHA, REPLICATES, hash_uniform, pixel_samples
 
 
 def _splitmix64(x):
@@ -64,7 +64,7 @@ def test_image_coordinates_invert_the_pinhole_rays():
     """`Camera.image_coordinates` of points along the rays through (u, v) gives back (u, v) (to
     1e-9 pixel: rounding of a 10-degree tangent over 37 pixels) and their distance along the
     viewing direction; a point behind the imager has a negative depth."""
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     cam = Camera.look_at([1.0, -2.0, 3.0], [0.5, 8.0, 0.0], [0, 0, 1], np.radians(10.0), (37, 23))
     rng = np.random.default_rng(4)

@@ -10,8 +10,8 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
+from pmmw.io.exr import read_exr
 from pmmw_cli.cli import app
-from pmmw_cli.io.exr import read_exr
 from tests.scenes import ground_and_block
 
 runner = CliRunner()
@@ -149,7 +149,7 @@ def test_console_script_runs_without_traceback(tmp_path):
 def test_interrupted_render_leaves_no_partial_file_and_resumes(tmp_path, monkeypatch):
     """Ctrl-C during tracing: exit 130, no EXR (not even a truncated one), finished tiles kept;
     `--resume` then renders only the rest and gives the same image as an uninterrupted run."""
-    from pmmw_cli.trace.integrator import Integrator
+    from pmmw.trace.integrator import Integrator
 
     scn = _scene(tmp_path)
     clean = tmp_path / "clean"
@@ -180,8 +180,8 @@ def test_interrupted_render_leaves_no_partial_file_and_resumes(tmp_path, monkeyp
 
 def test_refracting_mesh_that_is_not_watertight_is_warned_about(tmp_path):
     """An open dielectric mesh gets a warning naming it (and goes on, as a user may intend it)."""
-    from pmmw_cli.errors import clear_warnings, collected_warnings
-    from pmmw_cli.pipeline import resolve
+    from pmmw.errors import clear_warnings, collected_warnings
+    from pmmw.pipeline import resolve
 
     plane = trimesh.Trimesh(vertices=[[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], faces=[[0, 1, 2], [0, 2, 3]])
     plane.export(tmp_path / "plane.obj")
@@ -236,7 +236,7 @@ def test_a_shard_or_resume_with_other_settings_is_refused_naming_them(tmp_path):
 def test_sky_command_table_csv_map_and_plot(tmp_path):
     """`pmmw sky`: CSV header and rows, colder at zenith than near the horizon, fog warms the sky,
     the EXR map loads as a sky texture and reproduces the table, the plot is written."""
-    from pmmw_cli.scene.sky_texture import SkyTexture
+    from pmmw.scene.sky_texture import SkyTexture
 
     res = _run("sky", "--frequency", "95 GHz", "--format", "csv", "--elevations", "5,30,90")
     assert res.exit_code == 0, res.output
@@ -287,7 +287,7 @@ def test_flags_show_no_value_in_help(command):
 def test_validate_shows_the_slab_skys_default_opacity():
     """`validate` states the opacity the slab sky takes when none is given, and the zenith
     brightness it gives: 18.5 K at 35 GHz (the clear US standard atmosphere of PHYSICS.md)."""
-    from pmmw_cli.pipeline import validate
+    from pmmw.pipeline import validate
 
     sky = validate("configs/cinderblocks_35ghz.yaml")["sky"]["35 GHz"]
     assert sky["zenith_opacity_from"].startswith("default")
@@ -303,7 +303,7 @@ def test_the_readme_lists_exactly_the_required_keys():
 
     import pydantic
 
-    from pmmw_cli.config import schema
+    from pmmw.config import schema
 
     def required(model, prefix):
         out = []

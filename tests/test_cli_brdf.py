@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from pmmw_cli.brdf import projected_solid_angle
+from pmmw.io.exr import read_exr
+from pmmw.reflectance import projected_solid_angle
 from pmmw_cli.cli import app
-from pmmw_cli.io.exr import read_exr
 
 runner = CliRunner()
 

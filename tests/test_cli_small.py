@@ -5,7 +5,7 @@ from pathlib import Path
 
 from typer.testing import CliRunner
 
-from pmmw_cli import __version__
+from pmmw import __version__
 from pmmw_cli.cli import app
 from tests.scenes import ground_and_block
 
@@ -48,11 +48,11 @@ render: {spp: 64, min_spp: 4, target_error: 100 K, max_depth: 2, tile: 8, worker
 
 def test_bench_leaves_the_committed_page_alone_by_default(tmp_path, monkeypatch):
     import pmmw_cli.bench
-    import pmmw_cli.po.bench
+    import pmmw_cli.bench_po
 
     seen = []
     monkeypatch.setattr(pmmw_cli.bench, "bench", lambda *a, **k: seen.append(k["out_md"]))
-    monkeypatch.setattr(pmmw_cli.po.bench, "run", lambda out, **k: seen.append(out))
+    monkeypatch.setattr(pmmw_cli.bench_po, "run", lambda out, **k: seen.append(out))
     monkeypatch.chdir(tmp_path)
     for args in (["bench"], ["bench", "--po"], ["bench", "--write-docs"], ["bench", "--po", "--write-docs"],
                  ["bench", "--out", "b/x.md"]):

@@ -1,4 +1,4 @@
-"""The compiled bounce loop (`pmmw_cli.trace.kernels`) against the vectorized one it replaces for
+"""The compiled bounce loop (`pmmw.trace.kernels`) against the vectorized one it replaces for
 smooth scenes (`Integrator._bounce` with ``compiled=False``), and the compiled steps of rough
 surfaces against the roughness models' array code.
 
@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from pmmw_cli import pipeline
-from pmmw_cli.physics import roughness
-from pmmw_cli.trace.integrator import Integrator
-from pmmw_cli.trace.intersect import make_intersector
+from pmmw import pipeline
+from pmmw.physics import roughness
+from pmmw.trace.integrator import Integrator
+from pmmw.trace.intersect import make_intersector
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOOTH = ["landing_95ghz", "cinderblocks_35ghz", "cwd_outdoor_95ghz", "cwd_indoor_95ghz", "sar_cessna_95ghz"]
@@ -205,8 +205,8 @@ def _reference_coefficients(job, cur, fm, other, leaving, cos1):
     perfect conductor), emitting at the films' temperature; a bare perfect conductor at the
     body's; a bare interface (a thin sheet and a blackbody index-matched to the incident medium)
     at the incident medium's. q2 where the bare interface gives it, NaN elsewhere."""
-    from pmmw_cli.physics import fresnel, multilayer
-    from pmmw_cli.trace.job import BLACKBODY, METAL, THIN
+    from pmmw.physics import fresnel, multilayer
+    from pmmw.trace.job import BLACKBODY, METAL, THIN
 
     media = job.media
     n = cos1.size
@@ -234,7 +234,7 @@ def _reference_coefficients(job, cur, fm, other, leaving, cos1):
             t_abs[g], q2[g] = media.temperature[c], q
         for name in out:
             out[name][g] = getattr(coeff, name)
-    from pmmw_cli.physics.fresnel import Fresnel
+    from pmmw.physics.fresnel import Fresnel
 
     return Fresnel(**out), t_abs, q2
 
@@ -249,7 +249,7 @@ def test_kernel_coefficients_equal_the_vectorized_assembly():
     1e-12 relative (the same arithmetic in another order)."""
     import trimesh
 
-    from pmmw_cli.trace import kernels
+    from pmmw.trace import kernels
     from tests.scenes import UniformSky, looking_down_at, make_job, material
 
     box = trimesh.creation.box(extents=[1, 1, 1])
@@ -290,7 +290,7 @@ def test_kernel_coefficients_equal_the_vectorized_assembly():
 def test_tangents_are_world_x_projected_onto_the_face():
     """`kernels.tangents`: unit, perpendicular to the normal, and in the plane spanned by the
     normal and world X (world Y when the normal is within 26 degrees of X), to rounding."""
-    from pmmw_cli.trace import kernels
+    from pmmw.trace import kernels
 
     rng = np.random.default_rng(2)
     n = rng.normal(size=(5000, 3))
@@ -309,7 +309,7 @@ def test_tally_equals_the_array_sums():
     """`kernels.tally` (a tile's per-pixel sums) against the same sums in numpy: a first chunk of
     3 samples sets the shift (its mean), a second of 2 samples on a subset of the pixels adds to
     the shifted sums, squares and the replicates (sample number mod 2). Rounding only (1e-12)."""
-    from pmmw_cli.trace import kernels
+    from pmmw.trace import kernels
 
     rng = np.random.default_rng(5)
     npx, reps = 7, 2
@@ -352,7 +352,7 @@ def test_tile_means_are_the_sample_statistics():
     sqrt(n); 0 for one sample), and the mean of the even-numbered samples minus that of the
     odd-numbered ones (0 with one sample). Per-pixel counts 1, 2, 3 and 8, values around 300 K
     with a spread of 20 K, so that the shifted sums' rounding stays below 1e-10 K."""
-    from pmmw_cli.trace import kernels
+    from pmmw.trace import kernels
 
     rng = np.random.default_rng(11)
     counts = np.array([1, 2, 3, 8, 5])
@@ -380,14 +380,14 @@ def test_tile_means_are_the_sample_statistics():
 
 
 def test_sky_emission_kernel_equals_the_jones_algebra():
-    """`kernels.sky_emit` against the array algebra of `pmmw_cli.physics.jones`: the Jones matrix
+    """`kernels.sky_emit` against the array algebra of `pmmw.physics.jones`: the Jones matrix
     re-expressed in the sky's (h, v) basis (`rebase`, h = unit(z x k), v = k x h) and its Stokes
     terms for columns (Th, Tv) (`stokes_terms`), summed per sample; unpolarized, Tv in both
     columns. Random rays (one straight up, where h falls back to the ray's s), random complex
     Jones matrices, two rays per sample. Tolerance: rounding (1e-12 K)."""
-    from pmmw_cli.physics.jones import rebase, stokes_terms
-    from pmmw_cli.surface import Wave
-    from pmmw_cli.trace import kernels
+    from pmmw.physics.jones import rebase, stokes_terms
+    from pmmw.surface import Wave
+    from pmmw.trace import kernels
 
     rng = np.random.default_rng(3)
     n = 200
@@ -428,7 +428,7 @@ def test_crossing_a_rough_coating_layer_is_beer_lambert():
     and what it loses emitted at the layer's temperature, T (1 - tau) times its rows' powers in
     Ex2 and Ey2. Random directions, normals and Jones matrices; tolerance: rounding (1e-12 K of
     emissions up to ~1e3 K, 1e-15 of amplitudes)."""
-    from pmmw_cli.trace import kernels
+    from pmmw.trace import kernels
 
     rng = np.random.default_rng(1)
     n = 200

@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pmmw_cli.config import apply_overrides, load_scenario, scenario_to_display
-from pmmw_cli.errors import UserError, UserErrors
+from pmmw.config import apply_overrides, load_scenario, scenario_to_display
+from pmmw.errors import UserError, UserErrors
 
 BASE = """
 name: t

@@ -1,4 +1,4 @@
-"""The one detection criterion (`pmmw_cli.imaging.detection`: matched-filter SNR >= 5) against
+"""The one detection criterion (`pmmw.imaging.detection`: matched-filter SNR >= 5) against
 closed forms, its Monte Carlo error against the spread over seeds, and where a render reports it:
 report.json/report.md (controls that must fail and must pass), the regions preview, the
 ideal|sensor figure, `pmmw sweep`'s table and report."""
@@ -13,12 +13,12 @@ import yaml
 from typer.testing import CliRunner
 
 import pmmw
-from pmmw_cli import pipeline
+from pmmw import pipeline
+from pmmw.imaging import detection
+from pmmw.imaging.imager import psf_kernel
+from pmmw.io.exr import read_exr
+from pmmw.io.preview import write_figure
 from pmmw_cli.cli import app
-from pmmw_cli.imaging import detection
-from pmmw_cli.imaging.imager import psf_kernel
-from pmmw_cli.io.exr import read_exr
-from pmmw_cli.io.preview import write_figure
 from tests.scenes import ground_and_block
 
 runner = CliRunner()
@@ -233,7 +233,7 @@ def test_the_regions_preview_outlines_and_names_each_region(folder, tmp_path):
     colour: pixels of each region's colour (within 40 levels per channel: antialiasing) are there,
     at least 50 of each (a 2-pixel circle scaled to 480 px wide is about 250 px of outline), and
     none in a render without regions. Listed in report.json and report.md."""
-    from pmmw_cli.io.preview import REGION_COLOURS
+    from pmmw.io.preview import REGION_COLOURS
 
     _render(folder, tmp_path / "a")
     path = tmp_path / "a" / "previews" / "tiny_regions.png"
@@ -257,7 +257,7 @@ def test_the_ideal_and_sensor_panels_each_have_their_own_range(tmp_path):
     the step would be two mid greys: the left half of the figure (the ideal panel and its bar)
     would hold no pure black but its frame, text and ticks (about a thousand pixels). At least
     10000 black pixels: the ideal's cold half, scaled up, is about 130 x 270 px."""
-    from pmmw_cli.io.preview import panel_ranges
+    from pmmw.io.preview import panel_ranges
 
     ideal = np.full((32, 32), 300.0)
     ideal[:, 16:] = 301.0

@@ -1,5 +1,5 @@
 """The example scripts in examples/ run as a user runs them and reach their conclusions by the
-reports' one detection criterion (`pmmw_cli.imaging.detection`: matched-filter SNR over the
+reports' one detection criterion (`pmmw.imaging.detection`: matched-filter SNR over the
 target's blurred footprint >= 5, Rose 1948), in the channel the reports lead with (Ey2): one
 landing beacon is detectable from 500 m but not from 2000 m; the concealed gun at 4 m and 8 m."""
 

@@ -5,11 +5,11 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from pmmw_cli import pipeline
+from pmmw import pipeline
+from pmmw.errors import PmmwWarning
+from pmmw.filekinds import CLUSTER, PO_JOB, SCENARIO, STACK, SWEEP, file_kind
+from pmmw.io.yamlio import read_yaml
 from pmmw_cli.cli import app
-from pmmw_cli.errors import PmmwWarning
-from pmmw_cli.filekinds import CLUSTER, PO_JOB, SCENARIO, STACK, SWEEP, file_kind
-from pmmw_cli.io.yamlio import read_yaml
 from tests.scenes import ground_and_block
 
 runner = CliRunner()

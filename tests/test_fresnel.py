@@ -1,4 +1,4 @@
-"""`pmmw_cli.physics.fresnel` against textbook closed forms written here with angles.
+"""`pmmw.physics.fresnel` against textbook closed forms written here with angles.
 
 The reference computes the refraction angle by Snell's law (complex for lossy media) and the
 Fresnel formulas in terms of n and cos(theta) (Born & Wolf sec. 1.5, Hecht sec. 4.6); it shares no
@@ -8,7 +8,7 @@ code with the module, which works with normal wave-vector components and admitta
 import numpy as np
 import pytest
 
-from pmmw_cli.physics.fresnel import Fresnel, interface, normal_component
+from pmmw.physics.fresnel import Fresnel, interface, normal_component
 
 DEG = np.pi / 180.0
 
@@ -308,7 +308,7 @@ def test_compiled_square_root_is_the_principal_root():
     and the special values it hands to cmath (zero, 1e-300, 1e300, inf, NaN)."""
     import cmath
 
-    from pmmw_cli.physics.fresnel import _sqrt1
+    from pmmw.physics.fresnel import _sqrt1
 
     rng = np.random.default_rng(5)
     mag = 10.0 ** rng.uniform(-30, 30, (2, 20000))
@@ -331,7 +331,7 @@ def test_compiled_reciprocal_is_safe_over_the_whole_range():
     part first, for the (B, C) of thick stacks): against Python's complex division, the
     reference, to 2 ulp (relative 4e-16) on 20000 random values over 600 decades, where
     |z|^2 of an unscaled formula would overflow or underflow for a third of them."""
-    from pmmw_cli.physics.fresnel import _reciprocal1
+    from pmmw.physics.fresnel import _reciprocal1
 
     rng = np.random.default_rng(11)
     mag = 10.0 ** rng.uniform(-300, 300, (2, 20000))

@@ -24,8 +24,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
+from pmmw.io.exr import read_exr
 from pmmw_cli.cli import app
-from pmmw_cli.io.exr import read_exr
 
 runner = CliRunner()
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")  # numpy's warnings must not leak to users
@@ -231,7 +231,7 @@ def _lock(path: Path, kind: str) -> None:
     import socket
     import time
 
-    from pmmw_cli.io.lock import REMOTE_STALE_S, process_start
+    from pmmw.io.lock import REMOTE_STALE_S, process_start
 
     here, parent = socket.gethostname(), os.getppid()  # the test runner's parent: a live process
     rec = {"kind": "pmmw lock", "mode": "write", "command": "pmmw render x.yaml", "since": "then",
@@ -263,7 +263,7 @@ def test_any_output_folder_is_rendered_into_or_refused_and_nothing_else_is_touch
     import json
     import shutil
 
-    from pmmw_cli.io.lock import LOCK_NAME
+    from pmmw.io.lock import LOCK_NAME
 
     root = tmp_path_factory.mktemp("outfuzz")
     outside = root / "outside"
@@ -336,7 +336,7 @@ def test_any_image_size_a_header_declares_is_refused_in_one_line_or_read(meshes,
     GB."""
     import OpenImageIO as oiio
 
-    from pmmw_cli import memory, pipeline
+    from pmmw import memory, pipeline
 
     path = Path(meshes) / "sky.exr"
     path.unlink(missing_ok=True)

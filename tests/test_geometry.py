@@ -11,8 +11,8 @@ import trimesh
 from trimesh.visual import TextureVisuals
 from trimesh.visual.material import PBRMaterial
 
-from pmmw_cli.errors import UserError, clear_warnings, collected_warnings
-from pmmw_cli.scene.geometry import build_geometry, entry_transform, load_entry_mesh
+from pmmw.errors import UserError, clear_warnings, collected_warnings
+from pmmw.scene.geometry import build_geometry, entry_transform, load_entry_mesh
 
 REPO = Path(__file__).resolve().parents[1]
 CINDERBLOCKS = REPO / "scenes" / "cinderblocks" / "cinderblocks.glb"

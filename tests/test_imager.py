@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.special import j1
 
-from pmmw_cli.imaging.imager import PSF_ENERGY_TAIL, airy, apply_imager, blur, psf_kernel
+from pmmw.imaging.imager import PSF_ENERGY_TAIL, airy, apply_imager, blur, psf_kernel
 
 C0 = 299_792_458.0
 
@@ -70,8 +70,8 @@ def test_noise_has_the_stated_sigma_and_is_seeded():
 
 def _edge_scene(focus, aperture_radius, z_obj=10.0):
     """A hot/cold edge (two blackbody half-planes) facing a camera at distance z_obj."""
-    from pmmw_cli.scene.camera import Camera
-    from pmmw_cli.trace.job import RenderSettings
+    from pmmw.scene.camera import Camera
+    from pmmw.trace.job import RenderSettings
     from tests.scenes import UniformSky, box, make_job, material
 
     hot = (box([-20, z_obj, -20], [0, z_obj + 1, 20]), material(kind="blackbody", temperature=300.0))
@@ -107,9 +107,9 @@ def test_depth_of_field_blurs_as_the_thin_lens_predicts():
 
 def test_band_is_the_mean_over_sub_band_frequencies(tmp_path):
     """imager.bandwidth: the image is the average of renders at the sub-band midpoints."""
-    from pmmw_cli.io.exr import read_exr
-    from pmmw_cli.pipeline import band_frequencies
-    from pmmw_cli.pipeline import render as run
+    from pmmw.io.exr import read_exr
+    from pmmw.pipeline import band_frequencies
+    from pmmw.pipeline import render as run
     from tests.test_cli import _scene
 
     assert band_frequencies(95e9, 10e9, 5) == [91e9, 93e9, 95e9, 97e9, 99e9]
@@ -130,7 +130,7 @@ def test_primary_rays_and_their_basis_follow_the_pinhole_and_thin_lens():
     height/width of that); s is unit, perpendicular to d and in the plane of d and the imager's x;
     p = -d x s. With a thin lens every ray of one image point passes through the pinhole ray's
     point on the plane of focus, from origins on the aperture disk. Tolerances: rounding (1e-12)."""
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     fov, w, h = np.radians(10.0), 64, 48
     pin = Camera.look_at([1.0, 2.0, 3.0], [0.0, 50.0, 0.0], [0.0, 0.0, 1.0], fov, (w, h))

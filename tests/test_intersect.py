@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from pmmw_cli.trace.intersect import (
+from pmmw.trace.intersect import (
     EmbreeIntersector,
     NumpyIntersector,
     make_intersector,

@@ -9,12 +9,12 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from pmmw_cli.errors import UserError
-from pmmw_cli.io import atomic, exr
-from pmmw_cli.io.atomic import atomic_path, save_npz_atomic, write_bytes_atomic, write_text_atomic
-from pmmw_cli.io.exr import read_exr, write_exr
-from pmmw_cli.io.preview import display_range, display_scale, write_png, write_preview
-from pmmw_cli.io.report import write_report
+from pmmw.errors import UserError
+from pmmw.io import atomic, exr
+from pmmw.io.atomic import atomic_path, save_npz_atomic, write_bytes_atomic, write_text_atomic
+from pmmw.io.exr import read_exr, write_exr
+from pmmw.io.preview import display_range, display_scale, write_png, write_preview
+from pmmw.io.report import write_report
 
 CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2", "ideal.I", "aux.depth")
 

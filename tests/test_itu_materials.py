@@ -1,5 +1,5 @@
 """ITU-R P.2040-4 Table 3 building materials and ITU-R P.527-6 sec. 5.3 vegetation
-(`pmmw_cli.scene.itu_materials`).
+(`pmmw.scene.itu_materials`).
 
 P.2040: the table against three transcriptions made by other people (Sionna RT before and after
 it moved to P.2040-4, and the "wave tracer" renderer's P.2040-2 table), values printed in MathWorks'
@@ -19,8 +19,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pmmw_cli.scene.dielectric import EPS0
-from pmmw_cli.scene.itu_materials import (
+from pmmw.scene.dielectric import EPS0
+from pmmw.scene.itu_materials import (
     P527_VEGETATION_T_F,
     P2040_BUILDING_MATERIALS,
     P2040_ROWS,
@@ -210,7 +210,7 @@ def test_vegetation_bound_water_terms_are_their_complex_closed_forms():
     bound = 2.9 + 55.0 / (1.0 + cmath.sqrt(-1j * f_ghz / (0.01 * f_1)))
     assert bound.imag > 0  # loss in pmmw's sign
     # eq. (73)-(74) minus the dry and free-water parts leaves v_bw * bound
-    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+    from pmmw.atmosphere.itu import p527_water_permittivity
 
     for mg in (0.2, 0.5):
         e = p527_vegetation_permittivity(f_ghz * GHZ, T, mg)
@@ -239,7 +239,7 @@ def test_vegetation_above_freezing_is_ulaby_el_rayes_with_p527_water(f_ghz, mg):
     """Ulaby and El-Rayes 1987 (eqs. as the corn-leaf code and P.527-6 give them) with their free
     water 4.9 + 75 / (1 - i f/18) + i 18 sigma / f, sigma = 1.27 S/m: P.527-6 replaced that free
     water by its pure water, so the two differ by exactly v_fw (eps_pw - their Debye water); 1e-9."""
-    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+    from pmmw.atmosphere.itu import p527_water_permittivity
 
     T = 295.15  # 22 C, their laboratory temperature
     v_fw = mg * (0.55 * mg - 0.076)

@@ -1,11 +1,11 @@
-"""The guard against stale numba caches (`pmmw_cli.jit.clear_stale_caches`): a cached kernel
+"""The guard against stale numba caches (`pmmw.jit.clear_stale_caches`): a cached kernel
 keeps the machine code of the compiled functions it calls in other files, so an edit to any
 source with compiled code must drop every cached file (tests/test_compiled_tracer.py relies on
 it when physics code changes under a warm cache)."""
 
 from __future__ import annotations
 
-from pmmw_cli import jit
+from pmmw import jit
 
 
 def test_stale_caches_are_dropped_when_any_compiled_source_changes(tmp_path, monkeypatch):
@@ -38,7 +38,7 @@ def test_stale_caches_are_dropped_when_any_compiled_source_changes(tmp_path, mon
 
 
 def test_every_module_with_compiled_code_is_watched():
-    """A module that compiles with `pmmw_cli.jit` (or numba directly) but is missing from
+    """A module that compiles with `pmmw.jit` (or numba directly) but is missing from
     `SOURCES` would leave its callers' caches stale after an edit: the list must be complete."""
     import re
 

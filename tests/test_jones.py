@@ -1,8 +1,8 @@
-"""Jones-matrix helpers (pmmw_cli.physics.jones) against their plain-numpy definitions."""
+"""Jones-matrix helpers (pmmw.physics.jones) against their plain-numpy definitions."""
 
 import numpy as np
 
-from pmmw_cli.physics.jones import basis_change, rebase, row_power, stokes_terms
+from pmmw.physics.jones import basis_change, rebase, row_power, stokes_terms
 
 
 def _bases(rng, n):
@@ -39,7 +39,7 @@ def test_rebase_within_one_plane_keeps_the_emitted_power():
 
 
 def test_cross_matches_numpy_cross_with_broadcasting():
-    from pmmw_cli.physics.vec import cross
+    from pmmw.physics.vec import cross
 
     rng = np.random.default_rng(5)
     a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))

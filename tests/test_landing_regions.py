@@ -3,7 +3,7 @@
 holds the row of five beacons across the threshold (plates and their reflections in the ground)
 and no other beacon; every region is in view; and a sweep keeps the regions in their written
 order, which names each pair "a - b" with a the target whose blurred footprint its SNR uses
-(`pmmw_cli.imaging.detection.region_snr`). Geometry only: no render."""
+(`pmmw.imaging.detection.region_snr`). Geometry only: no render."""
 
 from pathlib import Path
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from pmmw_cli.config import load_scenario
-from pmmw_cli.pipeline import region_shapes
-from pmmw_cli.scene.camera import Camera
-from pmmw_cli.sweep import load_sweep_file, overrides_of, variants
+from pmmw.config import load_scenario
+from pmmw.pipeline import region_shapes
+from pmmw.scene.camera import Camera
+from pmmw.sweeps.run import load_sweep_file, overrides_of, variants
 
 REPO = Path(__file__).resolve().parent.parent
 LANDING = REPO / "configs/landing_95ghz.yaml"
@@ -31,7 +31,7 @@ def _beacons() -> dict[str, np.ndarray]:
         if not name.startswith("beacon"):
             continue
         v = trimesh.transformations.transform_points(scene.geometry[name].vertices, transform)
-        v = np.c_[v[:, 0], -v[:, 2], v[:, 1]]  # glTF Y up -> Z up (pmmw_cli.scene.geometry)
+        v = np.c_[v[:, 0], -v[:, 2], v[:, 1]]  # glTF Y up -> Z up (pmmw.scene.geometry)
         out[name] = np.vstack([v, v * [1.0, 1.0, -1.0]])
     return out
 

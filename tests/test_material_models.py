@@ -16,11 +16,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
+from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings
+from pmmw.physics.fresnel import interface
+from pmmw.scene.dielectric import EPS0
+from pmmw.scene.materials import MaterialDB
 from pmmw_cli.cli import app
-from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings
-from pmmw_cli.physics.fresnel import interface
-from pmmw_cli.scene.dielectric import EPS0
-from pmmw_cli.scene.materials import MaterialDB
 
 runner = CliRunner()
 
@@ -172,7 +172,7 @@ def test_p527_pure_water_is_liebe_as_smrt_writes_it(f_ghz, t_k):
     1e-12 relative (the same published formula in double precision)."""
     from smrt.permittivity.water import water_permittivity_maetzler87
 
-    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+    from pmmw.atmosphere.itu import p527_water_permittivity
 
     ours = complex(p527_water_permittivity(f_ghz * 1e9, t_k))
     theirs = complex(water_permittivity_maetzler87(f_ghz * 1e9, t_k))
@@ -188,7 +188,7 @@ def test_p527_sea_water_against_klein_swift():
     from smrt import PSU
     from smrt.permittivity.saline_water import seawater_permittivity_klein76
 
-    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+    from pmmw.atmosphere.itu import p527_water_permittivity
 
     for t_k in (278.15, 293.15, 298.15):
         for s in (10.0, 35.0):
@@ -199,7 +199,7 @@ def test_p527_sea_water_against_klein_swift():
 
 
 def _soil_eps(f, t_k=293.15, **params):
-    from pmmw_cli.scene.dielectric import make_dielectric
+    from pmmw.scene.dielectric import make_dielectric
 
     return make_dielectric({"name": "soil", **params}).eps(f, t_k)
 
@@ -245,7 +245,7 @@ def test_soil_default_bulk_density_is_p527_eq_57():
     """rho_b = 1.07256 + 0.078886 ln(sand) + 0.038753 ln(clay) + 0.032732 ln(silt) [%] when none is
     given: the loam of 40/20/40 % gives 1.6004 g/cm3, and the entry with the value written out
     gives the same eps to 1e-12."""
-    from pmmw_cli.scene.dielectric import p527_bulk_density
+    from pmmw.scene.dielectric import p527_bulk_density
 
     rho_b = 1.07256 + 0.078886 * math.log(40) + 0.038753 * math.log(20) + 0.032732 * math.log(40)
     assert p527_bulk_density(40, 20) == pytest.approx(rho_b, rel=1e-12) and rho_b == pytest.approx(1.6004, abs=1e-4)
@@ -283,8 +283,8 @@ def test_leaf_model_limits_and_the_thesis_table(db):
     eps' falls with md, and the table's eps' (to its printed digits) lies between md 0.6's and md
     0.2's at both frequencies.
     """
-    from pmmw_cli.atmosphere.itu import p527_water_permittivity
-    from pmmw_cli.scene.dielectric import make_dielectric
+    from pmmw.atmosphere.itu import p527_water_permittivity
+    from pmmw.scene.dielectric import make_dielectric
 
     def leaf(md, f, t_k=293.15, s=10.0):
         return make_dielectric({"name": "leaves", "dry_matter": md, "salinity": s}).eps(f, t_k)
@@ -360,7 +360,7 @@ def test_soil_and_leaf_models_are_finite_and_lossy_everywhere(f_ghz, t_k, mv, sa
     0-0.75 and salinity 0-40 g/kg: finite eps, eps' >= 1 for soil, eps'' >= 0 for both (the soil
     model's limits on the Recommendation's conductivity terms are what keep dry soils at a few
     GHz and sandy soils from NaN or gain)."""
-    from pmmw_cli.scene.dielectric import make_dielectric
+    from pmmw.scene.dielectric import make_dielectric
 
     clay = clay_share * (100.0 - sand)
     soil = _soil_eps(f_ghz * 1e9, t_k, sand=sand, clay=clay, moisture=mv, bulk_density=1.4)

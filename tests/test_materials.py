@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings
-from pmmw_cli.scene.materials import (
+from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings
+from pmmw.scene.materials import (
     KINDS,
     CoatingLayer,
     Material,
@@ -420,8 +420,8 @@ def test_materials_are_immutable(db):
 
 
 def test_roughness_and_bump_entries(db):
-    from pmmw_cli.physics.roughness import GGX, AshikhminShirley
-    from pmmw_cli.scene.bump import BumpMap
+    from pmmw.physics.roughness import GGX, AshikhminShirley
+    from pmmw.scene.bump import BumpMap
 
     new = db.with_overrides({
         "rough_sand": {"eps": [3.9, 0.56], "roughness": {"model": "ggx", "alpha": 0.3},

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
-from pmmw_cli.config.load import _split_key
-from pmmw_cli.errors import UserError, UserErrors, clear_warnings, collected_warnings
-from pmmw_cli.scene.materials import MaterialDB
+from pmmw.config.load import _split_key
+from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings
+from pmmw.scene.materials import MaterialDB
 
 ROOT = Path(__file__).resolve().parent.parent
 BAND = (35e9, 94e9, 140e9, 220e9, 300e9)  # the frequency trade studies' frequencies [Hz]
@@ -132,7 +132,7 @@ def test_namespaced_ids_in_key_paths():
 
 
 def test_set_reaches_a_namespaced_material(tmp_path):
-    from pmmw_cli.config.load import apply_overrides
+    from pmmw.config.load import apply_overrides
 
     raw = {"materials": {"murakowski2014.water": {"temperature": "280 K"}}}
     out = apply_overrides(raw, ['materials."murakowski2014.water".temperature=290 K'])
@@ -153,7 +153,7 @@ def test_out_of_range_warns_once_per_material_and_frequency(db):
 def test_sweep_report_lists_each_warning_once_with_its_variants(tmp_path):
     import json
 
-    from pmmw_cli.sweep_report import _warning_lines
+    from pmmw.sweeps.report import _warning_lines
 
     for name, warnings in (("v000", ["a"]), ("v001", ["a", "b"]), ("v002", [])):
         (tmp_path / name).mkdir()
@@ -177,8 +177,8 @@ TRADE_GAPS = {"landing_frequency": set(),
 
 @pytest.mark.parametrize("stem", sorted(TRADE_GAPS))
 def test_frequency_trade_studies_use_materials_valid_across_the_band(stem):
-    from pmmw_cli.pipeline import validate
-    from pmmw_cli.sweep import load_sweep_file, overrides_of, variants
+    from pmmw.pipeline import validate
+    from pmmw.sweeps.run import load_sweep_file, overrides_of, variants
 
     spec = load_sweep_file(ROOT / "configs" / f"{stem}.yaml")
     combos = variants(spec)

@@ -1,6 +1,6 @@
 """Material permittivity models against independent references over 35-300 GHz.
 
-pmmw's models (`pmmw_cli.scene.dielectric.MODELS`, `pmmw_cli.atmosphere.itu`) are checked against
+pmmw's models (`pmmw.scene.dielectric.MODELS`, `pmmw.atmosphere.itu`) are checked against
 code that shares nothing with them:
 
 * SMRT (`smrt.permittivity.*`): its own transcriptions of Liebe 1991, Maetzler 2006, Hufford 1991,
@@ -42,13 +42,13 @@ def nadir_emissivity(eps: complex) -> float:
 
 
 def _p527(f_ghz, t_k, salinity=0.0) -> complex:
-    from pmmw_cli.atmosphere.itu import p527_water_permittivity
+    from pmmw.atmosphere.itu import p527_water_permittivity
 
     return complex(p527_water_permittivity(f_ghz * 1e9, t_k, salinity))
 
 
 def _liebe(f_ghz, t_k) -> complex:
-    from pmmw_cli.scene.dielectric import MODELS
+    from pmmw.scene.dielectric import MODELS
 
     return complex(MODELS["water"].fn(f_ghz * 1e9, t_k))
 
@@ -253,7 +253,7 @@ def test_ice_equals_smrt_maetzler06(f_ghz, t_k):
     (Maetzler 2006 pp. 456-461; 0.01-3000 GHz by the source): the same formula, 1e-12 relative."""
     from smrt.permittivity.ice import ice_permittivity_maetzler06
 
-    from pmmw_cli.scene.dielectric import MODELS
+    from pmmw.scene.dielectric import MODELS
 
     ours = complex(MODELS["ice"].fn(f_ghz * 1e9, t_k))
     theirs = complex(ice_permittivity_maetzler06(f_ghz * 1e9, t_k))
@@ -272,7 +272,7 @@ def test_ice_against_smrt_hufford91(f_ghz, t_k):
     so 20 % relative."""
     from smrt.permittivity.ice import ice_permittivity_hufford91_maetzler87
 
-    from pmmw_cli.scene.dielectric import MODELS
+    from pmmw.scene.dielectric import MODELS
 
     ours = complex(MODELS["ice"].fn(f_ghz * 1e9, t_k))
     theirs = complex(ice_permittivity_hufford91_maetzler87(f_ghz * 1e9, t_k))
@@ -285,7 +285,7 @@ def test_ice_against_smrt_hufford91(f_ghz, t_k):
 
 def _soil(f_ghz, sand, clay, mv, t_k=293.15) -> complex:
     """pmmw's ``soil`` with SMRT's fixed bulk and particle densities (1.3, 2.664 g/cm^3)."""
-    from pmmw_cli.scene.dielectric import make_dielectric
+    from pmmw.scene.dielectric import make_dielectric
 
     return make_dielectric({"name": "soil", "sand": sand, "clay": clay, "moisture": mv, "bulk_density": 1.3,
                             "particle_density": 2.664}).eps(f_ghz * 1e9, t_k)

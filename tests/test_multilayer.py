@@ -1,4 +1,4 @@
-"""`pmmw_cli.physics.multilayer` against the independent `tmm` package (S. Byrnes).
+"""`pmmw.physics.multilayer` against the independent `tmm` package (S. Byrnes).
 
 tmm uses the same exp(-i w t) convention (n = n' + i n'', Im kz > 0 decaying), the same r_s and
 the same r_p sign (Born & Wolf r_par, equal to our H-field ratio), and the same transmitted-power
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import tmm
 
-from pmmw_cli.physics.fresnel import interface
-from pmmw_cli.physics.multilayer import stack
+from pmmw.physics.fresnel import interface
+from pmmw.physics.multilayer import stack
 
 C0 = 299_792_458.0
 DEG = np.pi / 180.0

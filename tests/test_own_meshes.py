@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from pmmw_cli.errors import UserError, clear_warnings, collected_warnings
-from pmmw_cli.scene.export import export_glb
-from pmmw_cli.scene.geometry import build_geometry, file_up_axis
+from pmmw.errors import UserError, clear_warnings, collected_warnings
+from pmmw.scene.export import export_glb
+from pmmw.scene.geometry import build_geometry, file_up_axis
 
 # the box's extents are exact small numbers stored as float32 in the GLB: 1e-6 m is far below any
 # difference between lying and standing (1 m)
@@ -72,7 +72,7 @@ def test_a_glb_that_states_its_up_axis_is_read_so(tmp_path):
 
 
 def test_validate_prints_each_objects_bounds_and_up_axis(tmp_path):
-    from pmmw_cli.pipeline import validate
+    from pmmw.pipeline import validate
 
     path = tmp_path / "box.glb"
     _upright_box().export(path)

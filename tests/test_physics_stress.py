@@ -11,8 +11,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pmmw_cli.physics.fresnel import interface
-from pmmw_cli.physics.multilayer import stack
+from pmmw.physics.fresnel import interface
+from pmmw.physics.multilayer import stack
 
 C0 = 299_792_458.0
 TOL = 1e-12

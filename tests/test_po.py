@@ -10,9 +10,9 @@ import trimesh
 from scipy import integrate
 from typer.testing import CliRunner
 
+from pmmw.physical_optics import solver
+from pmmw.physical_optics.command import CSV_HEADER, load_target
 from pmmw_cli.cli import app
-from pmmw_cli.po import solver
-from pmmw_cli.po.command import CSV_HEADER, load_target
 
 runner = CliRunner()
 C0 = 299_792_458.0

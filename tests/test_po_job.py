@@ -8,8 +8,8 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
+from pmmw.io.exr import read_exr
 from pmmw_cli.cli import app
-from pmmw_cli.io.exr import read_exr
 
 runner = CliRunner()
 C0 = 299_792_458.0
@@ -84,7 +84,7 @@ def test_shipped_po_jobs_validate(name):
     are run for the README (`pmmw po configs/po_*.yaml`)."""
     from pathlib import Path
 
-    from pmmw_cli.po.job import _targets, load_job
+    from pmmw.physical_optics.job import _targets, load_job
 
     job = load_job(Path("configs") / f"{name}.yaml")
     target = _targets(job, job.frequencies[0])

@@ -1,13 +1,13 @@
-"""The octree far field (`pmmw_cli.po.octree`) against the direct facet sum (`solver.far_field`),
+"""The octree far field (`pmmw.physical_optics.octree`) against the direct facet sum (`solver.far_field`),
 which shares only the exact triangle phase integral with it."""
 
 import numpy as np
 import pytest
 import trimesh
 
-from pmmw_cli.po import solver
-from pmmw_cli.po.command import load_target
-from pmmw_cli.po.octree import far_field_octree
+from pmmw.physical_optics import solver
+from pmmw.physical_optics.command import load_target
+from pmmw.physical_optics.octree import far_field_octree
 
 F = 95e9
 LAM = solver.C0 / F
@@ -84,7 +84,7 @@ def test_nothing_lit_radiates_nothing(tmp_path):
 def test_bench_po_writes_its_table(tmp_path):
     """`pmmw bench --po` on one tiny cell: a table row with both times and an error below the
     octree's 1e-3 tolerance."""
-    from pmmw_cli.po.bench import run
+    from pmmw_cli.bench_po import run
 
     path = run(tmp_path / "b.md", cases=[(3.0, 2, 2000)])
     row = [line for line in path.read_text().splitlines() if line.startswith("| 320 ")]

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pmmw_cli.pipeline import make_job, resolve
-from pmmw_cli.trace import pool
+from pmmw.pipeline import make_job, resolve
+from pmmw.trace import pool
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -52,7 +52,7 @@ def test_slots_round_trip_a_tile_and_leave_the_result_without_arrays():
 _REFAULTS = """
 import resource, sys
 import numpy as np
-from pmmw_cli.trace import pool
+from pmmw.trace import pool
 if sys.argv[1] == "keep":
     pool._reuse_freed_memory()
 faults = []
@@ -86,7 +86,7 @@ def test_a_rendering_process_reuses_the_memory_of_freed_arrays():
 def _tiles_and_what_they_see(*overrides):
     """The cinderblocks' tiles at 64 x 64 pixels in tiles of 16, in `pool._by_cost` order, and the
     media that an 8 x 8 grid of camera rays per tile hits (Embree)."""
-    from pmmw_cli.trace.intersect import make_intersector
+    from pmmw.trace.intersect import make_intersector
 
     res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml",
                   ["imager.resolution=[64, 64]", "render.tile=16", *overrides])
@@ -123,8 +123,8 @@ def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(mo
     estimate read `6118 s left`). The control: cached kernels say nothing."""
     import time
 
-    from pmmw_cli import jit
-    from pmmw_cli.trace import kernels
+    from pmmw import jit
+    from pmmw.trace import kernels
 
     res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[16, 8]", "render.tile=8",
                                                                   "render.spp=1"])

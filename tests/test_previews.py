@@ -5,9 +5,9 @@ import numpy as np
 import OpenImageIO as oiio
 from typer.testing import CliRunner
 
+from pmmw.io.exr import write_exr
+from pmmw.io.preview import MIN_DISPLAY_WIDTH, display_range, write_figure
 from pmmw_cli.cli import app
-from pmmw_cli.io.exr import write_exr
-from pmmw_cli.io.preview import MIN_DISPLAY_WIDTH, display_range, write_figure
 
 runner = CliRunner()
 
@@ -37,7 +37,7 @@ def test_a_small_image_is_scaled_up_with_its_own_display_range(tmp_path):
 def test_each_panel_of_a_pair_has_its_own_range(tmp_path):
     """The ideal image beside the sensor image: each on its own display range (the thesis's
     clipping of each image), the first panel's returned."""
-    from pmmw_cli.io.preview import panel_ranges
+    from pmmw.io.preview import panel_ranges
 
     a, b = np.full((8, 8), 250.0), np.full((8, 8), 340.0)
     a[:, 4:], b[:, 4:] = 260.0, 360.0

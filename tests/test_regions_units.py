@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from pmmw.config import load_scenario
+from pmmw.errors import UserError
+from pmmw.pipeline import check_regions, region_masks, region_shapes
+from pmmw.scene.camera import Camera
 from pmmw_cli.cli import app
-from pmmw_cli.config import load_scenario
-from pmmw_cli.errors import UserError
-from pmmw_cli.pipeline import check_regions, region_masks, region_shapes
-from pmmw_cli.scene.camera import Camera
 from tests.scenes import ground_and_block
 
 runner = CliRunner()
@@ -143,7 +143,7 @@ def test_validate_preview_draws_the_view_and_the_regions(tmp_path):
     without regions has no pixel of that colour."""
     from matplotlib.colors import to_rgb
 
-    from pmmw_cli.io.preview import REGION_COLOURS
+    from pmmw.io.preview import REGION_COLOURS
 
     path = _scenario(tmp_path, "{block: {bounds: [[-0.5, 4.9, 1.2], [0.5, 5.1, 1.8]]}}")
     res = runner.invoke(app, ["validate", str(path), "--preview", str(tmp_path / "view.png")])

@@ -345,7 +345,7 @@ def test_every_temperature_key_has_one_bound(f, top, value):
 def store(f, tmp_path):
     """A content-addressed store (files named by hash, no extension) and links into it: the
     block as GLB and PLY, a sky texture."""
-    from pmmw_cli.scene.sky_texture import write_sky_texture
+    from pmmw.scene.sky_texture import write_sky_texture
 
     (tmp_path / "store").mkdir()
     scene = tmp_path / "scene"

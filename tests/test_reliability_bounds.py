@@ -23,13 +23,13 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from pmmw_cli import pipeline
+from pmmw import pipeline
+from pmmw.errors import UserError
+from pmmw.io.exr import write_exr
 from pmmw_cli.cli import app
-from pmmw_cli.errors import UserError
-from pmmw_cli.io.exr import write_exr
 
 try:
-    from pmmw_cli import memory
+    from pmmw import memory
 except ImportError:  # a version before the bounds: its tests fail on what it does, not here
     memory = None
 
@@ -185,7 +185,7 @@ def test_an_obj_naming_a_huge_material_library_is_refused_before_it_is_read(tmp_
         res = _bounded(command, scn, "--out", tmp_path / "out") if command == "render" else _bounded(command, scn)
         assert res.returncode == 2, res.stderr[-2000:]
         _one_error_line(res.stdout + res.stderr, "s.yaml", "scene[0].mesh", "'huge.mtl'", "at most 8 MiB")
-    from pmmw_cli.scene.geometry import asset_files  # what the render's hash lists
+    from pmmw.scene.geometry import asset_files  # what the render's hash lists
 
     with pytest.raises(UserError, match="at most 8 MiB"):
         asset_files(tmp_path / "tri.obj")
@@ -244,8 +244,8 @@ def test_po_sizes_the_octree_from_the_frequency_before_solving(tmp_path):
                    "--theta", "0:180:1", "--phi", "0:359:1", "--method", "octree", "--format", "csv")
     assert res.returncode == 2, res.stderr[-2000:]
     _one_error_line(res.stdout + res.stderr, "plate.obj", "300 GHz", "lower frequency", "--force")
-    from pmmw_cli.po import command
-    from pmmw_cli.po.command import load_target
+    from pmmw.physical_optics import command
+    from pmmw.physical_optics.command import load_target
 
     target = load_target(plate, "metal", None, 10e9)
     k = 2 * np.pi * 10e9 / 299_792_458.0
@@ -356,8 +356,8 @@ def test_the_render_estimate_bounds_a_measured_peak_within_a_factor_3(tmp_path):
     rays: 250 MB) whole although a forked worker shares most of it with the parent and a small
     render's wave is small, and the mesh's reading at the most a format takes; a looser estimate
     would refuse renders that fit."""
-    from pmmw_cli.config import load_scenario
-    from pmmw_cli.pipeline import estimate_resources
+    from pmmw.config import load_scenario
+    from pmmw.pipeline import estimate_resources
 
     triangles = _grid_obj(tmp_path / "sheet.obj", 708)  # 999,698 triangles
     scn = tmp_path / "sheet.yaml"

@@ -58,7 +58,7 @@ render: {spp: 2, max_depth: 4, tile: 8, workers: 1}
 _PRELOAD = """
 import os, time
 from pathlib import Path
-import pmmw_cli.trace.integrator as integrator
+import pmmw.trace.integrator as integrator
 
 if not getattr(integrator, "_test_slow", False):  # Dask may run a preload more than once
     integrator._test_slow = True

@@ -16,12 +16,12 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from pmmw_cli import pipeline
+from pmmw import pipeline
+from pmmw.config import load_scenario
+from pmmw.errors import UserError
+from pmmw.io.exr import write_exr
+from pmmw.io.yamlio import MAX_NODES, load_yaml
 from pmmw_cli.cli import app
-from pmmw_cli.config import load_scenario
-from pmmw_cli.errors import UserError
-from pmmw_cli.io.exr import write_exr
-from pmmw_cli.io.yamlio import MAX_NODES, load_yaml
 
 runner = CliRunner()
 
@@ -246,7 +246,7 @@ def test_a_full_disk_leaves_the_previous_outputs_whole_and_the_tiles_for_resume(
     out = tmp_path / "out"
     assert _run("render", scn, "--out", out).exit_code == 0
     old = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
-    import pmmw_cli.io.preview as preview
+    import pmmw.io.preview as preview
 
     def full(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", str(out / "previews" / "x.png"))
@@ -260,7 +260,7 @@ def test_a_full_disk_leaves_the_previous_outputs_whole_and_the_tiles_for_resume(
     assert not list(out.glob(".pmmw-staging-*"))
     assert list((out / ".pmmw-tiles").rglob("tile_*.npz"))
     monkeypatch.setattr(pipeline, "write_figure", preview.write_figure)
-    from pmmw_cli.trace.integrator import Integrator
+    from pmmw.trace.integrator import Integrator
 
     def no_tracing(self, tile):
         raise AssertionError("--resume traced a tile that was already finished")
@@ -314,12 +314,12 @@ def test_stale_tile_folders_are_removed(tmp_path):
 def test_a_tile_is_traced_in_waves_of_bounded_size(monkeypatch):
     """spp 4096 on one 32x32 tile took 4.8 GB: a pass is now split so no wave exceeds MAX_WAVE
     camera rays, and the estimate is unchanged (same pixels, same sample numbers)."""
-    from pmmw_cli.scene.camera import Camera
-    from pmmw_cli.scene.sky import UniformSky
-    from pmmw_cli.trace import integrator
-    from pmmw_cli.trace.integrator import Integrator
-    from pmmw_cli.trace.intersect import make_intersector
-    from pmmw_cli.trace.job import RenderSettings
+    from pmmw.scene.camera import Camera
+    from pmmw.scene.sky import UniformSky
+    from pmmw.trace import integrator
+    from pmmw.trace.integrator import Integrator
+    from pmmw.trace.intersect import make_intersector
+    from pmmw.trace.job import RenderSettings
     from tests.scenes import box, make_job, material
 
     cam = Camera.look_at((0, -3, 0.5), (0, 0, 0.5), (0, 0, 1), np.radians(30), (8, 8))

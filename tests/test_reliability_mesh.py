@@ -15,9 +15,9 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
+from pmmw.errors import UserError
+from pmmw.scene.geometry import asset_files
 from pmmw_cli.cli import app
-from pmmw_cli.errors import UserError
-from pmmw_cli.scene.geometry import asset_files
 
 runner = CliRunner()
 

@@ -16,10 +16,10 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from pmmw.io import lock as lockmod
+from pmmw.io.exr import read_exr
+from pmmw.io.rundir import Staging
 from pmmw_cli.cli import app
-from pmmw_cli.io import lock as lockmod
-from pmmw_cli.io.exr import read_exr
-from pmmw_cli.io.rundir import Staging
 from tests.scenes import ground_and_block
 
 runner = CliRunner()
@@ -155,7 +155,7 @@ def test_stale_tiles_are_deleted_file_by_file_and_a_user_file_keeps_its_folder(t
     assert _run("render", scn, "--out", out, "--keep-tiles").exit_code == 0
     (stale,) = (out / ".pmmw-tiles").iterdir()
     (stale / "notes.txt").write_text("mine")
-    from pmmw_cli.errors import clear_warnings, collected_warnings
+    from pmmw.errors import clear_warnings, collected_warnings
 
     clear_warnings()
     res = _run("render", scn, "--out", out, "--spp", "3")  # another hash: the first folder is stale
@@ -196,8 +196,8 @@ def test_two_frequencies_that_would_write_the_same_files_are_refused(tmp_path):
 def test_sub_band_tile_folders_are_distinct_however_narrow_the_band(tmp_path):
     """Sub-band folders were named by the frequency to 6 digits: a 1 kHz band's four sub-bands
     shared one folder, and a resume mixed their tiles."""
-    from pmmw_cli.config import load_scenario
-    from pmmw_cli.pipeline import tile_folders
+    from pmmw.config import load_scenario
+    from pmmw.pipeline import tile_folders
 
     path = _scene(tmp_path)
     scn = load_scenario(path, ["imager.bandwidth=1 kHz", "imager.band_samples=4"])

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pmmw_cli.io.exr import read_exr
+from pmmw.io.exr import read_exr
 
 ROOT = Path(__file__).resolve().parents[1]
 PMMW = Path(sys.executable).parent / "pmmw"
@@ -39,7 +39,7 @@ EXIT_S = 5.0
 _KILLER = """
 import os, signal, sys
 from pathlib import Path
-from pmmw_cli.trace.integrator import Integrator
+from pmmw.trace.integrator import Integrator
 
 kill, marks, always = int(sys.argv[1]), Path(sys.argv[2]), sys.argv[3] == "always"
 render_tile = Integrator.render_tile
@@ -258,8 +258,8 @@ def test_resume_renders_damaged_tiles_again(tmp_path, clean):
 def test_a_saved_tile_is_loaded_only_when_every_array_is_plausible(tmp_path):
     """`_load_tile` against single faults: sky (inf depth) is valid; a NaN, a wrong shape, dtype,
     box or index is not (the tile is then rendered again)."""
-    from pmmw_cli.trace.integrator import TileResult
-    from pmmw_cli.trace.pool import _load_tile, _save_tile
+    from pmmw.trace.integrator import TileResult
+    from pmmw.trace.pool import _load_tile, _save_tile
 
     tile = (4, 8, 16, 16, 20)  # index, x0, y0, x1, y1: 8 x 4 pixels
     h, w = 4, 8

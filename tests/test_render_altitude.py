@@ -12,10 +12,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel
-from pmmw_cli.scene.camera import Camera
-from pmmw_cli.scene.sky import AtmosphereSky
-from pmmw_cli.trace.job import RenderSettings
+from pmmw.atmosphere.model import Atmosphere, AtmosphereModel
+from pmmw.scene.camera import Camera
+from pmmw.scene.sky import AtmosphereSky
+from pmmw.trace.job import RenderSettings
 from tests.scenes import box, make_job, material, render
 
 T_GROUND = 290.0  # [K] the sky model's ground and the ground mesh (a blackbody) alike

@@ -3,10 +3,10 @@
 import numpy as np
 import trimesh
 
-from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
-from pmmw_cli.scene.camera import Camera
-from pmmw_cli.scene.sky import AtmosphereSky
-from pmmw_cli.trace.job import RenderSettings
+from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+from pmmw.scene.camera import Camera
+from pmmw.scene.sky import AtmosphereSky
+from pmmw.trace.job import RenderSettings
 from tests.scenes import box, make_job, material, render
 
 F95 = 95e9
@@ -80,8 +80,8 @@ def test_short_segments_skip_the_atmosphere_within_the_stated_bound():
     render uses, so the comparison is deterministic). The images must differ (the skip was taken).
     Observed: 0.016 K against the 0.12 K bound (the bound takes the worst temperature contrast and
     every segment at full weight)."""
-    from pmmw_cli.scene.sky import UniformSky
-    from pmmw_cli.trace.integrator import atmosphere_skip_length
+    from pmmw.scene.sky import UniformSky
+    from pmmw.trace.integrator import atmosphere_skip_length
     from tests.scenes import hollow_box
 
     model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=1e-3),)), F95)
@@ -161,7 +161,7 @@ def test_sky_lookup_reads_the_tables_as_numpy_interp_at_every_height_and_elevati
     on a table node and rays below the horizon (the ground through the air from the ray's height:
     `AtmosphereSky.ground_through_air`; the bare ground from at or below z = 0). Tolerance 1e-9 K: the
     two interpolate the same two points and differ only in rounding (~1e-13 K)."""
-    from pmmw_cli.atmosphere.model import SKY_ELEVATIONS
+    from pmmw.atmosphere.model import SKY_ELEVATIONS
 
     model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
     sky = AtmosphereSky(model, 281.5)
@@ -229,9 +229,9 @@ def test_an_imager_high_above_the_scene_reads_the_same_image_with_the_tabulated_
     within 1e-9 K in every pixel. Landing's imager, 70 m up, and any thin lens walk in full."""
     from pathlib import Path
 
-    from pmmw_cli import pipeline
-    from pmmw_cli.trace.integrator import Integrator, camera_column
-    from pmmw_cli.trace.intersect import make_intersector
+    from pmmw import pipeline
+    from pmmw.trace.integrator import Integrator, camera_column
+    from pmmw.trace.intersect import make_intersector
 
     configs = Path(__file__).resolve().parents[1] / "configs"
     res = pipeline.resolve(configs / "sar_cessna_95ghz.yaml",

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import tmm
 
-from pmmw_cli.trace.job import RenderSettings
+from pmmw.trace.job import RenderSettings
 from tests.scenes import (
     UniformSky,
     box,
@@ -92,7 +92,7 @@ def _room(temperature=300.0):
 
 
 def _room_camera():
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     return Camera.look_at([0.0, -4.0, 0.5], [0.0, 2.0, 0.0], [0, 0, 1], np.radians(70), (48, 36))
 
@@ -196,8 +196,8 @@ def test_thick_water_coating_equals_water_half_space():
 
 def test_metal_mirror_at_45_degrees_sees_the_sky_overhead():
     """A 45-degree metal plate reflects the zenith: Ex2 = Ey2 = Tsky(zenith)."""
-    from pmmw_cli.scene.camera import Camera
-    from pmmw_cli.scene.sky import SlabSky
+    from pmmw.scene.camera import Camera
+    from pmmw.scene.sky import SlabSky
 
     plate = box([-1, -0.01, -1], [1, 0.01, 1])
     plate.apply_transform(__import__("trimesh").transformations.rotation_matrix(np.radians(-45), [1, 0, 0]))
@@ -243,9 +243,9 @@ def test_polarized_sky_texture_in_the_imager_basis(tmp_path, roll_deg):
     for the imager's x, y (eq. 2.14, 2.15 with incoherent h and v components). V = 0.
     Tolerance 1e-3 K: the texture is uniform in each channel, so only rounding remains.
     """
-    from pmmw_cli.scene.camera import Camera
-    from pmmw_cli.scene.sky import TextureSky
-    from pmmw_cli.scene.sky_texture import SkyTexture
+    from pmmw.scene.camera import Camera
+    from pmmw.scene.sky import TextureSky
+    from pmmw.scene.sky_texture import SkyTexture
 
     th_val, tv_val = 40.0, 120.0
     sky = TextureSky(SkyTexture(np.full((90, 180), tv_val), np.full((90, 180), th_val)))
@@ -280,7 +280,7 @@ def test_branch_choice_strategies_are_unbiased(strategy):
     weight 1/(P or 1-P): the image mean must lie within 5 standard errors (estimated from the
     samples) of the closed form.
     """
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     eps, t_bb, t_sky = 2.25, 300.0, 20.0
     lossless = (box([-1000, -1000, -50], [1000, 1000, 0]), material(eps=eps, temperature=300.0))
@@ -291,8 +291,8 @@ def test_branch_choice_strategies_are_unbiased(strategy):
     settings = RenderSettings(spp=64, max_depth=8, threshold=1e-9, termination="temperature",
                               strategy=strategy, split_depth=1, tile=8)
     job = make_job([lossless, absorber], cam, UniformSky(t_sky, 290.0), F35, settings)
-    from pmmw_cli.trace.integrator import Integrator
-    from pmmw_cli.trace.intersect import make_intersector
+    from pmmw.trace.integrator import Integrator
+    from pmmw.trace.intersect import make_intersector
 
     res = Integrator(job, make_intersector(job.vertices, job.faces)).render_tile(job.tiles()[0])
     rs, rp = fresnel_closed_form(eps, np.radians(theta))
@@ -311,8 +311,8 @@ def test_adaptive_sampling_reaches_the_target_error():
     settings = RenderSettings(spp=64, max_depth=6, threshold=0.05, termination="roulette",
                               target_error=0.5, min_spp=4, tile=16)
     job = make_job(_room(300.0), _room_camera(), UniformSky(0.0, 0.0), F95, settings)
-    from pmmw_cli.trace.integrator import Integrator
-    from pmmw_cli.trace.intersect import make_intersector
+    from pmmw.trace.integrator import Integrator
+    from pmmw.trace.intersect import make_intersector
 
     integ = Integrator(job, make_intersector(job.vertices, job.faces))
     results = [integ.render_tile(t) for t in job.tiles()]
@@ -355,11 +355,11 @@ def test_adaptive_sampling_per_psf_footprint_meets_the_target_after_the_blur():
     sequence converges faster than the 1/sqrt(N) the estimate assumes), and the footprint rule
     must add under half the samples the per-pixel rule adds after the first pass (observed 1080
     against 2760)."""
-    from pmmw_cli.imaging.imager import blur, error_footprint, psf_kernel
-    from pmmw_cli.scene.camera import Camera
-    from pmmw_cli.trace.integrator import Integrator
-    from pmmw_cli.trace.intersect import make_intersector
-    from pmmw_cli.trace.pool import assemble
+    from pmmw.imaging.imager import blur, error_footprint, psf_kernel
+    from pmmw.scene.camera import Camera
+    from pmmw.trace.integrator import Integrator
+    from pmmw.trace.intersect import make_intersector
+    from pmmw.trace.pool import assemble
 
     n, side, dist, rot = 32, 3.0, 10.0, np.radians(25.0)
     plate = box([-side / 2, dist, -side / 2], [side / 2, dist + 0.01, side / 2])

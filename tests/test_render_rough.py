@@ -1,8 +1,8 @@
 """Rough and bumped surfaces in the renderer.
 
 References: energy conservation (isothermal enclosures read their temperature; a rough lossless
-dielectric reflects plus transmits 1), `pmmw_cli.brdf.monte_carlo` (the renderer's surface code,
-`pmmw_cli.surface`, driven forward from the source side over an infinite plane: these comparisons
+dielectric reflects plus transmits 1), `pmmw.reflectance.monte_carlo` (the renderer's surface code,
+`pmmw.surface`, driven forward from the source side over an infinite plane: these comparisons
 check the renderer's backward, reciprocal use of it through its wavefront, media stack, geometry,
 intersector and sky, not the surface physics, which tests/test_brdf.py checks against the analytic
 model and SCATMECH), the Optics Express 2016 copper number, and the flat-surface Fresnel closed form
@@ -16,10 +16,10 @@ import math
 import numpy as np
 import pytest
 
-from pmmw_cli import brdf as B
-from pmmw_cli.physics import roughness as R
-from pmmw_cli.scene.bump import BumpMap, gaussian_surface
-from pmmw_cli.trace.job import RenderSettings
+from pmmw import reflectance as B
+from pmmw.physics import roughness as R
+from pmmw.scene.bump import BumpMap, gaussian_surface
+from pmmw.trace.job import RenderSettings
 from tests.scenes import UniformSky, box, hollow_box, looking_down_at, make_job, material, render, sphere
 
 F95 = 95e9
@@ -48,7 +48,7 @@ def _room(t, model, bump=None):
 
 
 def _room_camera():
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     return Camera.look_at([0.0, -4.0, 0.5], [0.0, 2.0, 0.0], [0, 0, 1], np.radians(70), (24, 18))
 
@@ -147,7 +147,7 @@ def test_rough_converges_to_smooth():
 
 def test_smooth_scenes_never_touch_the_roughness_code(monkeypatch):
     """'Smooth costs nothing': with no rough or bumped material the facet code is never called."""
-    from pmmw_cli.surface import surfaces
+    from pmmw.surface import surfaces
 
     def boom(*a, **k):
         raise AssertionError("roughness code called for a smooth scene")
@@ -239,8 +239,8 @@ def test_bump_texture_file_gives_its_slopes(tmp_path):
     """A height texture (here an EXR ramp written with pmmw's writer) tiled over `size`: the
     central-difference slope equals height x (ramp step) / (pixel size) away from the wrap
     (exact for a linear ramp, to float32 rounding of the stored values)."""
-    from pmmw_cli.io.exr import write_exr
-    from pmmw_cli.scene.bump import make_bump
+    from pmmw.io.exr import write_exr
+    from pmmw.scene.bump import make_bump
 
     n = 32
     ramp = np.tile(np.arange(n, dtype=np.float32) / n, (n, 1))
@@ -279,7 +279,7 @@ def test_rough_cinderblocks_config_resolves_its_rough_bumpy_sand():
     realization over 16 x 16 correlation lengths: 10 %)."""
     from pathlib import Path
 
-    from pmmw_cli.pipeline import resolve, validate
+    from pmmw.pipeline import resolve, validate
 
     path = Path(__file__).resolve().parents[1] / "configs/cinderblocks_rough_35ghz.yaml"
     sand = validate(path)["media"]["35 GHz"]["desert_sand"]

@@ -10,8 +10,8 @@ import trimesh
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from pmmw_cli.scene.camera import Camera
-from pmmw_cli.trace.job import RenderSettings
+from pmmw.scene.camera import Camera
+from pmmw.trace.job import RenderSettings
 from tests.scenes import UniformSky, box, looking_down_at, make_job, material, render, sphere
 
 F95 = 95e9
@@ -120,7 +120,7 @@ def test_random_rough_scenes_render_within_the_range_of_their_temperatures(
     """Hypothesis: the same nested scenes with random roughness models and parameters (from
     mirror-like to extreme), rough coating layers, and bump maps up to slope 3 (steeper than
     the view): every pixel finite and within [min T, max T]."""
-    from pmmw_cli.scene.bump import BumpMap, gaussian_surface
+    from pmmw.scene.bump import BumpMap, gaussian_surface
 
     bump = None
     if bump_slope > 0:

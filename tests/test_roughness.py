@@ -1,4 +1,4 @@
-"""Microfacet models (pmmw_cli.physics.roughness): normalization, Smith masking against
+"""Microfacet models (pmmw.physics.roughness): normalization, Smith masking against
 independent quadratures, exact visible-normal sampling, Stryjewski et al. 2009's ensemble average against a
 high-precision direct integration (mpmath), the registry and its user errors."""
 
@@ -11,8 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hst
 
-from pmmw_cli.errors import UserError, UserErrors
-from pmmw_cli.physics import roughness as R
+from pmmw.errors import UserError, UserErrors
+from pmmw.physics import roughness as R
 
 Z = np.array([0.0, 0.0, 1.0])
 X = np.array([1.0, 0.0, 0.0])

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pmmw_cli.config.schema import Region
-from pmmw_cli.physics.jones import stokes_images
-from pmmw_cli.pipeline import atmosphere_model, make_job, region_masks, resolve, validate
-from pmmw_cli.trace.pool import assemble, render_tiles
+from pmmw.config.schema import Region
+from pmmw.physics.jones import stokes_images
+from pmmw.pipeline import atmosphere_model, make_job, region_masks, resolve, validate
+from pmmw.trace.pool import assemble, render_tiles
 
 REPO = Path(__file__).resolve().parents[1]
 # scenarios: not the sweep files (a top-level `grid:`) nor the physical-optics jobs (po_*)
@@ -102,7 +102,7 @@ SAR = REPO / "configs/sar_cessna_95ghz.yaml"
 def sar_sweep_weathers() -> dict[str, str]:
     """The `atmosphere.layers` values of configs/sar_sweep.yaml (clear, cloud, rain in its order), as
     --set values."""
-    from pmmw_cli.sweep import _yaml_value, load_sweep_file
+    from pmmw.sweeps.run import _yaml_value, load_sweep_file
 
     layers = dict(load_sweep_file(REPO / "configs/sar_sweep.yaml").grid)["atmosphere.layers"]
     return dict(zip(("clear", "cloud", "rain"), (_yaml_value(v) for v in layers)))
@@ -185,8 +185,8 @@ def test_landing_fogs_are_the_thesis_columns():
     in the landing sweep and trade study (the column to 1e-6: the configs write 7 digits); with them
     the 95 GHz heavy fog adds sec. 3.1.3's path loss from the sky via a beacon at 1000 m to the
     imager, 2.2 dB, of which 0.8 dB vertically through the fog, each to its printed digit (0.05 dB)."""
-    from pmmw_cli.config.schema import WeatherLayer
-    from pmmw_cli.sweep import _yaml_value, load_sweep_file
+    from pmmw.config.schema import WeatherLayer
+    from pmmw.sweeps.run import _yaml_value, load_sweep_file
 
     for name in ("landing_sweep.yaml", "landing_trade.yaml"):
         fogs = dict(load_sweep_file(REPO / "configs" / name).grid)["atmosphere.layers"][1:]
@@ -225,7 +225,7 @@ def test_target_error_applies_after_the_blur_only_when_the_imager_blurs():
     """render.target_error: with an aperture the per-pixel goal is target / sqrt(sum psf^2) (the
     landing PSF spans ~15 pixels: a factor > 5); without one it is the target itself (factor 1,
     exactly)."""
-    from pmmw_cli.imaging.imager import error_footprint, psf_kernel
+    from pmmw.imaging.imager import error_footprint, psf_kernel
 
     blurred = make_job(resolve(LANDING, ["render.target_error=0.4 K"]), 95e9)
     kern = psf_kernel(blurred.camera.pixel_angle, blurred.k0, 0.6)
@@ -238,8 +238,8 @@ def test_target_error_applies_after_the_blur_only_when_the_imager_blurs():
 def test_shipped_sweep_files_resolve_every_variant(path):
     """Each shipped sweep file loads, and every one of its variants is a valid scenario (the
     renders themselves are the README's trade studies)."""
-    from pmmw_cli.config import load_scenario
-    from pmmw_cli.sweep import load_sweep_file, overrides_of, variants
+    from pmmw.config import load_scenario
+    from pmmw.sweeps.run import load_sweep_file, overrides_of, variants
 
     spec = load_sweep_file(path)
     combos = variants(spec)

@@ -16,7 +16,7 @@ import trimesh
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from pmmw_cli.scene.geometry import load_entry_mesh
+from pmmw.scene.geometry import load_entry_mesh
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / "scenes"

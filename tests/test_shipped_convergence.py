@@ -25,8 +25,8 @@ import os
 
 import pytest
 
-from pmmw_cli.config import load_scenario
-from pmmw_cli.pipeline import region_limit, render
+from pmmw.config import load_scenario
+from pmmw.pipeline import region_limit, render
 
 pytestmark = pytest.mark.slow
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pmmw_cli.errors import UserError
-from pmmw_cli.scene.sky_texture import SkyTexture, write_sky_texture
+from pmmw.errors import UserError
+from pmmw.scene.sky_texture import SkyTexture, write_sky_texture
 
 # Directions pass through atan2 on the way back to pixel coordinates, so a pixel centre is found
 # again only to float64 roundoff (a few ulp of the coordinate), not bit for bit.
@@ -125,7 +125,7 @@ def test_file_round_trip(tmp_path):
 
 
 def test_missing_channel_names_file_key_and_channels(tmp_path):
-    from pmmw_cli.io.exr import write_exr
+    from pmmw.io.exr import write_exr
 
     path = tmp_path / "rgb_sky.exr"
     write_exr(path, {"R": np.ones((2, 4)), "G": np.ones((2, 4)), "Tv": np.ones((2, 4))})

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from pmmw_cli import pipeline
+from pmmw import pipeline
+from pmmw.errors import UserError
+from pmmw.io.exr import read_exr
+from pmmw.sweeps.run import SweepSpec, linspace, parse_grid_options, variants
 from pmmw_cli.cli import app
-from pmmw_cli.errors import UserError
-from pmmw_cli.io.exr import read_exr
-from pmmw_cli.sweep import SweepSpec, linspace, parse_grid_options, variants
 from tests.scenes import ground_and_block
 
 runner = CliRunner()
@@ -187,7 +187,7 @@ def test_bad_sweep_options_are_one_line(tmp_path, args, words):
 # as to the OOM killer. The marks file is created atomically, so exactly one kill happens.
 _PRELOAD = """
 import os, signal
-import pmmw_cli.pipeline, pmmw_cli.trace.integrator
+import pmmw.pipeline, pmmw.trace.integrator
 
 def _kill_once():
     try:
@@ -196,21 +196,21 @@ def _kill_once():
         return
     os.kill(os.getpid(), signal.SIGKILL)
 
-if getattr(pmmw_cli.pipeline, "_test_killer", False):  # Dask may run a preload more than once
+if getattr(pmmw.pipeline, "_test_killer", False):  # Dask may run a preload more than once
     pass
 elif os.environ["PMMW_TEST_KILL"] == "sweep":
-    _render = pmmw_cli.pipeline.render
+    _render = pmmw.pipeline.render
     def render(*a, **k):
         _kill_once()
         return _render(*a, **k)
-    pmmw_cli.pipeline.render = render
+    pmmw.pipeline.render = render
 else:
-    _tile = pmmw_cli.trace.integrator.Integrator.render_tile
+    _tile = pmmw.trace.integrator.Integrator.render_tile
     def render_tile(self, tile):
         _kill_once()
         return _tile(self, tile)
-    pmmw_cli.trace.integrator.Integrator.render_tile = render_tile
-pmmw_cli.pipeline._test_killer = True
+    pmmw.trace.integrator.Integrator.render_tile = render_tile
+pmmw.pipeline._test_killer = True
 """
 
 

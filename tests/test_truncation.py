@@ -11,13 +11,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pmmw_cli.imaging.imager import blur, blur_adjoint, psf_kernel
-from pmmw_cli.physics.jones import stokes_images
-from pmmw_cli.pipeline import region_stats
-from pmmw_cli.trace.integrator import Integrator
-from pmmw_cli.trace.intersect import make_intersector
-from pmmw_cli.trace.job import RenderSettings
-from pmmw_cli.trace.pool import assemble
+from pmmw.imaging.imager import blur, blur_adjoint, psf_kernel
+from pmmw.physics.jones import stokes_images
+from pmmw.pipeline import region_stats
+from pmmw.trace.integrator import Integrator
+from pmmw.trace.intersect import make_intersector
+from pmmw.trace.job import RenderSettings
+from pmmw.trace.pool import assemble
 from tests.scenes import UniformSky, box, looking_down_at, make_job, material, sphere
 
 F95 = 95e9
@@ -56,7 +56,7 @@ def _cluttered_job(max_depth):
         (box([1.0, -1.2, 0], [1.2, 1.2, 1.0]), material(kind="metal", temperature=250.0)),
         (sphere([0.0, 0.0, 0.5], 0.4), material(eps=2.2 + 0j, temperature=320.0)),
     ]
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     cam = Camera.look_at([0.3, -2.5, 2.0], [0.0, 0.0, 0.4], [0, 0, 1], np.radians(60), (24, 24))
     settings = RenderSettings(spp=1, max_depth=max_depth, threshold=1e-9, termination="temperature", tile=24)
@@ -99,7 +99,7 @@ def _roulette_room(seed):
             (box([-5, -5, 3.0], [5, 5, 3.1]), material(kind="metal", temperature=300.0)),
             (box([-5, 4.9, 0], [5, 5, 3]), material(kind="metal", temperature=300.0)),
             (sphere([0, 1.0, 1.0], 0.7), material(eps=2.5 + 0.01j, temperature=300.0))]
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     cam = Camera.look_at([0.0, -4.0, 1.5], [0.0, 2.0, 0.8], [0, 0, 1], np.radians(60), (32, 32))
     settings = RenderSettings(spp=4, max_depth=40, threshold=0.05, termination="roulette", tile=32, seed=seed)
@@ -111,7 +111,7 @@ def test_region_standard_errors_predict_the_scatter_over_seeds():
     the scatter of the same figures over 12 seeds. With 12 seeds the sample standard deviation
     is within a factor 0.55-1.45 of the truth with probability > 99 %; the predicted error is
     averaged over the seeds."""
-    from pmmw_cli.config.schema import Region
+    from pmmw.config.schema import Region
 
     regions = {"a": Region(box=[4, 4, 14, 14]), "b": Region(box=[18, 10, 28, 26])}
     kernel = psf_kernel(np.radians(60) / 32, 2 * np.pi * 95e9 / 3e8, 0.02)
@@ -145,7 +145,7 @@ def _predicted_and_observed_scatter(make, scn, kernel):
 def test_one_sample_per_pixel_gives_no_standard_error():
     job = _mirror_job(2)
     img = _image(job)
-    from pmmw_cli.config.schema import Region
+    from pmmw.config.schema import Region
 
     scn = SimpleNamespace(output=SimpleNamespace(regions={"a": Region(box=[0, 0, 2, 2])}),
                           imager=SimpleNamespace(noise=1.0), render=SimpleNamespace(max_depth=2, termination="temperature"))
@@ -159,7 +159,7 @@ def _checkerboard(seed, spp):
     4 m straight down with the image turned 30 degrees to them: every square's edges cross
     pixels at slant, so most of the variance is the pixels' partial coverage, where the
     low-discrepancy sub-pixel samples beat independent ones."""
-    from pmmw_cli.scene.camera import Camera
+    from pmmw.scene.camera import Camera
 
     objects, n, a = [], 12, 0.23
     for i in range(n):
@@ -179,7 +179,7 @@ def test_region_standard_errors_hold_for_low_discrepancy_samples_at_edges():
     estimate (from the two independently rotated replicates of each pixel) predicts the scatter
     of a region mean and a contrast over 12 seeds within 0.55-1.45 (the sampling range of a
     12-seed standard deviation at > 99 %)."""
-    from pmmw_cli.config.schema import Region
+    from pmmw.config.schema import Region
 
     regions = {"a": Region(box=[2, 2, 16, 16]), "b": Region(box=[16, 14, 30, 30])}
     kernel = psf_kernel(np.radians(30) / 32, 2 * np.pi * 95e9 / 3e8, 0.05)
@@ -194,8 +194,8 @@ def test_the_rain_sky_stays_within_the_range_the_truncation_bound_assumes():
     so the range must cover every elevation and observer height, not only the cells' mean
     sources; checked on 10 mm/h rain under a cloud at 95 GHz (the SAR rain weather) over a 250 K
     ground, colder than the air, which the scattering solution sees."""
-    from pmmw_cli.atmosphere.model import Atmosphere, AtmosphereModel, Layer
-    from pmmw_cli.scene.sky import AtmosphereSky
+    from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+    from pmmw.scene.sky import AtmosphereSky
 
     atm = Atmosphere(profile="standard", layers=(Layer("rain", 0.0, 1500.0, rain_rate=10.0),
                                                  Layer("cloud", 1000.0, 2000.0, liquid_water=1.3e-3)))
@@ -212,7 +212,7 @@ def test_the_rain_sky_stays_within_the_range_the_truncation_bound_assumes():
 def test_the_rain_two_stream_ground_is_the_skys_ground():
     """The scene's sky puts `sky.ground_temperature` below the horizon; the scattering solution of
     the same atmosphere stands on the same ground."""
-    from pmmw_cli.pipeline import atmosphere_model, resolve
+    from pmmw.pipeline import atmosphere_model, resolve
 
     res = resolve("configs/sar_cessna_95ghz.yaml", ["sky.ground_temperature=260 K",
                                                    "atmosphere.layers=[{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h}]"])

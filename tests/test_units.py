@@ -21,15 +21,15 @@ import pytest
 from pydantic import BaseModel
 from typer.testing import CliRunner
 
+from pmmw.config import load_scenario
+from pmmw.config.schema import Quantity, Scenario
+from pmmw.errors import UserError
+from pmmw.scene import bump as bump_mod
+from pmmw.scene import materials as mat_mod
+from pmmw.scene.materials import MaterialDB
+from pmmw.sky_table import parse_layer
+from pmmw.units import parse_quantity
 from pmmw_cli.cli import app
-from pmmw_cli.config import load_scenario
-from pmmw_cli.config.schema import Quantity, Scenario
-from pmmw_cli.errors import UserError
-from pmmw_cli.scene import bump as bump_mod
-from pmmw_cli.scene import materials as mat_mod
-from pmmw_cli.scene.materials import MaterialDB
-from pmmw_cli.skycmd import parse_layer
-from pmmw_cli.units import parse_quantity
 
 UNIT_RTOL = 1e-12  # pure unit arithmetic: rounding only (module docstring)
 REF = pint.UnitRegistry()  # independent of pmmw's registry
@@ -315,7 +315,7 @@ def test_display_round_trips_any_units(tmp_path, base, overrides):
     """`scenario_to_display` writes SI values back as unit strings that load to the same values."""
     import yaml
 
-    from pmmw_cli.config import scenario_to_display
+    from pmmw.config import scenario_to_display
 
     s = load_scenario(write(tmp_path, base), overrides)
     shown = scenario_to_display(s)
@@ -421,7 +421,7 @@ def test_bump_wrong_dimension_names_the_key():
 
 @pytest.mark.parametrize("layer", ["rain,0 ft,3 km,0.5 in/h", "rain,0,3000 m,3.5277777777777777e-06 m/s"])
 def test_sky_layer_option_units(layer):
-    from pmmw_cli.config.schema import WeatherLayer
+    from pmmw.config.schema import WeatherLayer
 
     w = WeatherLayer.model_validate(parse_layer(layer))
     assert (w.base, w.top) == (0.0, 3000.0) and same(w.rain_rate, REF.Quantity("0.5 in/h").to("mm/h").magnitude)

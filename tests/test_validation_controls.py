@@ -17,8 +17,8 @@ shipped imagers' noise and PSFs, so a target far above the threshold at full siz
 import numpy as np
 import pytest
 
+from pmmw.imaging.detection import ROSE_SNR
 from pmmw_cli import validation as v
-from pmmw_cli.imaging.detection import ROSE_SNR
 
 SMALL = ["imager.resolution=[96, 96]", "render.spp=4", "render.target_error=null"]
 # the clothed body's Monte Carlo noise is large (skin reflects about half: each sample either mirrors
@@ -80,7 +80,7 @@ def test_an_absent_object_changes_no_pixel(tmp_path):
     errors); the same block of metal (the control) must exceed it."""
     import trimesh
 
-    from pmmw_cli.pipeline import resolve, trace_frequency
+    from pmmw.pipeline import resolve, trace_frequency
     from tests.scenes import ground_and_block
 
     ground_and_block(tmp_path)

@@ -6,17 +6,17 @@ Orderings ("A is colder/warmer than B") hold when the two regions' means differ 
 ``MARGIN`` = 10 K (5 x the cart's 2 K noise per pixel, sec. 2.3.1: an order that a single noisy
 pixel would show); the 4-sample Monte Carlo error of a region mean is ~1 K (the renders' replicate
 spread), a tenth of it. "Stands out" / "not visible" is pmmw's one detection criterion
-(`pmmw_cli.imaging.detection`): the region SNR against what is beside it, here without the PSF
+(`pmmw.imaging.detection`): the region SNR against what is beside it, here without the PSF
 (the quick renders leave the aperture off: Rose's contrast times the square root of the area),
 at least 5 or below it.
 """
 
 from pathlib import Path
 
-from pmmw_cli.config.schema import Region
-from pmmw_cli.physics.jones import stokes_images
-from pmmw_cli.pipeline import make_job, region_masks, resolve
-from pmmw_cli.trace.pool import assemble, render_tiles
+from pmmw.config.schema import Region
+from pmmw.physics.jones import stokes_images
+from pmmw.pipeline import make_job, region_masks, resolve
+from pmmw.trace.pool import assemble, render_tiles
 
 REPO = Path(__file__).resolve().parents[1]
 TRUCK = REPO / "configs/truck_35ghz.yaml"
@@ -32,7 +32,7 @@ PIXELS: dict = {}  # region -> its number of pixels in the last `_region_means`
 
 def _snr(means, a, b, c) -> float:
     """Region ``a`` against ``b`` in channel ``c`` by the criterion, without the PSF."""
-    from pmmw_cli.imaging.detection import region_snr
+    from pmmw.imaging.detection import region_snr
 
     return region_snr(means[a][c] - means[b][c], [True] * PIXELS[a], None, SIGMA)
 

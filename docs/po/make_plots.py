@@ -9,8 +9,8 @@ import numpy as np
 import trimesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from pmmw_cli.po import solver  # noqa: E402
-from pmmw_cli.po.command import load_target  # noqa: E402
+from pmmw.physical_optics import solver  # noqa: E402
+from pmmw.physical_optics.command import load_target  # noqa: E402
 from tests.po_refs import sphere_bistatic_rcs  # noqa: E402
 
 HERE = Path(__file__).resolve().parent

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from pmmw_cli.scene.export import check_glb, export_glb
+from pmmw.scene.export import check_glb, export_glb
 
 # Concrete masonry unit (nominal 400 x 200 x 200 mm with 10 mm joints) [m].
 BLOCK_LENGTH, BLOCK_WIDTH, BLOCK_HEIGHT = 0.390, 0.190, 0.190

@@ -36,8 +36,8 @@ import numpy as np
 import trimesh
 from scipy import ndimage
 
-from pmmw_cli.scene.export import check_glb, export_glb
-from pmmw_cli.scene.shapes import box, cell_block
+from pmmw.scene.export import check_glb, export_glb
+from pmmw.scene.shapes import box, cell_block
 
 VARIANTS = ("outdoor", "indoor")
 CLOTHINGS = ("shell", "coating")

@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from pmmw_cli.scene.export import check_glb, export_glb
-from pmmw_cli.scene.shapes import box
+from pmmw.scene.export import check_glb, export_glb
+from pmmw.scene.shapes import box
 
 TARGETS = ("cessna", "blanket", "beacon")
 TARGET_MATERIAL = {"cessna": "aircraft", "blanket": "blanket", "beacon": "blanket"}

@@ -48,8 +48,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from pmmw_cli.scene.export import check_glb, export_glb
-from pmmw_cli.scene.shapes import box, cell_block
+from pmmw.scene.export import check_glb, export_glb
+from pmmw.scene.shapes import box, cell_block
 
 IMAGER_HEIGHT = 1.5  # [m], the thesis's cart-mounted dish
 

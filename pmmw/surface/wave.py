@@ -1,0 +1,53 @@
+"""The wave of rays a bounce works on, as the compiled kernels take it (`pmmw.trace.kernels`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["Wave"]
+
+
+class Wave:
+    """Struct of arrays for the rays of one bounce: origins ``o``, directions ``d`` and polarization
+    bases ``s``, ``p`` (n, 3) float64; Jones matrices ``m`` (n, 2, 2) complex128 (`pmmw.physics.jones`);
+    the sample each ray adds to ``sid`` (n,) int64; interactions so far ``depth`` (n,) int32; the
+    medium stack ``stack`` (n, stack_size) int16 with its top ``top`` (n,) int32; the temperature
+    a path ended here takes ``last_t`` (n,) float64 [K]."""
+
+    __slots__ = ("o", "d", "s", "p", "m", "sid", "depth", "stack", "top", "last_t")
+
+    def __init__(self, **kw):
+        for k, v in kw.items():
+            setattr(self, k, v)
+
+    def take(self, idx):
+        if idx.dtype == bool:
+            idx = np.flatnonzero(idx)  # once, not once per array: half the cost of a take
+        return Wave(**{k: getattr(self, k)[idx] for k in self.__slots__})
+
+    @staticmethod
+    def concat(waves):
+        waves = [w for w in waves if w is not None and w.o.shape[0] > 0]
+        if not waves:
+            return None
+        if len(waves) == 1:
+            return waves[0]
+        return Wave(**{k: np.concatenate([getattr(w, k) for w in waves]) for k in Wave.__slots__})
+
+    def __len__(self):
+        return self.o.shape[0]
+
+    def arrays(self):
+        """The fields as the tuple the compiled kernels take (`pmmw.trace.kernels`)."""
+        return tuple(getattr(self, k) for k in self.__slots__)
+
+    @staticmethod
+    def empty(n, stack_size):
+        """Room for ``n`` rays (filled by `kernels.scatter`)."""
+        return Wave(o=np.empty((n, 3)), d=np.empty((n, 3)), s=np.empty((n, 3)), p=np.empty((n, 3)),
+                     m=np.empty((n, 2, 2), complex), sid=np.empty(n, np.int64), depth=np.empty(n, np.int32),
+                     stack=np.empty((n, stack_size), np.int16), top=np.empty(n, np.int32), last_t=np.empty(n))
+
+    def head(self, n):
+        """The first ``n`` rays (views)."""
+        return Wave(**{k: getattr(self, k)[:n] for k in self.__slots__})
