@@ -37,7 +37,7 @@ for view, (dist, position, look_at, fov) in views.items():
     ds = pmmw.render(base.set({"imager.position": position, "imager.look_at": look_at, "imager.fov": fov,
                                "frequency": ["35 GHz", "95 GHz"]}))
     for f in ds.frequency.values:
-        report = ds.attrs["regions"][f"{f / 1e9:g} GHz"]
+        report = pmmw.regions(ds)[f"{f / 1e9:g} GHz"]
         chan = report["channel"]  # the channel the reports lead with (Ey2)
         c = report["contrasts"][PAIR][chan]
         lines.append(f"{view},{dist},{f / 1e9:g},{chan},{c['K']:.3f},{c['snr']:.3f},{c['snr_stderr']:.3f},"

@@ -37,7 +37,7 @@ for rng, (position, radius) in ranges.items():
     scn = base.set({"imager.position": position, "output.regions": regions, "frequency": ["35 GHz", "95 GHz"]})
     ds = pmmw.render(scn)  # one Dataset, both frequencies
     for f in ds.frequency.values:
-        report = ds.attrs["regions"][f"{f / 1e9:g} GHz"]
+        report = pmmw.regions(ds)[f"{f / 1e9:g} GHz"]
         chan = report["channel"]  # the channel the reports lead with (Ey2, as the thesis shows)
         c = report["contrasts"][PAIR][chan]
         rows.append((rng, f / 1e9, chan, c["K"], c["snr"], c["snr_stderr"], c["detectable"]))

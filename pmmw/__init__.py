@@ -3,7 +3,11 @@
     import pmmw
     scn = pmmw.Scenario.load("configs/landing_95ghz.yaml").set({"imager.noise": "2 K"})
     ds = pmmw.render(scn, spp=4)          # xarray.Dataset of I, Q, U, V, Ex2, Ey2 [K]
-    ds["I"].sel(frequency=95e9).plot(yincrease=False)   # row 0, the top of the image, on top
+    ds["I"].sel(frequency=95e9).plot()   # upright: y is the angle above the view axis [deg]
+    pmmw.regions(ds)                       # the report's regions (JSON text in ds.attrs)
+    ds.to_netcdf("landing.nc")             # or ds.to_zarr(...)
+    scene = pmmw.load(scn)                 # meshes and materials built once ...
+    ds = scene.render(frequency="35 GHz", pose={"position": [0, -500, 40]})   # ... many renders
 
 Every misuse raises `UserError` naming the argument or the scenario key (`UserErrors` for
 several at once); `EnvironmentProblem` (a `UserError` too) is the machine refusing (a disk full, a
@@ -23,11 +27,11 @@ import importlib
 
 __version__ = "0.1.0"
 
-_API = {"Scenario", "render", "validate", "sky", "brdf", "po", "sweep"}
+_API = {"Scenario", "render", "load", "LoadedScene", "regions", "validate", "sky", "brdf", "po", "sweep"}
 _ERRORS = {"EnvironmentProblem", "PmmwWarning", "UserError", "UserErrors"}
 
-__all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "UserError", "UserErrors",
-           "EnvironmentProblem", "PmmwWarning", "__version__"]
+__all__ = ["Scenario", "render", "load", "LoadedScene", "regions", "validate", "sky", "brdf", "po", "sweep",
+           "UserError", "UserErrors", "EnvironmentProblem", "PmmwWarning", "__version__"]
 
 
 def __getattr__(name: str):

@@ -296,13 +296,88 @@ def region_shapes(regions, cam) -> dict:
     spanning [k, k + 1)): ``("box", x0, y0, x1, y1)`` or ``("circle", u, v, radius)``, None for a
     centre behind the imager."""
     shapes = {}
+    focal = cam.width / 2.0 / np.tan(cam.fov / 2.0)  # [px] the pinhole's focal length
     for name, r in regions.items():
         if r.box is not None:
             shapes[name] = ("box", *(float(x) for x in r.box))
             continue
+        if getattr(r, "bounds", None) is not None:  # the rectangle the world box's corners project into
+            lo, hi = (np.asarray(c, float) for c in r.bounds)
+            corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
+                                for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+            u, v, depth = cam.image_coordinates(corners)
+            shapes[name] = (("box", float(np.floor(u.min())), float(np.floor(v.min())), float(np.ceil(u.max())),
+                             float(np.ceil(v.max()))) if (depth > 0).all() else None)
+            continue
         (u,), (v,), (depth,) = cam.image_coordinates(np.asarray(r.center, float)[None])
-        shapes[name] = ("circle", float(u), float(v), float(r.radius)) if depth > 0 else None
+        unit = getattr(r, "radius_unit", "px")
+        radius = {"px": r.radius, "m": focal * r.radius / depth, "rad": focal * np.tan(min(r.radius, 1.5))}[unit]
+        shapes[name] = ("circle", float(u), float(v), float(radius)) if depth > 0 else None
     return shapes
+
+
+def check_regions(scn) -> dict:
+    """``output.regions`` on the image, checked before rendering (`validate`): each region's
+    pixel shape and pixel count. A region behind the imager or wholly outside the image is a
+    `UserError` naming it; one partly outside is warned about.
+
+    Returns
+    -------
+    dict
+        name -> ``{"circle_px": [u, v, radius]}`` or ``{"box_px": [x0, y0, x1, y1]}``, with ``pixels``.
+    """
+    im = scn.imager
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)
+    masks = region_masks(scn.output.regions, cam)
+    out, errors = {}, []
+    for name, shape in region_shapes(scn.output.regions, cam).items():
+        key = f"output.regions.{name}"
+        if shape is None:
+            errors.append(UserError("lies behind the imager", scn.source_file, key))
+            continue
+        n = int(masks[name].sum())
+        out[name] = {f"{shape[0]}_px": [round(float(x), 2) for x in shape[1:]], "pixels": n}
+        if n == 0:
+            errors.append(UserError(f"falls outside the {cam.width} x {cam.height} image (its {shape[0]} in pixels: "
+                                    f"{[round(float(x), 1) for x in shape[1:]]}); move it into view", scn.source_file,
+                                    key))
+        elif shape[0] == "box" and (shape[1] < 0 or shape[2] < 0 or shape[3] > cam.width or shape[4] > cam.height) \
+                or shape[0] == "circle" and not (0 <= shape[1] - shape[3] and shape[1] + shape[3] <= cam.width
+                                                 and 0 <= shape[2] - shape[3] and shape[2] + shape[3] <= cam.height):
+            warn(f"{key} lies partly outside the {cam.width} x {cam.height} image: only its {n} pixels inside count")
+    if errors:
+        raise UserErrors(errors) if len(errors) > 1 else errors[0]
+    return out
+
+
+def view_preview(scn, geom, path: Path) -> Path:
+    """What the imager sees, before any render: the first surface through each pixel centre,
+    shaded by how squarely it faces the imager (|cos| of the angle between the ray and the face
+    normal; the sky blank), with ``output.regions`` outlined and named
+    (`io.preview.write_regions_figure`)."""
+    from pmmw.trace.intersect import make_intersector
+
+    im = scn.imager
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)
+    half = np.tan(cam.fov / 2.0)
+    v, u = np.mgrid[0:cam.height, 0:cam.width] + 0.5
+    # the pinhole direction through (u, v): the inverse of `Camera.image_coordinates`
+    d = (cam.k + np.multiply.outer((2.0 * u / cam.width - 1.0) * half, cam.x)
+         + np.multiply.outer((cam.height - 2.0 * v) / cam.width * half, cam.y)).reshape(-1, 3)
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    t, prim = make_intersector(geom.vertices, geom.faces).intersect(np.broadcast_to(cam.position, d.shape).copy(), d)
+    tri = geom.vertices[geom.faces[np.maximum(prim, 0)]]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    facing = np.abs(np.sum(n * d, axis=1)) / np.maximum(np.linalg.norm(n, axis=1), 1e-300)
+    shade = np.where(prim >= 0, facing, np.nan).reshape(cam.height, cam.width)
+    shapes = region_shapes(scn.output.regions, cam) if scn.output.regions else {}
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_regions_figure(path, shade, shapes, title=f"{scn.name}: the view and its regions", units="-",
+                             quantity="|cos| facing the imager")
+    except OSError as e:
+        raise os_problem(e, path.parent, "write the preview") from None
+    return path
 
 
 def region_masks(regions, cam) -> dict:
@@ -318,7 +393,9 @@ def region_masks(regions, cam) -> dict:
             masks[name] = (xx >= x0) & (xx < x1) & (yy >= y0) & (yy < y1)
         else:
             u, v, radius = shape[1:]
-            masks[name] = (xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= radius**2
+            # a circle smaller than a pixel is the pixel holding its centre
+            masks[name] = ((xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= radius**2) | (
+                (xx == np.floor(u)) & (yy == np.floor(v)))
     return masks
 
 
@@ -912,10 +989,20 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
                 raise os_problem(e, out_dir, "write the report") from None
             staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
             print(
-                f"{report['name']}: {r['pixels']} px x {r['spp']} spp, {r['rays'] / 1e6:.2f} M rays, "
+                f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
+                f"{r['rays'] / 1e6:.2f} M rays, "
                 f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}"
             )
     return written, tile_dirs
+
+
+def spp_words(spp: int, mean: float) -> str:
+    """The samples per pixel of the render summary: ``256 spp``, or the mean actually averaged
+    when adaptive sampling (``render.target_error``) stopped early, e.g. ``9.8 spp averaged
+    (adaptive, up to 256)``."""
+    if mean < spp - 0.05:
+        return f"{mean:.3g} spp averaged (adaptive, up to {spp})"
+    return f"{spp} spp"
 
 
 def frequency_images(scn, f, job, img, shash: str = "") -> dict:
@@ -1000,12 +1087,16 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     }
 
 
-def validate(path, overrides=(), data=None, values=None) -> dict:
+def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
     """The ``pmmw validate`` job: the resolved scenario and, per frequency, the media (and the slab
-    sky's opacity and brightness, defaults included), the geometry and the resources."""
+    sky's opacity and brightness, defaults included), the geometry and the resources. With
+    ``preview`` (a PNG path) also the view's distance map with the regions outlined and named
+    (`view_preview`)."""
     clear_warnings()
     res = resolve(path, overrides, data=data, values=values)
     scn, geom = res.scenario, res.geometry
+    if preview is not None:
+        view_preview(scn, geom, Path(preview))
     per_object = {}
     for i, (name, entry) in enumerate(zip(geom.objects, scn.scene)):
         v = geom.vertices[np.unique(geom.faces[geom.face_object == i])]
@@ -1017,6 +1108,8 @@ def validate(path, overrides=(), data=None, values=None) -> dict:
         "watertight": dict(zip(geom.objects, map(bool, geom.object_watertight))),
         "bounds_m": [list(map(float, geom.bounds[0])), list(map(float, geom.bounds[1]))],
     }, "media": {}}
+    if scn.output.regions:
+        out["regions"] = check_regions(scn)
     for f in scn.frequencies:
         media = build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere)
         kinds = {v: k for k, v in KIND_CODES.items()}

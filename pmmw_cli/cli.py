@@ -32,6 +32,18 @@ app.add_typer(materials_app, name="materials")
 EXIT_USER_ERROR = 2
 
 
+def _print_version(value: bool):
+    if value:
+        typer.echo(f"pmmw {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(version: bool = typer.Option(False, "--version", "-V", callback=_print_version, is_eager=True,
+                                       metavar="", help="Print the pmmw version and exit.")):
+    """pmmw: passive millimetre-wave imaging simulator (polarized geometrical optics)."""
+
+
 def _user_errors(fn):
     """One line and an exit status instead of a traceback: `UserError` 2, `EnvironmentProblem` 1,
     a signal 128 + N (`pmmw.interrupt`; a KeyboardInterrupt counts as SIGINT)."""
@@ -96,13 +108,17 @@ def render(
 @app.command()
 @_user_errors
 def validate(
-    scenario: Path = typer.Argument(..., help="Scenario YAML file."),
+    scenario: Path = typer.Argument(..., metavar="FILE", help="A scenario, sweep file, physical-optics job, brdf "
+                                                              "stack file or Dask cluster file (YAML)."),
     set_: Optional[List[str]] = SetOpt,
+    preview: Optional[Path] = typer.Option(None, "--preview", metavar="FILE.png",
+                                           help="Also draw the view (distance to the first surface) with the "
+                                                "regions outlined and named."),
 ):
-    """Check a scenario and every asset it names; print the resolved job. Renders nothing."""
-    from pmmw.pipeline import validate as run
+    """Check any pmmw file as its kind (printed first) and every asset it names. Renders nothing."""
+    from pmmw.filekinds import validate_file as run
 
-    resolved = run(scenario, set_ or [])
+    resolved = run(scenario, set_ or [], preview=preview)
     typer.echo(yaml.safe_dump(resolved, sort_keys=False, default_flow_style=None, width=100).rstrip())
 
 
@@ -415,7 +431,10 @@ def bench(
     reference_spp: int = typer.Option(256, "--reference-spp", min=1, help="Samples of the cached reference render."),
     workers: Optional[int] = typer.Option(None, "--workers", min=1),
     set_: Optional[List[str]] = SetOpt,
-    out: Path = typer.Option(Path("docs/benchmarks.md"), "--out", help="Markdown table (plots and JSON beside it)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Markdown table, plots and JSON beside it (default "
+                                                           "out/bench/benchmarks.md, or benchmarks_po.md)."),
+    write_docs: bool = typer.Option(False, "--write-docs", metavar="", help="Write the committed "
+                                    "docs/benchmarks.md (docs/benchmarks_po.md with --po) instead."),
     cache: Path = typer.Option(Path(".pmmw-cache"), "--cache", help="Where reference renders are cached."),
     with_scaling: bool = typer.Option(False, "--scaling", metavar="", help="Also measure cost against triangle count (1e3-1e6)."),
     render_times: Optional[List[Path]] = typer.Option(None, "--render-times", help="Also time these configs as shipped (repeatable)."),
@@ -423,11 +442,15 @@ def bench(
     po: bool = typer.Option(False, "--po", metavar="", help="Instead: physical optics, direct sum against octree "
                                                  "(docs/benchmarks_po.md)."),
 ):
-    """Run time against error for each scenario and sampling strategy (docs/benchmarks.md)."""
+    """Run time against error for each scenario and sampling strategy (into out/bench/)."""
+    if out is not None and write_docs:
+        raise UserError("give --out or --write-docs, not both", "--write-docs")
+    name = "benchmarks_po.md" if po else "benchmarks.md"
+    target = out or (Path("docs") / name if write_docs else Path("out") / "bench" / name)
+    target.parent.mkdir(parents=True, exist_ok=True)
     if po:
         from pmmw_cli.bench_po import run as run_po_bench
 
-        target = out if out != Path("docs/benchmarks.md") else Path("docs/benchmarks_po.md")
         run_po_bench(target, command="pmmw bench " + " ".join(sys.argv[2:]))
         typer.echo(f"wrote {target}")
         return
@@ -444,7 +467,7 @@ def bench(
         raise UserError(f"unknown strategy {bad[0]!r}; known: {', '.join(STRATEGIES)}", file="--strategies")
     command = "pmmw bench " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "pmmw bench"
     run(scenarios or [], spp_list=spp_list, strategies=strats, ref_spp=reference_spp, workers=workers,
-        overrides=set_ or [], out_md=out, cache_dir=cache, command=command, with_scaling=with_scaling,
+        overrides=set_ or [], out_md=target, cache_dir=cache, command=command, with_scaling=with_scaling,
         render_times=tuple(render_times or ()), skip_configs=tuple(skip_configs or ()))
 
 

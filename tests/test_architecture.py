@@ -24,7 +24,7 @@ LAYERS = (
     {"scene", "surface", "imaging"},
     {"trace"},
     {"pipeline"},
-    {"reflectance", "physical_optics", "sweeps", "sky_table"},
+    {"reflectance", "physical_optics", "sweeps", "sky_table", "filekinds"},
     {"api"},
     {"pmmw_cli", "pmmw_cli.validation", "pmmw_cli.bench", "pmmw_cli.bench_po"},
     {"pmmw_cli.cli"},

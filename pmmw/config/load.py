@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import difflib
 import math
 import re
 import typing
@@ -72,7 +73,15 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
         raw = {}
     if not isinstance(raw, dict):
         raise UserError(f"the top level must be a mapping of keys (name, frequency, imager, scene, ...), got a {type(raw).__name__}", file=path)
+    keys = [str(o).split("=", 1)[0].strip() for o in overrides] + [str(k) for k in (values or {})]
+    # pixel regions set alongside the overrides are the rendered image's pixels, not the file's
+    file_resolution = None if any(k == "output" or k.startswith("output.regions") for k in keys) \
+        else _file_resolution(raw)
     raw = apply_overrides(raw, list(overrides))
+    if file_resolution is not None and isinstance(raw.get("output"), dict) and raw["output"].get("regions") \
+            and "regions_resolution" not in raw["output"]:
+        # pixel regions are the file's pixels: on a resolution set from outside they scale with the image
+        raw["output"] = {**raw["output"], "regions_resolution": file_resolution}
     if values:
         raw = apply_overrides(raw, [], values=plain(dict(values)))
     for key, dotted in (("spp", "render.spp"), ("workers", "render.workers"), ("seed", "render.seed")):
@@ -153,6 +162,15 @@ def _segments(key: str) -> list[tuple[bool, str]]:
         if i == len(key):
             out.append((False, ""))
             return out
+
+
+def _file_resolution(raw: dict):
+    """The scenario file's own ``imager.resolution`` (before overrides), when it is two whole numbers."""
+    res = raw.get("imager", {}).get("resolution") if isinstance(raw.get("imager"), dict) else None
+    if isinstance(res, (list, tuple)) and len(res) == 2 and all(isinstance(v, int) and not isinstance(v, bool)
+                                                               for v in res):
+        return list(res)
+    return None
 
 
 def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = None) -> dict:
@@ -269,7 +287,9 @@ def _user_error(err: dict, path: Path, freq_key: str, raw: dict) -> UserError:
     typ = err["type"]
     if typ == "extra_forbidden":
         allowed = _allowed_keys(loc[:-1])
-        msg = f"unknown key {loc[-1]!r}" + (f"; allowed: {', '.join(allowed)}" if allowed else "")
+        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
+        msg = (f"unknown key {loc[-1]!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+               + (f"; allowed: {', '.join(allowed)}" if allowed else ""))
     elif typ == "missing":
         msg = "required key missing"
     elif typ in ("value_error", "assertion_error"):
@@ -317,6 +337,16 @@ def _unwrap(tp):
         args = [a for a in typing.get_args(tp) if a is not type(None)]
         return _unwrap(args[0]) if len(args) == 1 else tp
     return tp
+
+
+def _region_display(r) -> dict:
+    """A region as the resolved scenario shows it (its pixel values scaled to the image)."""
+    if r.box is not None:
+        return {"box": list(r.box)}
+    if r.bounds is not None:
+        return {"bounds": [[_qty(v, "m") for v in corner] for corner in r.bounds]}
+    radius = {"px": round(r.radius, 4), "m": _qty(r.radius, "m"), "rad": _qty(math.degrees(r.radius), "deg")}
+    return {"center": [_qty(v, "m") for v in r.center], "radius": radius[r.radius_unit]}
 
 
 def _qty(value: float, unit: str, scale: float = 1.0) -> str:
@@ -434,8 +464,7 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
             "dir": str(scn.output.dir) if scn.output.dir is not None else None,
             "channels": list(scn.output.channels), "previews": scn.output.previews, "aux": list(scn.output.aux),
             **({"false_alarm": scn.output.false_alarm} if scn.output.false_alarm != 1e-3 else {}),
-            **({"regions": {n: ({"center": [_qty(v, "m") for v in r.center], "radius": r.radius}
-                                if r.center is not None else {"box": list(r.box)})
-                            for n, r in scn.output.regions.items()}} if scn.output.regions else {}),
+            **({"regions": {n: _region_display(r) for n, r in scn.output.regions.items()}}
+               if scn.output.regions else {}),
         },
     }

@@ -729,24 +729,74 @@ class Render(_Model):
 
 
 class Region(_Model):
-    """A named region of interest: a world point with a radius in pixels, or a pixel box."""
+    """A named region of interest, in scene units or in pixels.
+
+    - ``center`` (a world point [m]) with a ``radius``: a bare number is pixels (of the image
+      ``output.regions_resolution`` describes), a length (``0.3 m``) is metres around the point
+      (projected at its distance), an angle (``0.5 deg``) is the angle it subtends;
+    - ``bounds``: a world box ``[[x0, y0, z0], [x1, y1, z1]]`` [m] (what ``pmmw validate`` prints
+      as an object's ``bounds_m``), the rectangle of the image its corners project into;
+    - ``box``: ``[x0, y0, x1, y1]`` pixels, x1/y1 exclusive.
+    """
 
     center: Annotated[Optional[Vec3], Quantity("length", n=3)] = None  # [m]
-    radius: float = Field(2.0, gt=0)  # [pixels] around the projected center
+    radius: float = Field(2.0, gt=0)  # [pixels], [m] or [rad]: radius_unit
+    radius_unit: Literal["px", "m", "rad"] = "px"
     box: Optional[tuple[int, int, int, int]] = None  # [x0, y0, x1, y1] pixels, x1/y1 exclusive
+    bounds: Optional[tuple[Annotated[Vec3, Quantity("length", n=3)], Annotated[Vec3, Quantity("length", n=3)]]] = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _radius_with_unit(cls, data):
+        """``radius: 0.3 m`` or ``0.5 deg`` -> metres or radians (`radius_unit`); a number stays pixels."""
+        if isinstance(data, dict) and isinstance(data.get("radius"), str):
+            text = data["radius"]
+            for kind, unit in (("length", "m"), ("angle", "rad")):
+                try:
+                    value = parse_quantity(text, kind)
+                except UserError:
+                    continue
+                if any(ch.isalpha() for ch in text):
+                    return {**data, "radius": value, "radius_unit": unit}
+            try:
+                float(text)
+            except ValueError:
+                raise ConfigValueError(f"radius is pixels (a number), a length ('0.3 m') or an angle ('0.5 deg'); "
+                                       f"got {text!r}") from None
+        return data
 
     @model_validator(mode="after")
     def _one(self):
-        if (self.center is None) == (self.box is None):
-            raise ConfigValueError("give exactly one of 'center' (world point [m]) or 'box' ([x0, y0, x1, y1] pixels)")
+        if sum(x is not None for x in (self.center, self.box, self.bounds)) != 1:
+            raise ConfigValueError("give exactly one of 'center' (world point [m]) with a radius, 'bounds' (world "
+                                   "box [[x0, y0, z0], [x1, y1, z1]] [m]) or 'box' ([x0, y0, x1, y1] pixels)")
         if self.box is not None and not (self.box[0] < self.box[2] and self.box[1] < self.box[3]):
             raise ConfigValueError(f"box must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got {list(self.box)}")
+        if self.bounds is not None and not all(a <= b for a, b in zip(*self.bounds)):
+            raise ConfigValueError("bounds must be [[x0, y0, z0], [x1, y1, z1]] with each lower corner coordinate "
+                                   "at most the upper one")
+        return self
+
+    def scaled(self, sx: float, sy: float) -> "Region":
+        """This region on an image ``sx`` x ``sy`` times the size its pixels were given for: a
+        pixel box grows outward to whole pixels, a pixel radius by the mean scale; regions in
+        scene units are unchanged."""
+        if self.box is not None:
+            x0, y0, x1, y1 = self.box
+            box = (math.floor(x0 * sx), math.floor(y0 * sy), max(math.ceil(x1 * sx), math.floor(x0 * sx) + 1),
+                   max(math.ceil(y1 * sy), math.floor(y0 * sy) + 1))
+            return self.model_copy(update={"box": box})
+        if self.center is not None and self.radius_unit == "px":
+            return self.model_copy(update={"radius": self.radius * math.sqrt(sx * sy)})
         return self
 
 
 class OutputConfig(_Model):
     dir: Optional[Path] = None
     regions: dict[str, Region] = {}
+    # the image size [width, height] the regions' pixel values are given for (default: the scenario
+    # file's imager.resolution, before --set): on another resolution they scale with the image
+    regions_resolution: Optional[tuple[int, int]] = None
     channels: tuple[str, ...] = CHANNELS
     previews: bool = True
     aux: tuple[str, ...] = ()
@@ -864,6 +914,19 @@ class ScenarioConfig(_Model):
         elif self.sky.model == "atmosphere" and not layered:
             raise ConfigValueError("sky model 'atmosphere' needs a layered atmosphere (atmosphere: {profile: ...}), "
                                    "not 'none' or model: uniform")
+        return self
+
+    @model_validator(mode="after")
+    def _regions_scale(self):
+        """Pixel regions given for another image size scale with the image (`Region.scaled`)."""
+        ref = self.output.regions_resolution
+        res = tuple(self.imager.resolution)
+        if ref is not None and self.output.regions and tuple(ref) != res:
+            if min(ref) < 1:
+                raise ConfigValueError(f"output.regions_resolution must be positive, got {list(ref)}")
+            sx, sy = res[0] / ref[0], res[1] / ref[1]
+            regions = {n: r.scaled(sx, sy) for n, r in self.output.regions.items()}
+            object.__setattr__(self.output, "regions", regions)
         return self
 
     @model_validator(mode="after")

@@ -242,6 +242,14 @@ def _dbsm(x):
     return float(10.0 * np.log10(max(float(x), 1e-30)))
 
 
+def dbsm_text(x: float, width: int = 0, digits: int = 3) -> str:
+    """An RCS [m^2] in dBsm for a table: ``-inf`` for an exact zero (a cross-polarized return of
+    a flat plate, say), not the floor of `_dbsm`'s logarithm."""
+    if not float(x) > 0.0:
+        return f"{'-inf':>{width}}"
+    return f"{10.0 * math.log10(float(x)):{width}.{digits}f}"
+
+
 def format_rows(res: Result, fmt: str) -> str:
     rows = [(math.degrees(t), math.degrees(p), a, b)
             for t, p, a, b in zip(res.theta, res.phi, res.rcs_theta, res.rcs_phi)]
@@ -257,12 +265,12 @@ def format_rows(res: Result, fmt: str) -> str:
                    f"phi {s['incidence_deg'][1]:g} deg")
                 + f"; {s['facets_lit']} of {s['facets']} facets lit; {s['time_s']:.2f} s"]
         if s["backscatter_rcs_m2"] is not None:
-            head.append(f"backscatter {s['backscatter_rcs_m2']:.4g} m^2 ({_dbsm(s['backscatter_rcs_m2']):.2f} dBsm)")
+            head.append(f"backscatter {s['backscatter_rcs_m2']:.4g} m^2 ({dbsm_text(s['backscatter_rcs_m2'], 0, 2)} dBsm)")
         p = s["peak"]
-        head.append(f"peak {p['rcs_m2']:.4g} m^2 ({p['rcs_dBsm']:.2f} dBsm) at theta {p['theta_deg']:g}, "
+        head.append(f"peak {p['rcs_m2']:.4g} m^2 ({dbsm_text(p['rcs_m2'], 0, 2)} dBsm) at theta {p['theta_deg']:g}, "
                     f"phi {p['phi_deg']:g} deg")
         lines = [f"{'theta_deg':>9} {'phi_deg':>8} {'rcs_theta_dBsm':>15} {'rcs_phi_dBsm':>13}"]
-        lines += [f"{t:9.3f} {p_:8.3f} {_dbsm(a):15.3f} {_dbsm(b):13.3f}" for t, p_, a, b in rows]
+        lines += [f"{t:9.3f} {p_:8.3f} {dbsm_text(a, 15)} {dbsm_text(b, 13)}" for t, p_, a, b in rows]
         return "\n".join(head + lines)
     raise UserError(f"expected csv, json or table, got {fmt!r}", "--format")
 
@@ -351,7 +359,7 @@ def write_report(out: Path, name: str, source: str, runs, observation: str, plot
              "| --- | ---: | --- | ---: | ---: | ---: | --- | ---: |"]
     for stem, res in runs:
         s = res.summary
-        back = "" if s["backscatter_rcs_m2"] is None else f"{_dbsm(s['backscatter_rcs_m2']):.2f}"
+        back = "" if s["backscatter_rcs_m2"] is None else dbsm_text(s["backscatter_rcs_m2"], 0, 2)
         p = s["peak"]
         lines.append(f"| {stem} | {s['frequency_hz'] / 1e9:g} | {s['polarization']} | {s['facets_lit']} / "
                      f"{s['facets']} | {back} | {p['rcs_dBsm']:.2f} | ({p['theta_deg']:g}, {p['phi_deg']:g}) "

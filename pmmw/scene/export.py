@@ -37,8 +37,14 @@ def export_glb(nodes: dict, out: Path) -> None:
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(".tmp.glb")
-    scene.export(tmp, file_type="glb")
+    scene.export(tmp, file_type="glb", tree_postprocessor=_state_y_up)
     tmp.replace(out)
+
+
+def _state_y_up(tree: dict) -> None:
+    """The file says it is Y-up (``asset.extras.up_axis``), so that pmmw reads it without the
+    warning it gives other trimesh-written glTF files (`geometry.file_up_axis`)."""
+    tree.setdefault("asset", {}).setdefault("extras", {})["up_axis"] = "Y"
 
 
 def check_glb(nodes: dict, out: Path, expected: set | None = None) -> None:

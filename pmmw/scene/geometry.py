@@ -7,8 +7,11 @@ frame (Z up); `build_geometry` applies each entry's transform, assigns materials
 meshes and concatenates everything into a `SceneGeometry`.
 
 Frames. The world frame is Z up, right-handed. glTF is Y up by its specification, so a glTF
-asset is turned +90 deg about X on load: ``(x, y, z)_gltf -> (x, -z, y)_world``. OBJ, PLY and STL
-carry no convention and are taken as Z up unless the entry says ``up_axis: y``.
+asset is turned +90 deg about X on load: ``(x, y, z)_gltf -> (x, -z, y)_world``, unless the file
+says otherwise in ``asset.extras.up_axis`` ("Y" or "Z": what pmmw's own exporter writes,
+`scene.export.export_glb`). A glTF that trimesh wrote without that mark is read as Y up with a
+warning whatever its shape: trimesh keeps its own (Z-up) coordinates on export. OBJ, PLY and STL
+carry no convention and are taken as Z up. A scene entry's ``up_axis: y|z`` overrides all of these.
 
 Orientation. Face normals point outward by counter-clockwise winding (trimesh's convention); the
 tracer relies on it to tell entering a medium from leaving it (Murakowski 2014 sec. 2.2.9), so every
@@ -177,7 +180,7 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
 
 def _parts(path: Path, fmt: str, scene, up_axis) -> list[tuple[str, trimesh.Trimesh]]:
     """`load_entry_mesh`'s parts of a scene trimesh has read."""
-    rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis) == "y" else None
+    rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis, fmt) == "y" else None
     parts = []
     n_not_finite = 0
     for node in sorted(scene.graph.nodes_geometry):
@@ -213,8 +216,13 @@ FLAT_RATIO = 5.0  # a scene this many times wider than tall lies flat on its gro
 
 def _warn_if_z_up(path: Path, parts) -> None:
     """glTF is Y-up by specification, but exporters that write their own Z-up coordinates as they
-    are (trimesh among them) make a flat scene stand on its edge. After the Y-up -> Z-up turn a
-    ground-like scene is wide in x and y and thin in z; thin in y instead means the file was Z-up."""
+    are (trimesh among them) make an upright object lie down and a flat scene stand on its edge.
+    A file that states its up axis (``asset.extras.up_axis``) is read so, without a warning; one
+    written by trimesh without it is warned about whatever its shape; any other is warned about
+    when it lies on its edge (after the Y-up -> Z-up turn a ground-like scene is wide in x and y
+    and thin in z; thin in y instead means the file was Z-up)."""
+    if _stated_up_axis(path) is not None:
+        return
     v = np.concatenate([np.asarray(m.vertices) for _, m in parts])
     ext = np.ptp(v, axis=0)
     try:
@@ -222,6 +230,14 @@ def _warn_if_z_up(path: Path, parts) -> None:
     except UserError:
         generator = ""
     flat_on_edge = ext[1] * FLAT_RATIO < min(ext[0], ext[2])
+    if "trimesh" in generator.lower():
+        shape = (f"it lies on its edge, {ext[1]:.3g} m thick along y" if flat_on_edge else
+                 f"it now spans {ext[0]:.3g} x {ext[1]:.3g} m and stands {ext[2]:.3g} m tall")
+        warn(f"{path.name}: written by trimesh, which keeps its own (Z-up) coordinates in a glTF, yet read as "
+             f"glTF's Y-up: {shape}. If it was modelled Z-up, set `up_axis: z` on its scene entry; if it was "
+             "turned to Y-up before export, set `up_axis: y` there (or write asset.extras.up_axis in the file) "
+             "to say so")
+        return
     if flat_on_edge:
         warn(f"{path.name}: the glTF is taken as Y-up (its specification) but lies on its edge, {ext[1]:.3g} m "
              f"thick along y against {ext[0]:.3g} x {ext[2]:.3g} m"
@@ -269,10 +285,24 @@ def asset_files(mesh_path) -> list[Path]:
     return list(dict.fromkeys(files))
 
 
-def file_up_axis(path, up_axis: str | None = None) -> str:
-    """The up axis a mesh file is read with: the entry's ``up_axis``, else glTF's Y (its spec)
-    and Z for every other format."""
-    return up_axis or ("y" if _mesh_format(Path(path)) == "gltf" else "z")
+def file_up_axis(path, up_axis: str | None = None, fmt: str | None = None) -> str:
+    """The up axis a mesh file is read with: the entry's ``up_axis``; else, for glTF, what the
+    file states (``asset.extras.up_axis``) or Y (its specification); Z for every other format."""
+    if up_axis:
+        return up_axis
+    if (fmt or _mesh_format(Path(path))) != "gltf":
+        return "z"
+    return _stated_up_axis(Path(path)) or "y"
+
+
+def _stated_up_axis(path: Path) -> str | None:
+    """The up axis a glTF file states in ``asset.extras.up_axis`` ("Y" or "Z", any case), or None."""
+    try:
+        extras = _gltf_json(path).get("asset", {}).get("extras")
+    except (UserError, OSError, ValueError):
+        return None
+    value = str(extras.get("up_axis", "")).strip().lower() if isinstance(extras, dict) else ""
+    return value if value in ("y", "z") else None
 
 
 def _mesh_format(path: Path) -> str:
@@ -690,11 +720,7 @@ def _build_entry(entry, key: str, scenario_file):
         have = list(dict.fromkeys(names))
         missing = [n for n in have if n not in materials]
         if missing:
-            raise UserError(
-                f"mesh material name(s) {_quoted(missing)} of {mesh_path.name} are not in the map; "
-                f"the mesh has {_quoted(have)}",
-                file=scenario_file, key=f"{key}.materials",
-            )
+            raise UserError(_unmapped_names(mesh_path, have, missing), file=scenario_file, key=f"{key}.materials")
         unused = [n for n in materials if n not in have]
         if unused:
             warn(
@@ -727,6 +753,29 @@ def _build_entry(entry, key: str, scenario_file):
             f"{mesh_path}: the mesh has no triangles of non-zero area", file=scenario_file, key=f"{key}.mesh"
         )
     return v, np.ascontiguousarray(f), part, names
+
+
+def _unmapped_names(mesh_path: Path, have: list[str], missing: list[str]) -> str:
+    """What to do when a mesh's material names are not all in its entry's ``materials`` map; the
+    rules per format are in docs/scenes.md ("Material names")."""
+    fmt = _mesh_format(mesh_path)
+    whole = "give `material: ID` instead of `materials:` (one database id for the whole mesh)"
+    if have == [""]:
+        how = {"obj": f"{mesh_path.name} has no `usemtl` line, so its faces carry no material name: {whole}, or "
+                      "put `usemtl NAME` lines before its faces and map each NAME in `materials:`",
+               "gltf": f"{mesh_path.name}'s primitives have no material or mesh name: {whole}, or name its "
+                       "materials in the exporter",
+               }.get(fmt, f"{mesh_path.name} is {fmt.upper()}, which carries no material names: {whole}, or split it into one file per "
+                          "material, or export it as glTF or OBJ with material names")
+        return f"{how} (see docs/scenes.md, \"Material names\")"
+    named = [n for n in missing if n]
+    text = (f"mesh material name(s) {_quoted(named)} of {mesh_path.name} are not in the map; "
+            if named else f"{mesh_path.name} has faces without a material name; ")
+    text += f"the mesh has {_quoted([n for n in have if n])}"
+    if "" in missing:
+        text += (" and faces before its first `usemtl` line, which have no name: put a `usemtl NAME` before them"
+                 if fmt == "obj" else " and unnamed faces") + " or map the empty name ('': ID)"
+    return text + " (see docs/scenes.md, \"Material names\")"
 
 
 def _quoted(names) -> str:

@@ -50,6 +50,7 @@ from pmmw.sweeps.spec import (  # noqa: F401
     SweepSpec,
     _label,
     _yaml_value,
+    check_variants,
     grid_values,
     linspace,
     load_sweep_file,
@@ -164,6 +165,10 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
         return 0
     if not spec.scenario.is_file():
         raise UserError("scenario file not found", spec.scenario)
+    check_variants(spec)  # every swept key and value against the schema, before anything is written
+    from pmmw.filekinds import _check_variant_regions
+
+    _check_variant_regions(spec)  # a region out of some variants' view: one warning before they render
     out = (spec.out or Path.cwd() / "out" / f"{spec.scenario.stem}_sweep").resolve()
     with output_lock(out):  # one sweep per folder: a second is refused, naming this one
         return _sweep_into(spec, out, resume=resume, quiet=quiet)

@@ -185,3 +185,57 @@ def _label(spec: SweepSpec, key: str, value):
     if key in spec.names:
         return spec.names[key][[_yaml_value(v) for v in dict(spec.grid)[key]].index(_yaml_value(value))]
     return value if isinstance(value, (int, float, str)) else _yaml_value(value)
+
+
+def _grid_key_of(key: str | None, grid_keys: list[str]) -> str | None:
+    """The grid key an error's scenario key path belongs to: the same key, one inside it
+    (``imager`` swept whole, ``imager.noise`` wrong) or one it is inside."""
+    if not key:
+        return None
+    for gk in grid_keys:
+        if key == gk or key.startswith((gk + ".", gk + "[")) or gk.startswith((key + ".", key + "[")):
+            return gk
+    return None
+
+
+def check_variants(spec: SweepSpec) -> int:
+    """Check every variant's scenario (the scenario file with the variant's values) against the
+    scenario schema, before anything is rendered; returns the number of variants.
+
+    A problem with a swept key or value is named in the sweep's own terms, once per key and
+    message: ``FILE: grid.imager.nosie: unknown key 'nosie' (did you mean 'noise'?)``, with the
+    value when only some values are wrong. A problem of the scenario file itself is named there.
+
+    Raises
+    ------
+    UserError or UserErrors
+        Every problem found, by file and key.
+    """
+    from pmmw.config import load_scenario
+
+    combos = variants(spec)
+    grid_keys = [k for k, _ in spec.grid]
+    per_key_values = {k: len(v) for k, v in spec.grid}
+    found: dict[tuple, list] = {}  # (grid key or None, file, key, message) -> the values it was seen with
+    for params in combos:
+        try:
+            load_scenario(spec.scenario, overrides_of(params))
+        except UserError as exc:
+            for e in getattr(exc, "errors", [exc]):
+                gk = _grid_key_of(e.key, grid_keys)
+                where = (gk, None, None) if gk is not None else (None, e.file, e.key)
+                seen = found.setdefault((*where, e.message), [])
+                if gk is not None and _yaml_value(params[gk]) not in seen:
+                    seen.append(_yaml_value(params[gk]))
+    errors = []
+    for (gk, file, key, message), values in found.items():
+        if gk is None:
+            errors.append(UserError(message, file, key))
+            continue
+        every = len(values) == per_key_values[gk]
+        shown = "" if every else f"value{'s' if len(values) > 1 else ''} {', '.join(values)}: "
+        file = spec.source if spec.source != "--grid" else "--grid"
+        errors.append(UserError(f"{shown}{message}", file, f"grid.{gk}" if file != "--grid" else gk))
+    if errors:
+        raise UserErrors(errors) if len(errors) > 1 else errors[0]
+    return len(combos)

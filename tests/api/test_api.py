@@ -44,8 +44,8 @@ def test_a_dict_renders_what_the_yaml_file_renders(folder):
     assert mem["I"].attrs["units"] == "K" and float(mem.frequency[0]) == pytest.approx(35e9)
     assert mem.attrs["spp"] == 2 and "x right, y up" in mem.attrs["convention"]
     # the report's regions ride along: contrasts in K and in noise sigmas
-    c = mem.attrs["regions"]["35 GHz"]["contrasts"]["block - ground"]["I"]
-    assert c == pytest.approx(disk.attrs["regions"]["35 GHz"]["contrasts"]["block - ground"]["I"])
+    c = pmmw.regions(mem)["35 GHz"]["contrasts"]["block - ground"]["I"]
+    assert c == pytest.approx(pmmw.regions(disk)["35 GHz"]["contrasts"]["block - ground"]["I"])
 
 
 def test_overrides_by_key_and_errors_name_the_key(folder):

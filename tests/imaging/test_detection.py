@@ -146,7 +146,8 @@ def test_the_snr_standard_error_matches_the_spread_over_seeds(folder):
     snr = {c: [] for c in ("Ex2", "Ey2")}
     err = {c: [] for c in snr}
     for seed in range(1, 17):
-        pair = pmmw.render(scn, seed=seed, workers=1, quiet=True).attrs["regions"]["35 GHz"]["contrasts"]["block - ground"]
+        ds = pmmw.render(scn, seed=seed, workers=1, quiet=True)
+        pair = pmmw.regions(ds)["35 GHz"]["contrasts"]["block - ground"]
         for c in snr:
             snr[c].append(pair[c]["snr"])
             err[c].append(pair[c]["snr_stderr"])
@@ -211,7 +212,7 @@ def test_the_report_gives_snr_and_detectable_with_controls(folder, tmp_path):
 
 def test_the_api_carries_the_criterion(folder):
     ds = pmmw.render(pmmw.Scenario.from_dict(SCENE, base_dir=folder), quiet=True)
-    regions = ds.attrs["regions"]["35 GHz"]
+    regions = pmmw.regions(ds)["35 GHz"]
     assert regions["contrasts"]["block - ground"]["Ey2"]["detectable"] is True
     assert regions["verdicts"]["block - ground"].startswith("block - ground: detectable")
 
