@@ -38,7 +38,7 @@ test: install-test
 
 # ruff's rules of pyproject.toml ([tool.ruff]): pyflakes, pycodestyle's errors, import order
 lint: install-test
-	$(BIN)/ruff check pmmw pmmw_cli tests examples scenes
+	$(BIN)/ruff check pmmw pmmw_cli tests examples scenes docs
 
 # also the longest convergence renders of the shipped configs (about 2.5 minutes more)
 test-full: install-test

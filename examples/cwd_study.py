@@ -35,7 +35,7 @@ out = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "out" / "examples"
 SCALE = float(os.environ.get("PMMW_EXAMPLE_SCALE", "1"))  # of the pixels per side
 base = pmmw.Scenario.load(ROOT / "configs" / "cwd_outdoor_95ghz.yaml").set(
     {"imager.resolution": [max(16, round(220 * SCALE)), max(16, round(370 * SCALE))],
-     "output.regions.gun.radius": max(0.5, 2 * SCALE), "output.regions.torso.radius": max(0.5, 2 * SCALE)})
+     "output.regions.gun.radius": max(1.0, 2 * SCALE), "output.regions.torso.radius": max(1.0, 2 * SCALE)})
 # view: distance to the man [m], imager position, look-at point [m], field of view
 views = {"4 m": (4, [0, -4, 1.5], [0, 0, 0.9], "18.1 deg"),
          "8 m": (8, [0, -8, 1.5], [0, 0, 0.9], "9.1 deg"),

@@ -39,8 +39,8 @@ rows, verdicts, images = [], [], {}
 for rng, (position, radius) in ranges.items():
     # the regions set here, not taken from the config (whose beacon box fits its own 1000 m view):
     # the middle beacon across the threshold, a circle of `radius` pixels around it, and the runway
-    regions = {"beacon": {"center": [0, -2.36, 0.41], "radius": max(0.5, radius * SCALE)},
-               "runway": {"center": [0, 40, 0.02], "radius": max(0.5, 3 * SCALE)}}
+    regions = {"beacon": {"center": [0, -2.36, 0.41], "radius": max(1.0, radius * SCALE)},
+               "runway": {"center": [0, 40, 0.02], "radius": max(1.0, 3 * SCALE)}}
     scn = base.set({"imager.position": position, "output.regions": regions, "frequency": ["35 GHz", "95 GHz"]})
     ds = pmmw.render(scn)  # one Dataset, both frequencies
     for f in ds.frequency.values:
