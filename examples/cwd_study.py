@@ -4,7 +4,7 @@ Murakowski 2014 sec. 3.2: a man outdoors with a handgun under denim, seen at 35 
 4 m and 8 m (the field of view narrowed with the distance so he fills the frame), at a quarter
 of the shipped pixels so that it runs in seconds (the full study is `pmmw sweep
 configs/cwd_trade.yaml`). The gun's grip against the torso is judged by the reports' one
-detection criterion (README "Detection": matched-filter SNR over the grip's blurred footprint
+detection criterion (docs/physics/accuracy.md, "Detection": matched-filter SNR over the grip's blurred footprint
 >= 5, Rose 1948) in the channel the reports lead with (Ey2).
 
 The metal grip mirrors its surroundings, so its contrast depends on the viewing angle (as the

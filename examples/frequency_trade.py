@@ -5,7 +5,7 @@ GHz, of scenes whose materials are valid across that band (docs/materials.md): t
 weapon outdoors and indoors (the gun's grip against the torso) and the landing in extreme fog (the
 row of beacons against the runway). Each scene twice: the aperture fixed (the beam narrows as the
 wavelength shortens) and scaled with the wavelength (the same beam at every frequency, so only the
-materials and the atmosphere change). The SNR is the reports' one detection criterion (README
+materials and the atmosphere change). The SNR is the reports' one detection criterion (docs/physics/accuracy.md,
 "Detection": matched-filter SNR >= 5) in the channel the reports lead with.
 
     python examples/frequency_trade.py [OUT_DIR]   # 30 renders, about 10 minutes on 2 cores;

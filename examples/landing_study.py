@@ -3,7 +3,7 @@
 Murakowski 2014 sec. 3.1: a passive imager on the 4-degree glide slope looks at the threshold,
 where 1 m metal plates tilted toward the approach mirror the cold sky. Here: the middle beacon
 across the threshold against the runway, from 2000 m and 500 m, at 35 and 95 GHz, in Table 3.2's
-"cloudy" weather (no fog layer), judged by the reports' one detection criterion (README
+"cloudy" weather (no fog layer), judged by the reports' one detection criterion (docs/physics/accuracy.md,
 "Detection": matched-filter SNR over the target's blurred footprint >= 5, Rose 1948) in the
 channel the reports lead with (Ey2). The full study, the row of five beacons in three weathers,
 is `pmmw sweep configs/landing_trade.yaml`.

@@ -199,3 +199,20 @@ def test_the_cheap_documented_commands_run(tmp_path):
         if run.returncode != 0:
             failed.append((where, " ".join(cmd), run.stderr.strip().splitlines()[-1:]))
     assert failed == []
+
+
+def _broken_links(text: str, base: Path) -> list[str]:
+    """Relative Markdown links (``[text](path)``, images too) whose file is not in the repository."""
+    import re
+
+    targets = re.findall(r"\]\((?!https?:|mailto:|#)([^)\s]+)\)", text)
+    return [t for t in targets if not (base / t.split("#")[0]).exists()]
+
+
+def test_the_readme_links_resolve():
+    """The README is read on GitHub and is not part of the site, whose strict build checks the
+    pages' links: its own links into docs/ are checked here."""
+    assert _broken_links((ROOT / "README.md").read_text(), ROOT) == []
+    # control: a link to a page that does not exist is caught, one that exists is not
+    assert _broken_links("[a](docs/guide/nope.md) [b](docs/guide/scenario.md#x) [c](https://x.org)", ROOT) == [
+        "docs/guide/nope.md"]
