@@ -127,7 +127,7 @@ def _type_name(tp) -> str:
         names = [_type_name(a) for a in args if a is not type(None)]
         return " or ".join(names)
     if origin is typing.Literal:
-        return " \\| ".join(f"`{a}`" for a in args)
+        return " or ".join(f"`{a}`" for a in args)
     if origin in (tuple,):
         if len(args) == 2 and args[1] is Ellipsis:
             return f"list of {_type_name(args[0])}"
