@@ -3,8 +3,8 @@ at a small size and its page shows the script, what it printed and the figures i
 
 Each script runs as a user runs it (``python examples/NAME.py OUT_DIR``), with
 ``PMMW_EXAMPLE_SCALE`` set so that it renders a fraction of the pixels per side, in a folder of its
-own; a script that fails fails the build. ``SLOW`` scripts (tens of renders) are not run: their
-page shows the figure committed under docs/ from a full run, and says so.
+own; a script that fails fails the build. Where a full run's figure is committed under docs/
+(``FULL``), the page shows it too: the small run's numbers are only indicative.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from pathlib import Path
 import mkdocs_gen_files
 
 ROOT = Path(__file__).resolve().parents[1]
-SCALE = os.environ.get("PMMW_EXAMPLE_SCALE", "0.12")
-# script -> the figure of a full run, committed under docs/ (shown instead of running it)
-SLOW = {"frequency_trade.py": "sweeps/frequency_trade.png"}
+SCALE = os.environ.get("PMMW_EXAMPLE_SCALE", "0.1")
+# script -> the figure of a full run, committed under docs/ (shown after the small run's)
+FULL = {"frequency_trade.py": "sweeps/frequency_trade.png"}
 # PMMW_GALLERY=skip: pages without running the scripts (for a quick look at the other pages)
 RUN = os.environ.get("PMMW_GALLERY", "run") != "skip"
 TIMEOUT = 900  # [s] per script: a hung example fails the build instead of holding it
@@ -39,11 +39,6 @@ def _page(script: Path) -> str:
     lines = [f"# {title.rstrip('.')}", "", rest.strip(), ""]
     if not RUN:
         lines += ["!!! note \"Not run in this build (PMMW_GALLERY=skip)\"", ""]
-    elif script.name in SLOW:
-        lines += ["!!! note \"Not run when the site is built\"",
-                  "    This example renders tens of variants (minutes on a laptop); the figure below is from "
-                  "a full run, committed with the documentation.", "",
-                  f"![{name}](../{SLOW[script.name]})", ""]
     else:
         with tempfile.TemporaryDirectory(prefix=f"pmmw-gallery-{name}-") as tmp:
             env = dict(os.environ, PMMW_EXAMPLE_SCALE=SCALE, MPLBACKEND="Agg",
@@ -57,11 +52,14 @@ def _page(script: Path) -> str:
             lines += [f"Run when the site was built, with `PMMW_EXAMPLE_SCALE={SCALE}` (a fraction of the "
                       f"pixels per side, so its numbers are only indicative), in {seconds:.0f} s:", "",
                       "```text", run.stdout.strip().replace(tmp, "OUT_DIR"), "```", ""]
-            for png in sorted(Path(tmp).rglob("*.png")):
-                rel = png.relative_to(tmp).as_posix().replace("/", "_")
+            for png in sorted(Path(tmp).glob("*.png")):  # the script's figures (not its renders' previews)
+                rel = png.name
                 with mkdocs_gen_files.open(f"gallery/{name}/{rel}", "wb") as f:
                     f.write(png.read_bytes())
                 lines += [f"![{rel}]({name}/{rel})", ""]
+    if script.name in FULL:
+        lines += ["A full run (`python examples/" + script.name + "`, every pixel), committed with the documentation:",
+                  "", f"![{name}, full run](../{FULL[script.name]})", ""]
     lines += ["## The script", "", f"`examples/{script.name}`:", "", "```python", script.read_text().rstrip(), "```", ""]
     return "\n".join(lines)
 
