@@ -584,7 +584,7 @@ def _all_outputs(names: dict) -> list[str]:
 SECONDS_PER_PATH = 1e-5
 TILE_BYTES_PER_PIXEL = 17 * 8  # float64 fields of a TileResult per pixel (pool._save_tile)
 # Memory of a render [bytes]: measured peaks (the sum of the proportional set sizes of the parent
-# and its workers, a 1e6-triangle OBJ on 2 workers; `tests/test_reliability_bounds.py` checks the
+# and its workers, a 1e6-triangle OBJ on 2 workers; `tests/reliability/test_reliability_bounds.py` checks the
 # estimate against a measured render) with a margin.
 PARENT_BASE_BYTES = 250e6  # the parent: interpreter, numpy, trimesh, the compiled kernels (238 MB measured)
 WORKER_BASE_BYTES = 250e6  # a render worker: interpreter, numpy, Embree, one wave of MAX_WAVE rays

@@ -11,7 +11,7 @@ import trimesh
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from pmmw.physical_optics import solver  # noqa: E402
 from pmmw.physical_optics.command import load_target  # noqa: E402
-from tests.po_refs import sphere_bistatic_rcs  # noqa: E402
+from tests.physical_optics.po_refs import sphere_bistatic_rcs  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 C0 = 299_792_458.0

@@ -187,7 +187,7 @@ def p527_water_permittivity(f, T, salinity=0.0):
     -0.35594E-06), where P.527-6 prints +3.5594e-7 after Meissner and Wentz (2004)'s table. With
     the printed sign salt would raise the first relaxation frequency 1.7 times at 30 C (35 g/kg)
     and sea water's eps' at 35 GHz above pure water's (38.4 against 25.0), against Klein and Swift
-    (1977) at L band and Stogryn et al. (1995) (tests/test_materials_reference.py).
+    (1977) at L band and Stogryn et al. (1995) (tests/scene/test_materials_reference.py).
 
     Parameters
     ----------

@@ -48,7 +48,7 @@ the Eddington closure's own. Against a 32-stream discrete-ordinates solution wit
 (Henyey-Greenstein) phase function, a rain-like slab of 4 optical depths at 285 K under the 3 K
 background reads at most 0.93 K too warm (omega 0.5, g 0.3, as 10 mm/h at 95 GHz; 2.6 K without
 the g mu term) and 0.21 K (omega 0.37, g -0.03, as at 35 GHz); see
-`tests/test_atmosphere_scattering.py`.
+`tests/atmosphere/test_atmosphere_scattering.py`.
 For rain (omega <= 0.56) the error is about 1 % of the contrast between the rain and what lies
 beyond it: at most ~3 K for an opaque rain under a cold sky, 1 K or less in the thesis's rain
 scene. Not modelled:

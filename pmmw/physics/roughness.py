@@ -368,7 +368,7 @@ def _area_any(a_up_fn, w):
 # ----------------------------------------------------------------------------------------------
 # The same arithmetic as `local_frame`, `_ggx_vndf_local` and the projected areas above, written
 # per ray in one pass (numba, cached on disk): these run once per rough interaction and re-hit.
-# tests/test_roughness.py checks them against the array code to rounding.
+# tests/physics/test_roughness.py checks them against the array code to rounding.
 
 _jit = njit()
 

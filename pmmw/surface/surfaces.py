@@ -60,7 +60,7 @@ class Surfaces:
         Branch choice (`kernels.STRATEGIES`).
     compiled : bool or None
         Smooth scenes interact in one pass of `kernels.scatter` (None, True); False sends them
-        through the rough-surface steps too (the reference of tests/test_compiled_tracer.py).
+        through the rough-surface steps too (the reference of tests/trace/test_compiled_tracer.py).
     count_facets : bool
         A child's ``depth`` counts facet events (each re-hit of a masked child and each facet
         event inside rough layers), as `pmmw brdf` reports scattering orders; otherwise

@@ -220,7 +220,7 @@ class Integrator:
         faces = (np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
                  np.ascontiguousarray(intersector.face_offset, float))
         # the surfaces' interactions (`pmmw.surface`); ``compiled=False`` sends smooth scenes
-        # through the rough-surface steps (the reference of tests/test_compiled_tracer.py)
+        # through the rough-surface steps (the reference of tests/trace/test_compiled_tracer.py)
         self.roulette, self.threshold = limits[2], limits[1]
         self.surfaces = Surfaces(job.media, job.frequency, faces, limits,
                                  (kernels.STRATEGIES[st.strategy], int(st.split_depth)), compiled)

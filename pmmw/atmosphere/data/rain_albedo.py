@@ -1,6 +1,6 @@
 """Single-scattering albedo of rain, omega = sigma_s / sigma_e, from Mie theory.
 
-Computed once offline (miepython 3.3, `tests/test_atmosphere_itu.py` re-derives sample entries):
+Computed once offline (miepython 3.3, `tests/atmosphere/test_atmosphere_itu.py` re-derives sample entries):
 spherical drops with the Marshall-Palmer size distribution N(D) = 8000 exp(-4.1 R^-0.21 D)
 [m^-3 mm^-1] (D in mm, R in mm/h) over 0.01 <= D <= 10 mm, water at 20 C (the temperature of the
 P.838 / Olsen et al. fits) with the P.840 double-Debye permittivity. At 10 mm/h this gives 0.367

@@ -5,7 +5,7 @@ albedo it gives agrees with that table to 5e-5): miepython 3.3 efficiencies Q_sc
 spherical drops, the Marshall-Palmer size distribution N(D) = 8000 exp(-4.1 R^-0.21 D)
 [m^-3 mm^-1] (D in mm, R in mm/h) over 0.01 <= D <= 10 mm (4000 diameters), water at 20 C with
 the P.840 double-Debye permittivity; g of the distribution is the scattering-weighted mean
-``int N D^2 Q_sca g dD / int N D^2 Q_sca dD``. `tests/test_atmosphere_scattering.py` re-derives
+``int N D^2 Q_sca g dD / int N D^2 Q_sca dD``. `tests/atmosphere/test_atmosphere_scattering.py` re-derives
 sample entries. At 10 mm/h: -0.027 at 35 GHz (drops near their first resonance scatter slightly
 backwards), 0.27 at 95 GHz.
 

@@ -1,0 +1,151 @@
+"""The worker pool hands back exactly what one process renders: every array of every tile, with
+the tiles' arrays coming back through memory shared with the forked workers (`pool._Slots`)."""
+
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pmmw.pipeline import make_job, resolve
+from pmmw.trace import pool
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_workers_return_every_array_of_every_tile_as_one_process_renders_it():
+    # adaptive sampling (per-pixel sample counts differ), tiles of three sizes (37 x 21 in tiles
+    # of 8: the slots that held a full tile then hold smaller ones), more tiles than slots
+    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml",
+                  ["imager.resolution=[37, 21]", "render.tile=8", "render.spp=16", "render.min_spp=2"])
+    job = make_job(res, res.scenario.frequencies[0])
+    one = pool.render_tiles(job, workers=1)
+    two = pool.render_tiles(job, workers=2)
+    assert len(two) == len(one) == 15
+    assert len({r.samples.max() for r in two}) > 1 or len({r.samples.min() for r in two}) > 1  # adaptive
+    for a, b in zip(one, two):
+        assert (b.index, b.box, b.rays) == (a.index, a.box, a.rays) and b.t_isect > 0.0
+        for name, _ in pool._PLANES:
+            x, y = getattr(a, name), getattr(b, name)
+            assert y.dtype == x.dtype and y.shape == x.shape, name
+            np.testing.assert_array_equal(y, x, err_msg=name)
+
+
+def test_slots_round_trip_a_tile_and_leave_the_result_without_arrays():
+    rng = np.random.default_rng(3)
+    h, w = 3, 5
+    r = pool.TileResult(7, (2, 4, 2 + w, 4 + h), rng.random((h, w, 4)), rng.random((h, w, 4)), rng.random((h, w)),
+                        rng.integers(-1, 4, (h, w)).astype(float), 11, rng.integers(1, 2**31 - 1, (h, w)).astype(np.int32),
+                        0.5, rng.random((h, w, 2)), rng.random((h, w, 4)))
+    want = {name: getattr(r, name).copy() for name, _ in pool._PLANES}
+    slots = pool._Slots(2, 64)
+    sent = slots.put(1, r)
+    assert all(getattr(sent, name) is None for name, _ in pool._PLANES)
+    back = slots.take(1, sent)
+    for name, a in want.items():
+        assert getattr(back, name).dtype == a.dtype, name
+        np.testing.assert_array_equal(getattr(back, name), a, err_msg=name)
+
+
+_REFAULTS = """
+import resource, sys
+import numpy as np
+from pmmw.trace import pool
+if sys.argv[1] == "keep":
+    pool._reuse_freed_memory()
+faults = []
+for _ in range(3):  # a wave's worth of arrays (eight of 8 MiB) made, written and freed, three times
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    arrays = [np.empty(1 << 20) for _ in range(8)]
+    for a in arrays:
+        a[:] = 1.0
+    faults.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+    del arrays, a
+print(faults[-1])
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or platform.libc_ver()[0] != "glibc",
+                    reason="glibc's mallopt")
+def test_a_rendering_process_reuses_the_memory_of_freed_arrays():
+    """With `pool._reuse_freed_memory` (what every rendering process calls first) the arrays of the
+    next wave land on memory the process already has: writing them faults in no page. By glibc's
+    default the 64 MiB freed at the top of the heap go back to the system (its trim threshold is
+    twice the largest array freed so far) and every round faults them in again, about 4000 pages
+    here (the cost that was 15 % of the landing scene's trace on the workers)."""
+    def faults(mode):
+        out = subprocess.run([sys.executable, "-c", _REFAULTS, mode], capture_output=True, text=True, check=True)
+        return int(out.stdout)
+
+    assert faults("default") >= 1000
+    assert faults("keep") < 64
+
+
+def _tiles_and_what_they_see(*overrides):
+    """The cinderblocks' tiles at 64 x 64 pixels in tiles of 16, in `pool._by_cost` order, and the
+    media that an 8 x 8 grid of camera rays per tile hits (Embree)."""
+    from pmmw.trace.intersect import make_intersector
+
+    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml",
+                  ["imager.resolution=[64, 64]", "render.tile=16", *overrides])
+    job = make_job(res, res.scenario.frequencies[0])
+    tiles = job.tiles()
+    order = [t[0] for t in pool._by_cost(job, tiles)]
+    assert sorted(order) == list(range(16))
+    isect = make_intersector(job.vertices, job.faces)
+    hits = {}
+    for i, x0, y0, x1, y1 in tiles:
+        u, v = np.meshgrid(np.linspace(x0, x1, 8, endpoint=False), np.linspace(y0, y1, 8, endpoint=False))
+        o, d, _, _ = job.camera.rays(u.ravel(), v.ravel(), np.arange(64), 1)
+        _, prim = isect.intersect(o, d)
+        hits[i] = set(job.media.ids[k] for k in job.face_medium[prim[prim >= 0]])
+    return order, hits
+
+
+def test_workers_take_the_tiles_with_most_of_the_scene_first_and_the_sky_last():
+    """`pool._by_cost` orders the work by the triangles each tile's screen area holds: on the
+    cinderblocks as shipped (looking down: every tile sees the sand) the six tiles that see a
+    block come first; looking level, the tiles that see only sky come last, in index order."""
+    order, hits = _tiles_and_what_they_see()
+    with_block = [n for n, i in enumerate(order) if "cinderblock" in hits[i]]
+    assert len(with_block) >= 4 and with_block == list(range(len(with_block)))
+    order, hits = _tiles_and_what_they_see("imager.look_at=[0.05, 5.25, 1.5]")
+    sky = [i for i in order if not hits[i]]
+    assert len(sky) >= 4 and order[-len(sky):] == sorted(sky)
+
+
+def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(monkeypatch):
+    """With the kernels not cached (`jit.is_cached` False; compiling stood in for by 1.5 s of
+    waiting), `render_tiles` tells ``notify`` before and after, and the progress clock starts after
+    the compile: the first tile's elapsed time is below the 1.5 s (it was counted in, and the first
+    estimate read `6118 s left`). The control: cached kernels say nothing."""
+    import time
+
+    from pmmw import jit
+    from pmmw.trace import kernels
+
+    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[16, 8]", "render.tile=8",
+                                                                  "render.spp=1"])
+    job = make_job(res, res.scenario.frequencies[0])
+    real_warm = kernels.warm
+
+    def slow_warm(stack_size=8):
+        real_warm(stack_size)
+        time.sleep(1.5)
+
+    monkeypatch.setattr(kernels, "warm", slow_warm)
+    images = []
+    for cached in (False, True):
+        monkeypatch.setattr(jit, "is_cached", lambda rel, cached=cached: cached)
+        said, elapsed = [], []
+        tiles = pool.render_tiles(job, workers=1, notify=said.append, progress=lambda d, t, r, e: elapsed.append(e))
+        images.append([t.mean for t in tiles])
+        if cached:
+            assert said == []
+        else:
+            assert len(said) == 2 and "compiling the tracer's kernels" in said[0] and "compiled in" in said[1]
+        assert len(elapsed) == 2 and elapsed[0] < 1.5, elapsed
+    for a, b in zip(*images):  # the pixel traced to compile the rest changes no random number of the image
+        np.testing.assert_array_equal(a, b)
