@@ -251,7 +251,7 @@ class Scenario:
         return replace(self, values={**self.values, **(values or {}), **keys})
 
     def resolved(self):
-        """The validated, typed scenario (`pmmw.config.schema.Scenario`): SI values, defaults
+        """The validated, typed scenario (`pmmw.config.schema.ScenarioConfig`): SI values, defaults
         filled in, paths absolute."""
         from pmmw.config import load_scenario
 

@@ -70,7 +70,7 @@ def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], g
                     data: dict | None = None):
     """An `Atmosphere` record from a YAML file (or the mapping ``data``) and/or command-line
     options (options win)."""
-    from pmmw.config.schema import Atmosphere
+    from pmmw.config.schema import AtmosphereConfig
 
     raw: dict = dict(data) if data is not None else {}
     if file is not None:
@@ -90,7 +90,7 @@ def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], g
     if humidity:
         raw["humidity"] = humidity
     try:
-        atm = Atmosphere.model_validate(raw)
+        atm = AtmosphereConfig.model_validate(raw)
     except ValidationError as exc:
         err = exc.errors()[0]
         key = ".".join(str(p) for p in ("atmosphere", *err["loc"]))
@@ -102,9 +102,9 @@ def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], g
 
 
 def _model(atm, f, layers=None):
-    from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+    from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, AtmosphereLayer
 
-    lay = atm.weather_at(f, file="pmmw sky") if layers is None else tuple(Layer(*layer) for layer in layers)
+    lay = atm.weather_at(f, file="pmmw sky") if layers is None else tuple(AtmosphereLayer(*layer) for layer in layers)
     return AtmosphereModel(Atmosphere(profile=atm.profile, ground_temperature=atm.ground_temperature,
                                       humidity=atm.humidity, layers=lay, ground_altitude=atm.ground_altitude), f)
 

@@ -10,7 +10,7 @@ from pmmw.atmosphere.model import (
     T_CMB,
     Atmosphere,
     AtmosphereModel,
-    Layer,
+    AtmosphereLayer,
 )
 
-__all__ = ["PROFILES", "T_CMB", "Atmosphere", "AtmosphereModel", "Layer"]
+__all__ = ["PROFILES", "T_CMB", "Atmosphere", "AtmosphereModel", "AtmosphereLayer"]

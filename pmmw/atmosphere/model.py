@@ -11,10 +11,10 @@ Per cell, at the cell's midpoint height:
 
 * gases: oxygen and water vapour, ITU-R P.676 Annex 1 line by line, on the P.835 reference
   profile of `Atmosphere.profile` (`pmmw.atmosphere.itu`); they absorb only (omega = 0);
-* fog and cloud slabs (`Layer`): liquid water, P.840 at the cell's temperature; the droplets are
+* fog and cloud slabs (`AtmosphereLayer`): liquid water, P.840 at the cell's temperature; the droplets are
   Rayleigh scatterers (omega < 1e-3 at 95 GHz), counted as absorbing only (omega = 0);
 * rain slabs: P.838 extinction for an unpolarized wave (mean of H and V), or a power law
-  A = a R^b [dB/km] with coefficients given for the frequency (`Layer.power_law`: Murakowski 2014
+  A = a R^b [dB/km] with coefficients given for the frequency (`AtmosphereLayer.power_law`: Murakowski 2014
   Table 3.5's, Olsen et al. 1978 at 20 C), of which the Mie fraction omega (about 0.37 at 35 GHz
   and 0.50 at 95 GHz for 10 mm/h) is scattering, with the asymmetry parameter g of the drop
   distribution (-0.03 and 0.27), both tabulated from Mie theory
@@ -111,7 +111,7 @@ LAYER_KINDS = ("fog", "cloud", "rain")
 
 
 @dataclass(frozen=True)
-class Layer:
+class AtmosphereLayer:
     """A weather slab between two heights above the ground.
 
     Attributes
@@ -180,7 +180,7 @@ class Atmosphere:
     humidity : float or None
         Water-vapour density at the scene's ground [kg/m^3] (7.5 g/m^3 = 7.5e-3 kg/m^3); the whole
         water-vapour profile is scaled by it. Not checked against saturation.
-    layers : tuple of Layer
+    layers : tuple of AtmosphereLayer
         Fog, cloud and rain slabs; where they overlap their attenuations add.
     ground_altitude : float
         Altitude above sea level of the scene's z = 0 [m].
@@ -189,7 +189,7 @@ class Atmosphere:
     profile: str = "standard"
     ground_temperature: float | None = None
     humidity: float | None = None
-    layers: tuple[Layer, ...] = ()
+    layers: tuple[AtmosphereLayer, ...] = ()
     ground_altitude: float = 0.0
 
     def __post_init__(self):
@@ -198,8 +198,8 @@ class Atmosphere:
                 f"unknown atmosphere profile {self.profile!r}; known: {', '.join(PROFILES)}"
             )
         object.__setattr__(self, "layers", tuple(self.layers))
-        if not all(isinstance(layer, Layer) for layer in self.layers):
-            raise TypeError("Atmosphere.layers must hold Layer records")
+        if not all(isinstance(layer, AtmosphereLayer) for layer in self.layers):
+            raise TypeError("Atmosphere.layers must hold AtmosphereLayer records")
         if not (-500.0 <= self.ground_altitude < itu.TROPOPAUSE_HEIGHT[self.profile]):
             raise ValueError(
                 f"ground_altitude {self.ground_altitude} m outside [-500 m, tropopause "

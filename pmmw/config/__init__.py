@@ -1,6 +1,6 @@
-"""Scenario YAML -> validated, typed `Scenario` (SI units, resolved paths)."""
+"""Scenario YAML -> validated, typed `ScenarioConfig` (SI units, resolved paths)."""
 
 from pmmw.config.load import apply_overrides, load_scenario, scenario_to_display
-from pmmw.config.schema import Scenario
+from pmmw.config.schema import ScenarioConfig
 
-__all__ = ["Scenario", "apply_overrides", "load_scenario", "scenario_to_display"]
+__all__ = ["ScenarioConfig", "apply_overrides", "load_scenario", "scenario_to_display"]

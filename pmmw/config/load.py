@@ -1,4 +1,4 @@
-"""YAML file + ``--set`` overrides -> validated `Scenario`, with every error named by file and key."""
+"""YAML file + ``--set`` overrides -> validated `ScenarioConfig`, with every error named by file and key."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
-from pmmw.config.schema import _FREQUENCY_SUFFIX, _NAME_MARKS, Scenario
+from pmmw.config.schema import _FREQUENCY_SUFFIX, _NAME_MARKS, ScenarioConfig
 from pmmw.errors import UserError, UserErrors
 from pmmw.io.inputs import check_input_path
 from pmmw.io.yamlio import MalformedYAML, load_yaml, read_yaml
@@ -30,7 +30,7 @@ def default_name(path: Path) -> str:
 
 
 def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | None = None,
-                  values: dict | None = None) -> Scenario:
+                  values: dict | None = None) -> ScenarioConfig:
     """Read, override, validate and resolve a scenario file.
 
     Parameters
@@ -193,7 +193,7 @@ def _fmt(loc) -> str:
     return out
 
 
-def _validate(raw: dict, path: Path) -> Scenario:
+def _validate(raw: dict, path: Path) -> ScenarioConfig:
     data = dict(raw)
     errors: list[UserError] = []
     # keys the loader sets itself are not user keys
@@ -225,7 +225,7 @@ def _validate(raw: dict, path: Path) -> Scenario:
             entries.append(e)
         data["scene"] = entries
     try:
-        scn = Scenario.model_validate(data, context={"base_dir": path.parent})
+        scn = ScenarioConfig.model_validate(data, context={"base_dir": path.parent})
     except ValidationError as exc:
         errors += [_user_error(err, path, freq_key, raw) for err in exc.errors()]
     except UserError as e:  # raised unwrapped by a validator: still name the file
@@ -271,8 +271,8 @@ def _user_error(err: dict, path: Path, freq_key: str, raw: dict) -> UserError:
 
 
 def _allowed_keys(loc) -> list[str]:
-    """The field names of the model at ``loc`` inside `Scenario`, for "unknown key" messages."""
-    tp = Scenario
+    """The field names of the model at ``loc`` inside `ScenarioConfig`, for "unknown key" messages."""
+    tp = ScenarioConfig
     for part in loc:
         tp = _item_type(tp, part)
         if tp is None:
@@ -280,7 +280,7 @@ def _allowed_keys(loc) -> list[str]:
     if isinstance(tp, type) and issubclass(tp, BaseModel):
         hidden = {"source_file", "frequencies", "key"}
         names = [n for n in tp.model_fields if n not in hidden]
-        if tp is Scenario:
+        if tp is ScenarioConfig:
             names.insert(1, "frequency")
         if tp.__name__ == "Sky":
             names.insert(names.index("file"), "texture")
@@ -311,7 +311,7 @@ def _qty(value: float, unit: str, scale: float = 1.0) -> str:
     return f"{value / scale:.12g} {unit}"
 
 
-def scenario_to_display(scn: Scenario) -> dict:
+def scenario_to_display(scn: ScenarioConfig) -> dict:
     """The resolved scenario as plain YAML-able data, with units re-attached as strings.
 
     Without ``source_file`` (set by the loader), the result is itself a valid scenario that

@@ -428,19 +428,19 @@ class WeatherLayer(_Model):
         return self
 
     def model_layer(self, f: float, half_band: float = 0.0):
-        """This slab as the atmosphere model takes it at frequency f [Hz] (`pmmw.atmosphere.model.Layer`);
+        """This slab as the atmosphere model takes it at frequency f [Hz] (`pmmw.atmosphere.model.AtmosphereLayer`);
         None where its power law has no coefficients within ``half_band`` [Hz] of f."""
-        from pmmw.atmosphere.model import Layer
+        from pmmw.atmosphere.model import AtmosphereLayer
 
         power_law = None
         if self.kind == "rain" and self.attenuation.model == "power_law":
             power_law = self.attenuation.coefficients_at(f, half_band)
             if power_law is None:
                 return None
-        return Layer(self.kind, self.base, self.top, self.liquid_water, self.rain_rate, power_law, self.scattering)
+        return AtmosphereLayer(self.kind, self.base, self.top, self.liquid_water, self.rain_rate, power_law, self.scattering)
 
 
-class Atmosphere(_Model):
+class AtmosphereConfig(_Model):
     """``model: layered`` (default): an ITU-R P.835 profile with gases (P.676), weather layers of
     fog/cloud (P.840) and rain (P.838); ``model: uniform``: one absorbing medium of ``loss`` at
     ``temperature`` along every path (Murakowski 2014's Blender setting, sec. 2.2.9)."""
@@ -488,7 +488,7 @@ class Atmosphere(_Model):
         return self
 
     def weather_at(self, f: float, half_band: float = 0.0, file=None) -> tuple:
-        """The weather layers as `pmmw.atmosphere.model.Layer` records at frequency f [Hz], a
+        """The weather layers as `pmmw.atmosphere.model.AtmosphereLayer` records at frequency f [Hz], a
         rain power law's entry taken within ``half_band`` [Hz] of f (a sub-band of the imager's band).
 
         Raises
@@ -516,7 +516,7 @@ def _positive_temperature(t, hint: str = ""):
 
 
 class Sky(_Model):
-    model: Optional[Literal["atmosphere", "slab", "uniform", "texture"]] = None  # None: see Scenario
+    model: Optional[Literal["atmosphere", "slab", "uniform", "texture"]] = None  # None: see ScenarioConfig
     temperature: Annotated[Optional[float], Quantity("temperature")] = None
     file: Optional[Path] = None
     zenith_opacity: Optional[float] = None
@@ -634,7 +634,7 @@ class Region(_Model):
         return self
 
 
-class Output(_Model):
+class OutputConfig(_Model):
     dir: Optional[Path] = None
     regions: dict[str, Region] = {}
     channels: tuple[str, ...] = CHANNELS
@@ -674,17 +674,17 @@ def _subset(v, allowed, what):
     return tuple(v)
 
 
-class Scenario(_Model):
+class ScenarioConfig(_Model):
     name: str
     source_file: Path
     frequencies: Annotated[tuple[float, ...], Quantity("frequency", many=True)]
     imager: Imager
     scene: tuple[SceneEntry, ...]
     materials: dict[str, dict] = {}
-    atmosphere: Optional[Atmosphere] = Atmosphere()
+    atmosphere: Optional[AtmosphereConfig] = AtmosphereConfig()
     sky: Sky = Sky()
     render: Render = Render()
-    output: Output = Output()
+    output: OutputConfig = OutputConfig()
 
     @field_validator("name")
     @classmethod

@@ -40,7 +40,7 @@ class Observation(_Model):
     phi: Union[str, float, list[float]] = 0.0  # [deg] START:STOP:STEP, one angle or a list
 
 
-class Output(_Model):
+class PoOutputConfig(_Model):
     dir: Optional[Path] = None
     plot: bool = True
 
@@ -58,7 +58,7 @@ class PoJob(_Model):
     bounces: int = Field(1, ge=1, le=command.MAX_BOUNCES)
     method: Literal["auto", "direct", "octree"] = "auto"
     tube: Annotated[Optional[float], Quantity("length")] = None
-    output: Output = Output()
+    output: PoOutputConfig = PoOutputConfig()
 
     @field_validator("polarization", mode="before")
     @classmethod

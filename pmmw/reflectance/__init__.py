@@ -80,7 +80,7 @@ from pmmw.reflectance.command import _direction as _direction  # tests build dir
 from pmmw.reflectance.grid import N_PHI, N_THETA, grid_directions, mueller_from_jones, projected_solid_angle
 from pmmw.reflectance.montecarlo import monte_carlo
 from pmmw.reflectance.optics import flat_reflectance
-from pmmw.reflectance.stack import Layer, Stack, load_stack, parse_complex
+from pmmw.reflectance.stack import StackLayer, Stack, load_stack, parse_complex
 
 __all__ = [
     "METHODS",
@@ -88,7 +88,7 @@ __all__ = [
     "N_THETA",
     "SHADOWING",
     "BrdfResult",
-    "Layer",
+    "StackLayer",
     "MethodResult",
     "Stack",
     "analytic",

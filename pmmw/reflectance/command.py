@@ -19,7 +19,7 @@ from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, projected_solid_angle
 from pmmw.reflectance.montecarlo import monte_carlo
 from pmmw.reflectance.optics import flat_reflectance
 from pmmw.reflectance.outputs import write_outputs
-from pmmw.reflectance.stack import _C0, Layer, Stack, _frequency, _medium_eps, load_stack
+from pmmw.reflectance.stack import _C0, StackLayer, Stack, _frequency, _medium_eps, load_stack
 
 __all__ = ["METHODS", "BrdfResult", "MethodResult", "roughness_spec_from_options", "run_brdf"]
 
@@ -87,7 +87,7 @@ def _stack_from_options(n, eps, material, roughness_spec, frequency, wavelength)
     model = rough.make_model(roughness_spec, file="command line", key="roughness") if roughness_spec else None
     if material is not None:
         return _material_stack(material, eps_val, metal, model, f)
-    return Stack(layers=(Layer(eps=eps_val, roughness=model, metal=metal, name=given[0].lstrip("-")),), frequency=f)
+    return Stack(layers=(StackLayer(eps=eps_val, roughness=model, metal=metal, name=given[0].lstrip("-")),), frequency=f)
 
 
 def _material_stack(mid, eps_val, metal, model, f):
@@ -106,9 +106,9 @@ def _material_stack(mid, eps_val, metal, model, f):
         return () if coat is None else tuple(zip(coat.eps.tolist(), coat.thickness.tolist()))
 
     names = [x.material for x in mat.coating if x.roughness is not None]
-    layers = [Layer(eps=x.eps, roughness=x.roughness, thickness=x.thickness, coating=pairs(x.films), name=name)
+    layers = [StackLayer(eps=x.eps, roughness=x.roughness, thickness=x.thickness, coating=pairs(x.films), name=name)
               for x, name in zip(rough_layers, names)]
-    layers.append(Layer(eps=eps_val, roughness=model if model is not None else mat.roughness, metal=metal,
+    layers.append(StackLayer(eps=eps_val, roughness=model if model is not None else mat.roughness, metal=metal,
                         coating=pairs(films), name=mid))
     return Stack(layers=tuple(layers), frequency=f)
 

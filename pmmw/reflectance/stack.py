@@ -1,4 +1,4 @@
-"""The surface that `pmmw brdf` scatters from: a `Stack` of `Layer` records, top layer first.
+"""The surface that `pmmw brdf` scatters from: a `Stack` of `StackLayer` records, top layer first.
 
 A stack comes from a stack file (`load_stack`, YAML; every problem reported with the file and key
 path) or from the command line (`pmmw.reflectance.command`). Permittivities follow the
@@ -16,11 +16,11 @@ from pmmw.errors import UserError, UserErrors
 from pmmw.io.yamlio import read_yaml
 from pmmw.physics import roughness as rough
 
-__all__ = ["Layer", "Stack", "load_stack", "parse_complex"]
+__all__ = ["StackLayer", "Stack", "load_stack", "parse_complex"]
 
 
 @dataclass(frozen=True)
-class Layer:
+class StackLayer:
     """One medium below the ambient one, with the interface on its top.
 
     Attributes
@@ -57,7 +57,7 @@ class Stack:
 
     Attributes
     ----------
-    layers : tuple of Layer
+    layers : tuple of StackLayer
     ambient_eps : complex
         Permittivity of the incidence medium (lossless).
     frequency : float or None
@@ -262,7 +262,7 @@ def load_stack(path, *, frequency=None, wavelength=None) -> Stack:
                 raise UserError("a coating needs the frequency (frequency: or --frequency)", file, f"{key}.coating")
             if thickness and eps.imag > 0.0 and f is None and i != len(layers_raw) - 1:
                 raise UserError("an absorbing layer with a thickness needs the frequency", file, f"{key}.thickness")
-            layers.append(Layer(eps=eps, roughness=model, thickness=thickness, coating=tuple(coating), metal=metal,
+            layers.append(StackLayer(eps=eps, roughness=model, thickness=thickness, coating=tuple(coating), metal=metal,
                                 name=str(entry.get("name", f"layer {i}"))))
         except UserErrors as ex:
             errors.extend(ex.errors)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pmmw.atmosphere import Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere import Atmosphere, AtmosphereModel, AtmosphereLayer, itu
 from pmmw.atmosphere.model import atmosphere_profile
 
 GHZ = 1e9
@@ -135,7 +135,7 @@ def test_fog_matches_seed_table_3_2():
     for (f_ghz, lwc_g_m3), ref in table.items():
         clear = AtmosphereModel(Atmosphere(), f_ghz * GHZ)
         fog = AtmosphereModel(
-            Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=lwc_g_m3 * 1e-3),)),
+            Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=lwc_g_m3 * 1e-3),)),
             f_ghz * GHZ,
         )
         fog_alone = fog.specific_attenuation_db_km(0.0) - clear.specific_attenuation_db_km(0.0)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pmmw.atmosphere import Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere import Atmosphere, AtmosphereModel, AtmosphereLayer, itu
 from pmmw.atmosphere.itu import NP_M_PER_DB_KM
 from pmmw.atmosphere.model import rain_power_law_db_km
 from pmmw.config import load_scenario
@@ -36,7 +36,7 @@ def _rain(rate, power_law=None, f_ghz=95):
     with 0-1500 m of rain, less those of the same cells with the layer at 0 mm/h (the same gas and
     everything else): the rain alone, shape (K,) each."""
     def model(r):
-        layer = Layer("rain", 0.0, 1500.0, rain_rate=r, power_law=power_law)
+        layer = AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=r, power_law=power_law)
         return AtmosphereModel(Atmosphere(layers=(layer,)), f_ghz * GHZ)
     wet = model(rate)
     edges = wet.edges[wet.edges <= 1500.0]
@@ -179,8 +179,8 @@ def test_rain_without_scattering_absorbs_all_its_extinction():
     cell grids differ: a scattering layer is cut finer), no scattering, so the path loss is unchanged and the layer emits as a pure absorber (its
     brightness seen from below, optically thick, tends to its temperature; scattering drops reflect
     the cold sky and look colder). Closed forms: equal extinction to rounding; zero scattering."""
-    wet = Layer("rain", 0.0, 1500.0, rain_rate=50.0)
-    dry = Layer("rain", 0.0, 1500.0, rain_rate=50.0, scattering=False)
+    wet = AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=50.0)
+    dry = AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=50.0, scattering=False)
     a = AtmosphereModel(Atmosphere(layers=(wet,)), 95e9)
     b = AtmosphereModel(Atmosphere(layers=(dry,)), 95e9)
     assert np.all(b.omega == 0.0) and np.any(a.omega > 0.3)  # 95 GHz, 50 mm/h: albedo about 0.5

@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 import pytest
 
-from pmmw.atmosphere import T_CMB, Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere import T_CMB, Atmosphere, AtmosphereModel, AtmosphereLayer, itu
 from pmmw.atmosphere.model import atmosphere_profile, layered_sky_temperature, vertical_grid
 
 GHZ = 1e9
@@ -152,8 +152,8 @@ def test_vertical_path_to_the_top_equals_zenith_sky():
     # background is the zenith sky exactly (summation order only)
     atm = Atmosphere(
         layers=(
-            Layer("cloud", 1000.0, 2000.0, liquid_water=0.5e-3),
-            Layer("rain", 0.0, 1500.0, rain_rate=10.0),
+            AtmosphereLayer("cloud", 1000.0, 2000.0, liquid_water=0.5e-3),
+            AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=10.0),
         )
     )
     m = AtmosphereModel(atm, 35 * GHZ)
@@ -218,8 +218,8 @@ def _loop_reference(m: AtmosphereModel, z0: float, z1: float, L: float):
 def test_sloped_paths_match_a_plain_loop_in_order():
     atm = Atmosphere(
         layers=(
-            Layer("fog", 0.0, 600.0, liquid_water=1e-3),
-            Layer("rain", 300.0, 1500.0, rain_rate=25.0),
+            AtmosphereLayer("fog", 0.0, 600.0, liquid_water=1e-3),
+            AtmosphereLayer("rain", 300.0, 1500.0, rain_rate=25.0),
         )
     )
     m = AtmosphereModel(atm, 95 * GHZ)
@@ -271,7 +271,7 @@ def test_fog_vertical_loss_matches_seed():
     clear = AtmosphereModel(Atmosphere(), 95 * GHZ)
     for lwc_g_m3, lo, hi in ((0.3, 0.70, 0.85), (1.0, 2.48 / 1.07, 2.48 * 1.07)):
         fog = AtmosphereModel(
-            Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=lwc_g_m3 * 1e-3),)), 95 * GHZ
+            Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=lwc_g_m3 * 1e-3),)), 95 * GHZ
         )
         fog_alone = float(
             fog.path_loss_db(0.0, 600.0, 600.0) - clear.path_loss_db(0.0, 600.0, 600.0)
@@ -284,7 +284,7 @@ def test_rain_scatters_in_as_much_as_it_scatters_out():
     # an opaque horizontal path inside rain reads the cell's source (1 - omega) T + omega <I0>
     # (tests/atmosphere/test_atmosphere_scattering.py checks its value); formerly T alpha_abs / alpha
     f = 95 * GHZ
-    m = AtmosphereModel(Atmosphere(layers=(Layer("rain", 0.0, 1000.0, rain_rate=10.0),)), f)
+    m = AtmosphereModel(Atmosphere(layers=(AtmosphereLayer("rain", 0.0, 1000.0, rain_rate=10.0),)), f)
     t, emission = m.path(500.0, 500.0, 1e5)
     j = np.searchsorted(m.edges, 500.0) - 1
     a_rain = itu.rain_specific_attenuation_db_km(10.0, f) * itu.NP_M_PER_DB_KM
@@ -299,11 +299,11 @@ def test_rain_scatters_in_as_much_as_it_scatters_out():
 
 def test_layers_are_validated():
     with pytest.raises(ValueError, match="base < top"):
-        Layer("fog", 600.0, 100.0, liquid_water=1e-3)
+        AtmosphereLayer("fog", 600.0, 100.0, liquid_water=1e-3)
     with pytest.raises(ValueError, match="kind"):
-        Layer("snow", 0.0, 100.0)
+        AtmosphereLayer("snow", 0.0, 100.0)
     with pytest.raises(ValueError, match="rain_rate"):
-        Layer("rain", 0.0, 100.0, liquid_water=1e-3)
+        AtmosphereLayer("rain", 0.0, 100.0, liquid_water=1e-3)
     with pytest.raises(ValueError, match="1-1000 GHz"):
         AtmosphereModel(Atmosphere(), 2e12)
     with pytest.raises(ValueError, match="dz"):
@@ -313,7 +313,7 @@ def test_layers_are_validated():
 def test_speed():
     # the renderer builds one model per (frequency, atmosphere) and traces ~1e6 segments per
     # bounce: print the times (no wall-time assertion in tests)
-    atm = Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=0.3e-3),))
+    atm = Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=0.3e-3),))
     t0 = time.perf_counter()
     m = AtmosphereModel(atm, 95 * GHZ)
     t1 = time.perf_counter()

@@ -16,14 +16,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pmmw.atmosphere import T_CMB, Atmosphere, AtmosphereModel, Layer, itu
+from pmmw.atmosphere import T_CMB, Atmosphere, AtmosphereModel, AtmosphereLayer, itu
 from pmmw.atmosphere.model import layered_sky_temperature, scattering_source
 
 GHZ = 1e9
 ELEVATIONS = np.radians([0.0, 1.0, 5.0, 10.0, 30.0, 60.0, 90.0])
 RAIN_CLOUD = (  # Murakowski 2014 sec. 3.3.4: rain up to 1500 m under clouds at 1000-2000 m
-    Layer("rain", 0.0, 1500.0, rain_rate=10.0),
-    Layer("cloud", 1000.0, 2000.0, liquid_water=0.5e-3),
+    AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=10.0),
+    AtmosphereLayer("cloud", 1000.0, 2000.0, liquid_water=0.5e-3),
 )
 
 
@@ -97,7 +97,7 @@ def test_thick_isothermal_rain_under_the_cosmic_background_reads_its_temperature
     require 1e-4 K at every elevation (0-5 km of rain, 12 optical depths, left 2e-3 K at the
     35 GHz zenith: the transmitted background, physics, not the scheme). Without the
     scattered-in radiation (the former source) the same sky read more than 90 K colder."""
-    atm = Atmosphere(layers=(Layer("rain", 0.0, 8000.0, rain_rate=50.0),))
+    atm = Atmosphere(layers=(AtmosphereLayer("rain", 0.0, 8000.0, rain_rate=50.0),))
     m = _isothermal(AtmosphereModel(atm, f_ghz * GHZ), 285.0)
     j = np.searchsorted(m.edges, 2500.0) - 1
     print(f"{f_ghz} GHz: rain tau {m.depth[np.searchsorted(m.edges, 8000.0)]:.1f}, "
@@ -255,7 +255,7 @@ def test_murakowski_rain_scene_contrast_is_about_2_K():
 def test_clear_air_and_fog_are_unchanged(f_ghz):
     """Nothing scatters without rain (gases and Rayleigh droplets: omega = 0): the source is the
     temperature itself, bit for bit, and the sky is the non-scattering transfer to 1e-9 K."""
-    for layers in ((), (Layer("fog", 0.0, 600.0, liquid_water=1e-3),)):
+    for layers in ((), (AtmosphereLayer("fog", 0.0, 600.0, liquid_water=1e-3),)):
         m = AtmosphereModel(Atmosphere(layers=layers), f_ghz * GHZ)
         assert np.all(m.omega == 0.0) and np.all(m.source_mu == 0.0)
         np.testing.assert_array_equal(m.source, m.temperature)
@@ -278,7 +278,7 @@ def test_rain_is_brighter_than_its_absorption_and_directional():
     travelling up (from the warm ground) exceeds that for radiation travelling down when g > 0
     (`tests/atmosphere/test_atmosphere_rt.py` checks that paths use it, against a plain per-cell loop)."""
     f = 95 * GHZ
-    m = AtmosphereModel(Atmosphere(layers=(Layer("rain", 0.0, 3000.0, rain_rate=10.0),)), f)
+    m = AtmosphereModel(Atmosphere(layers=(AtmosphereLayer("rain", 0.0, 3000.0, rain_rate=10.0),)), f)
     j = np.searchsorted(m.edges, 500.0) - 1
     t, emission = m.path(500.0, 500.0, 1e5)
     assert float(t) < 1e-30
@@ -302,7 +302,7 @@ def test_isothermal_box_full_of_rain_renders_its_temperature():
     from pmmw.trace.job import RenderSettings
     from tests.scenes import hollow_box, make_job, material, render
 
-    atm = Atmosphere(layers=(Layer("rain", 0.0, 5000.0, rain_rate=50.0),))
+    atm = Atmosphere(layers=(AtmosphereLayer("rain", 0.0, 5000.0, rain_rate=50.0),))
     walls = material(eps=3 + 0.5j, temperature=285.0)
     room = (hollow_box([-100, -100, 1], [100, 100, 201], 1.0), walls)
     cam = Camera.look_at([0, -80, 20], [30, 100, 150], [0, 0, 1], np.radians(70), (8, 8))

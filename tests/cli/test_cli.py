@@ -315,7 +315,7 @@ def test_the_readme_lists_exactly_the_required_keys():
                     out.append(prefix + {"frequencies": "frequency"}.get(name, name))
         return out
 
-    want = set(required(schema.Scenario, "")) | {"scene[i]." + k for k in required(schema.SceneEntry, "")}
+    want = set(required(schema.ScenarioConfig, "")) | {"scene[i]." + k for k in required(schema.SceneEntry, "")}
     want |= {"atmosphere.layers[i]." + k for k in required(schema.WeatherLayer, "")}
     text = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "scenario.md").read_text()  # the scenario guide
     para = text[text.index("Required keys"):text.index("```yaml", text.index("Required keys"))]

@@ -22,7 +22,7 @@ from pydantic import BaseModel
 from typer.testing import CliRunner
 
 from pmmw.config import load_scenario
-from pmmw.config.schema import Quantity, Scenario
+from pmmw.config.schema import Quantity, ScenarioConfig
 from pmmw.errors import UserError
 from pmmw.scene import bump as bump_mod
 from pmmw.scene import materials as mat_mod
@@ -178,7 +178,7 @@ def _models(tp):
     return [ms for a in args for ms in _models(a)]
 
 
-def schema_quantity_fields(model=Scenario, prefix="") -> dict[str, Quantity]:
+def schema_quantity_fields(model=ScenarioConfig, prefix="") -> dict[str, Quantity]:
     """Dotted path -> `Quantity` marker of every quantity field reachable from `model`."""
     out = {}
     for name, info in model.model_fields.items():

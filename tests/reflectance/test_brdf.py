@@ -21,7 +21,7 @@ Q_RECIP = np.diag([1.0, 1.0, -1.0, 1.0])  # Mueller reciprocity: M(wo->wi) = Q M
 
 
 def _copper(model=None):
-    return B.Stack(layers=(B.Layer(eps=COPPER_N ** 2, roughness=model),))
+    return B.Stack(layers=(B.StackLayer(eps=COPPER_N ** 2, roughness=model),))
 
 
 def _mc(stack, theta_i, samples, seed=0, phi_i=0.0):
@@ -49,7 +49,7 @@ def _flat_fresnel_mueller(n, theta_i):
 def test_rough_lossless_dielectric_reflects_plus_transmits_one(model, theta_i):
     """Every path keeps its power until it leaves (no discarding; branch choice rescales), so
     R + T = 1 to rounding, path by path; nothing is absorbed."""
-    s, _ = _mc(B.Stack(layers=(B.Layer(eps=2.25 + 0j, roughness=model),)), theta_i, 20_000)
+    s, _ = _mc(B.Stack(layers=(B.StackLayer(eps=2.25 + 0j, roughness=model),)), theta_i, 20_000)
     assert s["total_reflectance"] + s["total_transmittance"] == pytest.approx(1.0, abs=1e-12)
     assert s["absorptance"] < 1e-12 and s["lost"] == 0.0  # rounding of R + T = 1 per facet
     assert 0.0 < s["total_reflectance"] < 1.0
@@ -57,9 +57,9 @@ def test_rough_lossless_dielectric_reflects_plus_transmits_one(model, theta_i):
 
 def test_rough_lossless_multilayer_reflects_plus_transmits_one():
     stack = B.Stack(layers=(
-        B.Layer(eps=1.69 + 0j, roughness=R.AshikhminShirley(30, 30)),
-        B.Layer(eps=1.96 + 0j, roughness=R.AshikhminShirley(10, 40, orientation_deg=30)),
-        B.Layer(eps=2.25 + 0j, roughness=R.GGX(0.3)),
+        B.StackLayer(eps=1.69 + 0j, roughness=R.AshikhminShirley(30, 30)),
+        B.StackLayer(eps=1.96 + 0j, roughness=R.AshikhminShirley(10, 40, orientation_deg=30)),
+        B.StackLayer(eps=2.25 + 0j, roughness=R.GGX(0.3)),
     ))
     s, _ = _mc(stack, 40.0, 20_000)
     assert s["total_reflectance"] + s["total_transmittance"] == pytest.approx(1.0, abs=1e-12)
@@ -67,7 +67,7 @@ def test_rough_lossless_multilayer_reflects_plus_transmits_one():
 
 def test_rough_perfect_conductor_reflects_everything():
     """White furnace: a rough perfect conductor returns every path with its full power."""
-    stack = B.Stack(layers=(B.Layer(eps=0j, metal=True, roughness=R.AshikhminShirley(5, 5)),))
+    stack = B.Stack(layers=(B.StackLayer(eps=0j, metal=True, roughness=R.AshikhminShirley(5, 5)),))
     s, _ = _mc(stack, 60.0, 50_000)
     assert s["total_reflectance"] == pytest.approx(1.0, abs=1e-12)
 
@@ -75,8 +75,8 @@ def test_rough_perfect_conductor_reflects_everything():
 def test_lossy_stack_balances_reflection_absorption():
     """Copper under a lossy, thick, rough dielectric layer: R + A = 1 within the Monte Carlo error
     of R (Russian roulette below the threshold is unbiased but noisy)."""
-    stack = B.Stack(layers=(B.Layer(eps=2.5 + 0.05j, thickness=2e-3, roughness=R.AshikhminShirley(10, 10)),
-                            B.Layer(eps=COPPER_N ** 2, roughness=R.AshikhminShirley(20, 20))), frequency=95e9)
+    stack = B.Stack(layers=(B.StackLayer(eps=2.5 + 0.05j, thickness=2e-3, roughness=R.AshikhminShirley(10, 10)),
+                            B.StackLayer(eps=COPPER_N ** 2, roughness=R.AshikhminShirley(20, 20))), frequency=95e9)
     s, _ = _mc(stack, 30.0, 20_000)
     total = s["total_reflectance"] + s["absorptance"] + s["lost"]
     assert total == pytest.approx(1.0, abs=5 * s["total_reflectance_stderr"] + 1e-3)
@@ -93,8 +93,8 @@ def test_rough_copper_never_beats_flat_copper(e):
 
 
 def test_smooth_multilayer_matches_the_incoherent_closed_form():
-    stack = B.Stack(layers=(B.Layer(eps=2.25 + 0j, thickness=0.01), B.Layer(eps=4 + 0.5j, thickness=0.003),
-                            B.Layer(eps=COPPER_N ** 2)), frequency=95e9)
+    stack = B.Stack(layers=(B.StackLayer(eps=2.25 + 0j, thickness=0.01), B.StackLayer(eps=4 + 0.5j, thickness=0.003),
+                            B.StackLayer(eps=COPPER_N ** 2)), frequency=95e9)
     s, res = _mc(stack, 35.0, 100_000)
     assert s["total_reflectance"] == pytest.approx(res.summary["flat_reflectance"],
                                                    abs=5 * s["total_reflectance_stderr"] + 2e-3)
@@ -104,7 +104,7 @@ def test_coating_on_the_facets_uses_the_multilayer_stack():
     """A quarter-wave film on glass (n = 1.5 on 2.25) at normal incidence: a nearly smooth
     surface reflects the coated-stack value, here 0 (perfect antireflection)."""
     lam = 299_792_458.0 / 95e9
-    coated = B.Stack(layers=(B.Layer(eps=2.25 ** 2 + 0j, roughness=R.BlinnPhong(1e6),
+    coated = B.Stack(layers=(B.StackLayer(eps=2.25 ** 2 + 0j, roughness=R.BlinnPhong(1e6),
                                      coating=((1.5 ** 2 + 0j, lam / 4 / 1.5),)),), frequency=95e9)
     s, _ = _mc(coated, 0.0, 5_000)
     assert s["total_reflectance"] < 1e-9
@@ -512,10 +512,10 @@ def test_a_stack_becomes_one_medium_of_the_renderers_tables():
     from pmmw.trace.job import DIELECTRIC, METAL, OPAQUE
 
     f = 94e9
-    top = B.Layer(eps=2.25 + 0.05j, roughness=R.GGX(0.3), thickness=2e-3, coating=((3.0 + 0.1j, 1e-4),))
-    mid = B.Layer(eps=2.0 + 0.01j, roughness=R.Beckmann(0.2))
-    for bottom, kind in ((B.Layer(eps=6.0 + 2.0j, roughness=R.GGX(0.1)), OPAQUE),
-                         (B.Layer(eps=0j, metal=True), METAL), (B.Layer(eps=4.0 + 0j), DIELECTRIC)):
+    top = B.StackLayer(eps=2.25 + 0.05j, roughness=R.GGX(0.3), thickness=2e-3, coating=((3.0 + 0.1j, 1e-4),))
+    mid = B.StackLayer(eps=2.0 + 0.01j, roughness=R.Beckmann(0.2))
+    for bottom, kind in ((B.StackLayer(eps=6.0 + 2.0j, roughness=R.GGX(0.1)), OPAQUE),
+                         (B.StackLayer(eps=0j, metal=True), METAL), (B.StackLayer(eps=4.0 + 0j), DIELECTRIC)):
         media = stack_media(B.Stack(layers=(top, mid, bottom), frequency=f))
         assert list(media.kind) == [DIELECTRIC, kind]
         assert media.rough(1) is bottom.roughness

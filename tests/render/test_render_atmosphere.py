@@ -3,7 +3,7 @@
 import numpy as np
 import trimesh
 
-from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, AtmosphereLayer
 from pmmw.scene.camera import Camera
 from pmmw.scene.sky import AtmosphereSky
 from pmmw.trace.job import RenderSettings
@@ -49,7 +49,7 @@ def test_fog_adds_the_liquid_water_attenuation_along_a_horizontal_path():
     target = (box([-50, 300, -10], [50, 301, 50]), material(kind="blackbody", temperature=300.0))
     cam = Camera.look_at([0, 0, 2.0], [0, 300, 2.0], [0, 0, 1], np.radians(0.1), (1, 1))
     clear = AtmosphereModel(Atmosphere(), F95)
-    foggy = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
+    foggy = AtmosphereModel(Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
     for model in (clear, foggy):
         img = render(_job([target], cam, model))
         trans, emission = model.path(np.array([2.0]), np.array([2.0]), np.array([300.0]))
@@ -84,7 +84,7 @@ def test_short_segments_skip_the_atmosphere_within_the_stated_bound():
     from pmmw.trace.integrator import atmosphere_skip_length
     from tests.scenes import hollow_box
 
-    model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=1e-3),)), F95)
+    model = AtmosphereModel(Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=1e-3),)), F95)
     room = hollow_box([-0.2, -0.2, 0.8], [0.2, 0.2, 1.2], 0.02)
     block = box([-0.1, 0.05, 0.8], [0.1, 0.15, 0.95])
     cam = Camera.look_at([0, -0.1, 1.1], [0, 0.18, 0.9], [0, 0, 1], np.radians(80), (12, 12))
@@ -123,7 +123,7 @@ def test_long_segments_are_not_skipped():
     target = (box([-50, 300, -10], [50, 301, 50]), material(kind="blackbody", temperature=300.0))
     ground = (box([-50, 0, -1], [50, 300, 0]), material(eps=3 + 0.3j, temperature=290.0))
     cam = Camera.look_at([0, 0, 2.0], [0, 300, 1.0], [0, 0, 1], np.radians(2), (4, 4))
-    model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
+    model = AtmosphereModel(Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
     job = _job([target, ground], cam, model)
     assert job.settings.atmosphere_tolerance == 0.01
     count = _count_segments(model)
@@ -163,7 +163,7 @@ def test_sky_lookup_reads_the_tables_as_numpy_interp_at_every_height_and_elevati
     two interpolate the same two points and differ only in rounding (~1e-13 K)."""
     from pmmw.atmosphere.model import SKY_ELEVATIONS
 
-    model = AtmosphereModel(Atmosphere(layers=(Layer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
+    model = AtmosphereModel(Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=0.3e-3),)), F95)
     sky = AtmosphereSky(model, 281.5)
     rng = np.random.default_rng(7)
     n = 20000
@@ -200,7 +200,7 @@ def test_a_tabulated_column_gives_the_cell_walk_of_every_segment():
     rounding (1e-14 relative: closed form). In fog the column needs a finer grid, and still
     holds."""
     rng = np.random.default_rng(5)
-    for atm in (Atmosphere(humidity=0.004), Atmosphere(layers=[Layer(kind="fog", base=0.0, top=600.0,
+    for atm in (Atmosphere(humidity=0.004), Atmosphere(layers=[AtmosphereLayer(kind="fog", base=0.0, top=600.0,
                                                                       liquid_water=1e-3)])):
         model = AtmosphereModel(atm, F95)
         col = model.column(3000.0, 10.0, 1.0, 1.008)

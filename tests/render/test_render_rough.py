@@ -95,7 +95,7 @@ def test_rough_copper_reflectance_matches_the_brdf_monte_carlo(theta):
     img = _plane(theta, material(eps=COPPER_EPS, temperature=0.0, roughness=model), spp=20_000)
     res = {}
     for name, stokes in (("Ex2", (1, 1, 0, 0)), ("Ey2", (1, -1, 0, 0))):
-        stack = B.Stack(layers=(B.Layer(eps=COPPER_EPS, roughness=model),))
+        stack = B.Stack(layers=(B.StackLayer(eps=COPPER_EPS, roughness=model),))
         s = B.run_brdf(stack=stack, incidence=theta, stokes=stokes, samples=100_000, seed=7, plots=False)
         res[name] = s.summary["methods"]["mc"]["total_reflectance"]
         assert float(img[name][0, 0]) == pytest.approx(res[name], abs=8e-3), name
@@ -131,7 +131,7 @@ def test_rough_lossless_dielectric_reflects_plus_transmits_one(theta):
     # residue is ~ threshold x (fraction of paths reaching it) / sqrt(spp) << 1e-5
     assert abs(float(both["I"][0, 0]) - 2.0) < 1e-5  # I = Ex2 + Ey2
     refl = float(scene(0.0)["I"][0, 0]) / 2
-    s = B.run_brdf(stack=B.Stack(layers=(B.Layer(eps=eps, roughness=model),)), incidence=theta, samples=100_000,
+    s = B.run_brdf(stack=B.Stack(layers=(B.StackLayer(eps=eps, roughness=model),)), incidence=theta, samples=100_000,
                    seed=2, plots=False).summary["methods"]["mc"]
     assert refl == pytest.approx(s["total_reflectance"], abs=0.012)
 
@@ -223,11 +223,11 @@ def test_rough_layer_over_a_substrate_matches_the_brdf_monte_carlo(substrate):
     layer_eps, d = 2.25 + 0.05j, 2e-3
     if substrate == "metal":
         mat = material(kind="metal", temperature=0.0, roughness=R.GGX(0.2), coating=[(layer_eps, d, 0.0, R.GGX(0.3))])
-        bottom = B.Layer(eps=0j, metal=True, roughness=R.GGX(0.2))
+        bottom = B.StackLayer(eps=0j, metal=True, roughness=R.GGX(0.2))
     else:
         mat = material(eps=6.0 + 2.0j, temperature=0.0, roughness=R.GGX(0.2), coating=[(layer_eps, d, 0.0, R.GGX(0.3))])
-        bottom = B.Layer(eps=6.0 + 2.0j, roughness=R.GGX(0.2))
-    stack = B.Stack(layers=(B.Layer(eps=layer_eps, roughness=R.GGX(0.3), thickness=d), bottom), frequency=F95)
+        bottom = B.StackLayer(eps=6.0 + 2.0j, roughness=R.GGX(0.2))
+    stack = B.Stack(layers=(B.StackLayer(eps=layer_eps, roughness=R.GGX(0.3), thickness=d), bottom), frequency=F95)
     img = _plane(50.0, mat, spp=20_000)
     for name, stokes in (("Ex2", (1, 1, 0, 0)), ("Ey2", (1, -1, 0, 0))):
         s = B.run_brdf(stack=stack, incidence=50.0, stokes=stokes, samples=20_000, seed=4, plots=False)

@@ -194,11 +194,11 @@ def test_the_rain_sky_stays_within_the_range_the_truncation_bound_assumes():
     so the range must cover every elevation and observer height, not only the cells' mean
     sources; checked on 10 mm/h rain under a cloud at 95 GHz (the SAR rain weather) over a 250 K
     ground, colder than the air, which the scattering solution sees."""
-    from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, Layer
+    from pmmw.atmosphere.model import Atmosphere, AtmosphereModel, AtmosphereLayer
     from pmmw.scene.sky import AtmosphereSky
 
-    atm = Atmosphere(profile="standard", layers=(Layer("rain", 0.0, 1500.0, rain_rate=10.0),
-                                                 Layer("cloud", 1000.0, 2000.0, liquid_water=1.3e-3)))
+    atm = Atmosphere(profile="standard", layers=(AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=10.0),
+                                                 AtmosphereLayer("cloud", 1000.0, 2000.0, liquid_water=1.3e-3)))
     model = AtmosphereModel(atm, 95e9, ground_temperature=250.0)
     assert np.abs(model.source_mu).max() > 1.0  # the direction term is there to be covered
     sky = AtmosphereSky(model, 250.0)
