@@ -5,16 +5,20 @@ GHz, of scenes whose materials are valid across that band (docs/materials.md): t
 weapon outdoors and indoors (the gun's grip against the torso) and the landing in extreme fog (the
 row of beacons against the runway). Each scene twice: the aperture fixed (the beam narrows as the
 wavelength shortens) and scaled with the wavelength (the same beam at every frequency, so only the
-materials and the atmosphere change). The SNR is the reports' one detection criterion (README
+materials and the atmosphere change). The SNR is the reports' one detection criterion (docs/physics/accuracy.md,
 "Detection": matched-filter SNR >= 5) in the channel the reports lead with.
 
     python examples/frequency_trade.py [OUT_DIR]   # 30 renders, about 10 minutes on 2 cores;
                                                    # writes frequency_trade.csv and .png in OUT_DIR
 
+PMMW_EXAMPLE_SCALE=0.1 renders a tenth of the pixels per side (the documentation's gallery runs the
+examples so; the regions scale with the pixels, and the SNRs are then only indicative).
+
 Sweeps already rendered (``pmmw sweep configs/cwd_outdoor_frequency.yaml`` into out/...) are
 reused: each variant whose inputs are unchanged is skipped.
 """
 
+import os
 import sys
 from pathlib import Path
 
@@ -31,6 +35,26 @@ ROOT = Path(__file__).resolve().parent.parent
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "out" / "examples"
 out.mkdir(parents=True, exist_ok=True)
 
+SCALE = float(os.environ.get("PMMW_EXAMPLE_SCALE", "1"))  # of the pixels per side
+
+
+def scaled(grid: dict, scenario: Path) -> dict:
+    """The sweep's grid with the scenario's pixels, and its regions' pixel sizes, times SCALE (one
+    value each: every variant renders at that size)."""
+    if SCALE == 1:
+        return grid
+    scn = yaml.safe_load(scenario.read_text())
+    w, h = scn["imager"]["resolution"]
+    out = dict(grid, **{"imager.resolution": [[max(16, round(w * SCALE)), max(16, round(h * SCALE))]]})
+    for name, region in scn.get("output", {}).get("regions", {}).items():
+        if "radius" in region:
+            out[f"output.regions.{name}.radius"] = [max(1.0, region["radius"] * SCALE)]
+        if "box" in region:
+            x0, y0, x1, y1 = (round(v * SCALE) for v in region["box"])
+            out[f"output.regions.{name}.box"] = [[x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)]]
+    return out
+
+
 STUDIES = {  # title -> (sweep file stem, the pair whose SNR is plotted)
     "concealed weapon, outdoors": ("cwd_outdoor_frequency", "gun - torso"),
     "concealed weapon, indoors": ("cwd_indoor_frequency", "gun - torso"),
@@ -42,7 +66,8 @@ fig, axes = plt.subplots(1, len(STUDIES), figsize=(13.0, 3.8), dpi=110)
 for ax, (title, (stem, pair)) in zip(axes, STUDIES.items()):
     for suffix, how, style in (("", "fixed", "o-"), ("_scaled", "scaled with the wavelength", "s--")):
         spec = yaml.safe_load((ROOT / "configs" / f"{stem}{suffix}.yaml").read_text())
-        table = pmmw.sweep(ROOT / "configs" / spec["scenario"], spec["grid"], out=out / f"{stem}{suffix}",
+        scenario = ROOT / "configs" / spec["scenario"]
+        table = pmmw.sweep(scenario, scaled(spec["grid"], scenario), out=out / f"{stem}{suffix}",
                            zip=spec.get("zip", False), resume=True)
         snr_col = next(c for c in table.columns if c.startswith(f"snr {pair} "))
         channel = snr_col.rsplit(" ", 1)[1]

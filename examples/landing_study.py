@@ -3,14 +3,18 @@
 Murakowski 2014 sec. 3.1: a passive imager on the 4-degree glide slope looks at the threshold,
 where 1 m metal plates tilted toward the approach mirror the cold sky. Here: the middle beacon
 across the threshold against the runway, from 2000 m and 500 m, at 35 and 95 GHz, in Table 3.2's
-"cloudy" weather (no fog layer), judged by the reports' one detection criterion (README
+"cloudy" weather (no fog layer), judged by the reports' one detection criterion (docs/physics/accuracy.md,
 "Detection": matched-filter SNR over the target's blurred footprint >= 5, Rose 1948) in the
 channel the reports lead with (Ey2). The full study, the row of five beacons in three weathers,
 is `pmmw sweep configs/landing_trade.yaml`.
 
     python examples/landing_study.py [OUT_DIR]     # prints the table, writes landing_study.png
+
+PMMW_EXAMPLE_SCALE=0.2 renders a fifth of the pixels per side (the documentation's gallery runs the
+examples so; the regions' radii in pixels scale too, so the SNRs are only indicative).
 """
 
+import os
 import sys
 from pathlib import Path
 
@@ -24,7 +28,10 @@ import pmmw
 ROOT = Path(__file__).resolve().parent.parent
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "out" / "examples"
 
-base = pmmw.Scenario.load(ROOT / "configs" / "landing_95ghz.yaml").set({"atmosphere.layers": []})
+SCALE = float(os.environ.get("PMMW_EXAMPLE_SCALE", "1"))  # of the pixels per side
+side = max(16, round(500 * SCALE))
+base = pmmw.Scenario.load(ROOT / "configs" / "landing_95ghz.yaml").set({"atmosphere.layers": [],
+                                                                       "imager.resolution": [side, side]})
 ranges = {2000: ([0, -1995.13, 139.52], 1), 500: ([0, -498.78, 34.88], 3)}  # position [m], beacon radius [px]
 PAIR = "beacon - runway"
 
@@ -32,8 +39,8 @@ rows, verdicts, images = [], [], {}
 for rng, (position, radius) in ranges.items():
     # the regions set here, not taken from the config (whose beacon box fits its own 1000 m view):
     # the middle beacon across the threshold, a circle of `radius` pixels around it, and the runway
-    regions = {"beacon": {"center": [0, -2.36, 0.41], "radius": radius},
-               "runway": {"center": [0, 40, 0.02], "radius": 3}}
+    regions = {"beacon": {"center": [0, -2.36, 0.41], "radius": max(1.0, radius * SCALE)},
+               "runway": {"center": [0, 40, 0.02], "radius": max(1.0, 3 * SCALE)}}
     scn = base.set({"imager.position": position, "output.regions": regions, "frequency": ["35 GHz", "95 GHz"]})
     ds = pmmw.render(scn)  # one Dataset, both frequencies
     for f in ds.frequency.values:

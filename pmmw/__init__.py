@@ -13,7 +13,7 @@ Every misuse raises `UserError` naming the argument or the scenario key (`UserEr
 several at once); `EnvironmentProblem` (a `UserError` too) is the machine refusing (a disk full, a
 folder that cannot be written). Results to read with care (a material outside its stated range, a
 noisy region) come as `PmmwWarning` through Python's `warnings`, and in each report. See
-`pmmw.api` (the functions' documentation and their errors) and the README's "Python API".
+`pmmw.api` (the functions' documentation and their errors) and docs/guide/python-api.md.
 
 This package is the library: it returns data, raises and warns, and never imports the command
 line (`pmmw_cli`, the ``pmmw`` command, is a layer on top of it; docs/ARCHITECTURE.md). Its

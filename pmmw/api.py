@@ -658,7 +658,7 @@ def po(mesh, *, frequency, material: str | None = None, eps: str | None = None, 
     `xarray.Dataset` with ``rcs_theta`` and ``rcs_phi`` [m^2] over (phi, theta) in degrees and
     the run's summary (backscatter, peak, lit facets) as attributes.
 
-    ``incidence`` is '30,0' or [30, 0] [deg]; ``theta`` 'START:STOP:STEP' or one angle; ``phi``
+    ``incidence`` is '30,0' or ``[30, 0]`` [deg]; ``theta`` 'START:STOP:STEP' or one angle; ``phi``
     'P1,P2', 'START:STOP:STEP', one angle or a list [deg]. ``force`` solves past the memory check,
     as ``--force``.
     """

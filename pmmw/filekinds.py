@@ -79,7 +79,8 @@ def validate_file(path, overrides=(), preview=None) -> dict:
     check_input_path(path)
     if not path.is_file():
         raise UserError("file not found" if not path.exists() else "is not a file", path)
-    raw = read_yaml(path, "pmmw file")
+    # a Blender file is a scenario (exported by the add-on, `pmmw.blender`); everything else is YAML
+    raw = None if path.suffix.lower() == ".blend" else read_yaml(path, "pmmw file")
     kind = file_kind(raw)
     if kind not in (SCENARIO, SWEEP) and preview is not None:
         raise UserError(f"--preview draws a scenario's view; {path.name} is a {kind}", "--preview")

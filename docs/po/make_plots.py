@@ -1,4 +1,4 @@
-"""The figures of the README's "Physical optics" section: `python docs/po/make_plots.py` from the
+"""The figures of docs/guide/physical-optics.md: `python docs/po/make_plots.py` from the
 repository root (needs the test extras: miepython for the Mie series)."""
 
 import subprocess

@@ -279,7 +279,7 @@ def test_validate_shows_the_slab_skys_default_opacity():
 
 
 def test_the_readme_lists_exactly_the_required_keys():
-    """README "Required keys" against the schema's required fields (source_file is set by the loader;
+    """The scenario guide's (docs/guide/scenario.md) "Required keys" against the schema's required fields (source_file is set by the loader;
     `frequency` is the file's spelling of `frequencies`; a scene entry's material is checked apart)."""
     import re
 
@@ -299,7 +299,7 @@ def test_the_readme_lists_exactly_the_required_keys():
 
     want = set(required(schema.ScenarioConfig, "")) | {"scene[i]." + k for k in required(schema.SceneEntry, "")}
     want |= {"atmosphere.layers[i]." + k for k in required(schema.WeatherLayer, "")}
-    text = Path("README.md").read_text()
+    text = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "scenario.md").read_text()  # the scenario guide
     para = text[text.index("Required keys"):text.index("```yaml", text.index("Required keys"))]
     listed = set(re.findall(r"`([a-z_.\[\]]+)`", para.replace("`.base`", "`atmosphere.layers[i].base`")
                             .replace("`.top`", "`atmosphere.layers[i].top`")))
