@@ -75,6 +75,9 @@ def claim(folder: Path, manifest: dict, what: str) -> None:
         ``folder`` is a link, a file, or a folder pmmw did not make (pmmw neither writes into
         nor deletes such a folder).
     """
+    root = folder.parent
+    if not root.is_symlink() and root.exists() and not root.is_dir():
+        raise UserError(f"{root.name} is a file where pmmw keeps its tile folders: move it away", root.parent, what)
     if folder.is_symlink():
         raise UserError(f"{folder} is a symbolic link; pmmw keeps tiles only in folders it makes itself: "
                         "remove the link", folder.parent, what)

@@ -148,6 +148,22 @@ def test_a_tile_folder_that_is_a_link_is_refused_and_its_target_kept(tmp_path):
         assert _tree(victim) == before
 
 
+def test_a_user_file_named_like_the_tile_root_is_refused_and_kept(tmp_path):
+    """A file ``.pmmw-tiles`` in the output folder (found by the fuzzer: a NotADirectoryError
+    traceback) is one error line naming it, exit 2, and keeps its bytes; the control: without it
+    the same render succeeds."""
+    scn = _scene(tmp_path)
+    out = tmp_path / "O"
+    out.mkdir()
+    (out / ".pmmw-tiles").write_text("a user's notes")
+    res = _run("render", scn, "--out", out)
+    assert res.exit_code == 2
+    _one_error_line(res, ".pmmw-tiles", "is a file")
+    assert (out / ".pmmw-tiles").read_text() == "a user's notes"
+    (out / ".pmmw-tiles").unlink()
+    assert _run("render", scn, "--out", out).exit_code == 0
+
+
 def test_stale_tiles_are_deleted_file_by_file_and_a_user_file_keeps_its_folder(tmp_path):
     """Stale tile folders used to go with `shutil.rmtree`, whatever they held."""
     scn = _scene(tmp_path)
