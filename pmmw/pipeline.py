@@ -10,7 +10,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +28,7 @@ from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature
 from pmmw.io.exr import write_exr
 from pmmw.io.lock import FolderLock
 from pmmw.io.preview import write_depth_figure, write_figure, write_material_figure, write_regions_figure
-from pmmw.io.progress import StatusLine
+from pmmw.io.progress import StatusLine, say
 from pmmw.io.report import write_report
 from pmmw.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
 from pmmw.io.tilestore import (
@@ -601,15 +600,14 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
             bar = _Progress(label, quiet)
             render_tiles(job, workers=workers, tile_dir=tile_dir, resume=True,
                          progress=bar, tiles=mine, counts=counts, notify=bar.note)
-            print(f"{label}: shard {shard[0]}/{shard[1]}: {counts['rendered']} tiles rendered, {counts['reused']} "
-                  f"already there, in {tile_dir}; assemble with `pmmw render ... --resume` once every shard is done")
+            say(f"{label}: shard {shard[0]}/{shard[1]}: {counts['rendered']} tiles rendered, {counts['reused']} "
+                f"already there, in {tile_dir}; assemble with `pmmw render ... --resume` once every shard is done")
             continue
         bar = _Progress(label, quiet)
         results = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=resume,
                                progress=bar, counts=counts, client=client, notify=bar.note)
         if resume:
-            print(f"{label}: --resume: {counts['reused']} tiles found, {counts['rendered']} rendered",
-                  file=sys.stderr)
+            say(f"{label}: --resume: {counts['reused']} tiles found, {counts['rendered']} rendered")
         imgs.append(assemble(job, results))
     if shard is not None:
         return None, None, dirs
@@ -924,8 +922,8 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
         elif deletable(tile_root, out_dir):
             removed, kept = remove_stale_tiles(tile_root, out_dir, scn, shash)
             if removed and not quiet:
-                print(f"removed {removed} tile folder(s) of an earlier version of this scenario (other inputs: never "
-                      "resumable)", file=sys.stderr)
+                say(f"removed {removed} tile folder(s) of an earlier version of this scenario (other inputs: never "
+                    "resumable)")
             if kept:
                 warn(f"kept {kept} tile folder(s) of an earlier version of this scenario in {tile_root}: they hold "
                      "files pmmw did not write")
@@ -942,8 +940,8 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
                     remove_folder(d, out_dir)
                 remove_root_if_empty(tile_root, out_dir)
             else:
-                print(f"tiles kept in {tile_root}: it links out of the output folder, and pmmw never deletes "
-                      "through a link", file=sys.stderr)
+                say(f"tiles kept in {tile_root}: it links out of the output folder, and pmmw never deletes "
+                    "through a link")
     return written
 
 
@@ -988,10 +986,10 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
             except OSError as e:
                 raise os_problem(e, out_dir, "write the report") from None
             staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
-            print(
+            say(
                 f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
                 f"{r['rays'] / 1e6:.2f} M rays, "
-                f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}"
+                f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}", result=True
             )
     return written, tile_dirs
 

@@ -42,6 +42,9 @@ def _print_version(value: bool):
 def _main(version: bool = typer.Option(False, "--version", "-V", callback=_print_version, is_eager=True,
                                        metavar="", help="Print the pmmw version and exit.")):
     """pmmw: passive millimetre-wave imaging simulator (polarized geometrical optics)."""
+    from pmmw_cli import progress
+
+    progress.install()  # the library's progress and notes (`pmmw.io.progress`) on standard error
 
 
 def _user_errors(fn):
@@ -322,7 +325,7 @@ def sweep(
 ):
     """Render a grid of variants of a scenario; write sweep.csv and a trade-study report."""
     from pmmw.io.yamlio import read_yaml
-    from pmmw.sweeps.run import SweepSpec, load_sweep_file, parse_grid_options, run_sweep
+    from pmmw.sweeps.run import SweepSpec, job_script, load_sweep_file, parse_grid_options, run_sweep
 
     raw = read_yaml(scenario, "scenario or sweep file") if scenario.is_file() else None
     if isinstance(raw, dict) and "grid" in raw:
@@ -341,7 +344,10 @@ def sweep(
     spec.workers = workers or spec.workers
     if (spec.scheduler or spec.cluster) and spec.executor == "local":
         spec.executor = "dask"
-    raise typer.Exit(run_sweep(spec, resume=resume, quiet=quiet, dry_run=dry_run))
+    if dry_run:  # the script on standard output, to be redirected into a file
+        typer.echo(job_script(spec))
+        raise typer.Exit(0)
+    raise typer.Exit(run_sweep(spec, resume=resume, quiet=quiet))
 
 
 @app.command()

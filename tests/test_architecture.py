@@ -26,7 +26,7 @@ LAYERS = (
     {"pipeline"},
     {"reflectance", "physical_optics", "sweeps", "sky_table", "filekinds"},
     {"api"},
-    {"pmmw_cli", "pmmw_cli.validation", "pmmw_cli.bench", "pmmw_cli.bench_po"},
+    {"pmmw_cli", "pmmw_cli.validation", "pmmw_cli.bench", "pmmw_cli.bench_po", "pmmw_cli.progress"},
     {"pmmw_cli.cli"},
     {"pmmw_cli.__main__"},
 )
@@ -204,3 +204,60 @@ assert 'matplotlib.pyplot' in sys.modules
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr[-2000:]
     assert (tmp_path / "a.png").stat().st_size > 1000 and (tmp_path / "b.png").stat().st_size > 10_000
+
+
+# Where the library may still write to a terminal: the signal line of the entry point's runtime,
+# the warning lines the command line installs, the add-on's zip builder run as a script, and the
+# Blender add-on (it runs inside Blender, whose console is its log).
+PRINTS_ALLOWED = {"pmmw/interrupt.py", "pmmw/errors.py", "pmmw/blender/__main__.py"}
+
+
+def _writes(path: Path) -> list[int]:
+    """Lines of ``print(...)`` calls and ``sys.stdout/stderr.write`` in a file."""
+    lines = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Call):
+            f = node.func
+            if isinstance(f, ast.Name) and f.id == "print":
+                lines.append(node.lineno)
+            elif (isinstance(f, ast.Attribute) and f.attr == "write" and isinstance(f.value, ast.Attribute)
+                  and f.value.attr in ("stdout", "stderr")):
+                lines.append(node.lineno)
+    return lines
+
+
+def test_the_library_never_prints():
+    """The library speaks through return values, exceptions, `warnings` and the ``pmmw`` logger
+    (`pmmw.io.progress`); only the command line prints. The control: the scan finds the command
+    line's own status line writing."""
+    found = {}
+    for p in sorted((ROOT / "pmmw").rglob("*.py")):
+        rel = p.relative_to(ROOT).as_posix()
+        if rel in PRINTS_ALLOWED or rel.startswith("pmmw/blender/pmmw_blender/"):
+            continue
+        if _writes(p):
+            found[rel] = _writes(p)
+    assert found == {}
+    assert _writes(ROOT / "pmmw_cli" / "progress.py")
+
+
+def test_progress_reaches_the_command_line_not_a_notebook(tmp_path):
+    """A render's summary line is a `logging` record: the command shows it on standard error; the
+    API (no handler configured) shows nothing on either stream."""
+    import subprocess
+    import sys
+
+    code = """
+import pmmw
+scn = pmmw.Scenario.load("configs/landing_95ghz.yaml").set({"imager.resolution": [8, 8], "render.target_error": None})
+pmmw.render(scn, spp=1, workers=1, out=%r)
+""" % str(tmp_path / "api")
+    api = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert api.returncode == 0, api.stderr[-2000:]
+    assert "M rays" not in api.stdout + api.stderr
+    cli = subprocess.run([sys.executable, "-m", "pmmw_cli", "render", "configs/landing_95ghz.yaml", "--set",
+                          "imager.resolution=[8, 8]", "--set", "render.target_error=null", "--spp", "1", "--out",
+                          str(tmp_path / "cli")], capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert cli.returncode == 0, cli.stderr[-2000:]
+    assert "M rays" in cli.stdout  # the command's result on standard output, its notes on standard error
+

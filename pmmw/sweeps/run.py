@@ -35,7 +35,6 @@ from __future__ import annotations
 import csv
 import io
 import json
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -44,7 +43,7 @@ from pmmw.distributed import EXECUTORS
 from pmmw.errors import EnvironmentProblem, UserError, exception_text
 from pmmw.io.atomic import write_text_atomic
 from pmmw.io.lock import output_lock
-from pmmw.io.progress import StatusLine
+from pmmw.io.progress import StatusLine, say
 from pmmw.sweeps.spec import (  # noqa: F401
     MAX_VARIANTS,
     SweepSpec,
@@ -147,6 +146,16 @@ def _done(out_dir: Path, shash: str) -> bool:
         return False
 
 
+def job_script(spec: SweepSpec) -> str:
+    """The batch job script dask-jobqueue would submit for the sweep's ``cluster`` file
+    (``pmmw sweep --dry-run``)."""
+    if spec.cluster is None:
+        raise UserError("--dry-run prints the batch job script of --cluster FILE", "--dry-run")
+    from pmmw.distributed import jobqueue_cluster
+
+    return jobqueue_cluster(spec.cluster).job_script()
+
+
 def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry_run: bool = False) -> int:
     """Render every variant, write ``sweep.csv`` and ``report.md``; returns the exit status
     (0 all done, 1 some failed)."""
@@ -157,11 +166,7 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
 
         probe_scheduler(spec.scheduler)  # a wrong address told before any variant is looked at
     if dry_run:
-        if spec.cluster is None:
-            raise UserError("--dry-run prints the batch job script of --cluster FILE", "--dry-run")
-        from pmmw.distributed import jobqueue_cluster
-
-        print(jobqueue_cluster(spec.cluster).job_script())
+        say(job_script(spec))
         return 0
     if not spec.scenario.is_file():
         raise UserError("scenario file not found", spec.scenario)
@@ -210,9 +215,9 @@ def _sweep_into(spec: SweepSpec, out: Path, *, resume: bool, quiet: bool) -> int
         raise EnvironmentProblem(f"the Dask scheduler at {lost} went away during the sweep ({done} of {len(table)} "
                                  "variants done; rerun with --resume to keep them)")
     failed = [r for r in table if r["status"] != "done"]
-    print(f"sweep: {len(table) - len(failed)} of {len(table)} variants done -> {out / 'sweep.csv'}")
+    say(f"sweep: {len(table) - len(failed)} of {len(table)} variants done -> {out / 'sweep.csv'}", result=True)
     for r in failed:
-        print(f"  {r['variant']}: {r['status']}", file=sys.stderr)
+        say(f"  {r['variant']}: {r['status']}")
     return 1 if failed else 0
 
 
