@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parent
 #: Every module with compiled code (paths relative to the package).
 SOURCES = ("atmosphere/model.py", "physics/fresnel.py", "physics/multilayer.py", "physics/roughness.py",
            "physical_optics/kernels.py", "scene/bump.py", "scene/camera.py", "scene/sky.py", "trace/intersect.py",
-           "trace/kernels.py")
+           "trace/kernels.py", "surface/kernels.py")
 _STAMP = ROOT / "__pycache__" / "numba-sources.sha256"
 
 

@@ -21,10 +21,9 @@ import numpy as np
 from pmmw.physics.jones import basis_change
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jones
 from pmmw.reflectance.stack import Stack
-from pmmw.surface import Surfaces, Wave
+from pmmw.surface import Surfaces, Wave, kernels
+from pmmw.surface.media import DIELECTRIC, METAL, OPAQUE, Coating, Media, RoughLayer
 from pmmw.surface.records import Faces, Hit, HitCode, Limits
-from pmmw.trace import kernels
-from pmmw.trace.job import DIELECTRIC, METAL, OPAQUE, Coating, Media, RoughLayer
 
 __all__ = ["monte_carlo", "stack_media"]
 

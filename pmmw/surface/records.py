@@ -1,4 +1,4 @@
-"""The records the compiled kernels take (`pmmw.trace.kernels`), named as the equations name them.
+"""The records the compiled kernels take (`pmmw.surface.kernels`, `pmmw.trace.kernels`), named as the equations name them.
 
 numba passes a named tuple as cheaply as a plain one (a heterogeneous tuple type whose fields are
 read by name), so the kernels read ``wave.m`` or ``hit.cos1`` instead of ``wave[4]`` or

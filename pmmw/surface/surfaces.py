@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from pmmw.constants import C0
 from pmmw.physics.roughness import GGX_CODE, MAX_REHITS, OTHER_CODE
+from pmmw.surface import kernels
+from pmmw.surface.media import Media
 from pmmw.surface.records import Hit, HitCode
 from pmmw.surface.tables import Pile, kernel_tables
 from pmmw.surface.wave import Wave
-from pmmw.trace import kernels
-from pmmw.trace.job import C0, Media
 
 __all__ = ["Surfaces", "deposit"]
 

@@ -11,9 +11,9 @@ import numpy as np
 
 from pmmw.physics import fresnel
 from pmmw.physics.roughness import NOT_ROUGH, OTHER_CODE
+from pmmw.surface import kernels
+from pmmw.surface.media import DIELECTRIC, Media
 from pmmw.surface.records import MediaTable
-from pmmw.trace import kernels
-from pmmw.trace.job import DIELECTRIC, Media
 
 __all__ = ["Pile", "kernel_tables", "surface_coefficients", "surface_response"]
 

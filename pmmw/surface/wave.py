@@ -1,4 +1,4 @@
-"""The wave of rays a bounce works on, as the compiled kernels take it (`pmmw.trace.kernels`)."""
+"""The wave of rays a bounce works on, as the compiled kernels take it (`pmmw.surface.kernels`)."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ class Wave:
         return self.o.shape[0]
 
     def arrays(self) -> WaveArrays:
-        """The fields as the record the compiled kernels take (`pmmw.trace.kernels`)."""
+        """The fields as the record the compiled kernels take (`pmmw.surface.kernels`)."""
         return WaveArrays(*(getattr(self, k) for k in self.__slots__))
 
     @staticmethod

@@ -316,7 +316,7 @@ def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
     telling ``notify`` (a callable taking one line) before and after when they are not cached yet;
     then one pixel of the job is traced here, so that the camera's, sky's and atmosphere's compiled
     code is ready too and the first tile's time is its own. Returns the seconds it took."""
-    cold = not jit.is_cached("trace/kernels.py")
+    cold = not (jit.is_cached("trace/kernels.py") and jit.is_cached("surface/kernels.py"))
     if cold and notify is not None:
         notify("compiling the tracer's kernels: once after an install or an update of pmmw, about a minute "
                "on 2 cores ...")

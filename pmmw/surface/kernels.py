@@ -1,0 +1,766 @@
+"""The surfaces' compiled per-ray steps (numba), one pass over a wave each, no temporaries: what
+happens to a ray at a face, and the termination rule every step shares.
+
+The integrator's own steps (a segment's arrival at a face, the sky, a tile's sums) are in
+`pmmw.trace.kernels`, which calls these; the surface layer (`pmmw.surface.surfaces`) drives them
+once per bounce:
+
+* `scatter`: for each interacting ray, the interface's coefficients (`coefficients`: Fresnel, a
+  perfect conductor, or the stack of its coherent films), the local (s, p) basis (Murakowski 2014
+  eq. 2.23, 2.35), the emission of what the interface absorbs (eq. 2.36) or a sink swallows, the
+  choice of branches (``render.strategy``), the reflected and transmitted children (eq.
+  2.19-2.21, 2.39, 2.40) off the surface, and their termination (`survive`). On rough faces whose
+  masking is compiled (GGX, Beckmann; ``MASKED``) the same pass draws the GGX facet
+  (`pmmw.physics.roughness.ggx_draw1`) and sends each child off the surface or back onto it for a
+  re-hit (Smith masking, `pmmw.physics.roughness.smith_g1`);
+* `settle`: that masking as a pass of its own over children that `scatter` left at the hit
+  point (``AT_POINT``), for models whose masking is array code and for the walk through rough
+  coating layers; `cross_layer`: a ray across a rough coating layer;
+* `emit`: incoherent emission seen through Jones matrices, added to the per-sample sums
+  (`pmmw.physics.jones`, "Stokes from an emission event");
+* `survive`/`survivors`: the depth cut-off, weight threshold and Russian roulette, and `compact`
+  to drop the ended rays in place; `gather`, `tangents`, `off_surface`.
+
+A wave is passed as a `WaveArrays` record (the fields of `pmmw.surface.Wave`), a hit as a `Hit`,
+the media, faces and termination limits as `MediaTable`, `Faces` and `Limits`
+(`pmmw.surface.records`: named tuples, read by name; ``Hit.code`` is a `HitCode`). Random numbers
+are drawn by the caller (one per ray that may need one), so the kernels are deterministic
+functions of their inputs. The compiled code is cached on disk (`pmmw.jit`);
+``NUMBA_DISABLE_JIT=1`` runs the same code as Python.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pmmw.jit import inline, njit
+from pmmw.physics import fresnel, multilayer, roughness
+from pmmw.surface.media import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
+from pmmw.surface.records import HitCode
+
+# `Hit.code` as compiled constants (numba reads a module's int globals as constants)
+_MISSED, _PASSED, _INTERACTS, _ENDED = (int(c) for c in (HitCode.MISSED, HitCode.PASSED, HitCode.INTERACTS,
+                                                          HitCode.ENDED))
+A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
+_TINY = 1e-12
+_NORMAL = 1e-9  # |n x k| below this: normal incidence, the ray keeps its own s
+
+STRATEGIES = {"split": 0, "stochastic": 1, "hybrid": 2}
+#: What `scatter` does with the children (its ``settle`` argument's first entry): they leave the
+#: surface at once and are terminated (smooth faces); they stay at the hit point (the rough code's
+#: steps that follow); or, on rough faces, each leaves or comes back by Smith masking here.
+FINISH, AT_POINT, MASKED = 0, 1, 2
+_I64, _I8, _F8, _B1 = np.zeros(0, np.int64), np.zeros(0, np.int8), np.zeros(0), np.zeros(0, bool)
+NO_SETTLE = (FINISH, _I64, _I8, None)  # `scatter`'s children leave at once
+
+
+def at_point(src, branch):
+    """`scatter`'s ``settle`` argument for children left at the hit point (``AT_POINT``), each
+    one's row in the wave to ``src`` and +1 (reflected) or -1 (transmitted) to ``branch``."""
+    return (AT_POINT, src, branch, None)
+
+
+def masked(draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts):
+    """`scatter`'s ``settle`` argument for rough faces (``MASKED``): see `scatter`."""
+    return (MASKED, _I64, _I8, (draw, u1, u2, n_geo, n_mac, u_leave, rough, bool(over), float(wavelength),
+                                int(rehit_depth), back_side, counts))
+
+_jit = njit()
+_inline = inline()
+
+
+@_inline
+def _add(acc, k, n00, n01, n10, n11, ta, tb):
+    """acc[k] += (Ex2, Ey2, U, V) of emission (Ta, Tb) seen through N (`jones.stokes_terms`)."""
+    c = n00 * np.conj(n10) * ta + n01 * np.conj(n11) * tb
+    acc[k, 0] += (n00.real ** 2 + n00.imag ** 2) * ta + (n01.real ** 2 + n01.imag ** 2) * tb
+    acc[k, 1] += (n10.real ** 2 + n10.imag ** 2) * ta + (n11.real ** 2 + n11.imag ** 2) * tb
+    acc[k, 2] += 2.0 * c.real
+    acc[k, 3] += 2.0 * c.imag
+
+
+@_jit
+def emit(acc, sid, m, ta, tb):
+    """Add the emission of brightness temperatures (ta, tb) [K], one per ray, seen through each
+    ray's Jones matrix ``m`` (columns a, b), to ``acc[sid]``."""
+    for i in range(sid.shape[0]):
+        _add(acc, sid[i], m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], ta[i], tb[i])
+
+
+@_inline
+def _row_powers(m00, m01, m10, m11):
+    """The powers of the two rows of a Jones matrix (`jones.row_power` of one ray)."""
+    return (m00.real ** 2 + m00.imag ** 2 + m01.real ** 2 + m01.imag ** 2,
+            m10.real ** 2 + m10.imag ** 2 + m11.real ** 2 + m11.imag ** 2)
+
+
+@_inline
+def _rebase1(m00, m01, m10, m11, s_old, p_old, s_new, p_new):
+    """A Jones matrix re-expressed in a new local basis, M B (eq. 2.35; `jones.rebase` of one ray;
+    the basis vectors as 3-tuples of floats)."""
+    b00 = s_new[0] * s_old[0] + s_new[1] * s_old[1] + s_new[2] * s_old[2]
+    b01 = p_new[0] * s_old[0] + p_new[1] * s_old[1] + p_new[2] * s_old[2]
+    b10 = s_new[0] * p_old[0] + s_new[1] * p_old[1] + s_new[2] * p_old[2]
+    b11 = p_new[0] * p_old[0] + p_new[1] * p_old[1] + p_new[2] * p_old[2]
+    return m00 * b00 + m01 * b10, m00 * b01 + m01 * b11, m10 * b00 + m11 * b10, m10 * b01 + m11 * b11
+
+
+@_inline
+def _end(acc, cut, k, m00, m01, m10, m11, t_last, t_lo, t_hi):
+    """End a path on ``t_last`` (Murakowski 2014 sec. 2.2.9) and count what that may have cost:
+    the ended power (mean of the rows) and the rows' largest power times the largest difference
+    between ``t_last`` and any brightness the path could still have seen."""
+    _add(acc, k, m00, m01, m10, m11, t_last, t_last)
+    r0, r1 = _row_powers(m00, m01, m10, m11)
+    cut[k, 0] += 0.5 * (r0 + r1)
+    cut[k, 1] += max(r0, r1) * max(t_hi - t_last, t_last - t_lo)
+
+
+@_inline
+def _roulette(w, threshold, u):
+    """Russian roulette of a ray of weight ``w`` below ``threshold``: the factor its Jones matrix
+    is scaled by, 1 / sqrt(q) if it survives (``u`` < q = w / threshold, so that its expected
+    power is kept: unbiased), 0 if it ends."""
+    q = w / threshold
+    return 1.0 / math.sqrt(q) if u < q else 0.0
+
+
+@_inline
+def _fate(m00, m01, m10, m11, depth, u, limits):
+    """The termination rule of one ray after an interaction (`survive`), on the entries of its
+    Jones matrix alone: the factor to scale them by (1 usually, > 1 after roulette), 0 when the
+    ray ends silently, -1 when it ends on the temperature of its last object (`_end`)."""
+    max_depth, threshold, roulette = limits.max_depth, limits.threshold, limits.roulette
+    w = max(_row_powers(m00, m01, m10, m11))
+    if w <= 0.0:
+        return 0.0
+    if depth >= max_depth:
+        return -1.0
+    if w < threshold:
+        return _roulette(w, threshold, u) if roulette else -1.0
+    return 1.0
+
+
+@_inline
+def survive(acc, cut, k, m, i, depth, t_last, u, limits):
+    """Termination of one ray (row ``i`` of ``m``) after an interaction: True to go on.
+
+    ``limits = (max_depth, threshold, roulette, t_lo, t_hi)``. Beyond ``max_depth`` the path
+    ends on ``t_last``; below ``threshold`` (the largest row power, `jones.row_power`) it ends
+    there too, or with ``roulette`` survives with probability weight / threshold (``u`` < it)
+    and is scaled up by 1 / that (unbiased). A ray with no power left ends silently.
+    """
+    m00, m01, m10, m11 = m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1]
+    g = _fate(m00, m01, m10, m11, depth, u, limits)
+    if g < 0.0:
+        _end(acc, cut, k, m00, m01, m10, m11, t_last, limits.t_lo, limits.t_hi)
+    if g <= 0.0:
+        return False
+    if g != 1.0:
+        m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
+    return True
+
+
+@_jit
+def survivors(wave, u, limits, acc, cut, keep):
+    """`survive` for every ray of a wave (in place on its Jones matrices); ``keep`` is set."""
+    m, sid, depth, last_t = wave.m, wave.sid, wave.depth, wave.last_t
+    for i in range(sid.shape[0]):
+        keep[i] = survive(acc, cut, sid[i], m, i, depth[i], last_t[i], u[i] if u.shape[0] else 1.0, limits)
+
+
+@_inline
+def _dot(a, i, b, j):
+    return a[i, 0] * b[j, 0] + a[i, 1] * b[j, 1] + a[i, 2] * b[j, 2]
+
+
+@_inline
+def _far_eps1(kind, eps1, eps_other):
+    """Permittivity beyond a face: a thin sheet keeps the incident medium on both sides; a
+    blackbody is index-matched (nothing reflects at its own surface, all that enters is absorbed;
+    under a coating, to the coating's last layer)."""
+    return eps1 if kind == THIN or kind == BLACKBODY else eps_other
+
+
+@_jit
+def far_eps(kind, eps1, eps_other):
+    """`_far_eps1` of arrays of rays."""
+    out = np.empty(eps1.shape[0], np.complex128)
+    for i in range(eps1.shape[0]):
+        out[i] = _far_eps1(kind[i], eps1[i], eps_other[i])
+    return out
+
+
+@_inline
+def _amplitude(amp, power):
+    """An amplitude with the phase of ``amp`` and the magnitude sqrt(power) (renormalized R, T):
+    ``amp sqrt(power / |amp|^2)``, no complex division (an amplitude below 1e-154, whose square
+    underflows, is taken real: its power is below any threshold)."""
+    mag2 = amp.real * amp.real + amp.imag * amp.imag
+    power = max(power, 0.0)
+    return amp * math.sqrt(power / mag2) if mag2 > 0.0 else complex(math.sqrt(power), 0.0)
+
+
+@_inline
+def _k_cross(dx, dy, dz, sx, sy, sz):
+    """p = k x s of a ray of direction d (k = -d, the wave's direction of travel toward the
+    detector) and basis vector s: the second vector of its (s, p) basis."""
+    return -(dy * sz - dz * sy), -(dz * sx - dx * sz), -(dx * sy - dy * sx)
+
+
+@_inline
+def _off_surface1(ox, oy, oz, dx, dy, dz, sx, sy, sz, gx, gy, gz, step):
+    """A ray at the surface (origin o, direction d, basis vector s) off it along the side normal
+    g: a ray on the wrong side (``d . g <= 0``, a bump's tilt) is first mirrored through the face's
+    plane (d and s reflected; the caller sets p = k x s: the power is kept), then moved by
+    ``step`` along g. Returns (o, d, s, mirrored) as scalars (see `scatter` on why scalars)."""
+    dg = dx * gx + dy * gy + dz * gz
+    mirrored = dg <= 0.0
+    if mirrored:
+        sg = sx * gx + sy * gy + sz * gz
+        dx, dy, dz = dx - 2.0 * dg * gx, dy - 2.0 * dg * gy, dz - 2.0 * dg * gz
+        sx, sy, sz = sx - 2.0 * sg * gx, sy - 2.0 * sg * gy, sz - 2.0 * sg * gz
+        dg = -dg
+    side = -step if dg < 0.0 else step
+    return ox + side * gx, oy + side * gy, oz + side * gz, dx, dy, dz, sx, sy, sz, mirrored
+
+
+@_inline
+def _off_surface(o, d, s, p, c, gx, gy, gz, step):
+    """`_off_surface1` of ray c of a wave, in place."""
+    (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
+     mirrored) = _off_surface1(o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
+                               gx, gy, gz, step)
+    if mirrored:
+        p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
+
+
+@_jit
+def off_surface(wave, g, step):
+    """`_off_surface` for every ray of a wave (at the surface), side normals ``g`` (n, 3) and
+    steps (n,) [m]; in place."""
+    for c in range(g.shape[0]):
+        _off_surface(wave.o, wave.d, wave.s, wave.p, c, g[c, 0], g[c, 1], g[c, 2], step[c])
+
+
+@_inline
+def _film_buffers(films):
+    """Room for one ray's stack of media (`_coefficients1`)."""
+    n = films[1].max() + 2 if films[1].shape[0] else 2
+    return np.empty(n, np.complex128), np.empty(n, np.float64)
+
+
+@_inline
+def _coefficients1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
+    """Coefficients of one ray meeting a face of medium ``fm`` from medium ``cur`` (``other``
+    beyond; ``leaving`` ``fm``) at cosine ``cos1``: (rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2,
+    t_absorb) (`pmmw.surface.surface_coefficients` over arrays): `_coated1` under coherent
+    films, else `_bare1`. ``q2``: the far medium's normal component for refraction (outgoing
+    root; NaN for a conductor); ``t_absorb`` the temperature what is absorbed emits at."""
+    if media.has_coat[fm]:
+        return _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d)
+    eps, temperature = media.eps, media.temperature
+    return _bare1(media.kind[fm], eps[cur], eps[other], cos1, temperature[cur], temperature[fm])
+
+
+@_inline
+def _bare1(kd, e1, e_other, cos1, t_cur, t_fm):
+    """A face without films, of kind ``kd``, from permittivity ``e1`` (``e_other`` beyond): a
+    perfect conductor (`fresnel.conductor1`, absorbing nothing; ``t_fm``), or a bare interface
+    (`fresnel.interface1`), a lossy incident medium's remainder emitting at ``t_cur``. Scalars
+    only (see `scatter`)."""
+    if kd == METAL:
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.conductor1()
+        return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, t_fm
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2 = fresnel.interface1(e1, _far_eps1(kd, e1, e_other), cos1)
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, t_cur
+
+
+@_inline
+def _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
+    """`_coefficients1` of a face under coherent films (eq. 2.27-2.34): the stack from ``cur``
+    through them (innermost first when leaving) to the far medium, its absorption emitting at
+    the films' temperature."""
+    kind, eps = media.kind, media.eps
+    f_start, f_count, f_eps, f_d, f_temp, k0 = films
+    kd = kind[fm]
+    e1 = eps[cur]
+    nf, st = f_count[fm], f_start[fm]
+    buf_eps[0] = e1
+    for q in range(nf):
+        f = st + (nf - 1 - q if leaving else q)
+        buf_eps[1 + q], buf_d[q] = f_eps[f], f_d[f]
+    # a blackbody is index-matched to the films' innermost layer
+    buf_eps[nf + 1] = f_eps[st + nf - 1] if kd == BLACKBODY else _far_eps1(kd, e1, eps[other])
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(buf_eps[:nf + 2], buf_d[:nf], cos1, k0, kd == METAL)
+    q2 = complex(np.nan, 0.0)
+    if kd == DIELECTRIC:
+        eo = eps[other]
+        kpar2 = e1 * (1.0 - cos1 ** 2)
+        q2 = fresnel._root1(eo - kpar2, fresnel._l1(eo) + fresnel._l1(kpar2), False)
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, f_temp[fm]
+
+
+@_jit
+def coefficients(cur, face_med, other, leaving, cos1, media, films, amp, power, q2, t_absorb):
+    """`_coefficients1` of arrays of rays (shape (n,)): amplitudes (rs, rp, ts, tp) in ``amp``
+    (n, 4), powers (Rs, Rp, Ts, Tp, As, Ap) in ``power`` (n, 6), ``q2`` and ``t_absorb`` (n,)."""
+    buf_eps, buf_d = _film_buffers(films)
+    for i in range(cos1.shape[0]):
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2[i], t_absorb[i] = _coefficients1(
+            face_med[i], cur[i], other[i], leaving[i], cos1[i], media, films, buf_eps, buf_d)
+        amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
+        power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
+
+
+@_inline
+def _masked_side1(side, diel, cur, other, leaving):
+    """The media of the side a masked child is on, seen from there (cur, other, leaving): a
+    reflected child (``side`` > 0) keeps them, a refracted one swaps them, a thin sheet's
+    transmitted child keeps them."""
+    if side < 0.0 and diel:
+        return other, cur, not leaving
+    return cur, other, leaving
+
+
+@_inline
+def _to_next_facet1(alpha, wavelength):
+    """A masked child's way to the next facet, one wavelength of its side's medium (extinction
+    ``alpha`` [1/m]): transmittance, and the amplitude factors of what it emits and keeps."""
+    tau = math.exp(-alpha * wavelength)
+    return tau, math.sqrt(1.0 - tau), math.sqrt(tau)
+
+
+@_jit
+def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, settle):
+    """Interactions of the rays ``rows`` of a wave with the faces they hit (`arrive` filled
+    ``hit``); their children are written to ``out`` (room for two per row). Returns how many
+    (with ``MASKED``: how many leave).
+
+    Parameters
+    ----------
+    hit : tuple (pos, n, cos1, cur, face_med, other, leaving, code)
+        As `arrive` fills it; on a rough face ``n`` is the facet normal drawn for the ray and
+        ``cos1`` the cosine about it (with ``MASKED``: the macro normal, or the facet normal a
+        model without a compiled draw gave, and ``cos1`` is not read).
+    films : tuple (start, count, eps, thickness, temperature, k0)
+        The media's coherent films (`job.Coating`, outermost first), flattened: medium k's are
+        ``eps[start[k]:start[k] + count[k]]`` and ``thickness[...]`` [m], their absorption emits at
+        ``temperature[k]`` [K]; ``k0`` [1/m]. A face under films is the stack from the incident
+        medium through them (innermost first for a ray leaving the body) to the far medium
+        (`multilayer.stack1`); a bare interface `fresnel.interface1`, a perfect conductor
+        `fresnel.conductor1`.
+    choice : tuple (strategy code, split_depth)
+    u_choose, u_roul : ndarray
+        Uniforms for the branch choice (one per row; empty with ``split``) and Russian roulette
+        (two per row, the reflected child's first; empty without roulette; read by ``FINISH`` and
+        ``MASKED``).
+    settle : tuple (mode, src, branch, facets)
+        ``FINISH`` (`NO_SETTLE`): the children leave the surface here (offset along the side
+        normal, then `survive`). ``AT_POINT`` (`at_point`; the rough code's steps decide what
+        follows): they stay at the hit point, unterminated, and ``src``/``branch`` receive each
+        child's row in the wave and +1 (reflected) or -1 (transmitted). ``MASKED`` (`masked`):
+        a rough face's whole interaction, `Surfaces._interact` without the steps between
+        kernels. ``facets`` = (draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength,
+        rehit_depth, back_side, counts): per row its face normal and macro normal (facing the
+        incident side); where ``draw[face_med]``, the GGX facet drawn here from ``u1``, ``u2``
+        (`roughness.ggx_draw1` about the `_tangent1` frame; a facet that faces away: the power
+        emitted at the face's temperature, the ray goes on with none about the macro normal).
+        Each child then leaves (terminated by `survive` with ``u_roul`` as with ``FINISH``, then
+        off the surface as `settle` sends it: rows 0, 1, ... of ``out``) unless the next of
+        ``u_leave`` (one per child of a rough face, in order) is at or above its Smith masking
+        probability (`roughness.smith_g1`, ``rough`` the media's
+        codes as `settle` takes them); a masked child emits its power at the face's temperature
+        if ``over`` (the chain's end), else it crosses one ``wavelength`` of its side's medium and
+        comes back for a re-hit (depth changed by ``rehit_depth``): rows ``len(out) - 1``,
+        ``len(out) - 2``, ... of ``out``, its row, media and branch in ``back_side`` (src, cur,
+        other, leaving, sign) as `settle` fills them. ``counts`` receives (draws of weight other
+        than 1, uniforms of ``u_leave`` used, children that came back).
+    """
+    return _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out,
+                    settle[0], settle[1], settle[2], settle[3])
+
+
+@_jit
+def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, mode, src,
+             branch, facets):
+    """`scatter` with its ``settle`` unpacked: ``facets`` is None but with ``MASKED``, so that
+    numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
+    6 % of an interaction as run-time branches)."""
+    finish = mode == FINISH
+    d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top
+    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving
+    oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
+    if facets is not None:
+        draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts = facets
+        r_code, r_ax, r_ay, r_orient = rough
+        b_src, b_cur, b_other, b_leaving, b_sign = back_side
+    buf_eps, buf_d = _film_buffers(films)
+    face_offset = faces.offset
+    kind, alpha, temperature, n1_real, has_coat, eps = (media.kind, media.alpha, media.temperature, media.n1_real,
+                                                        media.has_coat, media.eps)
+    strategy, split_depth = choice
+    roulette = u_roul.shape[0] > 0
+    cap = stack.shape[1]
+    last_row = oo.shape[0] - 1
+    # The loop body calls no helper that takes arrays: numba counts references to an array
+    # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
+    # than all of an interaction's arithmetic. Helpers here take and return scalars.
+    n_out, n_back, used, drawn_off = 0, 0, 0, 0
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        k = sid[i]
+        fm = fm_a[i]
+        kd = kind[fm]
+        t_body = temperature[fm]
+        nx, ny, nz = n_in[i, 0], n_in[i, 1], n_in[i, 2]
+        dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+        if facets is not None:
+            code, tx, ty, tz = r_code[fm], 0.0, 0.0, 0.0
+            if code != roughness.NOT_ROUGH:
+                tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
+            if draw[fm]:  # the facet visible from the ray (GGX)
+                fx, fy, fz, w = roughness.ggx_draw1((n_mac[i, 0], n_mac[i, 1], n_mac[i, 2]), (tx, ty, tz),
+                                                    (-dx, -dy, -dz), u1[i], u2[i], r_ax[fm], r_ay[fm], r_orient[fm])
+                if w != 1.0:
+                    drawn_off += 1
+                if w > 0.0:
+                    nx, ny, nz = fx, fy, fz
+                else:  # no facet visible (degenerate input only): the power emitted here, none goes on
+                    _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
+                    m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
+            cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0)
+        else:
+            cos1 = cos1_a[i]
+        # the outgoing wave's (s, p) about the normal: s = unit(n x k), k = -d (eq. 2.23)
+        sx, sy, sz = -(ny * dz - nz * dy), -(nz * dx - nx * dz), -(nx * dy - ny * dx)
+        norm = math.sqrt(sx * sx + sy * sy + sz * sz)
+        if norm > _NORMAL:
+            sx, sy, sz = sx / norm, sy / norm, sz / norm
+        else:
+            sx, sy, sz = s_old[i, 0], s_old[i, 1], s_old[i, 2]
+        # p = k x s
+        px, py, pz = _k_cross(dx, dy, dz, sx, sy, sz)
+        # M re-expressed in (s, p) (eq. 2.35)
+        ml00, ml01, ml10, ml11 = _rebase1(m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
+                                          (s_old[i, 0], s_old[i, 1], s_old[i, 2]),
+                                          (p_old[i, 0], p_old[i, 1], p_old[i, 2]), (sx, sy, sz), (px, py, pz))
+        if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(fm, cur_a[i], other_a[i], leaving_a[i],
+                                                                          cos1, media, films, buf_eps, buf_d)
+        else:
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(kd, eps[cur_a[i]], eps[other_a[i]], cos1,
+                                                                        temperature[cur_a[i]], t_body)
+        # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
+        if As > A_ROUNDING or Ap > A_ROUNDING:
+            ea, eb = math.sqrt(As), math.sqrt(Ap)
+            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_abs, t_abs)
+        if kd == BLACKBODY or kd == OPAQUE:
+            ea, eb = math.sqrt(Ts), math.sqrt(Tp)
+            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_body, t_body)
+        diel = kd == DIELECTRIC
+        trans = (diel or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
+        keep_r, keep_t, gain_r, gain_t = True, trans, 1.0, 1.0
+        if strategy != 0 and trans and (strategy == 1 or depth[i] >= split_depth):
+            # the branches' shares of the power this ray carries (its Jones columns' powers
+            # times R and T): for a lossless interface the chosen child keeps that power exactly
+            c0 = ml00.real ** 2 + ml00.imag ** 2 + ml10.real ** 2 + ml10.imag ** 2
+            c1 = ml01.real ** 2 + ml01.imag ** 2 + ml11.real ** 2 + ml11.imag ** 2
+            r_sum, t_sum = c0 * Rs + c1 * Rp, c0 * Ts + c1 * Tp
+            p_r = r_sum / max(r_sum + t_sum, _TINY)
+            if u_choose[j] < p_r:
+                keep_t, gain_r = False, 1.0 / math.sqrt(p_r)
+            else:
+                keep_r, gain_t = False, 1.0 / math.sqrt(1.0 - p_r)
+        step = face_offset[prim[i]]
+        dn = dx * nx + dy * ny + dz * nz
+        depth_c = depth[i] + 1
+        tp_i = top[i]
+        for br in range(2):
+            if br == 0:  # reflected (eq. 2.21, 2.39): stays on the incident side, along +n
+                if not keep_r:
+                    continue
+                a_s, a_p = gain_r * _amplitude(rs, Rs), gain_r * _amplitude(rp, Rp)
+                cx, cy, cz = dx - 2.0 * dn * nx, dy - 2.0 * dn * ny, dz - 2.0 * dn * nz
+                side, top_c = 1.0, tp_i
+            else:  # transmitted (eq. 2.19, 2.40): refracted into the other medium, or straight through a sheet
+                if not keep_t:
+                    continue
+                a_s, a_p = gain_t * _amplitude(ts, Ts), gain_t * _amplitude(tp, Tp)
+                if diel:
+                    # homogeneous wave (sec. 2.2.4): tangential part kept (eq. 2.18), normal part
+                    # Re q2 of the outgoing root (eq. 2.20); Snell's law for lossless media
+                    n1 = n1_real[cur_a[i]]
+                    qr = q2c.real
+                    cx = n1 * (dx - dn * nx) - qr * nx
+                    cy = n1 * (dy - dn * ny) - qr * ny
+                    cz = n1 * (dz - dn * nz) - qr * nz
+                    norm = math.sqrt(cx * cx + cy * cy + cz * cz)
+                    cx, cy, cz = cx / norm, cy / norm, cz / norm
+                    top_c = tp_i - 1 if leaving_a[i] else tp_i + 1  # the body's medium popped or pushed
+                else:
+                    cx, cy, cz = dx, dy, dz
+                    top_c = tp_i
+                side = -1.0
+            m00, m01, m10, m11 = ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p
+            leaves = True
+            if facets is not None and code != roughness.NOT_ROUGH:  # masked by the microsurface? (as `settle`)
+                g1 = roughness.smith_g1((side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz),
+                                        (cx, cy, cz), code, r_ax[fm], r_ay[fm], r_orient[fm])
+                leaves = not u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
+                used += 1
+            if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
+                g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
+                if g < 0.0:
+                    _end(acc, cut, k, m00, m01, m10, m11, t_body, limits.t_lo, limits.t_hi)
+                if g <= 0.0:
+                    continue
+                if g != 1.0:
+                    m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+            gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
+            ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
+            row, depth_row, comes_back = n_out, depth_c, False
+            if facets is not None:
+                if leaves:  # along the face's side normal (a wrong-side child mirrored)
+                    ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
+                        ox, oy, oz, cx, cy, cz, sx, sy, sz, side * n_geo[i, 0], side * n_geo[i, 1], side * n_geo[i, 2],
+                        step)
+                else:
+                    if over:  # the chain's end: its power emitted where it is
+                        _add(acc, k, m00, m01, m10, m11, t_body, t_body)
+                        continue
+                    cur, oth, lv = _masked_side1(side, diel, cur_a[i], other_a[i], leaving_a[i])
+                    tau, e, g = _to_next_facet1(alpha[cur], wavelength)
+                    if tau < 1.0:
+                        tc = temperature[cur]
+                        _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
+                        m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+                    if not tau > A_ROUNDING:
+                        continue
+                    row, depth_row, comes_back = last_row - n_back, depth_c + rehit_depth, True
+                    b_src[n_back], b_cur[n_back], b_other[n_back] = i, cur, oth
+                    b_leaving[n_back], b_sign[n_back] = lv, side
+                    n_back += 1
+                    sx_c, sy_c, sz_c = sx, sy, sz
+            else:
+                sx_c, sy_c, sz_c = sx, sy, sz
+            # the child, at its row: p = k x s with k = -d
+            od[row, 0], od[row, 1], od[row, 2] = cx, cy, cz
+            os_[row, 0], os_[row, 1], os_[row, 2] = sx_c, sy_c, sz_c
+            op[row, 0], op[row, 1], op[row, 2] = _k_cross(cx, cy, cz, sx_c, sy_c, sz_c)
+            if finish and cx * gx + cy * gy + cz * gz > 0.0:  # off the surface along its side
+                ox, oy, oz = ox + step * gx, oy + step * gy, oz + step * gz
+            oo[row, 0], oo[row, 1], oo[row, 2] = ox, oy, oz
+            if finish and not cx * gx + cy * gy + cz * gz > 0.0:  # (only rounding at grazing incidence)
+                _off_surface(oo, od, os_, op, row, gx, gy, gz, step)
+            om[row, 0, 0], om[row, 0, 1], om[row, 1, 0], om[row, 1, 1] = m00, m01, m10, m11
+            osid[row], odepth[row], otop[row], olast[row] = k, depth_row, top_c, t_body
+            for c in range(cap):
+                ostack[row, c] = stack[i, c]
+            if top_c > tp_i:
+                ostack[row, top_c] = fm
+            if mode == AT_POINT:
+                src[row], branch[row] = i, 1 - 2 * br
+            if not comes_back:
+                n_out += 1
+    if facets is not None:
+        counts[0] += drawn_off
+        counts[1], counts[2] = used, n_back
+    return n_out
+
+
+@_jit
+def gather(src, rows, dst):
+    """Rows ``rows`` of wave ``src`` to rows 0, 1, ... of wave ``dst`` (the same wave when every
+    ``rows[n] >= n``: in place). One call per wave: numba counts references to arrays handed to a
+    helper, at a cost above a row's copy, so the arrays are unpacked once here."""
+    o, d, s, p, m, sid, depth, stack, top, last_t = src
+    o2, d2, s2, p2, m2, sid2, depth2, stack2, top2, last_t2 = dst
+    for n in range(rows.shape[0]):
+        c = rows[n]
+        for a in range(3):
+            o2[n, a], d2[n, a], s2[n, a], p2[n, a] = o[c, a], d[c, a], s[c, a], p[c, a]
+        m2[n, 0, 0], m2[n, 0, 1], m2[n, 1, 0], m2[n, 1, 1] = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
+        sid2[n], depth2[n], top2[n], last_t2[n] = sid[c], depth[c], top[c], last_t[c]
+        for a in range(stack.shape[1]):
+            stack2[n, a] = stack[c, a]
+
+
+@_inline
+def _tangent1(n0, n1, n2):
+    """The unit anisotropy tangent of a rough face of unit normal n: world X projected onto the
+    plane normal to n (world Y where n is within 26 degrees of X)."""
+    t0, t1 = (0.0, 1.0) if abs(n0) > 0.9 else (1.0, 0.0)
+    tn = t0 * n0 + t1 * n1
+    x0, x1, x2 = t0 - tn * n0, t1 - tn * n1, -tn * n2
+    norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    return x0 / norm, x1 / norm, x2 / norm
+
+
+@_jit
+def tangents(n, out):
+    """`_tangent1` of each unit normal, shape (N, 3)."""
+    for i in range(n.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = _tangent1(n[i, 0], n[i, 1], n[i, 2])
+
+
+@_jit
+def compact(wave, keep):
+    """Move the rows of a wave with ``keep`` to its front, in order (in place: the wave's arrays
+    must not be shared); returns how many."""
+    rows = np.flatnonzero(keep)
+    gather(wave, rows, wave)
+    return rows.shape[0]
+
+
+@_jit
+def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain_end, media, rough, wavelength, acc,
+           leave, back, back_side, leave_side, finish, rehit_depth, fate):
+    """Children of a rough surface's facets (`scatter` with ``finish`` False) sent off the
+    surface or back onto it (`Surfaces._settle`, which describes the rule), or between the
+    interfaces of rough coating layers (`Surfaces._layer_step`: ``finish`` False).
+
+    Parameters
+    ----------
+    kids : tuple of arrays (a wave)
+        The children, at their hit points; ``src`` their row in ``hit`` and ``branch`` +1
+        (reflected) or -1 (transmitted).
+    u_leave : ndarray, shape (n,)
+        Uniforms of the children of rough faces: a child leaves unless ``u_leave >= G1``,
+        Smith's masking probability about the macro normal of its side.
+    p_leave : ndarray, shape (n,)
+        G1 of the children of faces whose roughness model is not compiled
+        (`roughness.OTHER_CODE`), computed by the caller; read for those only.
+    hit : tuple (pos, n_geo, cos1, cur, face_med, other, leaving, code)
+        The interacting rows (``n_geo``: the face normal facing the incident side).
+    n_mac, tangent : ndarray, shape (rows, 3)
+        Macro normals facing the incident side, and the anisotropy tangents (`roughness.local_frame`).
+    step : ndarray, shape (rows,)
+        Offset off the face [m].
+    chain_end : tuple (over, t_end)
+        ``over`` (rows,) bool: the re-hit chain of the row is at its end, and a masked child's
+        power is emitted at ``t_end`` (rows, 2) [K] (column 0 for reflected children, 1 for
+        transmitted ones).
+    media : tuple (kind, alpha, temperature, ...)
+    rough : tuple (code, alpha_x, alpha_y, orientation) of arrays, one entry per medium
+        The media's roughness models (`roughness.smith_g1`'s codes; `roughness.NOT_ROUGH`: smooth).
+    wavelength : float
+        [m]: the way a masked child crosses in its medium to the next facet.
+    leave, back : tuple of arrays (waves)
+        Filled with the children that leave (off the surface, a wrong-side child mirrored
+        through the face's plane) and those that re-hit (at the hit point, one wavelength's
+        absorption applied and emitted, depth changed by ``rehit_depth``).
+    back_side : tuple (src, cur, other, leaving, sign)
+        Filled for each re-hitting child: its row in ``hit``, the media of its side seen from
+        there, and its branch.
+    leave_side : tuple (src, sign)
+        Filled for each leaving child: its row in ``hit`` and its branch.
+    finish : bool
+        Leaving children are terminated (`survive`) and leave the surface here (mirrored to the
+        right side of the face and offset along it); otherwise they are left at the hit point as
+        they are.
+    rehit_depth : int
+        Added to a re-hitting child's depth: -1 in the renderer (a chain of facets at one point
+        is one interaction), 0 where depth counts facet events (`pmmw brdf`'s orders).
+    fate : tuple (u_roul, limits, cut)
+        With ``finish``: Russian roulette's uniforms, two per row of ``hit`` (the reflected
+        child's first, as `scatter` reads them; empty without roulette), ``survive``'s limits and
+        truncation sums.
+
+    Returns
+    -------
+    (int, int)
+        How many children leave and how many re-hit.
+    """
+    pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
+    kind, alpha, temperature = media.kind, media.alpha, media.temperature
+    b_src, b_cur, b_other, b_leaving, b_sign = back_side
+    r_code, r_ax, r_ay, r_orient = rough
+    over, t_end = chain_end
+    l_src, l_sign = leave_side
+    o, d, s, p, m, sid, k_depth, k_last = kids[0], kids[1], kids[2], kids[3], kids[4], kids[5], kids[6], kids[9]
+    u_roul, limits, cut = fate
+    roulette = u_roul.shape[0] > 0
+    l_rows, b_rows = np.empty(src.shape[0], np.int64), np.empty(src.shape[0], np.int64)
+    nl, nb = 0, 0
+    for c in range(src.shape[0]):
+        i = src[c]
+        sg = float(branch[c])
+        gx, gy, gz = sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2]
+        fm = fm_a[i]
+        code = r_code[fm]
+        if code == roughness.OTHER_CODE:
+            g1 = p_leave[c]
+        elif code != roughness.NOT_ROUGH:
+            g1 = roughness.smith_g1((sg * n_mac[i, 0], sg * n_mac[i, 1], sg * n_mac[i, 2]),
+                                    (tangent[i, 0], tangent[i, 1], tangent[i, 2]), (d[c, 0], d[c, 1], d[c, 2]),
+                                    code, r_ax[fm], r_ay[fm], r_orient[fm])
+        if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
+            if finish:  # terminated (as `scatter` does)
+                m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
+                g = _fate(m00, m01, m10, m11, k_depth[c], u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0,
+                          limits)
+                if g < 0.0:
+                    _end(acc, cut, sid[c], m00, m01, m10, m11, k_last[c], limits.t_lo, limits.t_hi)
+                if g <= 0.0:
+                    continue
+                if g != 1.0:
+                    m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
+            l_src[nl], l_sign[nl] = i, sg
+            if finish:  # off the surface (a wrong-side child mirrored), written out here: see `scatter`
+                (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
+                 mirrored) = _off_surface1(o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1],
+                                           s[c, 2], gx, gy, gz, step[i])
+                if mirrored:
+                    p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
+            l_rows[nl] = c
+            nl += 1
+            continue
+        k = sid[c]
+        if over[i]:  # the chain's end: its power emitted where it is
+            te = t_end[i, 0] if sg > 0.0 else t_end[i, 1]
+            _add(acc, k, m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], te, te)
+            continue
+        cur, oth, lv = _masked_side1(sg, kind[fm_a[i]] == DIELECTRIC, cur_a[i], other_a[i], leaving_a[i])
+        tau, e, g = _to_next_facet1(alpha[cur], wavelength)
+        if tau < 1.0:
+            tc = temperature[cur]
+            _add(acc, k, m[c, 0, 0] * e, m[c, 0, 1] * e, m[c, 1, 0] * e, m[c, 1, 1] * e, tc, tc)
+            for a in range(2):
+                for b in range(2):
+                    m[c, a, b] *= g
+        if not tau > A_ROUNDING:
+            continue
+        b_rows[nb] = c
+        b_src[nb], b_cur[nb], b_other[nb], b_leaving[nb], b_sign[nb] = i, cur, oth, lv, sg
+        nb += 1
+    gather(kids, l_rows[:nl], leave)
+    gather(kids, b_rows[:nb], back)
+    b_o, b_depth = back[0], back[6]
+    for j in range(nb):  # a re-hit starts at the hit point
+        i = b_src[j]
+        b_o[j, 0], b_o[j, 1], b_o[j, 2] = pos[i, 0], pos[i, 1], pos[i, 2]
+        b_depth[j] += rehit_depth
+    return nl, nb
+
+
+@_jit
+def cross_layer(wave, n, rows, alpha, thickness, temperature, acc):
+    """Rays of a wave across a rough coating layer to its next interface (`Surfaces._layer_step`),
+    in place: each attenuated by exp(-alpha t / |cos|) (its direction against the layer's normal
+    ``n[rows[c]]``, the cosine kept above 1e-6) and emitting what it loses at ``temperature``
+    [K] (Murakowski 2014 eq. 2.37, 2.38); ``alpha`` [1/m], ``thickness`` [m]."""
+    d, m, sid = wave.d, wave.m, wave.sid
+    for c in range(d.shape[0]):
+        i = rows[c]
+        cos_t = max(abs(d[c, 0] * n[i, 0] + d[c, 1] * n[i, 1] + d[c, 2] * n[i, 2]), 1e-6)
+        tau = math.exp(-alpha * thickness / cos_t)
+        if tau < 1.0:
+            e, g = math.sqrt(1.0 - tau), math.sqrt(tau)
+            m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
+            _add(acc, sid[c], m00 * e, m01 * e, m10 * e, m11 * e, temperature, temperature)
+            m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
+
+
