@@ -18,7 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from pmmw import __version__
+from pmmw import __version__, timings
 from pmmw.config import load_scenario
 from pmmw.config.load import scenario_to_display
 from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
@@ -904,7 +904,8 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     clear_warnings()
     t0 = time.perf_counter()
     cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed), ("out", out)) if v is not None}
-    res = resolve(path, overrides, cli=cli, data=data, values=values)
+    with timings.phase("resolve"):
+        res = resolve(path, overrides, cli=cli, data=data, values=values)
     scn = res.scenario
     out_dir = Path(scn.output.dir) if scn.output.dir is not None else Path.cwd() / "out" / scn.name
     n_workers = scn.render.workers or default_workers()
@@ -933,6 +934,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
             for _, _, folder in tile_folders(scn, f, shash):
                 claim(tile_root / folder, tile_manifest(scn, shash), where)
         t_resolve = time.perf_counter() - t0
+        timings.mark("outputs checked")
         written, tile_dirs = _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolve,
                                                 n_workers=n_workers, resume=resume, shard=shard, quiet=quiet,
                                                 executor=executor, scheduler=scheduler, cluster=cluster)
@@ -962,9 +964,10 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
         for f in scn.frequencies:
             t1 = time.perf_counter()
             try:
-                job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=tile_root,
-                                                 shash=shash, resume=resume, shard=shard, quiet=quiet,
-                                                 client=client)
+                with timings.phase("trace"):
+                    job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=tile_root,
+                                                     shash=shash, resume=resume, shard=shard, quiet=quiet,
+                                                     client=client)
             except OSError as e:  # saving tiles: disk full, quota, a folder gone read-only
                 raise os_problem(e, tile_root, "save the finished tiles") from None
             tile_dirs += dirs
@@ -983,11 +986,12 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
                 "warnings": collected_warnings(), "scenario": scenario_to_display(scn),
             }
             reports = names[r["frequency_hz"]]["reports"]
-            try:
-                write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
-            except OSError as e:
-                raise os_problem(e, out_dir, "write the report") from None
-            staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
+            with timings.phase("report"):
+                try:
+                    write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
+                except OSError as e:
+                    raise os_problem(e, out_dir, "write the report") from None
+                staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
             print(
                 f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
                 f"{r['rays'] / 1e6:.2f} M rays, "
@@ -1039,41 +1043,30 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
     frequency's report entry (the caller adds the report and commits them together)."""
     t1 = time.perf_counter()
-    images = frequency_images(scn, f, job, img, shash)
+    with timings.phase("imager model"):
+        images = frequency_images(scn, f, job, img, shash)
+        summary = imager_summary(scn, job, images["noise_maps"])
     ideal, sensor, kernel = images["ideal"], images["sensor"], images["kernel"]
     cam = job.camera
-    regions = region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
+    with timings.phase("region statistics"):
+        regions = region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
     try:
-        write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
-        stats = {}
-        label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
-        for c in scn.output.channels:
-            chan = sensor[c]
-            stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
-            if c in names["previews"]:
-                lo, hi = write_figure(staged.path(names["previews"][c]), [(None, chan)], title=label.format(c))
-                stats[c].update(display_low=lo, display_high=hi)
-        for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
-            write_figure(staged.path(rel), [("ideal (before the imager)", ideal[c]),
-                                            (f"sensor ({_imager_words(scn)})", sensor[c])],
-                         title=label.format(c))
-        if names["regions_preview"]:
-            c = regions["channel"]
-            first = next(iter(regions["verdicts"].values()), None)
-            write_regions_figure(staged.path(names["regions_preview"]["regions"]), sensor[c],
-                                 region_shapes(scn.output.regions, cam), title=label.format(f"{c}, regions"),
-                                 caption=first)
-        if "depth" in names["aux_previews"]:
-            write_depth_figure(staged.path(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))
-        if "material" in names["aux_previews"]:
-            write_material_figure(staged.path(names["aux_previews"]["material"]), img.material, job.media.ids,
-                                  title=label.format("material of the first hit"))
+        with timings.phase("EXR"):
+            write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
+        with timings.phase("previews"):
+            shown = write_previews(scn, f, job, img, names, staged.path, sensor, ideal, regions)
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
+    stats = {}
+    for c in scn.output.channels:
+        chan = sensor[c]
+        stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
+        if c in shown:
+            stats[c].update(display_low=shown[c][0], display_high=shown[c][1])
     t_total = time.perf_counter() - t1 + t_trace
     return {
         "truncation": truncation_summary(img, scn),
-        **({"imager": summary} if (summary := imager_summary(scn, job, images["noise_maps"])) else {}),
+        **({"imager": summary} if summary else {}),
         **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
         **({"regions": regions} if regions else {}),
         **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
@@ -1085,6 +1078,32 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
         "mean_samples_per_pixel": float(img.samples.mean()),
         "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
     }
+
+
+def write_previews(scn, f, job, img, names, path_of, sensor, ideal, regions) -> dict:
+    """Draw the previews ``names`` asks for (`output_names`) of one frequency's images at
+    ``path_of(relative name)``. Returns {channel: (low, high)}: the temperatures [K] shown as
+    black and white in each channel's own preview."""
+    shown = {}
+    label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
+    for c, rel in names["previews"].items():
+        shown[c] = write_figure(path_of(rel), [(None, sensor[c])], title=label.format(c))
+    for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
+        write_figure(path_of(rel), [("ideal (before the imager)", ideal[c]),
+                                    (f"sensor ({_imager_words(scn)})", sensor[c])],
+                     title=label.format(c))
+    if names["regions_preview"]:
+        c = regions["channel"]
+        first = next(iter(regions["verdicts"].values()), None)
+        write_regions_figure(path_of(names["regions_preview"]["regions"]), sensor[c],
+                             region_shapes(scn.output.regions, job.camera), title=label.format(f"{c}, regions"),
+                             caption=first)
+    if "depth" in names["aux_previews"]:
+        write_depth_figure(path_of(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))
+    if "material" in names["aux_previews"]:
+        write_material_figure(path_of(names["aux_previews"]["material"]), img.material, job.media.ids,
+                              title=label.format("material of the first hit"))
+    return shown
 
 
 def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
