@@ -21,25 +21,30 @@ _MARKS: list[tuple[str, float]] = []  # (step, seconds since the process started
 _PHASES: dict[str, float] = {}  # step -> seconds, summed over repeats (one per frequency)
 
 
-def process_start() -> float:
-    """The wall-clock time [s since the epoch] this process started (Linux: from ``/proc``, to a
-    clock tick, 10 ms; elsewhere the first import of this module, a lower bound on the time
-    since the start)."""
+def _started_ago() -> float | None:
+    """Seconds since this process started (Linux: its start in clock ticks after boot, from
+    ``/proc``, against the boot-time clock: to a tick, 10 ms); None where that cannot be read."""
     try:
         with open(f"/proc/{os.getpid()}/stat") as f:
             ticks = int(f.read().rsplit(")", 1)[1].split()[19])  # field 22: start time after boot [ticks]
-        with open("/proc/stat") as f:
-            boot = next(float(line.split()[1]) for line in f if line.startswith("btime "))
-        return boot + ticks / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError, StopIteration):
-        return _IMPORTED
+        return time.clock_gettime(time.CLOCK_BOOTTIME) - ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError, AttributeError):
+        return None
+
+
+def process_start() -> float:
+    """The wall-clock time [s since the epoch] this process started (Linux: to a clock tick;
+    elsewhere the first import of this module, a lower bound on the time since the start)."""
+    ago = _started_ago()
+    return _IMPORTED if ago is None else time.time() - ago
 
 
 _IMPORTED = time.time()
 
 
 def _since_start() -> float:
-    return time.time() - process_start()
+    ago = _started_ago()
+    return time.time() - _IMPORTED if ago is None else ago
 
 
 def clear() -> None:

@@ -13,6 +13,8 @@ then formed from the noisy Ex2 and Ey2 (so I = Ex2 + Ey2 still holds in the sens
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 from scipy.special import j1
 
@@ -99,7 +101,7 @@ def fftconvolve(in1, in2, mode: str = "same"):
     """``scipy.signal.fftconvolve(in1, in2, mode="same")`` of two real arrays, by the same
     operations with `scipy.fft` alone (scipy 1.17's ``_freq_domain_conv``: real FFTs of the
     next fast lengths, axes of length 1 by broadcasting, the centre cut out), so the numbers are
-    the same to the bit. Importing ``scipy.signal`` loads ``scipy.stats`` too, about 0.5 s on a
+    the same to the bit; the kernel's transform is kept for the next call (`_spectrum`). Importing ``scipy.signal`` loads ``scipy.stats`` too, about 0.5 s on a
     2-core machine, more than the imager model itself takes. Returns float64 of in1's shape."""
     from scipy import fft as sp_fft
 
@@ -114,13 +116,32 @@ def fftconvolve(in1, in2, mode: str = "same"):
     shape = [s1[i] + s2[i] - 1 if i in axes else max(s1[i], s2[i]) for i in range(in1.ndim)]
     if axes:
         fshape = [sp_fft.next_fast_len(shape[a], True) for a in axes]
-        ret = sp_fft.irfftn(sp_fft.rfftn(in1, fshape, axes=axes) * sp_fft.rfftn(in2, fshape, axes=axes),
-                            fshape, axes=axes)
+        sp1 = sp_fft.rfftn(in1, fshape, axes=axes, workers=-1)
+        ret = sp_fft.irfftn(sp1 * _spectrum(in2, fshape, axes), fshape, axes=axes, workers=-1)
         ret = ret[tuple(slice(n) for n in shape)]
     else:
         ret = in1 * in2
     start = [(c - n) // 2 for c, n in zip(ret.shape, s1)]
     return ret[tuple(slice(b, b + n) for b, n in zip(start, s1))].copy()
+
+
+#: The last kernels' spectra (`_spectrum`): a render blurs four channels and each region's
+#: footprint with one PSF, and the regions' adjoint with the flipped one.
+_SPECTRA: dict = {}
+
+
+def _spectrum(kernel, fshape, axes):
+    """``scipy.fft.rfftn(kernel, fshape, axes)``, kept for the next image blurred with the same
+    kernel (known by its bytes): a third of each convolution's transforms. The transforms run on
+    every core (``workers=-1``: each line's transform is the same arithmetic, so the same numbers)."""
+    from scipy import fft as sp_fft
+
+    key = (hashlib.blake2b(kernel.tobytes(), digest_size=16).digest(), kernel.shape, tuple(fshape), tuple(axes))
+    if key not in _SPECTRA:
+        while len(_SPECTRA) >= 2:
+            del _SPECTRA[next(iter(_SPECTRA))]
+        _SPECTRA[key] = sp_fft.rfftn(kernel, fshape, axes=axes, workers=-1)
+    return _SPECTRA[key]
 
 
 def blur(img, kernel):

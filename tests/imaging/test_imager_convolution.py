@@ -40,3 +40,15 @@ def test_the_imager_model_does_not_import_scipy_signal():
             "print('scipy.signal' in sys.modules, 'scipy.fft' in sys.modules)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "True"]  # scipy.fft loaded: the model did convolve (the control)
+
+
+def test_a_kept_kernel_spectrum_gives_the_same_numbers():
+    # tolerance: none (array_equal): the second image reuses the kernel's kept transform, which
+    # must be the transform of this kernel (not of the previous one: the control)
+    rng = np.random.default_rng(5)
+    k1, k2 = rng.random((9, 9)), rng.random((9, 9))
+    for _ in range(2):
+        for k in (k1, k2, k1[::-1, ::-1]):
+            a = rng.normal(size=(30, 30))
+            assert np.array_equal(fftconvolve(a, k), signal.fftconvolve(a, k, mode="same"))
+    assert not np.array_equal(fftconvolve(a, k2), signal.fftconvolve(a, k1, mode="same"))
