@@ -116,8 +116,8 @@ def fftconvolve(in1, in2, mode: str = "same"):
     shape = [s1[i] + s2[i] - 1 if i in axes else max(s1[i], s2[i]) for i in range(in1.ndim)]
     if axes:
         fshape = [sp_fft.next_fast_len(shape[a], True) for a in axes]
-        sp1 = sp_fft.rfftn(in1, fshape, axes=axes, workers=-1)
-        ret = sp_fft.irfftn(sp1 * _spectrum(in2, fshape, axes), fshape, axes=axes, workers=-1)
+        sp1 = sp_fft.rfftn(in1, fshape, axes=axes)
+        ret = sp_fft.irfftn(sp1 * _spectrum(in2, fshape, axes), fshape, axes=axes)
         ret = ret[tuple(slice(n) for n in shape)]
     else:
         ret = in1 * in2
@@ -132,15 +132,14 @@ _SPECTRA: dict = {}
 
 def _spectrum(kernel, fshape, axes):
     """``scipy.fft.rfftn(kernel, fshape, axes)``, kept for the next image blurred with the same
-    kernel (known by its bytes): a third of each convolution's transforms. The transforms run on
-    every core (``workers=-1``: each line's transform is the same arithmetic, so the same numbers)."""
+    kernel (known by its bytes): a third of each convolution's transforms."""
     from scipy import fft as sp_fft
 
     key = (hashlib.blake2b(kernel.tobytes(), digest_size=16).digest(), kernel.shape, tuple(fshape), tuple(axes))
     if key not in _SPECTRA:
         while len(_SPECTRA) >= 2:
             del _SPECTRA[next(iter(_SPECTRA))]
-        _SPECTRA[key] = sp_fft.rfftn(kernel, fshape, axes=axes, workers=-1)
+        _SPECTRA[key] = sp_fft.rfftn(kernel, fshape, axes=axes)
     return _SPECTRA[key]
 
 
