@@ -14,6 +14,7 @@ then formed from the noisy Ex2 and Ey2 (so I = Ex2 + Ey2 still holds in the sens
 from __future__ import annotations
 
 import hashlib
+import threading
 
 import numpy as np
 from scipy.special import j1
@@ -128,6 +129,7 @@ def fftconvolve(in1, in2, mode: str = "same"):
 #: The last kernels' spectra (`_spectrum`): a render blurs four channels and each region's
 #: footprint with one PSF, and the regions' adjoint with the flipped one.
 _SPECTRA: dict = {}
+_SPECTRA_LOCK = threading.Lock()
 
 
 def _spectrum(kernel, fshape, axes):
@@ -136,11 +138,12 @@ def _spectrum(kernel, fshape, axes):
     from scipy import fft as sp_fft
 
     key = (hashlib.blake2b(kernel.tobytes(), digest_size=16).digest(), kernel.shape, tuple(fshape), tuple(axes))
-    if key not in _SPECTRA:
-        while len(_SPECTRA) >= 2:
-            del _SPECTRA[next(iter(_SPECTRA))]
-        _SPECTRA[key] = sp_fft.rfftn(kernel, fshape, axes=axes)
-    return _SPECTRA[key]
+    with _SPECTRA_LOCK:  # renders in threads (the API) share it
+        if key not in _SPECTRA:
+            while len(_SPECTRA) >= 2:
+                del _SPECTRA[next(iter(_SPECTRA))]
+            _SPECTRA[key] = sp_fft.rfftn(kernel, fshape, axes=axes)
+        return _SPECTRA[key]
 
 
 def blur(img, kernel):
