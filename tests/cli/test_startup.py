@@ -39,3 +39,50 @@ def test_control_each_comes_when_used():
                      "from pmmw.imaging.detection import probability_of_detection\n"
                      "probability_of_detection(5.0, 1e-3)\n")
     assert loaded == {"matplotlib", "scipy.interpolate"}
+
+
+def test_render_timings_prints_the_steps_and_phases(tmp_path):
+    """``--timings``: the moments (after the process started, in order) and each phase; without
+    it nothing of the kind (the control)."""
+    from tests.scenes import tiny_scenario
+
+    scn = tiny_scenario(tmp_path)
+    run = [sys.executable, "-m", "pmmw_cli", "render", str(scn), "-q", "--workers", "1", "--out"]
+    res = subprocess.run([*run, str(tmp_path / "a"), "--timings"], capture_output=True, text=True, cwd=ROOT)
+    assert res.returncode == 0, res.stderr
+    lines = res.stderr.split("timings:\n", 1)[1].splitlines()
+    moments = [(line.split(" at ")[0].strip(), float(line.split(" at ")[1].split()[0])) for line in lines
+               if " at " in line]
+    assert [m for m, _ in moments] == ["command started", "pipeline imported", "outputs checked", "kernels loaded",
+                                       "first tile sent", "done"]
+    times = [t for _, t in moments]
+    assert times == sorted(times) and 0.0 < times[0]
+    phases = {line.rsplit(None, 2)[0].strip() for line in lines if " at " not in line}
+    assert {"resolve", "trace", "imager model", "EXR", "previews", "report", "after the trace, together"} <= phases
+    res = subprocess.run([*run, str(tmp_path / "b")], capture_output=True, text=True, cwd=ROOT)
+    assert res.returncode == 0 and "timings:" not in res.stderr
+
+
+def test_seconds_since_the_process_started():
+    # a process that slept 0.3 s has been running at least that long (a clock tick of 10 ms is
+    # the resolution: margin 0.02 s), and not minutes (the control that the start is its own)
+    code = "import time\ntime.sleep(0.3)\nfrom pmmw import timings\nprint(timings._since_start())\n"
+    ago = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                               cwd=ROOT).stdout)
+    assert 0.28 <= ago < 30.0
+
+
+def test_marks_once_and_phases_add_up():
+    from pmmw import timings
+
+    timings.clear()
+    timings.mark("a")
+    timings.mark("a")  # a second frequency's first tile: the first one counts
+    for _ in range(2):
+        with timings.phase("EXR"):
+            pass
+    marks, phases = timings.recorded()
+    assert [m for m, _ in marks] == ["a"] and list(phases) == ["EXR"]
+    assert any(line.startswith("after the trace, together") for line in timings.lines())
+    timings.clear()
+    assert timings.recorded() == ([], {})
