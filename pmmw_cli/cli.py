@@ -95,8 +95,9 @@ def render(
                                            help="With dask: a dask-jobqueue cluster file (as for pmmw sweep)."),
     show_timings: bool = typer.Option(False, "--timings", metavar="",
                                       help="Print where the time went at the end: when the command started, the "
-                                           "scene was resolved and the first tile sent (seconds after the process "
-                                           "started), then each phase (trace, imager model, EXR, previews, report)."),
+                                           "pipeline was imported, the outputs checked, the kernels loaded and the "
+                                           "first tile sent (seconds after the process started), then each phase "
+                                           "(resolve, trace, imager model, region statistics, EXR, previews, report)."),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
     from pmmw import memory, timings
