@@ -17,7 +17,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from pmmw import __version__
+from pmmw import __version__, timings
 from pmmw.config import load_scenario
 from pmmw.config.load import scenario_to_display
 from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
@@ -686,22 +686,37 @@ def _stem(scn, f: float) -> str:
     return scn.name if len(scn.frequencies) == 1 else f"{scn.name}_{f / 1e9:g}GHz"
 
 
+def preview_channels(scn) -> tuple[str, ...]:
+    """The channels a render draws a preview of: with ``output.previews: true`` (the default, or
+    ``all``) every channel of ``output.channels``, a PNG preview per channel as the product
+    promises; with ``quick`` I alone (the first channel listed where I is not), the image a person
+    reads first and the one `pmmw sweep`'s contact sheet and the Blender add-on show; none with
+    ``false``. Drawing each figure takes about 0.1 s, more than the imager model of a 500 x 500
+    image (docs/benchmarks_command.md): ``quick`` is for the warm command's speed."""
+    chans, on = scn.output.channels, scn.output.previews
+    if on is True or on == "all":
+        return tuple(chans)
+    if not on:
+        return ()
+    return ("I",) if "I" in chans else tuple(chans[:1])
+
+
 def output_names(scn, f: float) -> dict:
     """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``,
-    ``previews`` and ``side_by_side`` (channel -> PNG), ``aux_previews`` (``depth``, ``material``
-    -> PNG, when ``output.aux`` asks for them), ``regions_preview`` (``regions`` -> PNG: the
-    sensor image with ``output.regions`` outlined, when there are regions), ``reports`` (JSON,
-    Markdown)."""
+    ``previews`` and ``side_by_side`` (channel -> PNG: `preview_channels`; the ideal image beside
+    the sensor's with ``output.previews: true``), ``aux_previews`` (``depth``, ``material`` -> PNG,
+    when ``output.aux`` asks for them), ``regions_preview`` (``regions`` -> PNG: the sensor image
+    with ``output.regions`` outlined, when there are regions), ``reports`` (JSON, Markdown)."""
     stem = _stem(scn, f)
     chans = scn.output.channels
     side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
-    if scn.imager.aperture_diameter <= 0 and scn.imager.noise <= 0:
-        side = ()  # the sensor image is the ideal one: no pair to compare
+    if (scn.imager.aperture_diameter <= 0 and scn.imager.noise <= 0) or scn.output.previews not in (True, "all"):
+        side = ()  # the sensor image is the ideal one: no pair to compare; or not asked for
     suffix = "" if len(scn.frequencies) == 1 else f"_{f / 1e9:g}GHz"
     on = scn.output.previews
     return {
         "exr": f"{stem}.exr",
-        "previews": {c: f"previews/{stem}_{c}.png" for c in chans} if on else {},
+        "previews": {c: f"previews/{stem}_{c}.png" for c in preview_channels(scn)},
         "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
         "aux_previews": {a: f"previews/{stem}_{a}.png" for a in ("depth", "material") if a in scn.output.aux}
         if on else {},
@@ -902,7 +917,8 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     clear_warnings()
     t0 = time.perf_counter()
     cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed), ("out", out)) if v is not None}
-    res = resolve(path, overrides, cli=cli, data=data, values=values)
+    with timings.phase("resolve"):
+        res = resolve(path, overrides, cli=cli, data=data, values=values)
     scn = res.scenario
     out_dir = Path(scn.output.dir) if scn.output.dir is not None else Path.cwd() / "out" / scn.name
     n_workers = scn.render.workers or default_workers()
@@ -931,6 +947,7 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
             for _, _, folder in tile_folders(scn, f, shash):
                 claim(tile_root / folder, tile_manifest(scn, shash), where)
         t_resolve = time.perf_counter() - t0
+        timings.mark("outputs checked")
         written, tile_dirs = _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolve,
                                                 n_workers=n_workers, resume=resume, shard=shard, quiet=quiet,
                                                 executor=executor, scheduler=scheduler, cluster=cluster)
@@ -960,9 +977,10 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
         for f in scn.frequencies:
             t1 = time.perf_counter()
             try:
-                job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=tile_root,
-                                                 shash=shash, resume=resume, shard=shard, quiet=quiet,
-                                                 client=client)
+                with timings.phase("trace"):
+                    job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=tile_root,
+                                                     shash=shash, resume=resume, shard=shard, quiet=quiet,
+                                                     client=client)
             except OSError as e:  # saving tiles: disk full, quota, a folder gone read-only
                 raise os_problem(e, tile_root, "save the finished tiles") from None
             tile_dirs += dirs
@@ -981,11 +999,12 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
                 "warnings": collected_warnings(), "scenario": scenario_to_display(scn),
             }
             reports = names[r["frequency_hz"]]["reports"]
-            try:
-                write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
-            except OSError as e:
-                raise os_problem(e, out_dir, "write the report") from None
-            staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
+            with timings.phase("report"):
+                try:
+                    write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
+                except OSError as e:
+                    raise os_problem(e, out_dir, "write the report") from None
+                staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
             say(
                 f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
                 f"{r['rays'] / 1e6:.2f} M rays, "
@@ -1037,41 +1056,30 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
     frequency's report entry (the caller adds the report and commits them together)."""
     t1 = time.perf_counter()
-    images = frequency_images(scn, f, job, img, shash)
+    with timings.phase("imager model"):
+        images = frequency_images(scn, f, job, img, shash)
+        summary = imager_summary(scn, job, images["noise_maps"])
     ideal, sensor, kernel = images["ideal"], images["sensor"], images["kernel"]
     cam = job.camera
-    regions = region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
+    with timings.phase("region statistics"):
+        regions = region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
     try:
-        write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
-        stats = {}
-        label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
-        for c in scn.output.channels:
-            chan = sensor[c]
-            stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
-            if c in names["previews"]:
-                lo, hi = write_figure(staged.path(names["previews"][c]), [(None, chan)], title=label.format(c))
-                stats[c].update(display_low=lo, display_high=hi)
-        for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
-            write_figure(staged.path(rel), [("ideal (before the imager)", ideal[c]),
-                                            (f"sensor ({_imager_words(scn)})", sensor[c])],
-                         title=label.format(c))
-        if names["regions_preview"]:
-            c = regions["channel"]
-            first = next(iter(regions["verdicts"].values()), None)
-            write_regions_figure(staged.path(names["regions_preview"]["regions"]), sensor[c],
-                                 region_shapes(scn.output.regions, cam), title=label.format(f"{c}, regions"),
-                                 caption=first)
-        if "depth" in names["aux_previews"]:
-            write_depth_figure(staged.path(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))
-        if "material" in names["aux_previews"]:
-            write_material_figure(staged.path(names["aux_previews"]["material"]), img.material, job.media.ids,
-                                  title=label.format("material of the first hit"))
+        with timings.phase("EXR"):
+            write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
+        with timings.phase("previews"):
+            shown = write_previews(scn, f, job, img, names, staged.path, sensor, ideal, regions)
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
+    stats = {}
+    for c in scn.output.channels:
+        chan = sensor[c]
+        stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
+        if c in shown:
+            stats[c].update(display_low=shown[c][0], display_high=shown[c][1])
     t_total = time.perf_counter() - t1 + t_trace
     return {
         "truncation": truncation_summary(img, scn),
-        **({"imager": summary} if (summary := imager_summary(scn, job, images["noise_maps"])) else {}),
+        **({"imager": summary} if summary else {}),
         **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
         **({"regions": regions} if regions else {}),
         **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
@@ -1083,6 +1091,32 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
         "mean_samples_per_pixel": float(img.samples.mean()),
         "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
     }
+
+
+def write_previews(scn, f, job, img, names, path_of, sensor, ideal, regions) -> dict:
+    """Draw the previews ``names`` asks for (`output_names`) of one frequency's images at
+    ``path_of(relative name)``. Returns {channel: (low, high)}: the temperatures [K] shown as
+    black and white in each channel's own preview."""
+    shown = {}
+    label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
+    for c, rel in names["previews"].items():
+        shown[c] = write_figure(path_of(rel), [(None, sensor[c])], title=label.format(c))
+    for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
+        write_figure(path_of(rel), [("ideal (before the imager)", ideal[c]),
+                                    (f"sensor ({_imager_words(scn)})", sensor[c])],
+                     title=label.format(c))
+    if names["regions_preview"]:
+        c = regions["channel"]
+        first = next(iter(regions["verdicts"].values()), None)
+        write_regions_figure(path_of(names["regions_preview"]["regions"]), sensor[c],
+                             region_shapes(scn.output.regions, job.camera), title=label.format(f"{c}, regions"),
+                             caption=first)
+    if "depth" in names["aux_previews"]:
+        write_depth_figure(path_of(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))
+    if "material" in names["aux_previews"]:
+        write_material_figure(path_of(names["aux_previews"]["material"]), img.material, job.media.ids,
+                              title=label.format("material of the first hit"))
+    return shown
 
 
 def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:

@@ -29,11 +29,33 @@ from __future__ import annotations
 import math
 import numbers
 import re
+import sys
 from functools import lru_cache
-
-import pint
+from typing import TYPE_CHECKING
 
 from pmmw.errors import UserError
+
+if TYPE_CHECKING:  # the type checker's view of the pint imported below without Dask
+    import pint
+
+
+def _import_pint():
+    """Import pint without Dask: pint looks for Dask when it is imported (``pint.compat``) and
+    imports it (with Jinja2) when installed, about 0.3 s of every command's start on a 2-core
+    machine, for Dask arrays of quantities that pmmw never makes. Dask itself is imported as
+    usual later (``--executor dask``)."""
+    hidden = "dask" not in sys.modules
+    if hidden:
+        sys.modules["dask"] = None  # importlib.util.find_spec("dask") is then None
+    try:
+        import pint
+    finally:
+        if hidden and sys.modules.get("dask", 0) is None:
+            del sys.modules["dask"]
+    return pint
+
+
+pint = _import_pint()  # noqa: F811  (the module the type checker sees above)
 
 # private names for the multiplicative level units of attenuation (see the module docstring)
 _NEPER = "pmmw_power_neper"

@@ -96,16 +96,28 @@ def render(
                                                  "local cluster of --workers processes)."),
     cluster: Optional[Path] = typer.Option(None, "--cluster", metavar="FILE.yaml",
                                            help="With dask: a dask-jobqueue cluster file (as for pmmw sweep)."),
+    show_timings: bool = typer.Option(False, "--timings", metavar="",
+                                      help="Print where the time went at the end: when the command started, the "
+                                           "pipeline was imported, the outputs checked, the kernels loaded and the "
+                                           "first tile sent (seconds after the process started), then each phase "
+                                           "(resolve, trace, imager model, region statistics, EXR, previews, report)."),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
-    from pmmw import memory
+    from pmmw import memory, timings
+
+    timings.clear()
+    timings.mark("command started")  # Python's start and the imports before this line
     from pmmw.pipeline import parse_shard
     from pmmw.pipeline import render as run
 
+    timings.mark("pipeline imported")
     with memory.overridable("--force", force):  # --force also reads a mesh or sky texture past the memory check
         run(scenario, set_ or [], out=out, spp=spp, workers=workers, seed=seed, resume=resume,
             quiet=quiet, keep_tiles=keep_tiles, shard=parse_shard(shard), force=force, executor=executor,
             scheduler=scheduler, cluster=cluster)
+    timings.mark("done")
+    if show_timings:
+        typer.echo("\n".join(["timings:", *(f"  {line}" for line in timings.lines())]), err=True)
 
 
 @app.command()

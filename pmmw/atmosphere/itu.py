@@ -24,7 +24,6 @@ stay in mm/h (``_mm_h``). Pressures passed to the P.676 functions are the DRY ai
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import RegularGridInterpolator
 
 from pmmw.atmosphere.data import p676, p838, rain_albedo, rain_asymmetry
 
@@ -286,6 +285,8 @@ def rain_specific_attenuation_db_km(rain_rate_mm_h, f, elevation=0.0, tilt=np.pi
 
 def _rain_table(values):
     """Bilinear interpolator in (log f [GHz], log R [mm/h]) on the Mie tables' grid."""
+    from scipy.interpolate import RegularGridInterpolator
+
     return RegularGridInterpolator(
         (
             np.log(np.array(rain_albedo.FREQUENCY_GHZ, float)),
@@ -295,8 +296,13 @@ def _rain_table(values):
     )
 
 
-_ALBEDO = _rain_table(rain_albedo.ALBEDO)
-_ASYMMETRY = _rain_table(rain_asymmetry.ASYMMETRY)
+_TABLES: dict = {}  # the interpolators, made on first use (scipy.interpolate: ~0.3 s to import)
+
+
+def _table(name: str):
+    if name not in _TABLES:
+        _TABLES[name] = _rain_table(rain_albedo.ALBEDO if name == "albedo" else rain_asymmetry.ASYMMETRY)
+    return _TABLES[name]
 
 
 def _rain_lookup(table, f, rain_rate_mm_h):
@@ -323,7 +329,7 @@ def rain_single_scattering_albedo(f, rain_rate_mm_h):
     rain_rate_mm_h : array_like
         Rain rate [mm/h].
     """
-    return _rain_lookup(_ALBEDO, f, rain_rate_mm_h)
+    return _rain_lookup(_table("albedo"), f, rain_rate_mm_h)
 
 
 def rain_asymmetry_parameter(f, rain_rate_mm_h):
@@ -340,7 +346,7 @@ def rain_asymmetry_parameter(f, rain_rate_mm_h):
     rain_rate_mm_h : array_like
         Rain rate [mm/h].
     """
-    return _rain_lookup(_ASYMMETRY, f, rain_rate_mm_h)
+    return _rain_lookup(_table("asymmetry"), f, rain_rate_mm_h)
 
 
 def rain_absorption_fraction(f, rain_rate_mm_h):

@@ -77,14 +77,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.linalg import solve_banded
 
 from pmmw.atmosphere import itu
 from pmmw.atmosphere.itu import NP_M_PER_DB_KM, PROFILES
 from pmmw.jit import njit
+
+if TYPE_CHECKING:  # scipy.interpolate is imported where it is used: ~0.3 s a command need not pay
+    from scipy.interpolate import CubicSpline
 
 T_CMB = 2.725  # cosmic microwave background [K]
 R_EARTH = 6371.0e3  # mean earth radius [m]
@@ -353,6 +355,8 @@ def scattering_source(dtau, omega, g, T, *, ground_temperature, top_temperature=
     put(n - 1, n - 2, E[-1] * (1.0 - c * r[-1]))
     put(n - 1, n - 1, 1.0 + c * r[-1])
     rhs[n - 1] = top_temperature - T[-1]
+    from scipy.linalg import solve_banded
+
     coef = solve_banded((2, 2), ab, rhs)
     a, b = coef[0::2], coef[1::2]
     mean = np.ones(K)  # cell mean of exp(-k s), = that of exp(-k (dtau' - s))
@@ -701,6 +705,8 @@ class AtmosphereModel:
         tau = float(np.interp(z_top, self.edges, self.depth) - np.interp(z_bottom, self.edges, self.depth))
         if s_hi - s_lo < 1e-12 * s_hi:  # one slope: a range to interpolate in all the same
             s_lo, s_hi = s_lo * (1.0 - 1e-9), s_hi * (1.0 + 1e-9)
+        from scipy.interpolate import CubicSpline
+
         n = 16
         while n <= 4096:
             s = np.linspace(s_lo, s_hi, 2 * n - 1)  # the nodes, and the midpoints between them

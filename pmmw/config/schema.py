@@ -798,7 +798,9 @@ class OutputConfig(_Model):
     # file's imager.resolution, before --set): on another resolution they scale with the image
     regions_resolution: Optional[tuple[int, int]] = None
     channels: tuple[str, ...] = CHANNELS
-    previews: bool = True
+    # True (or "all"): every channel's preview and the ideal image beside the sensor's; "quick": only
+    # the previews a render is read by, I and the regions (`pipeline.output_names`); False: none
+    previews: Union[Literal["all", "quick"], bool] = True
     aux: tuple[str, ...] = ()
     false_alarm: float = Field(1e-3, gt=0.0, lt=0.5)  # per target-sized test: the regions' probability of detection
 
@@ -820,6 +822,14 @@ class OutputConfig(_Model):
     @classmethod
     def _channels(cls, v):
         return _subset(v, CHANNELS, "channel")
+
+    @field_validator("previews", mode="before")
+    @classmethod
+    def _previews(cls, v):
+        if isinstance(v, bool) or v in ("all", "quick"):
+            return v
+        raise ConfigValueError(f"expected true or all (every channel's, and the ideal image beside the sensor's), "
+                               f"quick (the image of I and the regions) or false, got {v!r}")
 
     @field_validator("aux", mode="before")
     @classmethod

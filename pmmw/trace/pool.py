@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pmmw import interrupt, jit
+from pmmw import interrupt, jit, timings
 from pmmw.errors import EnvironmentProblem, exception_text
 from pmmw.io.atomic import save_npz_atomic
 from pmmw.trace import kernels
@@ -283,6 +283,7 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
     workers = min(workers, max(1, len(todo)))
     if todo and client is None:
         prepare_kernels(job, notify, intersector)
+        timings.mark("kernels loaded")
     start = time.perf_counter()
     rays = sum(r.rays for r in results.values())
 
@@ -304,6 +305,7 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
                                      f"{len(tiles)} tiles done{kept})") from None
     elif todo and workers == 1:
         _init_worker(job, intersector)
+        timings.mark("first tile sent")
         for t in todo:
             _collect(_render(t))
     elif todo:
@@ -423,6 +425,7 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
         theirs.close()
 
     try:
+        timings.mark("first tile sent")
         for _ in range(n):
             start()
         while live:

@@ -474,3 +474,16 @@ def test_a_unit_in_the_wrong_case_is_suggested(text, unit):
     kind = "attenuation" if "dB" in text else "frequency" if "hz" in text.lower() else "length"
     with pytest.raises(UserError, match=f"did you mean '{re.escape(unit)}'"):
         parse_quantity(text, kind, file="--x")
+
+
+def test_units_import_without_dask_and_dask_still_imports_after():
+    # pint imports Dask (and Jinja2) at its own import when installed: pmmw.units hides it, and
+    # the control (dask imported afterwards) shows it is hidden only while pint is imported
+    import subprocess
+    import sys
+
+    code = ("import sys\nimport pmmw.units as u\n"
+            "print('dask' in sys.modules, 'jinja2' in sys.modules, u.parse_quantity('95 GHz', 'frequency'))\n"
+            "import dask.array\nprint('dask' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "False", "95000000000.0", "True"]

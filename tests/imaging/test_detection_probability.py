@@ -99,3 +99,23 @@ def test_detection_limit_of_an_aperture_sweep_and_its_controls():
     # controls: a target below the criterion everywhere is never detected; above it, always
     assert detection.detection_limit([1.0, 2.0, 3.0], [4.9, 3.0, 1.0])["kind"] == "none"
     assert detection.detection_limit([1.0, 2.0, 3.0], [9.0, 7.0, 5.0])["kind"] == "all"
+
+
+def test_gaussian_tails_are_scipy_stats_to_the_bit():
+    # tolerance: none (array_equal): the same special functions scipy.stats.norm calls, so a
+    # report's probabilities of detection stay the same numbers; edges (0, 1, 0.5, inf, nan) included
+    import numpy as np
+    from scipy.stats import norm
+
+    from pmmw.imaging import detection
+
+    x = np.array([-np.inf, -40.0, -5.0, -0.3, 0.0, 1e-9, 2.5, 5.0, 38.0, np.inf, np.nan])
+    q = np.array([0.0, 1e-300, 1e-12, 2.9e-7, 1e-3, 0.3, 0.5, 0.97, 1.0 - 1e-16, 1.0, np.nan])
+    assert np.array_equal(detection._tail(x), norm.sf(x), equal_nan=True)
+    assert np.array_equal(detection._tail_inverse(q), norm.isf(q), equal_nan=True)
+    snr = np.linspace(0.0, 12.0, 49)
+    for pfa in (1e-3, 2.9e-7, 0.2):
+        assert np.array_equal(detection.probability_of_detection(snr, pfa), norm.sf(norm.isf(pfa) - snr))
+        assert detection.required_snr(0.9, pfa) == float(norm.isf(pfa) - norm.isf(0.9))
+    # control: the tail of -x is another function, so the comparison can fail
+    assert not np.array_equal(detection._tail(-x[1:-1]), norm.sf(x[1:-1]))

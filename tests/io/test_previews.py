@@ -1,6 +1,8 @@
 """Previews a person reads: a colour bar in kelvin, a title, the ideal|sensor pair labelled and
 only when the imager changes something, small images scaled up; `pmmw view` for any channel."""
 
+import json
+
 import numpy as np
 import OpenImageIO as oiio
 from typer.testing import CliRunner
@@ -66,9 +68,37 @@ render: {spp: 1, max_depth: 4, tile: 8, workers: 1}
     assert not list((tmp_path / "a" / "previews").glob("*_ideal_sensor.png"))  # ideal imager: no pair
     spec, _ = _png(tmp_path / "a" / "previews" / "s_I.png")
     assert spec.width >= MIN_DISPLAY_WIDTH
-    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "b"), "-q", "--set", "imager.noise=2 K"])
+    # with output.previews: quick, I alone; by default (true, as "all") every channel and the ideal|sensor pairs
+    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "b"), "-q", "--set", "imager.noise=2 K",
+                              "--set", "output.previews=quick"])
     assert res.exit_code == 0, res.output
-    assert len(list((tmp_path / "b" / "previews").glob("*_ideal_sensor.png"))) == 2
+    assert sorted(p.name for p in (tmp_path / "b" / "previews").iterdir()) == ["s_I.png"]
+    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "c"), "-q", "--set", "imager.noise=2 K"])
+    assert res.exit_code == 0, res.output
+    drawn = sorted(p.name for p in (tmp_path / "c" / "previews").iterdir())
+    assert drawn == sorted([f"s_{c}.png" for c in ("I", "Q", "U", "V", "Ex2", "Ey2")]
+                           + ["s_Ex2_ideal_sensor.png", "s_Ey2_ideal_sensor.png"])
+    report = json.loads((tmp_path / "c" / "report.json").read_text())
+    assert len(report["previews"]) == 6 and len(report["side_by_side"]) == 2
+    assert all("display_low" in report["channels"][c] for c in report["channels"])
+    report = json.loads((tmp_path / "b" / "report.json").read_text())
+    assert list(report["previews"]) == ["I"] and "side_by_side" not in report
+    assert "display_low" in report["channels"]["I"] and "display_low" not in report["channels"]["Q"]
+
+
+def test_the_default_previews_are_every_channel_and_quick_is_i_or_the_first():
+    from types import SimpleNamespace
+
+    from pmmw.pipeline import preview_channels
+
+    def scn(channels, previews):
+        return SimpleNamespace(output=SimpleNamespace(channels=channels, previews=previews))
+
+    assert preview_channels(scn(("I", "Q", "U", "V", "Ex2", "Ey2"), True)) == ("I", "Q", "U", "V", "Ex2", "Ey2")
+    assert preview_channels(scn(("I", "Q", "U", "V", "Ex2", "Ey2"), "quick")) == ("I",)
+    assert preview_channels(scn(("Ey2", "Ex2"), "quick")) == ("Ey2",)
+    assert preview_channels(scn(("Q", "I"), "all")) == ("Q", "I")
+    assert preview_channels(scn(("Q", "I"), False)) == ()
 
 
 def test_view_writes_any_channel(tmp_path):

@@ -1,0 +1,88 @@
+"""What `pmmw render` imports before its first ray: heavy modules that a render needs only after
+its trace (figures, the imager's FFTs, statistics) or only for some scenes (rain tables,
+Dask) are imported where they are used. Checked in a fresh interpreter
+through ``sys.modules``, each with a control that imports the module when its use comes."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: Modules not needed before a render's first ray (each ~0.1-0.5 s to import on 2 cores).
+#: (scipy.ndimage, scipy.spatial, scipy.optimize come with trimesh, which reads the meshes.)
+LATER = ("matplotlib", "xarray", "dask", "jinja2", "scipy.signal", "scipy.stats", "scipy.interpolate")
+
+
+def _loaded(code: str) -> set:
+    out = subprocess.run([sys.executable, "-c", "import sys\n" + code + "\nprint(' '.join(sorted(sys.modules)))"],
+                         capture_output=True, text=True, check=True, cwd=ROOT).stdout.split()
+    return {m for m in LATER if m in out}
+
+
+def test_the_command_line_and_the_pipeline_import_none_of_them():
+    assert _loaded("import pmmw_cli.__main__, pmmw_cli.cli") == set()
+    # everything `pmmw render` imports before it traces: the pipeline, the scenario's schema and
+    # its atmosphere, the scene loader, the tracer and its process pool
+    assert _loaded("import pmmw.pipeline, pmmw.trace.pool, pmmw.atmosphere.model, pmmw.scene.geometry") == set()
+
+
+def test_control_each_comes_when_used():
+    # the imager model (scipy.fft only, not scipy.signal), a figure (matplotlib), a rain table
+    # (scipy.interpolate), the report's detection probability (scipy.special, not scipy.stats)
+    loaded = _loaded("import numpy as np\n"
+                     "from pmmw.io.preview import write_figure\n"
+                     "import tempfile, os\n"
+                     "write_figure(os.path.join(tempfile.mkdtemp(), 'p.png'), [(None, np.eye(4))], title='t')\n"
+                     "from pmmw.atmosphere import itu\n"
+                     "itu.rain_single_scattering_albedo(95e9, 10.0)\n"
+                     "from pmmw.imaging.detection import probability_of_detection\n"
+                     "probability_of_detection(5.0, 1e-3)\n")
+    assert loaded == {"matplotlib", "scipy.interpolate"}
+
+
+def test_render_timings_prints_the_steps_and_phases(tmp_path):
+    """``--timings``: the moments (after the process started, in order) and each phase; without
+    it nothing of the kind (the control)."""
+    from tests.scenes import tiny_scenario
+
+    scn = tiny_scenario(tmp_path)
+    run = [sys.executable, "-m", "pmmw_cli", "render", str(scn), "-q", "--workers", "1", "--out"]
+    res = subprocess.run([*run, str(tmp_path / "a"), "--timings"], capture_output=True, text=True, cwd=ROOT)
+    assert res.returncode == 0, res.stderr
+    lines = res.stderr.split("timings:\n", 1)[1].splitlines()
+    moments = [(line.split(" at ")[0].strip(), float(line.split(" at ")[1].split()[0])) for line in lines
+               if " at " in line]
+    assert [m for m, _ in moments] == ["command started", "pipeline imported", "outputs checked", "kernels loaded",
+                                       "first tile sent", "done"]
+    times = [t for _, t in moments]
+    assert times == sorted(times) and 0.0 < times[0]
+    phases = {line.rsplit(None, 2)[0].strip() for line in lines if " at " not in line}
+    assert {"resolve", "trace", "imager model", "EXR", "previews", "report", "after the trace, together"} <= phases
+    res = subprocess.run([*run, str(tmp_path / "b")], capture_output=True, text=True, cwd=ROOT)
+    assert res.returncode == 0 and "timings:" not in res.stderr
+
+
+def test_seconds_since_the_process_started():
+    # a process that slept 0.3 s has been running at least that long (a clock tick of 10 ms is
+    # the resolution: margin 0.02 s), and not minutes (the control that the start is its own)
+    code = "import time\ntime.sleep(0.3)\nfrom pmmw import timings\nprint(timings._since_start())\n"
+    ago = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                               cwd=ROOT).stdout)
+    assert 0.28 <= ago < 30.0
+
+
+def test_marks_once_and_phases_add_up():
+    from pmmw import timings
+
+    timings.clear()
+    timings.mark("a")
+    timings.mark("a")  # a second frequency's first tile: the first one counts
+    for _ in range(2):
+        with timings.phase("EXR"):
+            pass
+    marks, phases = timings.recorded()
+    assert [m for m, _ in marks] == ["a"] and list(phases) == ["EXR"]
+    assert any(line.startswith("after the trace, together") for line in timings.lines())
+    timings.clear()
+    assert timings.recorded() == ([], {})
