@@ -38,10 +38,12 @@ render: install
 test: install-test
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
 
-# ruff's rules of pyproject.toml ([tool.ruff]): pyflakes, pycodestyle's errors, import order; mypy on
+# ruff's rules of pyproject.toml ([tool.ruff]): pyflakes, pycodestyle's errors, import order; ruff's
+# formatting (line length 120, checked, `ruff format` applies it); mypy on
 # the pure-numerics modules ([tool.mypy])
 lint: install-test
 	$(BIN)/ruff check pmmw pmmw_cli tests examples scenes docs
+	$(BIN)/ruff format --check pmmw pmmw_cli tests examples scenes docs
 	$(BIN)/mypy
 
 # also the longest convergence renders of the shipped configs (about 2.5 minutes more)

@@ -38,38 +38,67 @@ def _page(script: Path) -> str:
     title, _, rest = doc.partition("\n")
     lines = [f"# {title.rstrip('.')}", "", rest.strip(), ""]
     if not RUN:
-        lines += ["!!! note \"Not run in this build (PMMW_GALLERY=skip)\"", ""]
+        lines += ['!!! note "Not run in this build (PMMW_GALLERY=skip)"', ""]
     else:
         with tempfile.TemporaryDirectory(prefix=f"pmmw-gallery-{name}-") as tmp:
-            env = dict(os.environ, PMMW_EXAMPLE_SCALE=SCALE, MPLBACKEND="Agg",
-                       PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]).rstrip(os.pathsep))
+            env = dict(
+                os.environ,
+                PMMW_EXAMPLE_SCALE=SCALE,
+                MPLBACKEND="Agg",
+                PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]).rstrip(os.pathsep),
+            )
             t0 = time.perf_counter()
-            run = subprocess.run([sys.executable, str(script), tmp], cwd=ROOT, env=env, capture_output=True,
-                                 text=True, timeout=TIMEOUT)
+            run = subprocess.run(
+                [sys.executable, str(script), tmp], cwd=ROOT, env=env, capture_output=True, text=True, timeout=TIMEOUT
+            )
             seconds = time.perf_counter() - t0
             if run.returncode != 0:
                 raise RuntimeError(f"examples/{script.name} failed (exit {run.returncode}):\n{run.stderr[-3000:]}")
-            lines += [f"Run when the site was built, with `PMMW_EXAMPLE_SCALE={SCALE}` (a fraction of the "
-                      f"pixels per side, so its numbers are only indicative), in {seconds:.0f} s:", "",
-                      "```text", run.stdout.strip().replace(tmp, "OUT_DIR"), "```", ""]
+            lines += [
+                f"Run when the site was built, with `PMMW_EXAMPLE_SCALE={SCALE}` (a fraction of the "
+                f"pixels per side, so its numbers are only indicative), in {seconds:.0f} s:",
+                "",
+                "```text",
+                run.stdout.strip().replace(tmp, "OUT_DIR"),
+                "```",
+                "",
+            ]
             for png in sorted(Path(tmp).glob("*.png")):  # the script's figures (not its renders' previews)
                 rel = png.name
                 with mkdocs_gen_files.open(f"gallery/{name}/{rel}", "wb") as f:
                     f.write(png.read_bytes())
                 lines += [f"![{rel}]({name}/{rel})", ""]
     if script.name in FULL:
-        lines += ["A full run (`python examples/" + script.name + "`, every pixel), committed with the documentation:",
-                  "", f"![{name}, full run](../{FULL[script.name]})", ""]
-    lines += ["## The script", "", f"`examples/{script.name}`:", "", "```python", script.read_text().rstrip(), "```", ""]
+        lines += [
+            "A full run (`python examples/" + script.name + "`, every pixel), committed with the documentation:",
+            "",
+            f"![{name}, full run](../{FULL[script.name]})",
+            "",
+        ]
+    lines += [
+        "## The script",
+        "",
+        f"`examples/{script.name}`:",
+        "",
+        "```python",
+        script.read_text().rstrip(),
+        "```",
+        "",
+    ]
     return "\n".join(lines)
 
 
 def main() -> None:
     scripts = sorted((ROOT / "examples").glob("*.py"))
-    index = ["# Gallery", "",
-             "The `examples/` scripts, each run with the Python API as a user runs it. The figures are made "
-             "when the site is built (`make docs`), at a reduced size.", "",
-             "| example | what |", "| --- | --- |"]
+    index = [
+        "# Gallery",
+        "",
+        "The `examples/` scripts, each run with the Python API as a user runs it. The figures are made "
+        "when the site is built (`make docs`), at a reduced size.",
+        "",
+        "| example | what |",
+        "| --- | --- |",
+    ]
     for script in scripts:
         text = _page(script)
         with mkdocs_gen_files.open(f"gallery/{script.stem}.md", "w") as f:

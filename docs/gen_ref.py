@@ -33,8 +33,7 @@ try:
 except ImportError:  # run alone: print instead of writing into the site
     mkdocs_gen_files = None
 
-GENERATED = ("This page is generated from the code at each build (`docs/gen_ref.py`); edit the code, "
-             "not the page.\n\n")
+GENERATED = "This page is generated from the code at each build (`docs/gen_ref.py`); edit the code, not the page.\n\n"
 
 
 def _write(name: str, text: str) -> None:
@@ -54,6 +53,7 @@ def _cell(text) -> str:
 # -- commands -------------------------------------------------------------------------------------
 # typer's click objects (typer may carry its own copy of click: parameters are told apart by their
 # ``param_type_name``, groups by their ``commands``)
+
 
 def _command_section(cmd, path: list[str], level: int) -> list[str]:
     """One command's heading, help, usage and a table of its parameters as ``--help`` prints them."""
@@ -84,18 +84,26 @@ def cli_page() -> str:
     from pmmw_cli.cli import app
 
     root = typer.main.get_command(app)
-    lines = ["# Commands", "", GENERATED.strip(), "",
-             f"{inspect.cleandoc(root.help or '')}", "",
-             "Every command prints a user error as one line `error: FILE: KEY: message` and exits with "
-             "status 2; a problem of the machine (disk full, a lock held) exits with 1; an interrupt with "
-             "128 + the signal's number ([reliability](../guide/reliability.md)). `pmmw COMMAND --help` "
-             "prints the same options as below.", ""]
+    lines = [
+        "# Commands",
+        "",
+        GENERATED.strip(),
+        "",
+        f"{inspect.cleandoc(root.help or '')}",
+        "",
+        "Every command prints a user error as one line `error: FILE: KEY: message` and exits with "
+        "status 2; a problem of the machine (disk full, a lock held) exits with 1; an interrupt with "
+        "128 + the signal's number ([reliability](../guide/reliability.md)). `pmmw COMMAND --help` "
+        "prints the same options as below.",
+        "",
+    ]
     for name, cmd in sorted(root.commands.items()):
         lines += _command_section(cmd, ["pmmw", name], 2)
     return "\n".join(lines) + "\n"
 
 
 # -- scenario keys --------------------------------------------------------------------------------
+
 
 def _field_comments(cls) -> dict[str, str]:
     """field name -> the comment beside (or the comment lines just above) its line in the source."""
@@ -138,8 +146,15 @@ def _type_name(tp) -> str:
     if origin is dict:
         return f"mapping {_type_name(args[0])} → {_type_name(args[1])}"
     if isinstance(tp, type):
-        return {"str": "text", "int": "integer", "float": "number", "bool": "boolean", "PosixPath": "path",
-                "Path": "path", "Any": "any"}.get(tp.__name__, tp.__name__)
+        return {
+            "str": "text",
+            "int": "integer",
+            "float": "number",
+            "bool": "boolean",
+            "PosixPath": "path",
+            "Path": "path",
+            "Any": "any",
+        }.get(tp.__name__, tp.__name__)
     return str(tp).replace("typing.", "")
 
 
@@ -165,6 +180,7 @@ def _default_text(field, unit: str) -> str:
     if d is None:
         return ""
     from pydantic import BaseModel
+
     if isinstance(d, BaseModel):
         return "see below"
     if isinstance(d, float) and "[rad]" in unit:
@@ -200,8 +216,10 @@ def _keys(model, prefix: str, rows: list, seen: set) -> None:
         unit = _unit(field)
         sub = _model_of(field.annotation)
         tname = _type_name(field.annotation)
-        rows.append(f"| `{path}` | {_cell(tname)} | {_cell(unit)} | {_cell(_default_text(field, unit))} | "
-                    f"{_cell(comments.get(name, ''))} |")
+        rows.append(
+            f"| `{path}` | {_cell(tname)} | {_cell(unit)} | {_cell(_default_text(field, unit))} | "
+            f"{_cell(comments.get(name, ''))} |"
+        )
         if sub is not None and sub not in seen:
             seen.add(sub)
             origin = typing.get_origin(field.annotation)
@@ -220,28 +238,41 @@ def scenario_page() -> str:
     rows = ["| key | type | unit | default | note |", "| --- | --- | --- | --- | --- |"]
     _keys(schema.ScenarioConfig, "", rows, {schema.ScenarioConfig})
     lo, hi = schema.FREQUENCY_RANGE
-    return "\n".join([
-        "# Scenario keys", "", GENERATED.strip(), "",
-        "Every key of a scenario file, from the schema that validates it (`pmmw.config.schema`). "
-        "The [scenario guide](../guide/scenario.md) explains them with examples. A quantity is a "
-        "number or a unit string (`'95 GHz'`, `'0.8 mm'`, `'10 deg'`, `'20 degC'`); *unit* gives the "
-        "unit pmmw stores it in and the unit a bare number is taken in. `[i]` is an item of a list, "
-        "`NAME` a key of your choosing. An unknown key is an error that names it.", "",
-        f"Frequencies lie within {lo / 1e9:g}-{hi / 1e9:g} GHz (the atmosphere models' range); an image "
-        f"side is at most {schema.MAX_SIDE} pixels and {schema.MAX_PIXELS // (1 << 20)} Mpx in all.", "",
-        *rows, "",
-        "Material entries under `materials:` (a scenario's own materials, or overrides of the database's) "
-        "take the keys of a database entry: see [Materials](materials.md).", ""])
+    return "\n".join(
+        [
+            "# Scenario keys",
+            "",
+            GENERATED.strip(),
+            "",
+            "Every key of a scenario file, from the schema that validates it (`pmmw.config.schema`). "
+            "The [scenario guide](../guide/scenario.md) explains them with examples. A quantity is a "
+            "number or a unit string (`'95 GHz'`, `'0.8 mm'`, `'10 deg'`, `'20 degC'`); *unit* gives the "
+            "unit pmmw stores it in and the unit a bare number is taken in. `[i]` is an item of a list, "
+            "`NAME` a key of your choosing. An unknown key is an error that names it.",
+            "",
+            f"Frequencies lie within {lo / 1e9:g}-{hi / 1e9:g} GHz (the atmosphere models' range); an image "
+            f"side is at most {schema.MAX_SIDE} pixels and {schema.MAX_PIXELS // (1 << 20)} Mpx in all.",
+            "",
+            *rows,
+            "",
+            "Material entries under `materials:` (a scenario's own materials, or overrides of the database's) "
+            "take the keys of a database entry: see [Materials](materials.md).",
+            "",
+        ]
+    )
 
 
 # -- materials ------------------------------------------------------------------------------------
+
 
 def materials_page() -> str:
     from pmmw.scene.materials import MaterialDB
 
     db = MaterialDB.load()
-    rows = ["| id | name | kind | permittivity | valid range | temperature | source |",
-            "| --- | --- | --- | --- | --- | --- | --- |"]
+    rows = [
+        "| id | name | kind | permittivity | valid range | temperature | source |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
     for mid in db.ids():
         m = db.get(mid)
         if m.model is not None:
@@ -252,12 +283,16 @@ def materials_page() -> str:
                 rng = spec.ranges(m.model.params) if spec.ranges else None
             except Exception:  # a range text is only shown; the entry itself loaded
                 rng = None
-            rng = rng or (f"{spec.f_range[0] / 1e9:g}-{spec.f_range[1] / 1e9:g} GHz, "
-                          f"{spec.t_range[0]:g}-{spec.t_range[1]:g} K")
+            rng = rng or (
+                f"{spec.f_range[0] / 1e9:g}-{spec.f_range[1] / 1e9:g} GHz, {spec.t_range[0]:g}-{spec.t_range[1]:g} K"
+            )
         elif m.freqs:
             eps = "table: " + "; ".join(f"{f / 1e9:g} GHz: {e.real:.4g}{e.imag:+.3g}j" for f, e in zip(m.freqs, m.eps))
-            rng = (f"{min(m.freqs) / 1e9:g}-{max(m.freqs) / 1e9:g} GHz (tabulated)" if len(m.freqs) > 1
-                   else f"{m.freqs[0] / 1e9:g} GHz")
+            rng = (
+                f"{min(m.freqs) / 1e9:g}-{max(m.freqs) / 1e9:g} GHz (tabulated)"
+                if len(m.freqs) > 1
+                else f"{m.freqs[0] / 1e9:g} GHz"
+            )
         else:
             eps, rng = ("perfect conductor" if m.kind == "opaque" else "—"), "any"
         if m.coating:
@@ -265,19 +300,29 @@ def materials_page() -> str:
         if m.roughness is not None:
             eps += "; rough"
         temp = f"{m.temperature:g} K" if m.temperature is not None else "scene"
-        rows.append(f"| `{mid}` | {_cell(m.name)} | {m.kind} | {_cell(eps)} | {_cell(rng)} | {temp} | "
-                    f"{_cell(m.source)} |")
-    return "\n".join([
-        "# Materials", "", GENERATED.strip(), "",
-        f"The {len(db)} materials of the shipped database (`materials/*.yaml`), as `pmmw materials list` "
-        "shows them; `pmmw materials show ID --plot eps.png` draws one against frequency. A scenario "
-        "names them by id; [the materials guide](../guide/materials.md) tells how a mesh's material "
-        "names map to ids and how to add your own; [Material data](../materials.md) discusses the "
-        "sources. Outside a material's valid range its value is still computed, with a warning.", "",
-        *rows, ""])
+        rows.append(
+            f"| `{mid}` | {_cell(m.name)} | {m.kind} | {_cell(eps)} | {_cell(rng)} | {temp} | {_cell(m.source)} |"
+        )
+    return "\n".join(
+        [
+            "# Materials",
+            "",
+            GENERATED.strip(),
+            "",
+            f"The {len(db)} materials of the shipped database (`materials/*.yaml`), as `pmmw materials list` "
+            "shows them; `pmmw materials show ID --plot eps.png` draws one against frequency. A scenario "
+            "names them by id; [the materials guide](../guide/materials.md) tells how a mesh's material "
+            "names map to ids and how to add your own; [Material data](../materials.md) discusses the "
+            "sources. Outside a material's valid range its value is still computed, with a warning.",
+            "",
+            *rows,
+            "",
+        ]
+    )
 
 
 # -- registries -----------------------------------------------------------------------------------
+
 
 def _first_paragraph(obj) -> str:
     doc = inspect.getdoc(obj) or ""
@@ -288,40 +333,70 @@ def models_page() -> str:
     from pmmw.physics import roughness
     from pmmw.scene import dielectric, sky
 
-    out = ["# Models", "", GENERATED.strip(), "",
-           "The models each registry offers, by the name a scenario or material file gives.", "",
-           "## Roughness models", "",
-           "Chosen by `roughness: {model: NAME, ...}` in a material (or a `pmmw brdf` stack layer); see "
-           "[rough surfaces](../guide/rough-surfaces.md) and [the BRDF notes](../brdf.md). Registry: "
-           "`pmmw.physics.roughness.REGISTRY`.", "",
-           "| model | parameters (range, default) | what |", "| --- | --- | --- |"]
+    out = [
+        "# Models",
+        "",
+        GENERATED.strip(),
+        "",
+        "The models each registry offers, by the name a scenario or material file gives.",
+        "",
+        "## Roughness models",
+        "",
+        "Chosen by `roughness: {model: NAME, ...}` in a material (or a `pmmw brdf` stack layer); see "
+        "[rough surfaces](../guide/rough-surfaces.md) and [the BRDF notes](../brdf.md). Registry: "
+        "`pmmw.physics.roughness.REGISTRY`.",
+        "",
+        "| model | parameters (range, default) | what |",
+        "| --- | --- | --- |",
+    ]
     for name, ctor in roughness.REGISTRY.items():
         params = []
         for p, (lo, incl, hi, default, what) in roughness.PARAMETERS.get(name, {}).items():
             bound = f"{'≥' if incl else '>'} {lo:g}" + (f", ≤ {hi:g}" if hi is not None else "")
-            d = "required" if default is roughness._REQUIRED else ("optional" if default is None
-                                                                   else f"default {default:g}")
+            d = (
+                "required"
+                if default is roughness._REQUIRED
+                else ("optional" if default is None else f"default {default:g}")
+            )
             params.append(f"`{p}`: {what} ({bound}; {d})")
         cell = "<br>".join(_cell(p) for p in params)
         out.append(f"| `{name}` | {cell} | {_cell(_first_paragraph(ctor))} |")
-    out += ["", "## Sky models", "",
-            "Chosen by `sky: {model: NAME}`; see [atmosphere and sky](../guide/atmosphere.md). Registry: "
-            "`pmmw.scene.sky.SKY_MODELS`.", "",
-            "| model | what |", "| --- | --- |"]
-    classes = {"uniform": sky.UniformSky, "slab": sky.SlabSky, "atmosphere": sky.AtmosphereSky,
-               "texture": sky.TextureSky}
+    out += [
+        "",
+        "## Sky models",
+        "",
+        "Chosen by `sky: {model: NAME}`; see [atmosphere and sky](../guide/atmosphere.md). Registry: "
+        "`pmmw.scene.sky.SKY_MODELS`.",
+        "",
+        "| model | what |",
+        "| --- | --- |",
+    ]
+    classes = {
+        "uniform": sky.UniformSky,
+        "slab": sky.SlabSky,
+        "atmosphere": sky.AtmosphereSky,
+        "texture": sky.TextureSky,
+    }
     for name in sky.SKY_MODELS:
         out.append(f"| `{name}` | {_cell(_first_paragraph(classes.get(name, sky.SKY_MODELS[name])))} |")
-    out += ["", "## Permittivity models", "",
-            "Chosen by `model: {name: NAME, ...}` in a material entry; see [the materials guide]"
-            "(../guide/materials.md). Registry: `pmmw.scene.dielectric.MODELS`.", "",
-            "| model | parameters | frequency range | temperature range | source |",
-            "| --- | --- | --- | --- | --- |"]
+    out += [
+        "",
+        "## Permittivity models",
+        "",
+        "Chosen by `model: {name: NAME, ...}` in a material entry; see [the materials guide]"
+        "(../guide/materials.md). Registry: `pmmw.scene.dielectric.MODELS`.",
+        "",
+        "| model | parameters | frequency range | temperature range | source |",
+        "| --- | --- | --- | --- | --- |",
+    ]
     for name, ms in dielectric.MODELS.items():
-        params = ", ".join([f"`{p}`" for p in ms.params] + [f"`{p}` (optional)" for p in ms.optional
-                                                            if p not in ms.params])
-        out.append(f"| `{name}` | {params or '—'} | {ms.f_range[0] / 1e9:g}-{ms.f_range[1] / 1e9:g} GHz | "
-                   f"{ms.t_range[0]:g}-{ms.t_range[1]:g} K | {_cell(ms.source)} |")
+        params = ", ".join(
+            [f"`{p}`" for p in ms.params] + [f"`{p}` (optional)" for p in ms.optional if p not in ms.params]
+        )
+        out.append(
+            f"| `{name}` | {params or '—'} | {ms.f_range[0] / 1e9:g}-{ms.f_range[1] / 1e9:g} GHz | "
+            f"{ms.t_range[0]:g}-{ms.t_range[1]:g} K | {_cell(ms.source)} |"
+        )
     return "\n".join(out) + "\n"
 
 
@@ -346,10 +421,17 @@ API_MODULES = [
 
 
 def api_pages() -> list[tuple[str, str]]:
-    index = ["# Python API", "", GENERATED.strip(), "",
-             "From the docstrings (numpydoc), read without importing the modules. The "
-             "[Python API guide](../../guide/python-api.md) shows the API at work.", "",
-             "| module | |", "| --- | --- |"]
+    index = [
+        "# Python API",
+        "",
+        GENERATED.strip(),
+        "",
+        "From the docstrings (numpydoc), read without importing the modules. The "
+        "[Python API guide](../../guide/python-api.md) shows the API at work.",
+        "",
+        "| module | |",
+        "| --- | --- |",
+    ]
     pages = []
     for mod, what in API_MODULES:
         index.append(f"| [`{mod}`]({mod}.md) | {what} |")
@@ -358,6 +440,7 @@ def api_pages() -> list[tuple[str, str]]:
 
 
 # -- changelog ------------------------------------------------------------------------------------
+
 
 def changelog_page() -> str:
     text = (ROOT / "CHANGELOG.md").read_text()

@@ -39,7 +39,7 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
         if path is None:
             if uri in SOURCES:  # a page from outside docs/ linking into it: the link from where the page is
                 file, _, anchor = target.partition("#")
-                inside = posixpath.normpath(posixpath.join(SOURCES[uri], file))[len("docs/"):]
+                inside = posixpath.normpath(posixpath.join(SOURCES[uri], file))[len("docs/") :]
                 rel = posixpath.relpath(inside, posixpath.dirname(uri) or ".")
                 return f"[{text}]({rel}{'#' + anchor if anchor else ''})"
             return m.group(0)

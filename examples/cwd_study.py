@@ -34,26 +34,41 @@ out = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "out" / "examples"
 
 SCALE = float(os.environ.get("PMMW_EXAMPLE_SCALE", "1"))  # of the pixels per side
 base = pmmw.Scenario.load(ROOT / "configs" / "cwd_outdoor_95ghz.yaml").set(
-    {"imager.resolution": [max(16, round(220 * SCALE)), max(16, round(370 * SCALE))],
-     "output.regions.gun.radius": max(1.0, 2 * SCALE), "output.regions.torso.radius": max(1.0, 2 * SCALE)})
+    {
+        "imager.resolution": [max(16, round(220 * SCALE)), max(16, round(370 * SCALE))],
+        "output.regions.gun.radius": max(1.0, 2 * SCALE),
+        "output.regions.torso.radius": max(1.0, 2 * SCALE),
+    }
+)
 # view: distance to the man [m], imager position, look-at point [m], field of view
-views = {"4 m": (4, [0, -4, 1.5], [0, 0, 0.9], "18.1 deg"),
-         "8 m": (8, [0, -8, 1.5], [0, 0, 0.9], "9.1 deg"),
-         # the grip, at [0.165, -0.2, 1.25], seen from 8 m along the 4 m view's line of sight
-         "8 m high": (8, [-0.165, -7.8, 1.75], [-0.165, -3.8, 1.15], "9.1 deg")}
+views = {
+    "4 m": (4, [0, -4, 1.5], [0, 0, 0.9], "18.1 deg"),
+    "8 m": (8, [0, -8, 1.5], [0, 0, 0.9], "9.1 deg"),
+    # the grip, at [0.165, -0.2, 1.25], seen from 8 m along the 4 m view's line of sight
+    "8 m high": (8, [-0.165, -7.8, 1.75], [-0.165, -3.8, 1.15], "9.1 deg"),
+}
 
 PAIR = "gun - torso"
 images = {}  # (view, frequency [GHz]) -> (channel, image [K], SNR)
 lines = ["view,distance_m,frequency_GHz,channel,gun_minus_torso_K,snr,snr_stderr,detectable"]
 for view, (dist, position, look_at, fov) in views.items():
-    ds = pmmw.render(base.set({"imager.position": position, "imager.look_at": look_at, "imager.fov": fov,
-                               "frequency": ["35 GHz", "95 GHz"]}))
+    ds = pmmw.render(
+        base.set(
+            {
+                "imager.position": position,
+                "imager.look_at": look_at,
+                "imager.fov": fov,
+                "frequency": ["35 GHz", "95 GHz"],
+            }
+        )
+    )
     for f in ds.frequency.values:
         report = pmmw.regions(ds)[f"{f / 1e9:g} GHz"]
         chan = report["channel"]  # the channel the reports lead with (Ey2)
         c = report["contrasts"][PAIR][chan]
-        lines.append(f"{view},{dist},{f / 1e9:g},{chan},{c['K']:.3f},{c['snr']:.3f},{c['snr_stderr']:.3f},"
-                     f"{c['detectable']}")
+        lines.append(
+            f"{view},{dist},{f / 1e9:g},{chan},{c['K']:.3f},{c['snr']:.3f},{c['snr_stderr']:.3f},{c['detectable']}"
+        )
         images[(view, f / 1e9)] = (chan, ds[chan].sel(frequency=f), c["snr"])
         print(f"{view}, {f / 1e9:g} GHz: {PAIR} {c['K']:+.2f} K in {chan}; {report['verdicts'][PAIR]}")
 out.mkdir(parents=True, exist_ok=True)

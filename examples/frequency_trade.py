@@ -67,14 +67,24 @@ for ax, (title, (stem, pair)) in zip(axes, STUDIES.items()):
     for suffix, how, style in (("", "fixed", "o-"), ("_scaled", "scaled with the wavelength", "s--")):
         spec = yaml.safe_load((ROOT / "configs" / f"{stem}{suffix}.yaml").read_text())
         scenario = ROOT / "configs" / spec["scenario"]
-        table = pmmw.sweep(scenario, scaled(spec["grid"], scenario), out=out / f"{stem}{suffix}",
-                           zip=spec.get("zip", False), resume=True)
+        table = pmmw.sweep(
+            scenario,
+            scaled(spec["grid"], scenario),
+            out=out / f"{stem}{suffix}",
+            zip=spec.get("zip", False),
+            resume=True,
+        )
         snr_col = next(c for c in table.columns if c.startswith(f"snr {pair} "))
         channel = snr_col.rsplit(" ", 1)[1]
         freqs = [float(str(f).split()[0]) for f in table["frequency"]]
         apertures = table["imager.aperture_diameter"] if "imager.aperture_diameter" in table else [None] * len(freqs)
-        for f, a, k, snr, det in zip(freqs, apertures, table[f"contrast {pair} {channel} [K]"], table[snr_col],
-                                     table[f"detectable {pair} {channel}"]):
+        for f, a, k, snr, det in zip(
+            freqs,
+            apertures,
+            table[f"contrast {pair} {channel} [K]"],
+            table[snr_col],
+            table[f"detectable {pair} {channel}"],
+        ):
             rows.append(f"{stem},{how},{f:g},{a if a is not None else ''},{channel},{k:.3f},{snr:.2f},{det}")
         ax.plot(freqs, table[snr_col], style, label=f"aperture {how}")
     ax.axhline(5.0, color="k", lw=0.8, ls=":", label="detection threshold (SNR 5)")

@@ -30,8 +30,9 @@ out = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "out" / "examples"
 
 SCALE = float(os.environ.get("PMMW_EXAMPLE_SCALE", "1"))  # of the pixels per side
 side = max(16, round(500 * SCALE))
-base = pmmw.Scenario.load(ROOT / "configs" / "landing_95ghz.yaml").set({"atmosphere.layers": [],
-                                                                       "imager.resolution": [side, side]})
+base = pmmw.Scenario.load(ROOT / "configs" / "landing_95ghz.yaml").set(
+    {"atmosphere.layers": [], "imager.resolution": [side, side]}
+)
 ranges = {2000: ([0, -1995.13, 139.52], 1), 500: ([0, -498.78, 34.88], 3)}  # position [m], beacon radius [px]
 PAIR = "beacon - runway"
 
@@ -39,8 +40,10 @@ rows, verdicts, images = [], [], {}
 for rng, (position, radius) in ranges.items():
     # the regions set here, not taken from the config (whose beacon box fits its own 1000 m view):
     # the middle beacon across the threshold, a circle of `radius` pixels around it, and the runway
-    regions = {"beacon": {"center": [0, -2.36, 0.41], "radius": max(1.0, radius * SCALE)},
-               "runway": {"center": [0, 40, 0.02], "radius": max(1.0, 3 * SCALE)}}
+    regions = {
+        "beacon": {"center": [0, -2.36, 0.41], "radius": max(1.0, radius * SCALE)},
+        "runway": {"center": [0, 40, 0.02], "radius": max(1.0, 3 * SCALE)},
+    }
     scn = base.set({"imager.position": position, "output.regions": regions, "frequency": ["35 GHz", "95 GHz"]})
     ds = pmmw.render(scn)  # one Dataset, both frequencies
     for f in ds.frequency.values:

@@ -30,8 +30,23 @@ __version__ = "0.1.0"
 _API = {"Scenario", "render", "load", "LoadedScene", "regions", "validate", "sky", "brdf", "po", "sweep"}
 _ERRORS = {"EnvironmentProblem", "PmmwWarning", "UserError", "UserErrors"}
 
-__all__ = ["Scenario", "render", "load", "LoadedScene", "regions", "validate", "sky", "brdf", "po", "sweep",
-           "UserError", "UserErrors", "EnvironmentProblem", "PmmwWarning", "__version__"]
+__all__ = [
+    "Scenario",
+    "render",
+    "load",
+    "LoadedScene",
+    "regions",
+    "validate",
+    "sky",
+    "brdf",
+    "po",
+    "sweep",
+    "UserError",
+    "UserErrors",
+    "EnvironmentProblem",
+    "PmmwWarning",
+    "__version__",
+]
 
 
 def __getattr__(name: str):

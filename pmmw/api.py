@@ -54,6 +54,7 @@ __all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "load
 
 # -- arguments ----------------------------------------------------------------------------------
 
+
 def _api(name: str):
     """The checks every public function shares: its arguments bound to its signature (an unknown,
     missing, extra or repeated one is a `UserError` naming it), numpy values turned into Python
@@ -95,8 +96,11 @@ def _binding_error(where: str, sig: inspect.Signature, args, kwargs) -> UserErro
     params = {n: p for n, p in sig.parameters.items() if n not in ("cls", "self")}
     named = [n for n, p in params.items() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
     takes = f"{where} takes {', '.join(named)}"
-    positional = [n for n in named if params[n].kind in (inspect.Parameter.POSITIONAL_ONLY,
-                                                          inspect.Parameter.POSITIONAL_OR_KEYWORD)]
+    positional = [
+        n
+        for n in named
+        if params[n].kind in (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    ]
     n_args = len(args) - (len(sig.parameters) > len(params))  # the bound cls or self
     if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
         for k in kwargs:
@@ -106,14 +110,22 @@ def _binding_error(where: str, sig: inspect.Signature, args, kwargs) -> UserErro
                 return UserError(f"unknown argument{hint} ({takes})", where, k)
     if n_args > len(positional):
         rest = [n for n in named if n not in positional]
-        return UserError(f"takes {len(positional)} positional argument(s) ({', '.join(positional)}); give "
-                         f"{', '.join(rest)} by keyword, e.g. {rest[0] if rest else 'name'}=...", where,
-                         rest[0] if rest else None)
+        return UserError(
+            f"takes {len(positional)} positional argument(s) ({', '.join(positional)}); give "
+            f"{', '.join(rest)} by keyword, e.g. {rest[0] if rest else 'name'}=...",
+            where,
+            rest[0] if rest else None,
+        )
     for n in positional[:n_args]:
         if n in kwargs:
             return UserError("given twice, by position and by keyword", where, n)
-    missing = [n for n in named if params[n].default is inspect.Parameter.empty
-               and n not in kwargs and not (n in positional and positional.index(n) < n_args)]
+    missing = [
+        n
+        for n in named
+        if params[n].default is inspect.Parameter.empty
+        and n not in kwargs
+        and not (n in positional and positional.index(n) < n_args)
+    ]
     return UserError(f"missing argument ({takes})", where, missing[0] if missing else None)
 
 
@@ -185,8 +197,11 @@ def _path(where, name, v, optional=False):
     if not isinstance(v, (str, os.PathLike)) or isinstance(os.fspath(v), bytes):
         raise UserError(f"expected a path (str or pathlib.Path), got {_kind(v)}", where, name)
     if not os.fspath(v).strip():
-        raise UserError("an empty path names no file or folder (it would mean the current folder); give one, "
-                        "e.g. 'out/run' or '.'", where, name)
+        raise UserError(
+            "an empty path names no file or folder (it would mean the current folder); give one, e.g. 'out/run' or '.'",
+            where,
+            name,
+        )
     why = path_problem(v)
     if why:
         raise UserError(f"{why}: {shown(v)}", where, name)
@@ -222,12 +237,14 @@ class Scenario:
         texture) resolve against ``base_dir``."""
         where = "pmmw.Scenario.from_dict"
         if not isinstance(data, Mapping):
-            raise UserError(f"a scenario is a dict of keys (name, frequency, imager, scene, ...), got {_kind(data)}",
-                            where, "data")
+            raise UserError(
+                f"a scenario is a dict of keys (name, frequency, imager, scene, ...), got {_kind(data)}", where, "data"
+            )
         bad = [k for k in data if not isinstance(k, str)]
         if bad:
-            raise UserError(f"the keys of a scenario are str (name, frequency, imager, ...), got {bad[0]!r}", where,
-                            "data")
+            raise UserError(
+                f"the keys of a scenario are str (name, frequency, imager, ...), got {bad[0]!r}", where, "data"
+            )
         return cls(copy.deepcopy(dict(data)), _path(where, "base_dir", base_dir).resolve() / "<scenario dict>.yaml")
 
     @_api("Scenario.set")
@@ -238,16 +255,20 @@ class Scenario:
 
         where = "pmmw.Scenario.set"
         if values is not None and not isinstance(values, Mapping):
-            raise UserError(f"expected a dict of dotted key paths and values, e.g. {{'imager.noise': '2 K'}}, got "
-                            f"{_kind(values)}", where, "values")
-        for key in (values or {}):
+            raise UserError(
+                f"expected a dict of dotted key paths and values, e.g. {{'imager.noise': '2 K'}}, got {_kind(values)}",
+                where,
+                "values",
+            )
+        for key in values or {}:
             if not isinstance(key, str):
                 raise UserError(f"a key is a dotted key path (str) like 'imager.noise', got {key!r}", where, "values")
             try:
                 _split_key(key)
             except ValueError:
-                raise UserError(f"malformed key path {key!r}; expected e.g. 'imager.noise' or 'scene[0].material'",
-                                where, "values") from None
+                raise UserError(
+                    f"malformed key path {key!r}; expected e.g. 'imager.noise' or 'scene[0].material'", where, "values"
+                ) from None
         return replace(self, values={**self.values, **(values or {}), **keys})
 
     def resolved(self):
@@ -291,8 +312,15 @@ def validate(scenario) -> dict:
 
 
 @_api("render")
-def render(scenario, *, spp: int | None = None, workers: int | None = None, seed: int | None = None,
-           out=None, quiet: bool = True):
+def render(
+    scenario,
+    *,
+    spp: int | None = None,
+    workers: int | None = None,
+    seed: int | None = None,
+    out=None,
+    quiet: bool = True,
+):
     """Render a scenario; returns an `xarray.Dataset`.
 
     Parameters
@@ -318,8 +346,11 @@ def render(scenario, *, spp: int | None = None, workers: int | None = None, seed
 
     where = "pmmw.render"
     s = _scenario(scenario, where)
-    spp, workers, seed = (_integer(where, "spp", spp, 1), _integer(where, "workers", workers, 1),
-                          _integer(where, "seed", seed, 0))
+    spp, workers, seed = (
+        _integer(where, "spp", spp, 1),
+        _integer(where, "workers", workers, 1),
+        _integer(where, "seed", seed, 0),
+    )
     out, quiet = _path(where, "out", out, optional=True), _flag(where, "quiet", quiet)
     cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed)) if v is not None}
     if out is not None:
@@ -357,8 +388,9 @@ def _render_resolved(res, quiet: bool, earlier_warnings=()):
         images = pipeline.frequency_images(scn, f, job, img, shash)
         per_f.append((f, images["channels"], images["attrs"]))
         if scn.output.regions:
-            regions[f"{f / 1e9:g} GHz"] = pipeline.region_stats(scn, job.camera, images["sensor"], img, images["kernel"],
-                                                                 noise_maps=images["noise_maps"])
+            regions[f"{f / 1e9:g} GHz"] = pipeline.region_stats(
+                scn, job.camera, images["sensor"], img, images["kernel"], noise_maps=images["noise_maps"]
+            )
     ds = _dataset(per_f, regions)
     warnings = list(dict.fromkeys([*earlier_warnings, *pipeline.collected_warnings()]))
     ds.attrs["warnings"] = "\n".join(warnings)  # text: netCDF attributes hold no lists of text
@@ -384,9 +416,14 @@ def _dataset(per_f, regions):
     h, w = per_f[0][1][names[0]].shape
     from pmmw.pipeline import channel_quantity
 
-    data = {c: (("frequency", "y", "x"), np.stack([np.asarray(ch[c]) for _, ch, _ in per_f]),
-                dict(zip(("units", "long_name"), channel_quantity(c))))
-            for c in names}
+    data = {
+        c: (
+            ("frequency", "y", "x"),
+            np.stack([np.asarray(ch[c]) for _, ch, _ in per_f]),
+            dict(zip(("units", "long_name"), channel_quantity(c))),
+        )
+        for c in names
+    }
     attrs = {k.removeprefix("pmmw:"): v for k, v in per_f[0][2].items() if k != "pmmw:frequency_hz"}
     if regions:
         attrs["regions"] = json.dumps(regions)
@@ -396,11 +433,13 @@ def _dataset(per_f, regions):
     col, row = np.arange(w), np.arange(h)
     x_deg = np.degrees(np.arctan(((col + 0.5) / (w / 2.0) - 1.0) * half))
     y_deg = np.degrees(np.arctan((h / 2.0 - (row + 0.5)) / (w / 2.0) * half))
-    coords = {"frequency": ("frequency", [f for f, _, _ in per_f], {"units": "Hz"}),
-              "y": ("y", y_deg, {"units": "deg", "long_name": "angle above the viewing direction"}),
-              "x": ("x", x_deg, {"units": "deg", "long_name": "angle right of the viewing direction"}),
-              "row": ("y", row, {"long_name": "pixel row (0 at the top)"}),
-              "col": ("x", col, {"long_name": "pixel column (0 at the left)"})}
+    coords = {
+        "frequency": ("frequency", [f for f, _, _ in per_f], {"units": "Hz"}),
+        "y": ("y", y_deg, {"units": "deg", "long_name": "angle above the viewing direction"}),
+        "x": ("x", x_deg, {"units": "deg", "long_name": "angle right of the viewing direction"}),
+        "row": ("y", row, {"long_name": "pixel row (0 at the top)"}),
+        "col": ("x", col, {"long_name": "pixel column (0 at the left)"}),
+    }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
@@ -461,9 +500,18 @@ class LoadedScene:
     def __repr__(self) -> str:
         return f"LoadedScene({self.scenario.path.name}: {self._res.geometry.faces.shape[0]} triangles)"
 
-    def render(self, *, pose: dict | None = None, frequency=None, materials: dict | None = None,
-               values: dict | None = None, spp: int | None = None, workers: int | None = None,
-               seed: int | None = None, quiet: bool = True):
+    def render(
+        self,
+        *,
+        pose: dict | None = None,
+        frequency=None,
+        materials: dict | None = None,
+        values: dict | None = None,
+        spp: int | None = None,
+        workers: int | None = None,
+        seed: int | None = None,
+        quiet: bool = True,
+    ):
         """Render the loaded scene with overrides; returns an `xarray.Dataset` as `render` does.
 
         Parameters
@@ -503,8 +551,15 @@ def _loaded_render(loaded, pose, frequency, materials, values, spp, workers, see
         changes["frequency"] = frequency
     changes.update({f"materials.{k}": v for k, v in (materials or {}).items()})
     changes.update(values or {})
-    cli = {k: v for k, v in (("spp", _integer(where, "spp", spp, 1)), ("workers", _integer(where, "workers", workers, 1)),
-                             ("seed", _integer(where, "seed", seed, 0))) if v is not None}
+    cli = {
+        k: v
+        for k, v in (
+            ("spp", _integer(where, "spp", spp, 1)),
+            ("workers", _integer(where, "workers", workers, 1)),
+            ("seed", _integer(where, "seed", seed, 0)),
+        )
+        if v is not None
+    }
     from pmmw.config.load import plain
 
     pipeline.clear_warnings()
@@ -540,16 +595,23 @@ def sky(frequency, atmosphere: dict | None = None, elevations_deg=(5, 10, 15, 20
     where = "pmmw.sky"
     f = parse_frequency(_quantity(where, "frequency", frequency), f"{where}: frequency")
     if atmosphere is not None and not isinstance(atmosphere, Mapping):
-        raise UserError(f"expected a dict like a scenario's atmosphere: mapping, e.g. {{'profile': 'standard'}}, got "
-                        f"{_kind(atmosphere)}", where, "atmosphere")
+        raise UserError(
+            f"expected a dict like a scenario's atmosphere: mapping, e.g. {{'profile': 'standard'}}, got "
+            f"{_kind(atmosphere)}",
+            where,
+            "atmosphere",
+        )
     elevations = skycmd.parse_elevations(elevations_deg, where, "elevations_deg")
     try:
         atm = skycmd.load_atmosphere(None, None, [], None, None, data=dict(atmosphere or {}))
     except UserError as e:
         raise UserError(e.message, where, e.key) if e.file == "command line" else e from None
     rows = skycmd.sky_table(atm, f, elevations)
-    return xr.Dataset({"Tv": ("elevation", rows[:, 1], {"units": "K"}), "Th": ("elevation", rows[:, 2], {"units": "K"})},
-                      coords={"elevation": ("elevation", rows[:, 0], {"units": "deg"})}, attrs={"frequency_hz": f})
+    return xr.Dataset(
+        {"Tv": ("elevation", rows[:, 1], {"units": "K"}), "Th": ("elevation", rows[:, 2], {"units": "K"})},
+        coords={"elevation": ("elevation", rows[:, 0], {"units": "deg"})},
+        attrs={"frequency_hz": f},
+    )
 
 
 #: `brdf`'s options by kind (the flags of ``pmmw brdf``; `pmmw.reflectance.run_brdf`)
@@ -569,11 +631,15 @@ def _complex(where, name, v):
         return v
     if isinstance(v, complex):
         return [v.real, v.imag]
-    if isinstance(v, (list, tuple)) and len(v) == 2 and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+    if (
+        isinstance(v, (list, tuple))
+        and len(v) == 2
+        and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+    ):
         return list(v)
-    raise UserError(f"expected a complex number (0.23+3.46j, a str like '5.5+0.5j' or [re, im]), got {_kind(v)}",
-                    where, name)
+    raise UserError(
+        f"expected a complex number (0.23+3.46j, a str like '5.5+0.5j' or [re, im]), got {_kind(v)}", where, name
+    )
 
 
 @_api("brdf")
@@ -617,8 +683,11 @@ def brdf(*, method: str = "mc", out=None, **options):
             _quantity(where, name, v, optional=True)
         elif name in _BRDF_COMPLEX:
             options[name] = _complex(where, name, v)
-        elif name == "stokes" and not (isinstance(v, (list, tuple)) and len(v) == 4 and all(
-                isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
+        elif name == "stokes" and not (
+            isinstance(v, (list, tuple))
+            and len(v) == 4
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+        ):
             raise UserError(f"expected four numbers [I, Q, U, V], got {_kind(v)}", where, name)
         elif name == "stack" and v is not None and not isinstance(v, Stack):
             options[name] = _path(where, name, v)
@@ -629,10 +698,17 @@ def brdf(*, method: str = "mc", out=None, **options):
     for name, m in res.methods.items():
         attrs = {k: v for k, v in m.summary.items() if isinstance(v, (int, float, str))}
         out_ds[name] = xr.Dataset(
-            {"mueller": (("zenith", "azimuth", "row", "col"), m.mueller, {"units": "1/sr"}),
-             "stokes": (("component", "zenith", "azimuth"), m.stokes, {"units": "1/sr"})},
-            coords={"zenith": ("zenith", zen, {"units": "deg"}), "azimuth": ("azimuth", az, {"units": "deg"}),
-                    "component": ["I", "Q", "U", "V"]}, attrs=attrs)
+            {
+                "mueller": (("zenith", "azimuth", "row", "col"), m.mueller, {"units": "1/sr"}),
+                "stokes": (("component", "zenith", "azimuth"), m.stokes, {"units": "1/sr"}),
+            },
+            coords={
+                "zenith": ("zenith", zen, {"units": "deg"}),
+                "azimuth": ("azimuth", az, {"units": "deg"}),
+                "component": ["I", "Q", "U", "V"],
+            },
+            attrs=attrs,
+        )
     return out_ds
 
 
@@ -643,17 +719,37 @@ def _angles(where, name, v, many: bool):
         return v
     if isinstance(v, (int, float)) and not isinstance(v, bool):
         return repr(float(v))
-    if many and isinstance(v, (list, tuple)) and v and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+    if (
+        many
+        and isinstance(v, (list, tuple))
+        and v
+        and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+    ):
         return ",".join(repr(float(x)) for x in v)
     what = "a list of numbers" if many else "a str"
-    raise UserError(f"expected angles in degrees: {what} like {'[30, 0]' if many else '0:180:1'} or one number, "
-                    f"got {_kind(v)}", where, name)
+    raise UserError(
+        f"expected angles in degrees: {what} like {'[30, 0]' if many else '0:180:1'} or one number, got {_kind(v)}",
+        where,
+        name,
+    )
 
 
 @_api("po")
-def po(mesh, *, frequency, material: str | None = None, eps: str | None = None, incidence="0,0",
-       polarization="theta", theta=None, phi=None, monostatic=False, bounces=1, method="auto", force=False):
+def po(
+    mesh,
+    *,
+    frequency,
+    material: str | None = None,
+    eps: str | None = None,
+    incidence="0,0",
+    polarization="theta",
+    theta=None,
+    phi=None,
+    monostatic=False,
+    bounces=1,
+    method="auto",
+    force=False,
+):
     """Radar cross sections of a mesh by physical optics (``pmmw po``'s quick form); returns an
     `xarray.Dataset` with ``rcs_theta`` and ``rcs_phi`` [m^2] over (phi, theta) in degrees and
     the run's summary (backscatter, peak, lit facets) as attributes.
@@ -673,8 +769,11 @@ def po(mesh, *, frequency, material: str | None = None, eps: str | None = None, 
     material, eps = _text(where, "material", material), _complex(where, "eps", eps)
     given, incidence = incidence, _angles(where, "incidence", incidence, many=True)
     if incidence is None or len(incidence.split(",")) != 2:
-        raise UserError(f"expected two angles [theta, phi] in degrees, e.g. '30,0' or [30, 0], got {_kind(given)}",
-                        where, "incidence")
+        raise UserError(
+            f"expected two angles [theta, phi] in degrees, e.g. '30,0' or [30, 0], got {_kind(given)}",
+            where,
+            "incidence",
+        )
     theta, phi = _angles(where, "theta", theta, many=False), _angles(where, "phi", phi, many=True)
     _text(where, "polarization", polarization, optional=False, choices=("theta", "phi"))
     _text(where, "method", method, optional=False, choices=METHODS)
@@ -683,22 +782,47 @@ def po(mesh, *, frequency, material: str | None = None, eps: str | None = None, 
     _integer(where, "bounces", bounces, 1, optional=False)
     if bounces > MAX_BOUNCES:
         raise UserError(f"expected 1 to {MAX_BOUNCES} bounces, got {bounces}", where, "bounces")
-    res = run_po(mesh, material=material, eps=eps, frequency=frequency,
-                 incidence=incidence, polarization=polarization,
-                 theta=theta, phi=phi, monostatic=monostatic, bounces=bounces, method=method, force=force)
+    res = run_po(
+        mesh,
+        material=material,
+        eps=eps,
+        frequency=frequency,
+        incidence=incidence,
+        polarization=polarization,
+        theta=theta,
+        phi=phi,
+        monostatic=monostatic,
+        bounces=bounces,
+        method=method,
+        force=force,
+    )
     thetas, phis = res.axes
     shape = (phis.size, thetas.size)
     summary = {k: v for k, v in res.summary.items() if not isinstance(v, dict)}
     summary.update({f"peak_{k}": v for k, v in res.summary["peak"].items()})
     summary = {k: (v if v is not None else float("nan")) for k, v in summary.items()}
-    return xr.Dataset({"rcs_theta": (("phi", "theta"), res.rcs_theta.reshape(shape), {"units": "m^2"}),
-                       "rcs_phi": (("phi", "theta"), res.rcs_phi.reshape(shape), {"units": "m^2"})},
-                      coords={"theta": np.degrees(thetas), "phi": np.degrees(phis)}, attrs=summary)
+    return xr.Dataset(
+        {
+            "rcs_theta": (("phi", "theta"), res.rcs_theta.reshape(shape), {"units": "m^2"}),
+            "rcs_phi": (("phi", "theta"), res.rcs_phi.reshape(shape), {"units": "m^2"}),
+        },
+        coords={"theta": np.degrees(thetas), "phi": np.degrees(phis)},
+        attrs=summary,
+    )
 
 
 @_api("sweep")
-def sweep(scenario, grid: dict, *, out, zip: bool | list = False, executor: str = "local", workers=None,
-          resume: bool = False, quiet: bool = True):
+def sweep(
+    scenario,
+    grid: dict,
+    *,
+    out,
+    zip: bool | list = False,
+    executor: str = "local",
+    workers=None,
+    resume: bool = False,
+    quiet: bool = True,
+):
     """Render every variant of ``grid`` ({key: list of values}) as ``pmmw sweep`` does, into
     ``out``; returns the results table (``sweep.csv``) as a `pandas.DataFrame`."""
     import pandas as pd
@@ -710,12 +834,17 @@ def sweep(scenario, grid: dict, *, out, zip: bool | list = False, executor: str 
     where = "pmmw.sweep"
     s = _scenario(scenario, where)
     if s.data is not None or s.values:
-        raise UserError("a sweep renders a scenario file: save the scenario as YAML (its variants are its grid), or "
-                        "give the overrides as grid keys with one value", where, "scenario")
+        raise UserError(
+            "a sweep renders a scenario file: save the scenario as YAML (its variants are its grid), or "
+            "give the overrides as grid keys with one value",
+            where,
+            "scenario",
+        )
     example = "{'render.seed': [1, 2]}"
     if not isinstance(grid, Mapping) or not grid:
-        raise UserError(f"expected a dict of dotted keys and lists of values, e.g. {example}, got {_kind(grid)}",
-                        where, "grid")
+        raise UserError(
+            f"expected a dict of dotted keys and lists of values, e.g. {example}, got {_kind(grid)}", where, "grid"
+        )
     for k, v in grid.items():
         if not isinstance(k, str) or not k.strip():
             raise UserError(f"a key is a dotted key path (str) like 'render.seed', got {k!r}", where, "grid")
@@ -724,8 +853,7 @@ def sweep(scenario, grid: dict, *, out, zip: bool | list = False, executor: str 
         except ValueError:
             raise UserError(f"malformed key path {k!r}", where, "grid") from None
         if not isinstance(v, (list, tuple)) or not v:
-            raise UserError(f"the values of {k!r} are a non-empty list, e.g. {example}, got {_kind(v)}", where,
-                            "grid")
+            raise UserError(f"the values of {k!r} are a non-empty list, e.g. {example}, got {_kind(v)}", where, "grid")
     out = _path(where, "out", out)
     if not isinstance(zip, bool) and not (isinstance(zip, (list, tuple)) and all(isinstance(k, str) for k in zip)):
         raise UserError(f"expected True, False or a list of grid keys, got {_kind(zip)}", where, "zip")
@@ -733,7 +861,14 @@ def sweep(scenario, grid: dict, *, out, zip: bool | list = False, executor: str 
     workers = _integer(where, "workers", workers, 1)
     _flag(where, "resume", resume)
     _flag(where, "quiet", quiet)
-    spec = SweepSpec(scenario=s.path, grid=[(k, list(v)) for k, v in grid.items()], zip=zip, executor=executor,
-                     out=out, source="pmmw.sweep", workers=workers)
+    spec = SweepSpec(
+        scenario=s.path,
+        grid=[(k, list(v)) for k, v in grid.items()],
+        zip=zip,
+        executor=executor,
+        out=out,
+        source="pmmw.sweep",
+        workers=workers,
+    )
     run_sweep(spec, resume=resume, quiet=quiet)
     return pd.read_csv(Path(out) / "sweep.csv")

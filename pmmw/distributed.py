@@ -88,11 +88,13 @@ def _scheduler_host_port(address: str) -> tuple[str, str, int | None]:
     m = re.fullmatch(r"(?:([A-Za-z][A-Za-z0-9+.-]*)://)?(.*)", address.strip())
     scheme, rest = (m.group(1) or "tcp").lower(), m.group(2)
     if scheme in ("http", "https"):
-        raise UserError(f"{address} is a web address (a dashboard's?); a scheduler's looks like tcp://HOST:8786",
-                        "--scheduler")
+        raise UserError(
+            f"{address} is a web address (a dashboard's?); a scheduler's looks like tcp://HOST:8786", "--scheduler"
+        )
     if scheme not in backends:
-        raise UserError(f"{address}: unknown scheme {scheme!r}; a scheduler's address looks like tcp://HOST:8786",
-                        "--scheduler")
+        raise UserError(
+            f"{address}: unknown scheme {scheme!r}; a scheduler's address looks like tcp://HOST:8786", "--scheduler"
+        )
     if scheme != "tcp":
         return scheme, rest, None
     host, sep, port = rest.rpartition(":")
@@ -178,8 +180,10 @@ def probe_scheduler(address: str, timeout: float = CONNECT_S) -> None:
     except socket.gaierror as e:
         raise fail(f"names a host that cannot be found ({e.strerror})") from None
     except ConnectionRefusedError:
-        raise fail("refused the connection: no Dask scheduler listens there (start one with `dask scheduler`, "
-                   "or correct the address)") from None
+        raise fail(
+            "refused the connection: no Dask scheduler listens there (start one with `dask scheduler`, "
+            "or correct the address)"
+        ) from None
     except TimeoutError:
         raise fail(f"did not answer within {timeout:g} s") from None
     except OSError as e:
@@ -188,22 +192,32 @@ def probe_scheduler(address: str, timeout: float = CONNECT_S) -> None:
         head, late = _receive(sock, 8, deadline)
         if late and not head:
             if _answers_http(sock):
-                raise fail("is not a Dask scheduler (it answered like an HTTP server; a scheduler listens on "
-                           "port 8786 by default, its dashboard on 8787)")
-            raise fail(f"did not answer within {timeout:g} s (it accepts connections but says nothing; a Dask "
-                       "scheduler greets at once)")
+                raise fail(
+                    "is not a Dask scheduler (it answered like an HTTP server; a scheduler listens on "
+                    "port 8786 by default, its dashboard on 8787)"
+                )
+            raise fail(
+                f"did not answer within {timeout:g} s (it accepts connections but says nothing; a Dask "
+                "scheduler greets at once)"
+            )
         if head.startswith(b"HTTP/"):
             raise fail("is not a Dask scheduler (it answered like an HTTP server)")
         if len(head) < 8:
-            raise fail("is not a Dask scheduler (it closed the connection without the Dask handshake)" if not late
-                       else f"did not finish its greeting within {timeout:g} s: not a Dask scheduler")
+            raise fail(
+                "is not a Dask scheduler (it closed the connection without the Dask handshake)"
+                if not late
+                else f"did not finish its greeting within {timeout:g} s: not a Dask scheduler"
+            )
         (n,) = struct.unpack("Q", head)
         if not 0 < n <= GREETING_MAX:
             raise fail(f"is not a Dask scheduler (it sent {_shown(head)}, not the Dask handshake)")
         body, late = _receive(sock, n, deadline)
         if len(body) < n:
-            raise fail(f"did not finish its greeting within {timeout:g} s: not a Dask scheduler" if late else
-                       "is not a Dask scheduler (it closed the connection within the Dask handshake)")
+            raise fail(
+                f"did not finish its greeting within {timeout:g} s: not a Dask scheduler"
+                if late
+                else "is not a Dask scheduler (it closed the connection within the Dask handshake)"
+            )
         if not _is_handshake(body):
             raise fail(f"is not a Dask scheduler (it sent {_shown(head + body)}, not the Dask handshake)")
         with contextlib.suppress(OSError):
@@ -217,8 +231,11 @@ def quiet_dask_logs():
     pmmw's own line. Their handlers and settings are restored after."""
     import distributed  # noqa: F401 - importing it adds its handlers: first, so that they are quieted too
 
-    names = [n for n in list(logging.root.manager.loggerDict)
-             if n in DASK_LOGGERS or n.startswith(tuple(f"{d}." for d in DASK_LOGGERS))]
+    names = [
+        n
+        for n in list(logging.root.manager.loggerDict)
+        if n in DASK_LOGGERS or n.startswith(tuple(f"{d}." for d in DASK_LOGGERS))
+    ]
     handlers = {h for n in names for h in logging.getLogger(n).handlers}  # distributed gives its children one too
     levels = {h: h.level for h in handlers}
     saved = []
@@ -259,9 +276,12 @@ def connect(scheduler: str | None, cluster_file: Path | None, n_local: int):
                 client = Client(scheduler, timeout=f"{CONNECT_S}s")
             except Exception as e:  # noqa: BLE001 - it greeted like Dask but did not take a client
                 text = str(e).strip().splitlines()[0][:200] if str(e).strip() else ""
-                raise UserError(f"{scheduler} greeted like Dask but did not take a client within {CONNECT_S:g} s "
-                                f"({type(e).__name__}{': ' + text if text else ''}): is it a scheduler's address, "
-                                "not a worker's?", "--scheduler") from None
+                raise UserError(
+                    f"{scheduler} greeted like Dask but did not take a client within {CONNECT_S:g} s "
+                    f"({type(e).__name__}{': ' + text if text else ''}): is it a scheduler's address, "
+                    "not a worker's?",
+                    "--scheduler",
+                ) from None
         for w in seen:
             first = str(w.message).strip().splitlines()
             warn(f"Dask at {scheduler}: {first[0] if first else type(w.message).__name__}")

@@ -32,7 +32,7 @@ class UserError(Exception):
     def __init__(self, message: str, file: str | Path | None = None, key: str | None = None):
         message = _one_line(str(message))
         if len(message) > self.MAX_MESSAGE:
-            message = f"{message[:self.MAX_MESSAGE]}... ({len(message):,} characters in all)"
+            message = f"{message[: self.MAX_MESSAGE]}... ({len(message):,} characters in all)"
         super().__init__(message)
         self.message = message
         self.file = _one_line(str(file)) if file is not None else None

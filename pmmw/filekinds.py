@@ -28,7 +28,12 @@ from pmmw.io.inputs import check_input_path
 from pmmw.io.yamlio import read_yaml
 
 SCENARIO, SWEEP, PO_JOB, STACK, CLUSTER = (
-    "scenario", "sweep file", "physical-optics job", "brdf stack file", "Dask cluster file")
+    "scenario",
+    "sweep file",
+    "physical-optics job",
+    "brdf stack file",
+    "Dask cluster file",
+)
 #: the keys that tell each kind apart (a scenario has none of them)
 MARKS = {SWEEP: "grid", PO_JOB: "targets", STACK: "layers", CLUSTER: "kind"}
 
@@ -102,8 +107,9 @@ def validate_file(path, overrides=(), preview=None) -> dict:
         other = [k for k, mark in MARKS.items() if isinstance(raw, dict) and mark in raw]
         if not other:
             raise
-        hint = UserError(f"checked as a scenario; a {other[0]} has `{MARKS[other[0]]}:` and no imager or scene key",
-                         path)
+        hint = UserError(
+            f"checked as a scenario; a {other[0]} has `{MARKS[other[0]]}:` and no imager or scene key", path
+        )
         raise UserErrors([*getattr(exc, "errors", [exc]), hint]) from None
 
 
@@ -118,11 +124,17 @@ def _sweep(path: Path, preview=None) -> dict:
     base = validate(spec.scenario, preview=preview)
     _check_variant_regions(spec)
     base["warnings"] = collected_warnings()
-    return {"kind": SWEEP, "scenario": str(spec.scenario), "variants": count,
-            "grid": {k: list(v) for k, v in spec.grid}, "zipped": zipped_keys(spec),
-            "executor": spec.executor, **({"cluster": str(spec.cluster)} if spec.cluster else {}),
-            "out": str(spec.out or Path.cwd() / "out" / f"{spec.scenario.stem}_sweep"),
-            "scenario_check": {"geometry": base["geometry"], "warnings": base.get("warnings", [])}}
+    return {
+        "kind": SWEEP,
+        "scenario": str(spec.scenario),
+        "variants": count,
+        "grid": {k: list(v) for k, v in spec.grid},
+        "zipped": zipped_keys(spec),
+        "executor": spec.executor,
+        **({"cluster": str(spec.cluster)} if spec.cluster else {}),
+        "out": str(spec.out or Path.cwd() / "out" / f"{spec.scenario.stem}_sweep"),
+        "scenario_check": {"geometry": base["geometry"], "warnings": base.get("warnings", [])},
+    }
 
 
 def _check_variant_regions(spec) -> None:
@@ -145,8 +157,10 @@ def _check_variant_regions(spec) -> None:
             for e in getattr(exc, "errors", [exc]):
                 out_of_view.setdefault(str(e.key), []).append(f"v{i:03d}")
     for key, names in out_of_view.items():
-        warn(f"{spec.source}: {key} is behind the imager or outside the image in variant(s) {', '.join(names)}: "
-             "their contrasts with it will be NaN (pmmw validate with those values names the pixels)")
+        warn(
+            f"{spec.source}: {key} is behind the imager or outside the image in variant(s) {', '.join(names)}: "
+            "their contrasts with it will be NaN (pmmw validate with those values names the pixels)"
+        )
 
 
 def _po_job(path: Path) -> dict:
@@ -160,13 +174,22 @@ def _po_job(path: Path) -> dict:
     db = MaterialDB.load().with_overrides(dict(job.materials), file=job.source_file)
     check_material_ids(job.targets, db, job.source_file)
     geom = build_geometry(job.targets, scenario_file=job.source_file)
-    return {"kind": PO_JOB, "name": job.name, "frequencies_GHz": [f / 1e9 for f in job.frequencies],
-            "polarization": list(job.polarization), "monostatic": job.monostatic,
-            **({"incidence_deg": [round(math.degrees(float(a)), 6) for a in job.incidence]}
-               if job.incidence is not None else {}),
-            "observation": {"theta": job.observation.theta, "phi": job.observation.phi},
-            "targets": {name: {"triangles": int((geom.face_object == i).sum())} for i, name in enumerate(geom.objects)},
-            "bounces": job.bounces, "warnings": collected_warnings()}
+    return {
+        "kind": PO_JOB,
+        "name": job.name,
+        "frequencies_GHz": [f / 1e9 for f in job.frequencies],
+        "polarization": list(job.polarization),
+        "monostatic": job.monostatic,
+        **(
+            {"incidence_deg": [round(math.degrees(float(a)), 6) for a in job.incidence]}
+            if job.incidence is not None
+            else {}
+        ),
+        "observation": {"theta": job.observation.theta, "phi": job.observation.phi},
+        "targets": {name: {"triangles": int((geom.face_object == i).sum())} for i, name in enumerate(geom.objects)},
+        "bounces": job.bounces,
+        "warnings": collected_warnings(),
+    }
 
 
 def _stack(path: Path) -> dict:
@@ -176,13 +199,21 @@ def _stack(path: Path) -> dict:
     stack = load_stack(path)
     layers = []
     for layer in stack.layers:
-        layers.append({**({"metal": True} if layer.metal else {"eps": [float(layer.eps.real), float(layer.eps.imag)]}),
-                       **({"thickness_m": layer.thickness} if layer.thickness is not None else {}),
-                       **({"roughness": repr(layer.roughness)} if layer.roughness is not None else {}),
-                       **({"coating_films": len(layer.coating)} if layer.coating else {})})
-    return {"kind": STACK, **({"frequency_Hz": stack.frequency} if stack.frequency is not None else {}),
-            "ambient_eps": [float(stack.ambient_eps.real), float(stack.ambient_eps.imag)], "layers": layers,
-            "warnings": collected_warnings()}
+        layers.append(
+            {
+                **({"metal": True} if layer.metal else {"eps": [float(layer.eps.real), float(layer.eps.imag)]}),
+                **({"thickness_m": layer.thickness} if layer.thickness is not None else {}),
+                **({"roughness": repr(layer.roughness)} if layer.roughness is not None else {}),
+                **({"coating_films": len(layer.coating)} if layer.coating else {}),
+            }
+        )
+    return {
+        "kind": STACK,
+        **({"frequency_Hz": stack.frequency} if stack.frequency is not None else {}),
+        "ambient_eps": [float(stack.ambient_eps.real), float(stack.ambient_eps.imag)],
+        "layers": layers,
+        "warnings": collected_warnings(),
+    }
 
 
 def _cluster(path: Path, raw: dict) -> dict:
@@ -195,5 +226,8 @@ def _cluster(path: Path, raw: dict) -> dict:
     if errors:
         raise UserErrors(errors) if len(errors) > 1 else errors[0]
     kind = str(raw["kind"]).lower()
-    return {"kind": CLUSTER, "cluster": f"dask_jobqueue.{CLUSTER_KINDS[kind]}",
-            **{str(k): v for k, v in raw.items() if k != "kind"}}
+    return {
+        "kind": CLUSTER,
+        "cluster": f"dask_jobqueue.{CLUSTER_KINDS[kind]}",
+        **{str(k): v for k, v in raw.items() if k != "kind"},
+    }

@@ -22,9 +22,19 @@ __all__ = ["SOURCES", "clear_stale_caches", "is_cached", "inline", "njit"]
 
 ROOT = Path(__file__).resolve().parent
 #: Every module with compiled code (paths relative to the package).
-SOURCES = ("atmosphere/model.py", "physics/fresnel.py", "physics/multilayer.py", "physics/roughness.py",
-           "physical_optics/kernels.py", "scene/bump.py", "scene/camera.py", "scene/sky.py", "trace/intersect.py",
-           "trace/kernels.py", "surface/kernels.py")
+SOURCES = (
+    "atmosphere/model.py",
+    "physics/fresnel.py",
+    "physics/multilayer.py",
+    "physics/roughness.py",
+    "physical_optics/kernels.py",
+    "scene/bump.py",
+    "scene/camera.py",
+    "scene/sky.py",
+    "trace/intersect.py",
+    "trace/kernels.py",
+    "surface/kernels.py",
+)
 _STAMP = ROOT / "__pycache__" / "numba-sources.sha256"
 
 

@@ -51,8 +51,9 @@ def overridable(option: str, force: bool):
         _OVERRIDE.reset(token)
 
 
-def check_fits(need: float, what: str, *, file=None, key=None, remedy: str = "",
-               force: bool = False, option: str | None = None) -> None:
+def check_fits(
+    need: float, what: str, *, file=None, key=None, remedy: str = "", force: bool = False, option: str | None = None
+) -> None:
     """Refuse (`UserError`) an allocation of about ``need`` bytes beyond the available memory.
 
     Parameters
@@ -75,8 +76,13 @@ def check_fits(need: float, what: str, *, file=None, key=None, remedy: str = "",
     if free is None or need <= free or force:
         return
     past = f" (or pass {option} to try anyway)" if option else ""
-    raise UserError(f"{what} needs about {gigabytes(need)} GB of memory and {gigabytes(free)} GB are available"
-                    + (f": {remedy}" if remedy else "") + past, file=file, key=key)
+    raise UserError(
+        f"{what} needs about {gigabytes(need)} GB of memory and {gigabytes(free)} GB are available"
+        + (f": {remedy}" if remedy else "")
+        + past,
+        file=file,
+        key=key,
+    )
 
 
 def gigabytes(nbytes: float) -> str:

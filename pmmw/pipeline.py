@@ -76,7 +76,9 @@ def resolve(path, overrides=(), cli=None, data=None, values=None) -> Resolved:
     geom = build_geometry(scn.scene, scenario_file=scn.source_file)
     refracting = {m for m in geom.material_ids if db.get(m).kind == "dielectric"}
     for obj, tight in zip(geom.objects, geom.object_watertight):
-        mats = {geom.material_ids[i] for i in np.unique(geom.face_material[geom.face_object == geom.objects.index(obj)])}
+        mats = {
+            geom.material_ids[i] for i in np.unique(geom.face_material[geom.face_object == geom.objects.index(obj)])
+        }
         if not tight and mats & refracting:
             warn(
                 f"{obj} is not watertight but refracts ({', '.join(sorted(mats & refracting))}): "
@@ -98,7 +100,8 @@ def check_material_ids(entries, db: MaterialDB, file) -> None:
     errors = []
     for entry in entries:
         pairs = (
-            [(f"{entry.key}.material", entry.material)] if entry.material is not None
+            [(f"{entry.key}.material", entry.material)]
+            if entry.material is not None
             else [(f"{entry.key}.materials.{name}", mid) for name, mid in entry.materials.items()]
         )
         for key, mid in pairs:
@@ -205,25 +208,47 @@ def parse_shard(text: str | None):
 def make_job(res: Resolved, f: float) -> TraceJob:
     scn, geom = res.scenario, res.geometry
     im = scn.imager
-    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution,
-                         aperture_radius=im.aperture_diameter / 2.0, focus_distance=im.focus_distance)
+    cam = Camera.look_at(
+        im.position,
+        im.look_at,
+        im.up,
+        im.fov,
+        im.resolution,
+        aperture_radius=im.aperture_diameter / 2.0,
+        focus_distance=im.focus_distance,
+    )
     r = scn.render
     footprint = 1.0
     if r.target_error is not None and im.aperture_diameter > 0.0:
         # adaptive sampling to the error left after the imager's blur (Integrator.render_tile)
         footprint = error_footprint(psf_kernel(cam.pixel_angle, 2.0 * np.pi * f / C0, im.aperture_diameter))
     settings = RenderSettings(
-        spp=r.spp, max_depth=r.max_depth, threshold=r.threshold, seed=r.seed,
-        termination=r.termination, strategy=r.strategy, split_depth=r.split_depth,
-        target_error=r.target_error, min_spp=min(r.min_spp, r.spp), tile=r.tile, aux=tuple(scn.output.aux),
-        error_footprint=footprint, atmosphere_tolerance=r.atmosphere_tolerance,
+        spp=r.spp,
+        max_depth=r.max_depth,
+        threshold=r.threshold,
+        seed=r.seed,
+        termination=r.termination,
+        strategy=r.strategy,
+        split_depth=r.split_depth,
+        target_error=r.target_error,
+        min_spp=min(r.min_spp, r.spp),
+        tile=r.tile,
+        aux=tuple(scn.output.aux),
+        error_footprint=footprint,
+        atmosphere_tolerance=r.atmosphere_tolerance,
     )
     atm = atmosphere_model(scn, f)
     return TraceJob(
-        vertices=geom.vertices, faces=geom.faces, face_normals=geom.face_normals,
+        vertices=geom.vertices,
+        faces=geom.faces,
+        face_normals=geom.face_normals,
         face_medium=(geom.face_material + 1).astype(np.int32),
-        media=build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere), camera=cam,
-        sky=make_sky(scn.sky, f, atmosphere_model=atm), frequency=f, settings=settings, atmosphere=atm,
+        media=build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere),
+        camera=cam,
+        sky=make_sky(scn.sky, f, atmosphere_model=atm),
+        frequency=f,
+        settings=settings,
+        atmosphere=atm,
     )
 
 
@@ -260,8 +285,13 @@ def atmosphere_model(scn, f: float):
     # a rain power law's entry holds across the imager's band around its frequency (f may be a sub-band)
     layers = a.weather_at(f, half_band=scn.imager.bandwidth / 2.0, file=scn.source_file)
     try:
-        atm = Atmosphere(profile=a.profile, ground_temperature=a.ground_temperature, humidity=a.humidity,
-                         layers=layers, ground_altitude=a.ground_altitude)
+        atm = Atmosphere(
+            profile=a.profile,
+            ground_temperature=a.ground_temperature,
+            humidity=a.humidity,
+            layers=layers,
+            ground_altitude=a.ground_altitude,
+        )
     except ValueError as e:
         raise UserError(str(e), file=scn.source_file, key="atmosphere") from None
     # the scattering solution stands on the ground the sky model puts below the horizon
@@ -286,8 +316,9 @@ class _Progress:
             return
         rate = rays / elapsed if elapsed > 0 else 0.0
         left = elapsed / done * (total - done) if done else 0.0
-        self.line.show(f"{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left", elapsed,
-                       done == total)
+        self.line.show(
+            f"{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left", elapsed, done == total
+        )
 
 
 def region_shapes(regions, cam) -> dict:
@@ -302,11 +333,21 @@ def region_shapes(regions, cam) -> dict:
             continue
         if getattr(r, "bounds", None) is not None:  # the rectangle the world box's corners project into
             lo, hi = (np.asarray(c, float) for c in r.bounds)
-            corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
-                                for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+            corners = np.array(
+                [[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+            )
             u, v, depth = cam.image_coordinates(corners)
-            shapes[name] = (("box", float(np.floor(u.min())), float(np.floor(v.min())), float(np.ceil(u.max())),
-                             float(np.ceil(v.max()))) if (depth > 0).all() else None)
+            shapes[name] = (
+                (
+                    "box",
+                    float(np.floor(u.min())),
+                    float(np.floor(v.min())),
+                    float(np.ceil(u.max())),
+                    float(np.ceil(v.max())),
+                )
+                if (depth > 0).all()
+                else None
+            )
             continue
         (u,), (v,), (depth,) = cam.image_coordinates(np.asarray(r.center, float)[None])
         unit = getattr(r, "radius_unit", "px")
@@ -337,12 +378,25 @@ def check_regions(scn) -> dict:
         n = int(masks[name].sum())
         out[name] = {f"{shape[0]}_px": [round(float(x), 2) for x in shape[1:]], "pixels": n}
         if n == 0:
-            errors.append(UserError(f"falls outside the {cam.width} x {cam.height} image (its {shape[0]} in pixels: "
-                                    f"{[round(float(x), 1) for x in shape[1:]]}); move it into view", scn.source_file,
-                                    key))
-        elif shape[0] == "box" and (shape[1] < 0 or shape[2] < 0 or shape[3] > cam.width or shape[4] > cam.height) \
-                or shape[0] == "circle" and not (0 <= shape[1] - shape[3] and shape[1] + shape[3] <= cam.width
-                                                 and 0 <= shape[2] - shape[3] and shape[2] + shape[3] <= cam.height):
+            errors.append(
+                UserError(
+                    f"falls outside the {cam.width} x {cam.height} image (its {shape[0]} in pixels: "
+                    f"{[round(float(x), 1) for x in shape[1:]]}); move it into view",
+                    scn.source_file,
+                    key,
+                )
+            )
+        elif (
+            shape[0] == "box"
+            and (shape[1] < 0 or shape[2] < 0 or shape[3] > cam.width or shape[4] > cam.height)
+            or shape[0] == "circle"
+            and not (
+                0 <= shape[1] - shape[3]
+                and shape[1] + shape[3] <= cam.width
+                and 0 <= shape[2] - shape[3]
+                and shape[2] + shape[3] <= cam.height
+            )
+        ):
             warn(f"{key} lies partly outside the {cam.width} x {cam.height} image: only its {n} pixels inside count")
     if errors:
         raise UserErrors(errors) if len(errors) > 1 else errors[0]
@@ -359,10 +413,13 @@ def view_preview(scn, geom, path: Path) -> Path:
     im = scn.imager
     cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)
     half = np.tan(cam.fov / 2.0)
-    v, u = np.mgrid[0:cam.height, 0:cam.width] + 0.5
+    v, u = np.mgrid[0 : cam.height, 0 : cam.width] + 0.5
     # the pinhole direction through (u, v): the inverse of `Camera.image_coordinates`
-    d = (cam.k + np.multiply.outer((2.0 * u / cam.width - 1.0) * half, cam.x)
-         + np.multiply.outer((cam.height - 2.0 * v) / cam.width * half, cam.y)).reshape(-1, 3)
+    d = (
+        cam.k
+        + np.multiply.outer((2.0 * u / cam.width - 1.0) * half, cam.x)
+        + np.multiply.outer((cam.height - 2.0 * v) / cam.width * half, cam.y)
+    ).reshape(-1, 3)
     d /= np.linalg.norm(d, axis=1)[:, None]
     t, prim = make_intersector(geom.vertices, geom.faces).intersect(np.broadcast_to(cam.position, d.shape).copy(), d)
     tri = geom.vertices[geom.faces[np.maximum(prim, 0)]]
@@ -372,8 +429,14 @@ def view_preview(scn, geom, path: Path) -> Path:
     shapes = region_shapes(scn.output.regions, cam) if scn.output.regions else {}
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_regions_figure(path, shade, shapes, title=f"{scn.name}: the view and its regions", units="-",
-                             quantity="|cos| facing the imager")
+        write_regions_figure(
+            path,
+            shade,
+            shapes,
+            title=f"{scn.name}: the view and its regions",
+            units="-",
+            quantity="|cos| facing the imager",
+        )
     except OSError as e:
         raise os_problem(e, path.parent, "write the preview") from None
     return path
@@ -394,7 +457,8 @@ def region_masks(regions, cam) -> dict:
             u, v, radius = shape[1:]
             # a circle smaller than a pixel is the pixel holding its centre
             masks[name] = ((xx + 0.5 - u) ** 2 + (yy + 0.5 - v) ** 2 <= radius**2) | (
-                (xx == np.floor(u)) & (yy == np.floor(v)))
+                (xx == np.floor(u)) & (yy == np.floor(v))
+            )
     return masks
 
 
@@ -460,8 +524,10 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps
     limit = region_limit(sigma)
     pfa = getattr(scn.output, "false_alarm", 1e-3)  # a bare record (tests, validation) has the default
     st = scn.render
-    weights = {name: ((blur_adjoint(m / m.sum(), kernel) if kernel is not None else m / m.sum())
-                      if m.any() else None) for name, m in masks.items()}
+    weights = {
+        name: ((blur_adjoint(m / m.sum(), kernel) if kernel is not None else m / m.sum()) if m.any() else None)
+        for name, m in masks.items()
+    }
     if img is not None:
         d = img.replicate_diff
         var_maps = {"Ex2": d[..., 0] ** 2 / 4.0, "Ey2": d[..., 1] ** 2 / 4.0, "I": (d[..., 0] + d[..., 1]) ** 2 / 4.0}
@@ -478,7 +544,8 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps
         return float(np.sum(aw * img.truncated[..., 0])), float(np.sum(aw * img.truncated[..., 1]))
 
     ended = f"render.max_depth {st.max_depth}" + (
-        " and render.threshold with termination: temperature" if st.termination == "temperature" else "")
+        " and render.threshold with termination: temperature" if st.termination == "temperature" else ""
+    )
     means, pixels, errors, truncation = {}, {}, {}, {}
     for name, m in masks.items():
         pixels[name] = int(m.sum())
@@ -492,10 +559,12 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps
         if b is not None:
             truncation[name] = {"fraction": frac, "bound_K": b}
             if b > limit:
-                warn(f"output.regions.{name}: paths ended by {ended} carry {frac:.2%} of its power and can "
-                     f"move its mean by up to {b:.3g} K, more than {limit:.3g} K "
-                     f"({'a tenth of the noise sigma' if sigma > 0 else 'no imager noise'}): "
-                     "raise render.max_depth")
+                warn(
+                    f"output.regions.{name}: paths ended by {ended} carry {frac:.2%} of its power and can "
+                    f"move its mean by up to {b:.3g} K, more than {limit:.3g} K "
+                    f"({'a tenth of the noise sigma' if sigma > 0 else 'no imager noise'}): "
+                    "raise render.max_depth"
+                )
     names = list(masks)
     # detection: the ideal image's region means (weights mask / N, no blur) and the target's
     # blurred footprint (`detection.footprint_norm`)
@@ -503,7 +572,7 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps
     norms = {name: detection.footprint_norm(m, kernel) for name, m in masks.items() if m.any()}
     contrasts, verdicts = {}, {}
     for i, a in enumerate(names):
-        for b_name in names[i + 1:]:
+        for b_name in names[i + 1 :]:
             wa, wb = weights[a], weights[b_name]
             dw = None if wa is None or wb is None else wa - wb
             dw_ideal = None if dw is None else ideal_w[a] - ideal_w[b_name]
@@ -511,8 +580,11 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps
             pair = {}
             for c in chans:
                 k = means[a][c] - means[b_name][c]
-                scale = (detection.effective_sigma(masks[a], kernel, noise_maps[c]) if noise_maps
-                         else detection.channel_sigma(sigma, c))  # I carries sqrt(2) sigma
+                scale = (
+                    detection.effective_sigma(masks[a], kernel, noise_maps[c])
+                    if noise_maps
+                    else detection.channel_sigma(sigma, c)
+                )  # I carries sqrt(2) sigma
                 err = mc_error(dw, c)
                 snr = snr_err = k_ideal = None
                 if dw_ideal is not None and ideal is not None:
@@ -521,22 +593,40 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps
                     e_ideal = mc_error(dw_ideal, c)
                     if snr is not None and e_ideal is not None:
                         snr_err = e_ideal * norms[a] / scale
-                pair[c] = {"K": k, "ideal_K": k_ideal, "sigma": k / scale if sigma > 0 else float("nan"),
-                           "stderr_K": err,
-                           "truncation_bound_K": None if tb is None else tb * (2.0 if c == "I" else 1.0),
-                           "snr": snr, "snr_stderr": snr_err, "detectable": detection.detectable(snr),
-                           "pd": None if snr is None else detection.probability_of_detection(snr, pfa)}
+                pair[c] = {
+                    "K": k,
+                    "ideal_K": k_ideal,
+                    "sigma": k / scale if sigma > 0 else float("nan"),
+                    "stderr_K": err,
+                    "truncation_bound_K": None if tb is None else tb * (2.0 if c == "I" else 1.0),
+                    "snr": snr,
+                    "snr_stderr": snr_err,
+                    "detectable": detection.detectable(snr),
+                    "pd": None if snr is None else detection.probability_of_detection(snr, pfa),
+                }
                 if err is not None and 2.0 * err > limit * (np.sqrt(2.0) if c == "I" else 1.0):
-                    warn(f"output.regions: the contrast {a} - {b_name} in {c} has a Monte Carlo standard error "
-                         f"of {err:.3g} K: seeds will differ by more than {limit:.3g} K; raise render.spp "
-                         "or set render.target_error")
+                    warn(
+                        f"output.regions: the contrast {a} - {b_name} in {c} has a Monte Carlo standard error "
+                        f"of {err:.3g} K: seeds will differ by more than {limit:.3g} K; raise render.spp "
+                        "or set render.target_error"
+                    )
             contrasts[f"{a} - {b_name}"] = pair
             verdicts[f"{a} - {b_name}"] = detection.contrast_verdict(
-                f"{a} - {b_name}", {c: (v["snr"], v["snr_stderr"], v["ideal_K"]) for c, v in pair.items()})
-    return {"criterion": detection.CRITERION, "channel": report_channel(scn), "verdicts": verdicts,
-            "false_alarm": pfa,
-            "means": means, "pixels": pixels, "stderr": errors, "truncation": truncation,
-            "contrasts": contrasts, "noise_K": sigma, "limit_K": limit}
+                f"{a} - {b_name}", {c: (v["snr"], v["snr_stderr"], v["ideal_K"]) for c, v in pair.items()}
+            )
+    return {
+        "criterion": detection.CRITERION,
+        "channel": report_channel(scn),
+        "verdicts": verdicts,
+        "false_alarm": pfa,
+        "means": means,
+        "pixels": pixels,
+        "stderr": errors,
+        "truncation": truncation,
+        "contrasts": contrasts,
+        "noise_K": sigma,
+        "limit_K": limit,
+    }
 
 
 def truncation_summary(img, scn) -> dict:
@@ -544,9 +634,12 @@ def truncation_summary(img, scn) -> dict:
     frac, b = img.truncated[..., 0], img.truncated[..., 1]
     return {
         "max_depth": scn.render.max_depth,
-        "mean_fraction": float(frac.mean()), "max_fraction": float(frac.max()),
+        "mean_fraction": float(frac.mean()),
+        "max_fraction": float(frac.max()),
         "pixels_truncated": float((frac > 0).mean()),
-        "mean_bound_K": float(b.mean()), "p99_bound_K": float(np.quantile(b, 0.99)), "max_bound_K": float(b.max()),
+        "mean_bound_K": float(b.mean()),
+        "p99_bound_K": float(np.quantile(b, 0.99)),
+        "max_bound_K": float(b.max()),
     }
 
 
@@ -565,14 +658,28 @@ def average_images(imgs):
     return Image(
         sum(i.mean for i in imgs) / n,
         np.sqrt(sum(i.stderr**2 for i in imgs)) / n,
-        imgs[len(imgs) // 2].depth, imgs[len(imgs) // 2].material,
-        sum(i.samples for i in imgs).astype(np.int32), sum(i.rays for i in imgs), sum(i.t_isect for i in imgs),
-        sum(i.truncated for i in imgs) / n, sum(i.replicate_diff for i in imgs) / n,
+        imgs[len(imgs) // 2].depth,
+        imgs[len(imgs) // 2].material,
+        sum(i.samples for i in imgs).astype(np.int32),
+        sum(i.rays for i in imgs),
+        sum(i.t_isect for i in imgs),
+        sum(i.truncated for i in imgs) / n,
+        sum(i.replicate_diff for i in imgs) / n,
     )
 
 
-def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = None, shash: str = "",
-                    resume: bool = False, shard=None, quiet: bool = True, client=None):
+def trace_frequency(
+    res,
+    f: float,
+    *,
+    workers: int,
+    tile_root: Path | None = None,
+    shash: str = "",
+    resume: bool = False,
+    shard=None,
+    quiet: bool = True,
+    client=None,
+):
     """Trace the image at frequency f [Hz], averaged over the imager's sub-bands.
 
     Tiles are kept in ``tile_root/<folder>/`` (`tile_folders`) when a root is given (resumable),
@@ -598,14 +705,32 @@ def trace_frequency(res, f: float, *, workers: int, tile_root: Path | None = Non
         if shard is not None:
             mine = [t for t in job.tiles() if t[0] % shard[1] == shard[0] - 1]
             bar = _Progress(label, quiet)
-            render_tiles(job, workers=workers, tile_dir=tile_dir, resume=True,
-                         progress=bar, tiles=mine, counts=counts, notify=bar.note)
-            say(f"{label}: shard {shard[0]}/{shard[1]}: {counts['rendered']} tiles rendered, {counts['reused']} "
-                f"already there, in {tile_dir}; assemble with `pmmw render ... --resume` once every shard is done")
+            render_tiles(
+                job,
+                workers=workers,
+                tile_dir=tile_dir,
+                resume=True,
+                progress=bar,
+                tiles=mine,
+                counts=counts,
+                notify=bar.note,
+            )
+            say(
+                f"{label}: shard {shard[0]}/{shard[1]}: {counts['rendered']} tiles rendered, {counts['reused']} "
+                f"already there, in {tile_dir}; assemble with `pmmw render ... --resume` once every shard is done"
+            )
             continue
         bar = _Progress(label, quiet)
-        results = render_tiles(job, workers=workers, tile_dir=tile_dir, resume=resume,
-                               progress=bar, counts=counts, client=client, notify=bar.note)
+        results = render_tiles(
+            job,
+            workers=workers,
+            tile_dir=tile_dir,
+            resume=resume,
+            progress=bar,
+            counts=counts,
+            client=client,
+            notify=bar.note,
+        )
         if resume:
             say(f"{label}: --resume: {counts['reused']} tiles found, {counts['rendered']} rendered")
         imgs.append(assemble(job, results))
@@ -627,8 +752,14 @@ def receiver_of(scn):
     else:
         per = rx.pixels_per_receiver or -(-im.resolution[0] * im.resolution[1] // rx.receivers)
         tau = dwell_time(rx.frame_rate, per)
-    return Receiver(t_rec=t_rec, bandwidth=rx.bandwidth if rx.bandwidth is not None else im.bandwidth, tau=tau,
-                    mode=rx.mode, gain_fluctuation=rx.gain_fluctuation, t_ref=rx.reference_temperature)
+    return Receiver(
+        t_rec=t_rec,
+        bandwidth=rx.bandwidth if rx.bandwidth is not None else im.bandwidth,
+        tau=tau,
+        mode=rx.mode,
+        gain_fluctuation=rx.gain_fluctuation,
+        t_ref=rx.reference_temperature,
+    )
 
 
 def aperture_of(scn):
@@ -640,10 +771,18 @@ def aperture_of(scn):
     a = im.antenna
     if a is None:
         return Aperture()
-    spill = a.spillover if a.spillover is not None else (
-        gaussian_feed_spillover(a.edge_taper) if a.illumination == "gaussian" else 0.0)
-    return Aperture(kind=a.illumination, edge_taper_db=a.edge_taper or 0.0, blockage=a.blockage, spillover=spill,
-                    spillover_temperature=a.spillover_temperature)
+    spill = (
+        a.spillover
+        if a.spillover is not None
+        else (gaussian_feed_spillover(a.edge_taper) if a.illumination == "gaussian" else 0.0)
+    )
+    return Aperture(
+        kind=a.illumination,
+        edge_taper_db=a.edge_taper or 0.0,
+        blockage=a.blockage,
+        spillover=spill,
+        spillover_temperature=a.spillover_temperature,
+    )
 
 
 def imager_model(scn, job, ideal: dict, noise_maps: dict | None = None):
@@ -656,17 +795,28 @@ def imager_model(scn, job, ideal: dict, noise_maps: dict | None = None):
     if ap is not None:
         kernel = antenna_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter, ap)
     else:
-        kernel = psf_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter) if im.aperture_diameter > 0.0 else None
+        kernel = (
+            psf_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter) if im.aperture_diameter > 0.0 else None
+        )
     spill = ap.spillover if ap is not None else 0.0
-    sensor = apply_imager(ideal, pixel_angle=job.camera.pixel_angle, k0=job.k0, aperture_diameter=im.aperture_diameter,
-                          noise=im.noise, seed=scn.render.seed, kernel=kernel, spillover=spill,
-                          spillover_temperature=ap.spillover_temperature if ap is not None else 0.0,
-                          receiver=receiver_of(scn), noise_maps=noise_maps)
+    sensor = apply_imager(
+        ideal,
+        pixel_angle=job.camera.pixel_angle,
+        k0=job.k0,
+        aperture_diameter=im.aperture_diameter,
+        noise=im.noise,
+        seed=scn.render.seed,
+        kernel=kernel,
+        spillover=spill,
+        spillover_temperature=ap.spillover_temperature if ap is not None else 0.0,
+        receiver=receiver_of(scn),
+        noise_maps=noise_maps,
+    )
     return sensor, (None if kernel is None else kernel * (1.0 - spill))
 
 
 def imager_summary(scn, job, noise_maps: dict | None = None) -> dict:
-    """What a report states about the imager: ``receiver`` (NETD, per-pixel noise range: 
+    """What a report states about the imager: ``receiver`` (NETD, per-pixel noise range:
     `imaging.receiver.Receiver.summary`) and ``beam`` (`imaging.antenna.beam_report`), each when
     the imager has it."""
     out = {}
@@ -677,8 +827,10 @@ def imager_summary(scn, job, noise_maps: dict | None = None) -> dict:
     if ap is not None:
         out["beam"] = beam_report(ap, job.k0, scn.imager.aperture_diameter, job.camera.pixel_angle)
         if out["beam"]["pitch_over_nyquist"] > 1.0 + 1e-9:
-            out["beam"]["sampling"] += (f" ({out['beam']['pitch_over_nyquist']:.3g} x the Nyquist pitch: "
-                                        "raise imager.resolution or narrow imager.fov to sample the beam)")
+            out["beam"]["sampling"] += (
+                f" ({out['beam']['pitch_over_nyquist']:.3g} x the Nyquist pitch: "
+                "raise imager.resolution or narrow imager.fov to sample the beam)"
+            )
     return out
 
 
@@ -719,7 +871,8 @@ def output_names(scn, f: float) -> dict:
         "previews": {c: f"previews/{stem}_{c}.png" for c in preview_channels(scn)},
         "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
         "aux_previews": {a: f"previews/{stem}_{a}.png" for a in ("depth", "material") if a in scn.output.aux}
-        if on else {},
+        if on
+        else {},
         "regions_preview": {"regions": f"previews/{stem}_regions.png"} if on and scn.output.regions else {},
         "reports": [f"report{suffix}.json", f"report{suffix}.md"],
     }
@@ -728,13 +881,20 @@ def output_names(scn, f: float) -> dict:
 def _imager_words(scn) -> str:
     im = scn.imager
     parts = ([f"{im.aperture_diameter:g} m aperture"] if im.aperture_diameter > 0 else []) + (
-        [f"{im.noise:g} K noise"] if im.noise > 0 else [])
+        [f"{im.noise:g} K noise"] if im.noise > 0 else []
+    )
     return ", ".join(parts) or "ideal"
 
 
 def _all_outputs(names: dict) -> list[str]:
-    return [names["exr"], *names["previews"].values(), *names["side_by_side"].values(),
-            *names["aux_previews"].values(), *names["regions_preview"].values(), *names["reports"]]
+    return [
+        names["exr"],
+        *names["previews"].values(),
+        *names["side_by_side"].values(),
+        *names["aux_previews"].values(),
+        *names["regions_preview"].values(),
+        *names["reports"],
+    ]
 
 
 # [s] per camera path per core: the shipped landing scene on a 2-core laptop (docs/benchmarks.md);
@@ -775,12 +935,17 @@ def estimate_resources(scn, triangles: int, workers: int) -> dict:
     nf = len(scn.frequencies)
     n_chan = 2 * len(scn.output.channels) + 6
     paths = px * scn.render.spp * bands * nf
-    parent = (PARENT_BASE_BYTES + px * (TILE_BYTES_PER_PIXEL * (bands + 2) + 12 * n_chan)
-              + PARENT_BYTES_PER_TRIANGLE * triangles + _sky_texture_bytes(scn))
+    parent = (
+        PARENT_BASE_BYTES
+        + px * (TILE_BYTES_PER_PIXEL * (bands + 2) + 12 * n_chan)
+        + PARENT_BYTES_PER_TRIANGLE * triangles
+        + _sky_texture_bytes(scn)
+    )
     worker = WORKER_BASE_BYTES + WORKER_BYTES_PER_TRIANGLE * triangles
     load = PARENT_BASE_BYTES + LOAD_BYTES_PER_TRIANGLE * triangles
     return {
-        "pixels": px, "camera_paths_at_most": paths,
+        "pixels": px,
+        "camera_paths_at_most": paths,
         "memory_bytes": int(max(load, parent + max(1, workers) * worker)),
         "disk_bytes": int(px * (TILE_BYTES_PER_PIXEL * bands + 4 * n_chan) * nf),
         "time_s_rough": paths * SECONDS_PER_PATH / max(1, workers),
@@ -818,7 +983,9 @@ def check_memory(est: dict, source, force: bool = False) -> None:
     if free is not None and est["memory_bytes"] > free and not force:
         raise UserError(
             f"the render needs about {est['memory_bytes'] / 1e9:.3g} GB of memory and {free / 1e9:.3g} GB are "
-            "available: lower imager.resolution or render.workers (or pass --force to try anyway)", file=source)
+            "available: lower imager.resolution or render.workers (or pass --force to try anyway)",
+            file=source,
+        )
 
 
 def tile_manifest(scn, shash: str) -> dict:
@@ -836,8 +1003,9 @@ def tile_folders(scn, f: float, shash: str) -> list[tuple[float, str, str]]:
     bands = band_frequencies(f, scn.imager.bandwidth, scn.imager.band_samples)
     if len(bands) == 1:
         return [(bands[0], stem, f"{stem}-{shash}")]
-    return [(fk, f"{stem}@{fk / 1e9:.6g}GHz", f"{stem}@band{k + 1}of{len(bands)}-{shash}")
-            for k, fk in enumerate(bands)]
+    return [
+        (fk, f"{stem}@{fk / 1e9:.6g}GHz", f"{stem}@band{k + 1}of{len(bands)}-{shash}") for k, fk in enumerate(bands)
+    ]
 
 
 def other_tile_folders(tile_root: Path, scn, shash: str) -> list[tuple[Path, dict]]:
@@ -864,14 +1032,18 @@ def refuse_other_tiles(tile_root: Path, scn, shash: str, what: str) -> None:
         if not any(d.glob("tile_*.npz")):
             continue
         now = traced_settings(scn)
-        diff = _differences(json.loads(json.dumps(old.get("scenario"), default=str)),
-                            json.loads(json.dumps(now, default=str)))
+        diff = _differences(
+            json.loads(json.dumps(old.get("scenario"), default=str)), json.loads(json.dumps(now, default=str))
+        )
         if old.get("version") != __version__:
             diff.append(f"pmmw version: {old.get('version')} -> {__version__}")
         why = "; ".join(diff[:6]) or "the same settings but other input files (a mesh, texture or material changed)"
-        raise UserError(f"{d.name} holds tiles of this scenario rendered from other inputs ({why}); run every "
-                        "shard with the same scenario, or render without --resume to start afresh (which "
-                        "deletes them)", file=what)
+        raise UserError(
+            f"{d.name} holds tiles of this scenario rendered from other inputs ({why}); run every "
+            "shard with the same scenario, or render without --resume to start afresh (which "
+            "deletes them)",
+            file=what,
+        )
 
 
 def remove_stale_tiles(tile_root: Path, out_dir: Path, scn, shash: str) -> tuple[int, int]:
@@ -883,9 +1055,25 @@ def remove_stale_tiles(tile_root: Path, out_dir: Path, scn, shash: str) -> tuple
     return removed, len(stale) - removed
 
 
-def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, resume=False,
-           quiet=False, keep_tiles=False, shard=None, force=False, executor="local", scheduler=None,
-           cluster=None, data=None, values=None) -> list[Path]:
+def render(
+    path,
+    overrides=(),
+    *,
+    out=None,
+    spp=None,
+    workers=None,
+    seed=None,
+    resume=False,
+    quiet=False,
+    keep_tiles=False,
+    shard=None,
+    force=False,
+    executor="local",
+    scheduler=None,
+    cluster=None,
+    data=None,
+    values=None,
+) -> list[Path]:
     """The ``pmmw render`` job. Returns the EXR paths written.
 
     With ``shard=(i, n)`` only tiles whose index is i modulo n are rendered into the tile folder
@@ -908,8 +1096,11 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     if executor == "local" and (scheduler or cluster):
         executor = "dask"
     if executor == "dask" and shard is not None:
-        raise UserError("--shard splits a render into separate jobs; with --executor dask the cluster renders "
-                        "every tile of one job: use one or the other", "--shard")
+        raise UserError(
+            "--shard splits a render into separate jobs; with --executor dask the cluster renders "
+            "every tile of one job: use one or the other",
+            "--shard",
+        )
     if executor == "dask" and scheduler and cluster is None:  # a wrong address told before the scene loads
         from pmmw.distributed import probe_scheduler
 
@@ -926,8 +1117,15 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
     names = {f: output_names(scn, f) for f in scn.frequencies}
     inputs = input_files(scn)
     where = "output.dir" if out is None else "--out"
-    check_outputs(out_dir, [n for f in scn.frequencies for n in _all_outputs(names[f])],
-                  inputs, key=where, disk_bytes=est["disk_bytes"], force=force, scenario_name=scn.name)
+    check_outputs(
+        out_dir,
+        [n for f in scn.frequencies for n in _all_outputs(names[f])],
+        inputs,
+        key=where,
+        disk_bytes=est["disk_bytes"],
+        force=force,
+        scenario_name=scn.name,
+    )
     check_memory(est, scn.source_file, force)
     shash = scenario_hash(scn, res.db, inputs)
     tile_root = out_dir / TILE_ROOT
@@ -938,32 +1136,68 @@ def render(path, overrides=(), *, out=None, spp=None, workers=None, seed=None, r
         elif deletable(tile_root, out_dir):
             removed, kept = remove_stale_tiles(tile_root, out_dir, scn, shash)
             if removed and not quiet:
-                say(f"removed {removed} tile folder(s) of an earlier version of this scenario (other inputs: never "
-                    "resumable)")
+                say(
+                    f"removed {removed} tile folder(s) of an earlier version of this scenario (other inputs: never "
+                    "resumable)"
+                )
             if kept:
-                warn(f"kept {kept} tile folder(s) of an earlier version of this scenario in {tile_root}: they hold "
-                     "files pmmw did not write")
+                warn(
+                    f"kept {kept} tile folder(s) of an earlier version of this scenario in {tile_root}: they hold "
+                    "files pmmw did not write"
+                )
         for f in scn.frequencies:  # every tile folder checked before the first ray
             for _, _, folder in tile_folders(scn, f, shash):
                 claim(tile_root / folder, tile_manifest(scn, shash), where)
         t_resolve = time.perf_counter() - t0
         timings.mark("outputs checked")
-        written, tile_dirs = _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolve,
-                                                n_workers=n_workers, resume=resume, shard=shard, quiet=quiet,
-                                                executor=executor, scheduler=scheduler, cluster=cluster)
+        written, tile_dirs = _render_and_commit(
+            res,
+            names,
+            out_dir,
+            tile_root,
+            shash,
+            lock,
+            t0,
+            t_resolve,
+            n_workers=n_workers,
+            resume=resume,
+            shard=shard,
+            quiet=quiet,
+            executor=executor,
+            scheduler=scheduler,
+            cluster=cluster,
+        )
         if written and not keep_tiles:  # only once every output is in place: until then tiles resume
             if deletable(tile_root, out_dir):
                 for d in tile_dirs:
                     remove_folder(d, out_dir)
                 remove_root_if_empty(tile_root, out_dir)
             else:
-                say(f"tiles kept in {tile_root}: it links out of the output folder, and pmmw never deletes "
-                    "through a link")
+                say(
+                    f"tiles kept in {tile_root}: it links out of the output folder, and pmmw never deletes "
+                    "through a link"
+                )
     return written
 
 
-def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolve, *, n_workers, resume, shard,
-                       quiet, executor, scheduler, cluster):
+def _render_and_commit(
+    res,
+    names,
+    out_dir,
+    tile_root,
+    shash,
+    lock,
+    t0,
+    t_resolve,
+    *,
+    n_workers,
+    resume,
+    shard,
+    quiet,
+    executor,
+    scheduler,
+    cluster,
+):
     """Trace every frequency of the resolved scenario, then stage its outputs and commit them
     (reports last) while ``lock`` is still this run's. Returns (EXRs written, tile folders)."""
     scn = res.scenario
@@ -978,9 +1212,17 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
             t1 = time.perf_counter()
             try:
                 with timings.phase("trace"):
-                    job, img, dirs = trace_frequency(res, f, workers=n_workers, tile_root=tile_root,
-                                                     shash=shash, resume=resume, shard=shard, quiet=quiet,
-                                                     client=client)
+                    job, img, dirs = trace_frequency(
+                        res,
+                        f,
+                        workers=n_workers,
+                        tile_root=tile_root,
+                        shash=shash,
+                        resume=resume,
+                        shard=shard,
+                        quiet=quiet,
+                        client=client,
+                    )
             except OSError as e:  # saving tiles: disk full, quota, a folder gone read-only
                 raise os_problem(e, tile_root, "save the finished tiles") from None
             tile_dirs += dirs
@@ -988,15 +1230,17 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
                 continue
             t_trace = time.perf_counter() - t1
             staged = staging.enter_context(Staging(out_dir))
-            renders.append((staged, _finish_frequency(scn, f, job, img, names[f], staged, shash, t_trace,
-                                                      n_workers)))
+            renders.append((staged, _finish_frequency(scn, f, job, img, names[f], staged, shash, t_trace, n_workers)))
             written.append(out_dir / names[f]["exr"])
         total = time.perf_counter() - t0
         for staged, r in renders:
             report = {
-                "name": _stem(scn, r["frequency_hz"]), "version": __version__, **r,
+                "name": _stem(scn, r["frequency_hz"]),
+                "version": __version__,
+                **r,
                 "timing": {"resolve_s": round(t_resolve, 3), **r["timing"], "total_s": round(total, 3)},
-                "warnings": collected_warnings(), "scenario": scenario_to_display(scn),
+                "warnings": collected_warnings(),
+                "scenario": scenario_to_display(scn),
             }
             reports = names[r["frequency_hz"]]["reports"]
             with timings.phase("report"):
@@ -1004,11 +1248,12 @@ def _render_and_commit(res, names, out_dir, tile_root, shash, lock, t0, t_resolv
                     write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
                 except OSError as e:
                     raise os_problem(e, out_dir, "write the report") from None
-                staged.commit(_all_outputs(names[r["frequency_hz"]])[:-len(reports)], last=reports, check=lock.check)
+                staged.commit(_all_outputs(names[r["frequency_hz"]])[: -len(reports)], last=reports, check=lock.check)
             say(
                 f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
                 f"{r['rays'] / 1e6:.2f} M rays, "
-                f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}", result=True
+                f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}",
+                result=True,
             )
     return written, tile_dirs
 
@@ -1036,20 +1281,30 @@ def frequency_images(scn, f, job, img, shash: str = "") -> dict:
     channels.update(aux_channels(img, scn.output.aux))
     cam = job.camera
     attrs = {
-        "pmmw:version": __version__, "pmmw:units": "K (Rayleigh-Jeans brightness temperature)",
-        "pmmw:frequency_hz": float(f), "pmmw:fov_deg": float(np.degrees(cam.fov)),
+        "pmmw:version": __version__,
+        "pmmw:units": "K (Rayleigh-Jeans brightness temperature)",
+        "pmmw:frequency_hz": float(f),
+        "pmmw:fov_deg": float(np.degrees(cam.fov)),
         "pmmw:resolution": f"{cam.width}x{cam.height}",
         "pmmw:imager_position_m": " ".join(f"{v:g}" for v in cam.position),
         "pmmw:imager_x": " ".join(f"{v:.9g}" for v in cam.x),
         "pmmw:imager_y": " ".join(f"{v:.9g}" for v in cam.y),
         "pmmw:imager_k": " ".join(f"{v:.9g}" for v in cam.k),
-        "pmmw:scenario": str(scn.source_file), "pmmw:scenario_hash": shash,
-        "pmmw:spp": int(scn.render.spp), "pmmw:seed": int(scn.render.seed),
+        "pmmw:scenario": str(scn.source_file),
+        "pmmw:scenario_hash": shash,
+        "pmmw:spp": int(scn.render.spp),
+        "pmmw:seed": int(scn.render.seed),
         "pmmw:convention": "x right, y up, k viewing; I=Ex2+Ey2, Q=Ex2-Ey2, U=2Re(ExEy*), V=2Im(ExEy*) (Murakowski 2014 eq. 2.12)",
         "pmmw:materials": ",".join(job.media.ids),
     }
-    return {"ideal": ideal, "sensor": sensor, "kernel": kernel, "channels": channels, "attrs": attrs,
-            "noise_maps": noise_maps or None}
+    return {
+        "ideal": ideal,
+        "sensor": sensor,
+        "kernel": kernel,
+        "channels": channels,
+        "attrs": attrs,
+        "noise_maps": noise_maps or None,
+    }
 
 
 def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
@@ -1062,7 +1317,9 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     ideal, sensor, kernel = images["ideal"], images["sensor"], images["kernel"]
     cam = job.camera
     with timings.phase("region statistics"):
-        regions = region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
+        regions = (
+            region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
+        )
     try:
         with timings.phase("EXR"):
             write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
@@ -1083,13 +1340,21 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
         **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
         **({"regions": regions} if regions else {}),
         **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
-        "frequency_hz": f, "output_exr": str(staged.out_dir / names["exr"]), "channels": stats,
+        "frequency_hz": f,
+        "output_exr": str(staged.out_dir / names["exr"]),
+        "channels": stats,
         "previews": {**names["previews"], **{f"aux.{a}": rel for a, rel in names["aux_previews"].items()}},
         **({"regions_preview": names["regions_preview"]["regions"]} if names["regions_preview"] else {}),
-        "rays": img.rays, "timing": {"trace_s": round(t_trace, 3), "intersect_s": round(img.t_isect, 3),
-                                     "frequency_total_s": round(t_total, 3)},
+        "rays": img.rays,
+        "timing": {
+            "trace_s": round(t_trace, 3),
+            "intersect_s": round(img.t_isect, 3),
+            "frequency_total_s": round(t_total, 3),
+        },
         "mean_samples_per_pixel": float(img.samples.mean()),
-        "workers": n_workers, "pixels": cam.width * cam.height, "spp": scn.render.spp,
+        "workers": n_workers,
+        "pixels": cam.width * cam.height,
+        "spp": scn.render.spp,
     }
 
 
@@ -1102,20 +1367,30 @@ def write_previews(scn, f, job, img, names, path_of, sensor, ideal, regions) -> 
     for c, rel in names["previews"].items():
         shown[c] = write_figure(path_of(rel), [(None, sensor[c])], title=label.format(c))
     for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
-        write_figure(path_of(rel), [("ideal (before the imager)", ideal[c]),
-                                    (f"sensor ({_imager_words(scn)})", sensor[c])],
-                     title=label.format(c))
+        write_figure(
+            path_of(rel),
+            [("ideal (before the imager)", ideal[c]), (f"sensor ({_imager_words(scn)})", sensor[c])],
+            title=label.format(c),
+        )
     if names["regions_preview"]:
         c = regions["channel"]
         first = next(iter(regions["verdicts"].values()), None)
-        write_regions_figure(path_of(names["regions_preview"]["regions"]), sensor[c],
-                             region_shapes(scn.output.regions, job.camera), title=label.format(f"{c}, regions"),
-                             caption=first)
+        write_regions_figure(
+            path_of(names["regions_preview"]["regions"]),
+            sensor[c],
+            region_shapes(scn.output.regions, job.camera),
+            title=label.format(f"{c}, regions"),
+            caption=first,
+        )
     if "depth" in names["aux_previews"]:
         write_depth_figure(path_of(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))
     if "material" in names["aux_previews"]:
-        write_material_figure(path_of(names["aux_previews"]["material"]), img.material, job.media.ids,
-                              title=label.format("material of the first hit"))
+        write_material_figure(
+            path_of(names["aux_previews"]["material"]),
+            img.material,
+            job.media.ids,
+            title=label.format("material of the first hit"),
+        )
     return shown
 
 
@@ -1132,14 +1407,20 @@ def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
     per_object = {}
     for i, (name, entry) in enumerate(zip(geom.objects, scn.scene)):
         v = geom.vertices[np.unique(geom.faces[geom.face_object == i])]
-        per_object[name] = {"bounds_m": [[round(float(x), 4) for x in v.min(axis=0)],
-                                         [round(float(x), 4) for x in v.max(axis=0)]],
-                            "file_up_axis": file_up_axis(entry.mesh, entry.up_axis)}
-    out = {"scenario": scenario_to_display(scn), "geometry": {
-        "triangles": int(geom.faces.shape[0]), "objects": per_object,
-        "watertight": dict(zip(geom.objects, map(bool, geom.object_watertight))),
-        "bounds_m": [list(map(float, geom.bounds[0])), list(map(float, geom.bounds[1]))],
-    }, "media": {}}
+        per_object[name] = {
+            "bounds_m": [[round(float(x), 4) for x in v.min(axis=0)], [round(float(x), 4) for x in v.max(axis=0)]],
+            "file_up_axis": file_up_axis(entry.mesh, entry.up_axis),
+        }
+    out = {
+        "scenario": scenario_to_display(scn),
+        "geometry": {
+            "triangles": int(geom.faces.shape[0]),
+            "objects": per_object,
+            "watertight": dict(zip(geom.objects, map(bool, geom.object_watertight))),
+            "bounds_m": [list(map(float, geom.bounds[0])), list(map(float, geom.bounds[1]))],
+        },
+        "media": {},
+    }
     if scn.output.regions:
         out["regions"] = check_regions(scn)
     for f in scn.frequencies:
@@ -1148,13 +1429,19 @@ def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
         out["media"][f"{f / 1e9:g} GHz"] = {
             mid: {
                 "kind": kinds[int(media.kind[i])],
-                **({"eps": [float(media.eps[i].real), float(media.eps[i].imag)]}
-                   if int(media.kind[i]) not in (METAL, BLACKBODY) else {}),
+                **(
+                    {"eps": [float(media.eps[i].real), float(media.eps[i].imag)]}
+                    if int(media.kind[i]) not in (METAL, BLACKBODY)
+                    else {}
+                ),
                 "temperature_K": float(media.temperature[i]),
                 **({"loss_dB_per_km": float(media.alpha[i] * 1e3 * 10 / np.log(10))} if media.alpha[i] > 0 else {}),
                 **({"coating_layers": int(media.coating[i].eps.size)} if media.coating[i] is not None else {}),
-                **({"rough_coating_layers": [repr(layer.roughness) for layer in media.rough_layers(i)]}
-                   if media.rough_layers(i) else {}),
+                **(
+                    {"rough_coating_layers": [repr(layer.roughness) for layer in media.rough_layers(i)]}
+                    if media.rough_layers(i)
+                    else {}
+                ),
                 **({"roughness": repr(media.rough(i))} if media.rough(i) is not None else {}),
                 **({"bump": repr(media.bump_map(i))} if media.bump_map(i) is not None else {}),
             }
@@ -1162,8 +1449,10 @@ def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
         }
     im = scn.imager
     pixel = SimpleNamespace(pixel_angle=2.0 * np.arctan(np.tan(im.fov / 2.0) / im.resolution[0]))
-    imager = {f"{f / 1e9:g} GHz": imager_summary(scn, SimpleNamespace(k0=2.0 * np.pi * f / C0, camera=pixel))
-              for f in scn.frequencies}
+    imager = {
+        f"{f / 1e9:g} GHz": imager_summary(scn, SimpleNamespace(k0=2.0 * np.pi * f / C0, camera=pixel))
+        for f in scn.frequencies
+    }
     if any(imager.values()):  # NETD and the beam, as the render's report states them
         out["imager"] = imager
     if scn.sky.model == "texture":  # read and check it now, as render would
@@ -1173,10 +1462,12 @@ def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
         for f in scn.frequencies:
             sky = make_sky(scn.sky, f)
             out["sky"][f"{f / 1e9:g} GHz"] = {
-                "model": "slab", "temperature_K": sky.temperature,
+                "model": "slab",
+                "temperature_K": sky.temperature,
                 "zenith_opacity_Np": round(sky.tau, 5),
-                "zenith_opacity_from": "sky.zenith_opacity" if scn.sky.zenith_opacity is not None else
-                "default: clear US standard atmosphere (18.5 K at 35 GHz, 46 K at 95 GHz at the zenith)",
+                "zenith_opacity_from": "sky.zenith_opacity"
+                if scn.sky.zenith_opacity is not None
+                else "default: clear US standard atmosphere (18.5 K at 35 GHz, 46 K at 95 GHz at the zenith)",
                 "zenith_K": round(float(sky.zenith_angle_temperature(np.pi / 2)), 2),
                 "elevation_10deg_K": round(float(sky.zenith_angle_temperature(np.radians(10.0))), 2),
             }
@@ -1190,7 +1481,9 @@ def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
         "time_s_rough": round(est["time_s_rough"], 1),
     }
     if free is not None and est["memory_bytes"] > free:
-        warn(f"the render needs about {est['memory_bytes'] / 1e9:.3g} GB of memory and {free / 1e9:.3g} GB are "
-             "available: `pmmw render` will refuse it without --force")
+        warn(
+            f"the render needs about {est['memory_bytes'] / 1e9:.3g} GB of memory and {free / 1e9:.3g} GB are "
+            "available: `pmmw render` will refuse it without --force"
+        )
     out["warnings"] = collected_warnings()
     return out

@@ -39,7 +39,12 @@ def parse_layer(text: str):
     base = parse_quantity(parts[1], "length", file="--layer", key=kind)
     top = parse_quantity(parts[2], "length", file="--layer", key=kind)
     if kind == "rain":
-        return {"kind": kind, "base": base, "top": top, "rain_rate": f"{parse_quantity(parts[3], 'rate', file='--layer', key=kind) * 3.6e6} mm/h"}
+        return {
+            "kind": kind,
+            "base": base,
+            "top": top,
+            "rain_rate": f"{parse_quantity(parts[3], 'rate', file='--layer', key=kind) * 3.6e6} mm/h",
+        }
     return {"kind": kind, "base": base, "top": top, "liquid_water": parts[3]}
 
 
@@ -54,7 +59,8 @@ def parse_elevations(value, file="--elevations", key: str | None = None) -> list
         except ValueError:
             raise UserError(f"{example}, got {value!r}", file, key) from None
     elif isinstance(value, (list, tuple, np.ndarray)) and all(
-            isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) for v in value):
+        isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) for v in value
+    ):
         values = [float(v) for v in value]
     else:
         raise UserError(f"{example} (a list of numbers), got {value!r}", file, key)
@@ -66,8 +72,9 @@ def parse_elevations(value, file="--elevations", key: str | None = None) -> list
     return values
 
 
-def load_atmosphere(file: Path | None, profile: str | None, layers: list[str], ground_temperature, humidity,
-                    data: dict | None = None):
+def load_atmosphere(
+    file: Path | None, profile: str | None, layers: list[str], ground_temperature, humidity, data: dict | None = None
+):
     """An `Atmosphere` record from a YAML file (or the mapping ``data``) and/or command-line
     options (options win)."""
     from pmmw.config.schema import AtmosphereConfig
@@ -105,8 +112,16 @@ def _model(atm, f, layers=None):
     from pmmw.atmosphere.model import Atmosphere, AtmosphereLayer, AtmosphereModel
 
     lay = atm.weather_at(f, file="pmmw sky") if layers is None else tuple(AtmosphereLayer(*layer) for layer in layers)
-    return AtmosphereModel(Atmosphere(profile=atm.profile, ground_temperature=atm.ground_temperature,
-                                      humidity=atm.humidity, layers=lay, ground_altitude=atm.ground_altitude), f)
+    return AtmosphereModel(
+        Atmosphere(
+            profile=atm.profile,
+            ground_temperature=atm.ground_temperature,
+            humidity=atm.humidity,
+            layers=lay,
+            ground_altitude=atm.ground_altitude,
+        ),
+        f,
+    )
 
 
 def sky_table(atm, f: float, elevations_deg) -> np.ndarray:

@@ -102,8 +102,35 @@ _KINDS: dict[str, tuple[str, str | None, str, str]] = {
 }
 
 # units a misspelt one is compared with, case-insensitively ('95 Ghz' -> did you mean 'GHz'?)
-_COMMON_UNITS = ("Hz", "kHz", "MHz", "GHz", "THz", "nm", "um", "mm", "cm", "m", "km", "deg", "rad", "mrad", "K",
-                 "mK", "degC", "degF", "g/m3", "kg/m3", "mm/h", "dB/km", "Np/km", "dB/m", "s", "ms", "us")
+_COMMON_UNITS = (
+    "Hz",
+    "kHz",
+    "MHz",
+    "GHz",
+    "THz",
+    "nm",
+    "um",
+    "mm",
+    "cm",
+    "m",
+    "km",
+    "deg",
+    "rad",
+    "mrad",
+    "K",
+    "mK",
+    "degC",
+    "degF",
+    "g/m3",
+    "kg/m3",
+    "mm/h",
+    "dB/km",
+    "Np/km",
+    "dB/m",
+    "s",
+    "ms",
+    "us",
+)
 
 
 def _case_hint(text: str) -> str:
@@ -193,17 +220,26 @@ def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit:
         raise fail(f"is not {_a(noun)}{hint}")
     q = reg.Quantity(number, units)
     if kind == "temperature" and any(name.startswith("delta_") for name, _ in q.unit_items()):
-        raise UserError(f"{value!r} is a temperature difference; give an absolute temperature, "
-                        f"e.g. {example}", file, key)
+        raise UserError(
+            f"{value!r} is a temperature difference; give an absolute temperature, e.g. {example}", file, key
+        )
     if kind == "temperature_difference" and reg.Quantity(0.0, units).to(target).magnitude != 0.0:
-        raise UserError(f"{value!r} is on an offset scale, ambiguous for a temperature difference; "
-                        f"give kelvin or delta_degC (2 K = 2 delta_degC), e.g. {example}", file, key)
+        raise UserError(
+            f"{value!r} is on an offset scale, ambiguous for a temperature difference; "
+            f"give kelvin or delta_degC (2 K = 2 delta_degC), e.g. {example}",
+            file,
+            key,
+        )
     out = float(q.to(target).magnitude)
     if not math.isfinite(out):
         raise UserError(f"{value!r} is not a finite {noun}", file, key)
     if kind == "temperature" and not 0.0 <= out <= TEMPERATURE_MAX:
-        raise UserError(f"{value!r} is {'below absolute zero' if out < 0.0 else 'hotter than pmmw takes'}; "
-                        f"temperatures are 0 K to {TEMPERATURE_MAX:g} K", file, key)
+        raise UserError(
+            f"{value!r} is {'below absolute zero' if out < 0.0 else 'hotter than pmmw takes'}; "
+            f"temperatures are 0 K to {TEMPERATURE_MAX:g} K",
+            file,
+            key,
+        )
     if kind == "attenuation" and out < 0.0:
         raise UserError(f"attenuation must be >= 0, got {value!r}", file, key)
     return out

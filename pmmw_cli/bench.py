@@ -66,8 +66,13 @@ def reference(job, workers, cache_dir: Path, shash: str, ref_spp: int):
         with np.load(path) as z:
             return z["mean"], f"{ref_spp} spp split render (cached {path.name})"
     st = dataclasses.replace(
-        job.settings, spp=ref_spp, strategy="split", termination="temperature",
-        threshold=REFERENCE_THRESHOLD, max_depth=job.settings.max_depth + REFERENCE_EXTRA_DEPTH, target_error=None,
+        job.settings,
+        spp=ref_spp,
+        strategy="split",
+        termination="temperature",
+        threshold=REFERENCE_THRESHOLD,
+        max_depth=job.settings.max_depth + REFERENCE_EXTRA_DEPTH,
+        target_error=None,
     )
     img, _ = _render(dataclasses.replace(job, settings=st), workers)
     save_npz_atomic(path, mean=img.mean)
@@ -83,7 +88,7 @@ def _errors(mean, ref, kern):
             else:
                 a = np.stack([blur(mean[..., c], kern) for c in (0, 1)], axis=-1)
                 b = np.stack([blur(ref[..., c], kern) for c in (0, 1)], axis=-1)
-        d = (a[..., :2] - b[..., :2])
+        d = a[..., :2] - b[..., :2]
         out[f"{label}_rms"] = float(np.sqrt(np.mean(d * d)))
         out[f"{label}_max"] = float(np.max(np.abs(d)))
     return out
@@ -100,16 +105,32 @@ def machine() -> str:
         pass
     mem = ""
     try:
-        kb = int(next(line for line in Path("/proc/meminfo").read_text().splitlines() if line.startswith("MemTotal")).split()[1])
+        kb = int(
+            next(
+                line for line in Path("/proc/meminfo").read_text().splitlines() if line.startswith("MemTotal")
+            ).split()[1]
+        )
         mem = f", {kb / 2**20:.0f} GiB"
     except (OSError, StopIteration, ValueError):
         pass
     return f"{cpu}, {default_workers()} cores{mem}, {platform.system()} {platform.release()}, Python {platform.python_version()}"
 
 
-def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, ref_spp=256, workers=None,
-          overrides=(), out_md=Path("docs/benchmarks.md"), cache_dir=Path(".pmmw-cache"), command=None,
-          with_scaling=False, render_times=(), skip_configs=()):
+def bench(
+    scenarios,
+    *,
+    spp_list=(1, 2, 4, 8, 16, 32),
+    strategies=STRATEGIES,
+    ref_spp=256,
+    workers=None,
+    overrides=(),
+    out_md=Path("docs/benchmarks.md"),
+    cache_dir=Path(".pmmw-cache"),
+    command=None,
+    with_scaling=False,
+    render_times=(),
+    skip_configs=(),
+):
     """Run the benchmark and write ``out_md`` and one plot per scenario beside it."""
     workers = workers or default_workers()
     sections, all_rows = [], {}
@@ -122,21 +143,32 @@ def bench(scenarios, *, spp_list=(1, 2, 4, 8, 16, 32), strategies=STRATEGIES, re
         t0 = time.perf_counter()
         ref, ref_desc = reference(job, workers, Path(cache_dir), shash, ref_spp)
         t_ref = time.perf_counter() - t0
-        kern = (psf_kernel(job.camera.pixel_angle, job.k0, scn.imager.aperture_diameter)
-                if scn.imager.aperture_diameter > 0 else None)
+        kern = (
+            psf_kernel(job.camera.pixel_angle, job.k0, scn.imager.aperture_diameter)
+            if scn.imager.aperture_diameter > 0
+            else None
+        )
         rows = []
         for strategy in strategies:
             for spp in spp_list:
                 st = dataclasses.replace(job.settings, spp=spp, strategy=strategy, target_error=None)
                 img, wall = _render(dataclasses.replace(job, settings=st), workers)
-                rows.append({
-                    "strategy": strategy, "spp": spp, "wall_s": wall, "rays": img.rays,
-                    "isect_s": img.t_isect, "ratio": (wall * workers) / img.t_isect if img.t_isect > 0 else float("nan"),
-                    **_errors(img.mean, ref, kern),
-                })
-                print(f"{scn.name} {strategy:10s} spp={spp:4d}: {wall:7.2f} s, {img.rays / 1e6:7.2f} M rays, "
-                      f"ideal RMS {rows[-1]['ideal_rms']:.3f} K, sensor RMS {rows[-1]['sensor_rms']:.3f} K",
-                      file=sys.stderr)
+                rows.append(
+                    {
+                        "strategy": strategy,
+                        "spp": spp,
+                        "wall_s": wall,
+                        "rays": img.rays,
+                        "isect_s": img.t_isect,
+                        "ratio": (wall * workers) / img.t_isect if img.t_isect > 0 else float("nan"),
+                        **_errors(img.mean, ref, kern),
+                    }
+                )
+                print(
+                    f"{scn.name} {strategy:10s} spp={spp:4d}: {wall:7.2f} s, {img.rays / 1e6:7.2f} M rays, "
+                    f"ideal RMS {rows[-1]['ideal_rms']:.3f} K, sensor RMS {rows[-1]['sensor_rms']:.3f} K",
+                    file=sys.stderr,
+                )
         plot = out_md.parent / f"benchmarks_{scn.name}.png"
         _plot(rows, plot, scn.name, scn.imager.noise)
         all_rows[scn.name] = rows
@@ -195,7 +227,9 @@ def _plot(rows, path: Path, name: str, noise: float):
     for strategy in dict.fromkeys(r["strategy"] for r in rows):
         rs = [r for r in rows if r["strategy"] == strategy]
         ax.loglog([r["wall_s"] for r in rs], [max(r["ideal_rms"], 1e-6) for r in rs], "o-", label=f"{strategy}: ideal")
-        ax.loglog([r["wall_s"] for r in rs], [max(r["sensor_rms"], 1e-6) for r in rs], "s--", label=f"{strategy}: sensor")
+        ax.loglog(
+            [r["wall_s"] for r in rs], [max(r["sensor_rms"], 1e-6) for r in rs], "s--", label=f"{strategy}: sensor"
+        )
     if noise > 0:
         ax.axhline(0.1 * noise, color="grey", lw=0.8, ls=":", label="0.1 x imager noise")
     ax.set_xlabel("wall time [s]")
@@ -238,19 +272,37 @@ def scaling(levels=(2, 3, 4, 5, 6, 7, 8), resolution=(128, 128), spp=4, workers=
         fmed = np.concatenate([np.full(len(ball.faces), 1), np.full(len(ground.faces), 2)]).astype(np.int32)
         k0 = 2 * np.pi * 35e9 / C0
         eps = np.array([1 + 0j, 2.5 + 0.6j, 3.9 + 0.56j])
-        media = Media(["ambient", "ball", "ground"], eps, np.zeros(3, np.int8), np.array([290.0, 300.0, 300.0]),
-                      np.array([0.0, *(2 * k0 * np.sqrt(eps[1:]).imag)]), (None, None, None))
+        media = Media(
+            ["ambient", "ball", "ground"],
+            eps,
+            np.zeros(3, np.int8),
+            np.array([290.0, 300.0, 300.0]),
+            np.array([0.0, *(2 * k0 * np.sqrt(eps[1:]).imag)]),
+            (None, None, None),
+        )
         cam = Camera.look_at([0, 0, 1.5], [0, 4, 1.2], [0, 0, 1], np.radians(40), resolution)
-        job = TraceJob(verts, faces, normals, fmed, media, cam, UniformSky(30.0, 290.0), 35e9,
-                       RenderSettings(spp=spp, max_depth=6, threshold=1e-3, tile=64))
+        job = TraceJob(
+            verts,
+            faces,
+            normals,
+            fmed,
+            media,
+            cam,
+            UniformSky(30.0, 290.0),
+            35e9,
+            RenderSettings(spp=spp, max_depth=6, threshold=1e-3, tile=64),
+        )
         t0 = time.perf_counter()
         make_intersector(verts, faces)
         build = time.perf_counter() - t0
         img, wall = _render(job, workers)
-        rows.append({"triangles": int(len(faces)), "build_s": build, "wall_s": wall, "isect_s": img.t_isect,
-                     "rays": img.rays})
-        print(f"scaling: {len(faces):9d} triangles: build {build:.2f} s, render {wall:.2f} s, "
-              f"Embree {img.t_isect:.2f} s", file=sys.stderr)
+        rows.append(
+            {"triangles": int(len(faces)), "build_s": build, "wall_s": wall, "isect_s": img.t_isect, "rays": img.rays}
+        )
+        print(
+            f"scaling: {len(faces):9d} triangles: build {build:.2f} s, render {wall:.2f} s, Embree {img.t_isect:.2f} s",
+            file=sys.stderr,
+        )
     return rows
 
 
@@ -267,8 +319,10 @@ def _scaling_section(rows, resolution, spp):
     ]
     w = default_workers()
     for r in rows:
-        lines.append(f"| {r['triangles']:,} | {r['build_s']:.2f} | {r['wall_s']:.2f} | {r['isect_s']:.2f} | "
-                     f"{r['rays'] / 1e6:.2f} | {r['wall_s'] * w / r['rays'] * 1e6:.2f} |")
+        lines.append(
+            f"| {r['triangles']:,} | {r['build_s']:.2f} | {r['wall_s']:.2f} | {r['isect_s']:.2f} | "
+            f"{r['rays'] / 1e6:.2f} | {r['wall_s'] * w / r['rays'] * 1e6:.2f} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -283,14 +337,16 @@ def _render_times_section(configs, workers):
 
     from pmmw.pipeline import render
 
-    lines = ["\n## Shipped scenarios at full resolution\n",
-             f"Each config with its own settings, {workers} workers. *trace* is the tracing alone (the tiles "
-             f"on the workers, fastest of {TRACE_REPEATS} runs), *Embree* the time spent inside Embree for exactly "
-             "those rays (summed over the workers), *ratio* = trace x workers / Embree (1 would be pure "
-             "intersection); *command* is the wall time of `pmmw render CONFIG`, including scene loading, Embree "
-             "builds, the imager model, writing the files and the report's figures (not Python's start).\n",
-             "| config | pixels | spp | rays [M] | trace [s] | Embree [s] | ratio | command [s] |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = [
+        "\n## Shipped scenarios at full resolution\n",
+        f"Each config with its own settings, {workers} workers. *trace* is the tracing alone (the tiles "
+        f"on the workers, fastest of {TRACE_REPEATS} runs), *Embree* the time spent inside Embree for exactly "
+        "those rays (summed over the workers), *ratio* = trace x workers / Embree (1 would be pure "
+        "intersection); *command* is the wall time of `pmmw render CONFIG`, including scene loading, Embree "
+        "builds, the imager model, writing the files and the report's figures (not Python's start).\n",
+        "| config | pixels | spp | rays [M] | trace [s] | Embree [s] | ratio | command [s] |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
     for path in configs:
         res = resolve(path)
         scn = res.scenario
@@ -309,8 +365,10 @@ def _render_times_section(configs, workers):
             command = time.perf_counter() - t0
         w, h = scn.imager.resolution
         ratio = trace * workers / isect if isect > 0 else float("nan")
-        lines.append(f"| `{path}` | {w} x {h} | {scn.render.spp} | {rays / 1e6:.3g} | {trace:.2f} | {isect:.3f} | "
-                     f"{ratio:.1f} | {command:.1f} |")
+        lines.append(
+            f"| `{path}` | {w} x {h} | {scn.render.spp} | {rays / 1e6:.3g} | {trace:.2f} | {isect:.3f} | "
+            f"{ratio:.1f} | {command:.1f} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -395,8 +453,15 @@ def _instrumented(job):
             del model.path
     dirs = np.concatenate(sky.dirs) if sky.dirs else np.zeros((0, 3))
     heights = np.concatenate(sky.heights) if sky.heights else np.zeros(0)
-    return {"hits": isect.hits, "rays": rays, "atm_segments": segs[0], "atm_path_s": segs[1],
-            "wall_s": time.perf_counter() - t0, "sky_dirs": dirs, "sky_heights": heights}
+    return {
+        "hits": isect.hits,
+        "rays": rays,
+        "atm_segments": segs[0],
+        "atm_path_s": segs[1],
+        "wall_s": time.perf_counter() - t0,
+        "sky_dirs": dirs,
+        "sky_heights": heights,
+    }
 
 
 def _sky_rt_cost(model, dirs, heights, chunk=20000):
@@ -412,8 +477,14 @@ def _sky_rt_cost(model, dirs, heights, chunk=20000):
         sl = slice(start, start + chunk)
         # one observer height per call: rays of a chunk share the chunk's mean height, which
         # costs the same as each ray's own (the work is per ray and per cell)
-        layered_sky_temperature(model.edges, model.alpha, model.source, el[sl],
-                                observer_height=float(np.mean(h[sl])), refractive_index=model.refractive_index)
+        layered_sky_temperature(
+            model.edges,
+            model.alpha,
+            model.source,
+            el[sl],
+            observer_height=float(np.mean(h[sl])),
+            refractive_index=model.refractive_index,
+        )
     return time.perf_counter() - t0, int(up.sum())
 
 
@@ -529,16 +600,31 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
             ref, _ = reference(job, workers, Path(cache_dir), scenario_hash(scn, res.db), ref_spp)
             kern = psf_kernel(job.camera.pixel_angle, job.k0, scn.imager.aperture_diameter)
             target = 0.1 * scn.imager.noise
-            row["adaptive"] = {"target_K": target, "spp_cap": SKIP_ADAPTIVE_SPP, "min_spp": SKIP_ADAPTIVE_MIN_SPP,
-                               "footprint_factor": error_footprint(kern)}
+            row["adaptive"] = {
+                "target_K": target,
+                "spp_cap": SKIP_ADAPTIVE_SPP,
+                "min_spp": SKIP_ADAPTIVE_MIN_SPP,
+                "footprint_factor": error_footprint(kern),
+            }
             for rule, f in (("fixed", None), ("pixel", 1.0), ("footprint", error_footprint(kern))):
-                st = job.settings if f is None else dataclasses.replace(
-                    job.settings, spp=SKIP_ADAPTIVE_SPP, min_spp=SKIP_ADAPTIVE_MIN_SPP, target_error=target,
-                    error_footprint=f)
+                st = (
+                    job.settings
+                    if f is None
+                    else dataclasses.replace(
+                        job.settings,
+                        spp=SKIP_ADAPTIVE_SPP,
+                        min_spp=SKIP_ADAPTIVE_MIN_SPP,
+                        target_error=target,
+                        error_footprint=f,
+                    )
+                )
                 img_a, wall = _render(dataclasses.replace(job, settings=st), workers)
-                row["adaptive"][rule] = {"wall_s": wall, "mean_spp": float(img_a.samples.mean()),
-                                         "at_min": float(np.mean(img_a.samples <= st.min_spp)),
-                                         **_errors(img_a.mean, ref, kern)}
+                row["adaptive"][rule] = {
+                    "wall_s": wall,
+                    "mean_spp": float(img_a.samples.mean()),
+                    "at_min": float(np.mean(img_a.samples <= st.min_spp)),
+                    **_errors(img_a.mean, ref, kern),
+                }
         out[str(path)] = row
         print(f"skips {path}: done", file=sys.stderr)
     return out
@@ -555,19 +641,24 @@ def _skips_section(rows, workers):
     ]
     for path, r in rows.items():
         t = r["render_s"]
-        lines += [f"\n### `{path}`\n",
-                  f"{r['pixels']} pixels x {r['spp']} spp: {t:.2f} s, {r['rays'] / 1e6:.2f} M ray segments.\n",
-                  "| skip | with it | without it (or the work it avoids) | saves |", "| --- | --- | --- | ---: |"]
+        lines += [
+            f"\n### `{path}`\n",
+            f"{r['pixels']} pixels x {r['spp']} spp: {t:.2f} s, {r['rays'] / 1e6:.2f} M ray segments.\n",
+            "| skip | with it | without it (or the work it avoids) | saves |",
+            "| --- | --- | --- | ---: |",
+        ]
         lines.append(
             f"| no transmitted branch into metal, blackbody, opaque | {r['sink_hits']:,} hits end there "
             f"({100 * r['sink_hits'] / r['rays']:.2g} % of segments) | a child each: {r['sink_child_s']:.2f} s at "
-            f"{t * r['workers'] / r['rays'] * 1e6:.1f} us per segment (estimate) | {100 * r['sink_child_s'] / t:.0f} % |")
+            f"{t * r['workers'] / r['rays'] * 1e6:.1f} us per segment (estimate) | {100 * r['sink_child_s'] / t:.0f} % |"
+        )
         for a in r.get("atmosphere", []):
             lines.append(
                 f"| no path-atmosphere work with `atmosphere: none`{a['label']} | none: {a['none_s']:.2f} s | "
                 f"layered: {a['with_s']:.2f} s, of which {a['path_off_s']:.2f} s of {a['inproc_s']:.2f} s inside "
                 f"`AtmosphereModel.path` (one process) | {100 * (a['with_s'] - a['none_s']) / a['with_s']:.0f} % "
-                f"({100 * a['path_off_s'] / a['inproc_s']:.0f} % in `path`) |")
+                f"({100 * a['path_off_s'] / a['inproc_s']:.0f} % in `path`) |"
+            )
             lines.append(
                 f"| no path-atmosphere work on segments below the loss bound{a['label']} (skip length "
                 f"{a['skip_length_m'] * 100:.2g} cm, tolerance 0.01 K) | {a['skip_on_s']:.2f} s; "
@@ -575,30 +666,37 @@ def _skips_section(rows, workers):
                 f"{a['segments_off']:,}, {a['path_off_s']:.3f} s (images differ by {a['skip_max_diff_K']:.1e} K "
                 f"at most, `termination: temperature`) | "
                 f"{100 * (1 - a['segments_on'] / max(a['segments_off'], 1)):.0f} % of segments, "
-                f"{a['path_off_s'] - a['path_on_s']:.3f} s |")
+                f"{a['path_off_s'] - a['path_on_s']:.3f} s |"
+            )
         if "atmosphere" not in r:
             lines.append("| no path-atmosphere work | `atmosphere: none`: nothing to skip | | |")
         if "sky_rt_s" in r:
             lines.append(
                 f"| sky from cached tables | {r['sky_rays']:,} sky rays: {r['sky_table_s'] * 1e3:.1f} ms | "
-                f"per-ray radiative transfer: {r['sky_rt_s']:.2f} s | {100 * r['sky_rt_s'] / t:.0f} % of the render |")
+                f"per-ray radiative transfer: {r['sky_rt_s']:.2f} s | {100 * r['sky_rt_s'] / t:.0f} % of the render |"
+            )
         else:
-            lines.append("| sky from cached tables | the sky is not the layered atmosphere's: closed form per ray | | |")
+            lines.append(
+                "| sky from cached tables | the sky is not the layered atmosphere's: closed form per ray | | |"
+            )
         if "rough_on_s" in r:
             lines.append(
                 f"| no roughness sampling on smooth surfaces | smooth: {r['rough_off_s']:.2f} s | every surface "
                 f"nearly smooth, Blinn-Phong m = 1e6 (images differ by {r['rough_rms_diff_K']:.2g} K RMS, "
                 f"{r['rough_max_diff_K']:.2g} K at most, where grazing rays meet the residual masking): "
                 f"{r['rough_on_s']:.2f} s "
-                f"| {100 * (r['rough_on_s'] - r['rough_off_s']) / r['rough_on_s']:.0f} % |")
+                f"| {100 * (r['rough_on_s'] - r['rough_off_s']) / r['rough_on_s']:.0f} % |"
+            )
         lines.append(
             f"| no auxiliary channels unless asked (EXR channels made and written) | 12 channels: "
             f"{r['aux_off_s'] * 1e3:.0f} ms | + stderr (3), depth, material, samples: {r['aux_on_s'] * 1e3:.0f} ms | "
-            f"{(r['aux_on_s'] - r['aux_off_s']) * 1e3:.0f} ms ({100 * (r['aux_on_s'] - r['aux_off_s']) / t:.0f} % of the render) |")
+            f"{(r['aux_on_s'] - r['aux_off_s']) * 1e3:.0f} ms ({100 * (r['aux_on_s'] - r['aux_off_s']) / t:.0f} % of the render) |"
+        )
         per_tile = r["build_s"] * r["tiles"]
         lines.append(
             f"| Embree scene built once per worker | {r['workers']} builds of {r['build_s'] * 1e3:.1f} ms | "
-            f"one per tile: {r['tiles']} x = {per_tile:.2f} s of CPU | {100 * per_tile / (t * r['workers']):.0f} % |")
+            f"one per tile: {r['tiles']} x = {per_tile:.2f} s of CPU | {100 * per_tile / (t * r['workers']):.0f} % |"
+        )
         if "adaptive" in r:
             ad = r["adaptive"]
             lines += [
@@ -613,6 +711,8 @@ def _skips_section(rows, workers):
             for rule in ("fixed", "pixel", "footprint"):
                 a = ad[rule]
                 at_min = "-" if rule == "fixed" else f"{100 * a['at_min']:.0f} %"
-                lines.append(f"| {rule} | {a['wall_s']:.2f} | {a['mean_spp']:.2f} | {at_min} | "
-                             f"{a['ideal_rms']:.3f} | {a['sensor_rms']:.3f} | {a['sensor_max']:.2f} |")
+                lines.append(
+                    f"| {rule} | {a['wall_s']:.2f} | {a['mean_spp']:.2f} | {at_min} | "
+                    f"{a['ideal_rms']:.3f} | {a['sensor_rms']:.3f} | {a['sensor_max']:.2f} |"
+                )
     return "\n".join(lines) + "\n"

@@ -69,11 +69,12 @@ def run(out_md: Path, cases=CASES, command: str = "pmmw bench --po") -> Path:
             t_dir = (time.perf_counter() - t0) * tt.size / pick.size
             peak = max(np.abs(dt).max(), np.abs(dp).max())
             err = max(np.abs(ot[pick] - dt).max(), np.abs(op[pick] - dp).max()) / peak
-            rows.append((len(target.faces), int(lit.sum()), rw, tt.size, t_cur, t_dir, pick.size < tt.size,
-                         t_oct, err))
-            print(f"bench --po: {len(target.faces)} facets, {rw:g} wavelengths, {tt.size} directions: "
-                  f"currents {t_cur:.2f} s, direct {t_dir:.2f} s, octree {t_oct:.2f} s, error {err:.1e}",
-                  flush=True)
+            rows.append((len(target.faces), int(lit.sum()), rw, tt.size, t_cur, t_dir, pick.size < tt.size, t_oct, err))
+            print(
+                f"bench --po: {len(target.faces)} facets, {rw:g} wavelengths, {tt.size} directions: "
+                f"currents {t_cur:.2f} s, direct {t_dir:.2f} s, octree {t_oct:.2f} s, error {err:.1e}",
+                flush=True,
+            )
     lines = [
         "# Physical optics: direct sum against octree",
         "",
@@ -92,8 +93,10 @@ def run(out_md: Path, cases=CASES, command: str = "pmmw bench --po") -> Path:
         "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     for f, lit, rw, d, t_cur, t_dir, scaled, t_oct, err in rows:
-        lines.append(f"| {f} ({lit}) | {rw:g} | {d} | {t_cur:.2f} | {t_dir:.2f}{'*' if scaled else ''} "
-                     f"| {t_oct:.2f} | {t_dir / t_oct:.2f} | {err:.1e} |")
+        lines.append(
+            f"| {f} ({lit}) | {rw:g} | {d} | {t_cur:.2f} | {t_dir:.2f}{'*' if scaled else ''} "
+            f"| {t_oct:.2f} | {t_dir / t_oct:.2f} | {err:.1e} |"
+        )
     png = _plot(rows, out_md.with_suffix(".png"))
     lines += ["", f"![time against directions]({png.name})"]
     return write_text_atomic(out_md, "\n".join(lines) + "\n")

@@ -45,8 +45,15 @@ def material(kind="dielectric", eps=1 + 0j, temperature=300.0, coating=(), thick
     roughness a MicrofacetModel (or a record for `roughness.make_model`), bump a BumpMap."""
     if isinstance(roughness, dict):
         roughness = make_model(roughness)
-    return dict(kind=kind, eps=complex(eps), temperature=float(temperature), coating=list(coating), thickness=thickness,
-                roughness=roughness, bump=bump)
+    return dict(
+        kind=kind,
+        eps=complex(eps),
+        temperature=float(temperature),
+        coating=list(coating),
+        thickness=thickness,
+        roughness=roughness,
+        bump=bump,
+    )
 
 
 def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
@@ -81,11 +88,26 @@ def make_job(objects, camera, sky, frequency, settings=None, ambient=None):
         rough_layers, films = split_coating(layers, k0)
         coat.append(films)
         stacks.append(rough_layers)
-    media = Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp), np.array(alpha), tuple(coat),
-                  tuple(rough), tuple(bumps), tuple(stacks))
+    media = Media(
+        ids,
+        np.array(eps),
+        np.array(kind, np.int8),
+        np.array(temp),
+        np.array(alpha),
+        tuple(coat),
+        tuple(rough),
+        tuple(bumps),
+        tuple(stacks),
+    )
     return TraceJob(
-        vertices=np.concatenate(verts), faces=np.concatenate(faces), face_normals=np.concatenate(normals),
-        face_medium=np.concatenate(fmed), media=media, camera=camera, sky=sky, frequency=frequency,
+        vertices=np.concatenate(verts),
+        faces=np.concatenate(faces),
+        face_normals=np.concatenate(normals),
+        face_medium=np.concatenate(fmed),
+        media=media,
+        camera=camera,
+        sky=sky,
+        frequency=frequency,
         settings=settings or RenderSettings(spp=1, max_depth=8, threshold=1e-6, termination="temperature"),
     )
 

@@ -48,7 +48,8 @@ def _modules() -> dict[str, Path]:
 def _is_type_checking(node: ast.If) -> bool:
     t = node.test
     return (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING") or (
-        isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING")
+        isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING"
+    )
 
 
 def _imports(tree: ast.AST) -> list:
@@ -78,7 +79,7 @@ def _graph() -> dict[str, set[str]]:
                 base = node.module or ""
                 if node.level:
                     parts = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
-                    parts = parts[:len(parts) - (node.level - 1)]
+                    parts = parts[: len(parts) - (node.level - 1)]
                     base = ".".join(parts + ([node.module] if node.module else []))
                 names = [f"{base}.{a.name}" if f"{base}.{a.name}" in mods else base for a in node.names]
             for t in names:
@@ -153,8 +154,13 @@ def test_the_library_never_imports_the_command_line():
     """`pmmw` is usable without `pmmw_cli`: no module of the library imports it (at any depth,
     lazily or not); the control: the command line does import the library."""
     edges = _graph()
-    assert {(m, t) for m, ts in edges.items() if m.startswith("pmmw.") or m == "pmmw"
-            for t in ts if t.startswith("pmmw_cli")} == set()
+    assert {
+        (m, t)
+        for m, ts in edges.items()
+        if m.startswith("pmmw.") or m == "pmmw"
+        for t in ts
+        if t.startswith("pmmw_cli")
+    } == set()
     assert any(t.startswith("pmmw.") for t in edges["pmmw_cli.cli"])
 
 
@@ -189,8 +195,8 @@ import matplotlib
 from pmmw.io.preview import write_figure
 from pmmw.scene.materials import MaterialDB, plot_materials
 before = matplotlib.rcParams._get_backend_or_none()
-write_figure({str(tmp_path / 'a.png')!r}, [('I', np.random.default_rng(1).random((20, 30)) * 300)], title='t')
-plot_materials(MaterialDB.load(), ['water', 'murakowski2014.water'], {str(tmp_path / 'b.png')!r})
+write_figure({str(tmp_path / "a.png")!r}, [('I', np.random.default_rng(1).random((20, 30)) * 300)], title='t')
+plot_materials(MaterialDB.load(), ['water', 'murakowski2014.water'], {str(tmp_path / "b.png")!r})
 assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'
 assert matplotlib.rcParams._get_backend_or_none() == before, 'backend changed'
 import matplotlib.pyplot
@@ -215,8 +221,12 @@ def _writes(path: Path) -> list[int]:
             f = node.func
             if isinstance(f, ast.Name) and f.id == "print":
                 lines.append(node.lineno)
-            elif (isinstance(f, ast.Attribute) and f.attr == "write" and isinstance(f.value, ast.Attribute)
-                  and f.value.attr in ("stdout", "stderr")):
+            elif (
+                isinstance(f, ast.Attribute)
+                and f.attr == "write"
+                and isinstance(f.value, ast.Attribute)
+                and f.value.attr in ("stdout", "stderr")
+            ):
                 lines.append(node.lineno)
     return lines
 
@@ -250,9 +260,26 @@ pmmw.render(scn, spp=1, workers=1, out=%r)
     api = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=600)
     assert api.returncode == 0, api.stderr[-2000:]
     assert "M rays" not in api.stdout + api.stderr
-    cli = subprocess.run([sys.executable, "-m", "pmmw_cli", "render", "configs/landing_95ghz.yaml", "--set",
-                          "imager.resolution=[8, 8]", "--set", "render.target_error=null", "--spp", "1", "--out",
-                          str(tmp_path / "cli")], capture_output=True, text=True, cwd=ROOT, timeout=600)
+    cli = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pmmw_cli",
+            "render",
+            "configs/landing_95ghz.yaml",
+            "--set",
+            "imager.resolution=[8, 8]",
+            "--set",
+            "render.target_error=null",
+            "--spp",
+            "1",
+            "--out",
+            str(tmp_path / "cli"),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=600,
+    )
     assert cli.returncode == 0, cli.stderr[-2000:]
     assert "M rays" in cli.stdout  # the command's result on standard output, its notes on standard error
-

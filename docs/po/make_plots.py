@@ -22,9 +22,26 @@ def plate():
     v = [[-0.5, -0.5, 0], [0.5, -0.5, 0], [0.5, 0.5, 0], [-0.5, 0.5, 0]]
     trimesh.Trimesh(vertices=v, faces=[[0, 1, 2], [0, 2, 3]], process=False).export(mesh)
     for f in (35, 95):
-        subprocess.run(["pmmw", "po", str(mesh), "--material", "metal", "--frequency", f"{f} GHz", "--monostatic",
-                        "--theta", "0:5:0.005", "--format", "csv", "--plot",
-                        str(HERE / f"plate_1m_{f}ghz_monostatic.png")], check=True, stdout=subprocess.DEVNULL)
+        subprocess.run(
+            [
+                "pmmw",
+                "po",
+                str(mesh),
+                "--material",
+                "metal",
+                "--frequency",
+                f"{f} GHz",
+                "--monostatic",
+                "--theta",
+                "0:5:0.005",
+                "--format",
+                "csv",
+                "--plot",
+                str(HERE / f"plate_1m_{f}ghz_monostatic.png"),
+            ],
+            check=True,
+            stdout=subprocess.DEVNULL,
+        )
 
 
 def sphere():

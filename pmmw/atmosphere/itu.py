@@ -100,19 +100,12 @@ def oxygen_specific_attenuation_db_km(f, p_dry, rho, T):
     df = np.sqrt(df**2 + 2.25e-6)  # eq. 6b: Zeeman splitting
     delta = (a5 + a6 * theta) * 1e-4 * (p + e) * theta**0.8  # eq. 7
     F = (f / f0) * (
-        (df - delta * (f0 - f)) / ((f0 - f) ** 2 + df**2)
-        + (df - delta * (f0 + f)) / ((f0 + f) ** 2 + df**2)
+        (df - delta * (f0 - f)) / ((f0 - f) ** 2 + df**2) + (df - delta * (f0 + f)) / ((f0 + f) ** 2 + df**2)
     )  # eq. 5
     f, p, e, theta = f[..., 0], p[..., 0], e[..., 0], theta[..., 0]
     d = 5.6e-4 * (p + e) * theta**0.8  # eq. 9
     N_D = (
-        f
-        * p
-        * theta**2
-        * (
-            6.14e-5 / (d * (1.0 + (f / d) ** 2))
-            + 1.4e-12 * p * theta**1.5 / (1.0 + 1.9e-5 * f**1.5)
-        )
+        f * p * theta**2 * (6.14e-5 / (d * (1.0 + (f / d) ** 2)) + 1.4e-12 * p * theta**1.5 / (1.0 + 1.9e-5 * f**1.5))
     )  # eq. 8
     return 0.1820 * f * ((S * F).sum(axis=-1) + N_D)  # eqs. 1-2
 
@@ -134,9 +127,9 @@ def water_vapour_specific_attenuation_db_km(f, p_dry, rho, T):
 
 def gas_specific_attenuation_db_km(f, p_dry, rho, T):
     """Total gaseous specific attenuation gamma_o + gamma_w [dB/km]; arguments as above."""
-    return oxygen_specific_attenuation_db_km(
+    return oxygen_specific_attenuation_db_km(f, p_dry, rho, T) + water_vapour_specific_attenuation_db_km(
         f, p_dry, rho, T
-    ) + water_vapour_specific_attenuation_db_km(f, p_dry, rho, T)
+    )
 
 
 def double_debye(f_ghz, eps_s, eps_1, eps_inf, f_1, f_2):
@@ -207,8 +200,9 @@ def p527_water_permittivity(f, T, salinity=0.0):
     f_1 = 20.20 - 146.4 * theta + 316.0 * theta**2  # eq. (12) [GHz]
     f_2 = 39.8 * f_1  # eq. (13) [GHz]
     eps_ss = eps_s * np.exp(-3.33330e-3 * s + 4.74868e-6 * s**2)  # eq. (17)
-    f_1s = f_1 * (1.0 + s * (2.3232e-3 - 7.9208e-5 * t + 3.6764e-6 * t**2 - 3.5594e-7 * t**3
-                             + 8.9795e-9 * t**4))  # eq. (18), the t^3 sign corrected (docstring)
+    f_1s = f_1 * (
+        1.0 + s * (2.3232e-3 - 7.9208e-5 * t + 3.6764e-6 * t**2 - 3.5594e-7 * t**3 + 8.9795e-9 * t**4)
+    )  # eq. (18), the t^3 sign corrected (docstring)
     eps_1s = eps_1 * np.exp(-6.28908e-3 * s + 1.76032e-4 * s**2 - 9.22144e-5 * t * s)  # eq. (19)
     f_2s = f_2 * (1.0 + s * (-1.99723e-2 + 1.81176e-4 * t))  # eq. (20)
     eps_infs = eps_inf * (1.0 + s * (-2.04265e-3 + 1.57883e-4 * t))  # eq. (21)
@@ -405,13 +399,7 @@ def _standard(h):
                 0.6694167 * (270.65 / (270.65 - 2.8 * (hp - 51))) ** (-g / 2.8),
                 0.03956649 * (214.65 / (214.65 - 2.0 * (hp - 71))) ** (-g / 2.0),
             ],
-            np.exp(
-                95.571899
-                - 4.011801 * h
-                + 6.424731e-2 * h**2
-                - 4.789660e-4 * h**3
-                + 1.340543e-6 * h**4
-            ),
+            np.exp(95.571899 - 4.011801 * h + 6.424731e-2 * h**2 - 4.789660e-4 * h**3 + 1.340543e-6 * h**4),
         )
     rho = 7.5 * np.exp(-h / 2.0)  # eq. 6, rho_0 = 7.5 g/m^3, h_0 = 2 km
     return T, P, rho
@@ -463,9 +451,7 @@ def _mid_latitude_summer(h):
     )
     P = _upper_pressure(h, [3.8646, -111.5569, 1012.8186], 0.147, 0.165)
     hw = np.minimum(h, 15.0)  # no overflow of the polynomial aloft
-    rho = np.where(
-        h <= 15, 14.3542 * np.exp(-0.4174 * hw - 0.02290 * hw**2 + 0.001007 * hw**3), 0.0
-    )
+    rho = np.where(h <= 15, 14.3542 * np.exp(-0.4174 * hw - 0.02290 * hw**2 + 0.001007 * hw**3), 0.0)
     return T, P, rho
 
 
@@ -483,9 +469,7 @@ def _mid_latitude_winter(h):
     )
     P = _upper_pressure(h, [4.8307, -124.2954, 1018.8627], 0.147, 0.155)
     hw = np.minimum(h, 10.0)  # no overflow of the polynomial aloft
-    rho = np.where(
-        h <= 10, 3.4742 * np.exp(-0.2697 * hw - 0.03604 * hw**2 + 0.0004489 * hw**3), 0.0
-    )
+    rho = np.where(h <= 10, 3.4742 * np.exp(-0.2697 * hw - 0.03604 * hw**2 + 0.0004489 * hw**3), 0.0)
     return T, P, rho
 
 

@@ -145,13 +145,9 @@ class AtmosphereLayer:
 
     def __post_init__(self):
         if self.kind not in LAYER_KINDS:
-            raise ValueError(
-                f"unknown weather layer kind {self.kind!r}; known: {', '.join(LAYER_KINDS)}"
-            )
+            raise ValueError(f"unknown weather layer kind {self.kind!r}; known: {', '.join(LAYER_KINDS)}")
         if not (0.0 <= self.base < self.top):
-            raise ValueError(
-                f"{self.kind} layer: need 0 <= base < top, got base {self.base} m, top {self.top} m"
-            )
+            raise ValueError(f"{self.kind} layer: need 0 <= base < top, got base {self.base} m, top {self.top} m")
         if self.liquid_water < 0.0 or self.rain_rate < 0.0:
             raise ValueError(f"{self.kind} layer: liquid_water and rain_rate must be >= 0")
         if self.kind == "rain" and self.liquid_water:
@@ -196,9 +192,7 @@ class Atmosphere:
 
     def __post_init__(self):
         if self.profile not in PROFILES:
-            raise ValueError(
-                f"unknown atmosphere profile {self.profile!r}; known: {', '.join(PROFILES)}"
-            )
+            raise ValueError(f"unknown atmosphere profile {self.profile!r}; known: {', '.join(PROFILES)}")
         object.__setattr__(self, "layers", tuple(self.layers))
         if not all(isinstance(layer, AtmosphereLayer) for layer in self.layers):
             raise TypeError("Atmosphere.layers must hold AtmosphereLayer records")
@@ -422,17 +416,13 @@ def layered_sky_temperature(
         c = r_obs * np.cos(el)  # impact parameter of the ray at the observer
         if refractive_index is not None:
             n = np.asarray(refractive_index, dtype=np.float64)
-            i_obs = min(
-                max(np.searchsorted(edges, observer_height, side="right") - 1, 0), n.size - 1
-            )
+            i_obs = min(max(np.searchsorted(edges, observer_height, side="right") - 1, 0), n.size - 1)
             b = c * (n[i_obs] / n)[None, :]  # Bouguer: n_j r cos(el_j) = n_obs r_obs cos(el)
         else:
             b = c
         r_lo, r_hi = earth_radius + z_lo, earth_radius + z_hi
         # a straight line of impact parameter b covers sqrt(r^2 - b^2) from its tangent point
-        d = np.sqrt(np.maximum((r_hi - b) * (r_hi + b), 0.0)) - np.sqrt(
-            np.maximum((r_lo - b) * (r_lo + b), 0.0)
-        )
+        d = np.sqrt(np.maximum((r_hi - b) * (r_hi + b), 0.0)) - np.sqrt(np.maximum((r_lo - b) * (r_lo + b), 0.0))
     tau = alpha[None, :] * d
     tau_before = np.cumsum(tau, axis=1) - tau  # optical depth between the observer and cell j
     src = np.asarray(source, dtype=np.float64)[None, :]
@@ -495,9 +485,7 @@ class AtmosphereModel:
         ground_temperature: float | None = None,
     ):
         if not (F_MIN <= frequency <= F_MAX):
-            raise ValueError(
-                f"frequency {frequency:g} Hz outside the 1-1000 GHz of the ITU-R models"
-            )
+            raise ValueError(f"frequency {frequency:g} Hz outside the 1-1000 GHz of the ITU-R models")
         if dz is not None and not dz > 0.0:
             raise ValueError(f"dz must be > 0 m, got {dz}")
         if ground_temperature is not None and not ground_temperature > 0.0:
@@ -515,10 +503,7 @@ class AtmosphereModel:
         parts = np.minimum(parts, MAX_SPLIT).astype(int)
         if np.any(parts > 1):
             edges = np.concatenate(
-                [
-                    np.linspace(lo, hi, m, endpoint=False)
-                    for lo, hi, m in zip(edges[:-1], edges[1:], parts, strict=True)
-                ]
+                [np.linspace(lo, hi, m, endpoint=False) for lo, hi, m in zip(edges[:-1], edges[1:], parts, strict=True)]
                 + [edges[-1:]]
             )
             cells = self._cells(edges)
@@ -637,9 +622,9 @@ class AtmosphereModel:
         """Optical depth of straight segments [Np] from the cumulative depth (exact, no loop)."""
         dz = z1 - z0
         horizontal = np.abs(dz) <= HORIZONTAL_SLOPE * length
-        slope_tau = np.abs(
-            np.interp(z1, self.edges, self.depth) - np.interp(z0, self.edges, self.depth)
-        ) * (length / np.where(horizontal, 1.0, np.abs(dz)))
+        slope_tau = np.abs(np.interp(z1, self.edges, self.depth) - np.interp(z0, self.edges, self.depth)) * (
+            length / np.where(horizontal, 1.0, np.abs(dz))
+        )
         flat_tau = self.alpha[self._cell(0.5 * (z0 + z1))] * length
         return np.where(horizontal, flat_tau, slope_tau)
 
@@ -685,8 +670,19 @@ class AtmosphereModel:
         """`path` in place, for the renderer's segments (`pmmw.trace.kernels.ambient_segments`):
         ``z0``, ``z1`` already within 0..`top`, every argument a contiguous float64 array of
         shape (N,); a segment of length 0 gives transmittance 1 and no emission."""
-        _path_loop(z0, z1, length, self.edges, self.alpha, self.depth, self.source, self.source_mu,
-                   bool(np.any(self.source_mu)), trans, emission)
+        _path_loop(
+            z0,
+            z1,
+            length,
+            self.edges,
+            self.alpha,
+            self.depth,
+            self.source,
+            self.source_mu,
+            bool(np.any(self.source_mu)),
+            trans,
+            emission,
+        )
 
     def column(self, z_top: float, z_bottom: float, s_lo: float, s_hi: float, tolerance: float = 1e-9):
         """The column between two heights as seen from its top along every slope in a range, for
@@ -725,8 +721,7 @@ class AtmosphereModel:
         in full."""
         with np.errstate(divide="ignore", invalid="ignore"):
             s = length / (z0 - z1)
-        use = (length > 0.0) & (z0 == column.z_top) & (z1 <= column.z_bottom) & (s >= column.s_lo) & (
-            s <= column.s_hi)
+        use = (length > 0.0) & (z0 == column.z_top) & (z1 <= column.z_bottom) & (s >= column.s_lo) & (s <= column.s_hi)
         rest = np.flatnonzero(~use)
         if rest.size:
             tr, em = np.empty(rest.size), np.empty(rest.size)

@@ -28,9 +28,11 @@ from pmmw.errors import EnvironmentProblem, UserError, UserErrors, warn
 ADDON = Path(__file__).resolve().parent / "pmmw_blender"
 HEADLESS = ADDON / "headless.py"
 PYTHON_VARIABLE = "PMMW_BLENDER_PYTHON"
-INSTALL_HINT = ("reading a .blend needs Blender's bpy package: install pmmw's blender extra "
-                "(pip install 'pmmw[blender]', with Python 3.11), or set PMMW_BLENDER_PYTHON to a Python that "
-                "has bpy; or export the scene from Blender with the pmmw add-on (docs/blender.md)")
+INSTALL_HINT = (
+    "reading a .blend needs Blender's bpy package: install pmmw's blender extra "
+    "(pip install 'pmmw[blender]', with Python 3.11), or set PMMW_BLENDER_PYTHON to a Python that "
+    "has bpy; or export the scene from Blender with the pmmw add-on (docs/blender.md)"
+)
 
 KEEP_DAYS = 7  # exports of .blend files unused this long are removed when another is made
 
@@ -116,13 +118,20 @@ def export_root() -> Path:
 
 def _export(python: str, path: Path, out: Path) -> None:
     try:
-        run = subprocess.run([python, str(HEADLESS), str(path), str(out)], capture_output=True, text=True,
-                             errors="replace", stdin=subprocess.DEVNULL)
+        run = subprocess.run(
+            [python, str(HEADLESS), str(path), str(out)],
+            capture_output=True,
+            text=True,
+            errors="replace",
+            stdin=subprocess.DEVNULL,
+        )
     except OSError as e:
         raise EnvironmentProblem(f"cannot run {python} ({e.strerror})") from None
     lines = (run.stderr + run.stdout).splitlines()
-    errors = [UserError(msg, file=path, key=key or None)
-              for key, msg in (line.split("\t", 2)[1:] for line in lines if line.startswith("pmmw-error\t"))]
+    errors = [
+        UserError(msg, file=path, key=key or None)
+        for key, msg in (line.split("\t", 2)[1:] for line in lines if line.startswith("pmmw-error\t"))
+    ]
     if run.returncode == 2 and errors:
         raise errors[0] if len(errors) == 1 else UserErrors(errors)
     for line in lines:

@@ -27,11 +27,12 @@ def default_name(path: Path) -> str:
     for mark in _NAME_MARKS:
         stem = stem.replace(mark, "-")
     m = _FREQUENCY_SUFFIX.search(stem)
-    return stem if m is None else f"{stem[:m.start()]}-{stem[m.start() + 1:]}"
+    return stem if m is None else f"{stem[: m.start()]}-{stem[m.start() + 1 :]}"
 
 
-def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | None = None,
-                  values: dict | None = None) -> ScenarioConfig:
+def load_scenario(
+    path, overrides=(), *, cli: dict | None = None, data: dict | None = None, values: dict | None = None
+) -> ScenarioConfig:
     """Read, override, validate and resolve a scenario file.
 
     Parameters
@@ -72,14 +73,22 @@ def load_scenario(path, overrides=(), *, cli: dict | None = None, data: dict | N
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):
-        raise UserError(f"the top level must be a mapping of keys (name, frequency, imager, scene, ...), got a {type(raw).__name__}", file=path)
+        raise UserError(
+            f"the top level must be a mapping of keys (name, frequency, imager, scene, ...), got a {type(raw).__name__}",
+            file=path,
+        )
     keys = [str(o).split("=", 1)[0].strip() for o in overrides] + [str(k) for k in (values or {})]
     # pixel regions set alongside the overrides are the rendered image's pixels, not the file's
-    file_resolution = None if any(k == "output" or k.startswith("output.regions") for k in keys) \
-        else _file_resolution(raw)
+    file_resolution = (
+        None if any(k == "output" or k.startswith("output.regions") for k in keys) else _file_resolution(raw)
+    )
     raw = apply_overrides(raw, list(overrides))
-    if file_resolution is not None and isinstance(raw.get("output"), dict) and raw["output"].get("regions") \
-            and "regions_resolution" not in raw["output"]:
+    if (
+        file_resolution is not None
+        and isinstance(raw.get("output"), dict)
+        and raw["output"].get("regions")
+        and "regions_resolution" not in raw["output"]
+    ):
         # pixel regions are the file's pixels: on a resolution set from outside they scale with the image
         raw["output"] = {**raw["output"], "regions_resolution": file_resolution}
     if values:
@@ -145,9 +154,9 @@ def _segments(key: str) -> list[tuple[bool, str]]:
     while True:
         if key.startswith('"', i):
             end = key.find('"', i + 1)
-            if end < 0 or key[end + 1:end + 2] not in ("", "."):
+            if end < 0 or key[end + 1 : end + 2] not in ("", "."):
                 raise ValueError("malformed quoting")
-            out.append((True, key[i + 1:end]))
+            out.append((True, key[i + 1 : end]))
             i = end + 1
         else:
             end = key.find(".", i)
@@ -167,8 +176,11 @@ def _segments(key: str) -> list[tuple[bool, str]]:
 def _file_resolution(raw: dict):
     """The scenario file's own ``imager.resolution`` (before overrides), when it is two whole numbers."""
     res = raw.get("imager", {}).get("resolution") if isinstance(raw.get("imager"), dict) else None
-    if isinstance(res, (list, tuple)) and len(res) == 2 and all(isinstance(v, int) and not isinstance(v, bool)
-                                                               for v in res):
+    if (
+        isinstance(res, (list, tuple))
+        and len(res) == 2
+        and all(isinstance(v, int) and not isinstance(v, bool) for v in res)
+    ):
         return list(res)
     return None
 
@@ -211,7 +223,7 @@ def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = No
                 nxt = node[part] if (isinstance(part, int) or part in node) else None
                 if nxt is None:
                     if isinstance(part, int):
-                        raise UserError(f"cannot set inside {_fmt(parts[:i + 1])}", file="--set", key=key)
+                        raise UserError(f"cannot set inside {_fmt(parts[: i + 1])}", file="--set", key=key)
                     nxt = node[part] = {}
                 node = nxt
     return out
@@ -288,8 +300,11 @@ def _user_error(err: dict, path: Path, freq_key: str, raw: dict) -> UserError:
     if typ == "extra_forbidden":
         allowed = _allowed_keys(loc[:-1])
         close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
-        msg = (f"unknown key {loc[-1]!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
-               + (f"; allowed: {', '.join(allowed)}" if allowed else ""))
+        msg = (
+            f"unknown key {loc[-1]!r}"
+            + (f" (did you mean {close[0]!r}?)" if close else "")
+            + (f"; allowed: {', '.join(allowed)}" if allowed else "")
+        )
     elif typ == "missing":
         msg = "required key missing"
     elif typ in ("value_error", "assertion_error"):
@@ -364,7 +379,8 @@ def _receiver_display(rx) -> dict:
         "frame_rate": None if rx.frame_rate is None else _qty(rx.frame_rate, "Hz"),
         "receivers": rx.receivers if rx.frame_rate is not None else None,
         "pixels_per_receiver": rx.pixels_per_receiver,
-        "mode": rx.mode, "gain_fluctuation": rx.gain_fluctuation,
+        "mode": rx.mode,
+        "gain_fluctuation": rx.gain_fluctuation,
         "reference_temperature": None if rx.reference_temperature is None else _qty(rx.reference_temperature, "K"),
     }
     return {k: v for k, v in out.items() if v is not None}
@@ -372,10 +388,13 @@ def _receiver_display(rx) -> dict:
 
 def _antenna_display(a) -> dict:
     """``imager.antenna`` with its units."""
-    return {"illumination": a.illumination,
-            **({"edge_taper": f"{a.edge_taper:.12g} dB"} if a.edge_taper is not None else {}),
-            "blockage": a.blockage, **({"spillover": a.spillover} if a.spillover is not None else {}),
-            "spillover_temperature": _qty(a.spillover_temperature, "K")}
+    return {
+        "illumination": a.illumination,
+        **({"edge_taper": f"{a.edge_taper:.12g} dB"} if a.edge_taper is not None else {}),
+        "blockage": a.blockage,
+        **({"spillover": a.spillover} if a.spillover is not None else {}),
+        "spillover_temperature": _qty(a.spillover_temperature, "K"),
+    }
 
 
 def scenario_to_display(scn: ScenarioConfig) -> dict:
@@ -404,17 +423,19 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
     scene = []
     for e in scn.scene:
         t = e.transform
-        scene.append({
-            "mesh": str(e.mesh),
-            **({"material": e.material} if e.material is not None else {"materials": dict(e.materials)}),
-            "transform": {
-                "translate": [_qty(v, "m") for v in t.translate],
-                "rotate_deg": list(t.rotate_deg),
-                "scale": t.scale if isinstance(t.scale, float) else list(t.scale),
-            },
-            **({"up_axis": e.up_axis} if e.up_axis else {}),
-            **({"name": e.name} if e.name else {}),
-        })
+        scene.append(
+            {
+                "mesh": str(e.mesh),
+                **({"material": e.material} if e.material is not None else {"materials": dict(e.materials)}),
+                "transform": {
+                    "translate": [_qty(v, "m") for v in t.translate],
+                    "rotate_deg": list(t.rotate_deg),
+                    "scale": t.scale if isinstance(t.scale, float) else list(t.scale),
+                },
+                **({"up_axis": e.up_axis} if e.up_axis else {}),
+                **({"name": e.name} if e.name else {}),
+            }
+        )
     atm = scn.atmosphere
     sky = scn.sky
     render = scn.render.model_dump()
@@ -431,27 +452,54 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
         "imager": imager,
         "scene": scene,
         "materials": copy.deepcopy(scn.materials),
-        "atmosphere": "none" if atm is None else ({
-            "model": "uniform",
-            "loss": _qty(atm.loss * 1e3 * 10 / math.log(10), "dB/km"),  # [Np/m] of power -> dB/km
-            "temperature": _qty(atm.temperature, "K"),
-        } if atm.model == "uniform" else {
-            "model": "layered", "profile": atm.profile,
-            **({"ground_temperature": _qty(atm.ground_temperature, "K")} if atm.ground_temperature is not None else {}),
-            **({"humidity": _qty(atm.humidity * 1e3, "g/m3")} if atm.humidity is not None else {}),
-            "ground_altitude": _qty(atm.ground_altitude, "m"),
-            "layers": [
-                {"kind": w.kind, "base": _qty(w.base, "m"), "top": _qty(w.top, "m"),
-                 **({"liquid_water": _qty(w.liquid_water * 1e3, "g/m3")} if w.kind != "rain" else
-                    {"rain_rate": _qty(w.rain_rate, "mm/h")}),
-                 # a power law only: P.838 (the default) keeps the display, and the hash, it had
-                 **({"attenuation": {"model": "power_law", "coefficients": {
-                     _qty(f, "GHz", 1e9): {"a": a, "b": b} for f, a, b in w.attenuation.table()}}}
-                    if w.attenuation.model == "power_law" else {}),
-                 **({"scattering": False} if not w.scattering else {})}
-                for w in atm.layers
-            ],
-        }),
+        "atmosphere": "none"
+        if atm is None
+        else (
+            {
+                "model": "uniform",
+                "loss": _qty(atm.loss * 1e3 * 10 / math.log(10), "dB/km"),  # [Np/m] of power -> dB/km
+                "temperature": _qty(atm.temperature, "K"),
+            }
+            if atm.model == "uniform"
+            else {
+                "model": "layered",
+                "profile": atm.profile,
+                **(
+                    {"ground_temperature": _qty(atm.ground_temperature, "K")}
+                    if atm.ground_temperature is not None
+                    else {}
+                ),
+                **({"humidity": _qty(atm.humidity * 1e3, "g/m3")} if atm.humidity is not None else {}),
+                "ground_altitude": _qty(atm.ground_altitude, "m"),
+                "layers": [
+                    {
+                        "kind": w.kind,
+                        "base": _qty(w.base, "m"),
+                        "top": _qty(w.top, "m"),
+                        **(
+                            {"liquid_water": _qty(w.liquid_water * 1e3, "g/m3")}
+                            if w.kind != "rain"
+                            else {"rain_rate": _qty(w.rain_rate, "mm/h")}
+                        ),
+                        # a power law only: P.838 (the default) keeps the display, and the hash, it had
+                        **(
+                            {
+                                "attenuation": {
+                                    "model": "power_law",
+                                    "coefficients": {
+                                        _qty(f, "GHz", 1e9): {"a": a, "b": b} for f, a, b in w.attenuation.table()
+                                    },
+                                }
+                            }
+                            if w.attenuation.model == "power_law"
+                            else {}
+                        ),
+                        **({"scattering": False} if not w.scattering else {}),
+                    }
+                    for w in atm.layers
+                ],
+            }
+        ),
         "sky": {
             "model": sky.model,
             **({"temperature": _qty(sky.temperature, "K")} if sky.temperature is not None else {}),
@@ -462,9 +510,14 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
         "render": render,
         "output": {
             "dir": str(scn.output.dir) if scn.output.dir is not None else None,
-            "channels": list(scn.output.channels), "previews": scn.output.previews, "aux": list(scn.output.aux),
+            "channels": list(scn.output.channels),
+            "previews": scn.output.previews,
+            "aux": list(scn.output.aux),
             **({"false_alarm": scn.output.false_alarm} if scn.output.false_alarm != 1e-3 else {}),
-            **({"regions": {n: _region_display(r) for n, r in scn.output.regions.items()}}
-               if scn.output.regions else {}),
+            **(
+                {"regions": {n: _region_display(r) for n, r in scn.output.regions.items()}}
+                if scn.output.regions
+                else {}
+            ),
         },
     }

@@ -142,7 +142,9 @@ def frequency_problem(f: float) -> str | None:
     lo, hi = FREQUENCY_RANGE
     if lo <= f <= hi:
         return None
-    return f"{f / 1e9:g} GHz is outside the {lo / 1e9:g}-{hi / 1e9:g} GHz that pmmw's atmosphere and material models cover"
+    return (
+        f"{f / 1e9:g} GHz is outside the {lo / 1e9:g}-{hi / 1e9:g} GHz that pmmw's atmosphere and material models cover"
+    )
 
 
 def parse_frequency(value, option: str = "--frequency") -> float:
@@ -212,8 +214,10 @@ class Receiver(_Model):
         if (self.noise_temperature is None) == (self.noise_figure is None):
             raise ConfigValueError("give one of noise_temperature (e.g. '600 K') or noise_figure (e.g. '5 dB')")
         if (self.integration_time is None) == (self.frame_rate is None):
-            raise ConfigValueError("give one of integration_time (per pixel, e.g. '10 ms') or frame_rate "
-                                   "(e.g. '10 Hz', with receivers and the pixels each scans)")
+            raise ConfigValueError(
+                "give one of integration_time (per pixel, e.g. '10 ms') or frame_rate "
+                "(e.g. '10 Hz', with receivers and the pixels each scans)"
+            )
         if self.integration_time is not None and (self.receivers != 1 or self.pixels_per_receiver is not None):
             raise ConfigValueError("receivers and pixels_per_receiver go with frame_rate, not integration_time")
         if self.reference_temperature is not None and self.mode != "dicke":
@@ -238,8 +242,9 @@ class Antenna(_Model):
             return None
         t = _decibels(v, "edge taper")
         if not 0.0 < t <= 60.0:
-            raise ConfigValueError(f"edge taper must be > 0 and <= 60 dB (the edge's level below the centre), "
-                                   f"got {t:g} dB")
+            raise ConfigValueError(
+                f"edge taper must be > 0 and <= 60 dB (the edge's level below the centre), got {t:g} dB"
+            )
         return t
 
     @field_validator("blockage", mode="before")
@@ -300,12 +305,17 @@ class Imager(_Model):
     @field_validator("resolution", mode="before")
     @classmethod
     def _res(cls, v):
-        if (not isinstance(v, (list, tuple)) or len(v) != 2
-                or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in v)):
+        if (
+            not isinstance(v, (list, tuple))
+            or len(v) != 2
+            or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in v)
+        ):
             raise ConfigValueError(f"expected [width, height], two integers >= 1, got {v!r}")
         if max(v) > MAX_SIDE or v[0] * v[1] > MAX_PIXELS:
-            raise ConfigValueError(f"{v[0]} x {v[1]} pixels is more than pmmw renders (at most {MAX_SIDE} per side "
-                                   f"and {MAX_PIXELS // (1 << 20)} Mpx in all)")
+            raise ConfigValueError(
+                f"{v[0]} x {v[1]} pixels is more than pmmw renders (at most {MAX_SIDE} per side "
+                f"and {MAX_PIXELS // (1 << 20)} Mpx in all)"
+            )
         return tuple(v)
 
     @field_validator("aperture_diameter")
@@ -325,8 +335,10 @@ class Imager(_Model):
     @model_validator(mode="after")
     def _hardware(self):
         if self.receiver is not None and self.noise > 0:
-            raise ConfigValueError("give imager.noise (one sigma for every pixel) or imager.receiver (the noise "
-                                   "from the hardware), not both")
+            raise ConfigValueError(
+                "give imager.noise (one sigma for every pixel) or imager.receiver (the noise "
+                "from the hardware), not both"
+            )
         if self.receiver is not None and self.receiver.bandwidth is None and not self.bandwidth > 0:
             raise ConfigValueError("imager.receiver needs a bandwidth (pre-detection), or imager.bandwidth")
         if self.antenna is not None and not self.aperture_diameter > 0:
@@ -336,7 +348,9 @@ class Imager(_Model):
     @model_validator(mode="after")
     def _pose(self):
         if self.focus_distance is not None and self.aperture_diameter <= 0:
-            raise ConfigValueError("focus_distance needs an aperture_diameter > 0 (depth of field comes from the aperture)")
+            raise ConfigValueError(
+                "focus_distance needs an aperture_diameter > 0 (depth of field comes from the aperture)"
+            )
         k = [b - a for a, b in zip(self.position, self.look_at)]
         nk = math.sqrt(sum(c * c for c in k))
         if nk == 0.0:
@@ -394,8 +408,14 @@ class SceneEntry(_Model):
         return self
 
 
-PROFILES = ("standard", "low_latitude", "mid_latitude_summer", "mid_latitude_winter",
-            "high_latitude_summer", "high_latitude_winter")
+PROFILES = (
+    "standard",
+    "low_latitude",
+    "mid_latitude_summer",
+    "mid_latitude_winter",
+    "high_latitude_summer",
+    "high_latitude_winter",
+)
 
 
 POWER_LAW_B_MAX = 2.0  # [-] largest exponent b: every ITU-R P.838-3 exponent (0.63-1.70 at 1-1000 GHz) fits
@@ -424,8 +444,10 @@ class PowerLawCoefficients(_Model):
     @classmethod
     def _b(cls, b):
         if not 0.0 < b <= POWER_LAW_B_MAX:
-            raise ConfigValueError(f"b (the exponent of the rain rate) must be within 0 < b <= {POWER_LAW_B_MAX:g} "
-                                   f"(ITU-R P.838's span 0.63-1.70), got {b:g}")
+            raise ConfigValueError(
+                f"b (the exponent of the rain rate) must be within 0 < b <= {POWER_LAW_B_MAX:g} "
+                f"(ITU-R P.838's span 0.63-1.70), got {b:g}"
+            )
         return b
 
 
@@ -467,8 +489,9 @@ class RainAttenuation(_Model):
     @model_validator(mode="after")
     def _of_model(self):
         if self.model == "power_law" and not self.coefficients:
-            raise ConfigValueError("model: power_law needs coefficients per frequency, e.g. "
-                                   "coefficients: {95 GHz: {a: 1.06, b: 0.745}}")
+            raise ConfigValueError(
+                "model: power_law needs coefficients per frequency, e.g. coefficients: {95 GHz: {a: 1.06, b: 0.745}}"
+            )
         if self.model == "p838" and self.coefficients:
             raise ConfigValueError("coefficients belong to model: power_law; ITU-R P.838 (model: p838) takes none")
         return self
@@ -530,11 +553,13 @@ class WeatherLayer(_Model):
         if self.kind != "rain" and self.rain_rate:
             raise ConfigValueError(f"a {self.kind} layer takes liquid_water (e.g. '0.3 g/m3'), not rain_rate")
         if self.kind != "rain" and "scattering" in self.model_fields_set:
-            raise ConfigValueError(f"scattering is a rain layer's; a {self.kind} layer's droplets only absorb "
-                                   "(Rayleigh: ITU-R P.840)")
+            raise ConfigValueError(
+                f"scattering is a rain layer's; a {self.kind} layer's droplets only absorb (Rayleigh: ITU-R P.840)"
+            )
         if self.kind != "rain" and "attenuation" in self.model_fields_set:
-            raise ConfigValueError(f"attenuation is a rain layer's; a {self.kind} layer's follows from liquid_water "
-                                   "(ITU-R P.840)")
+            raise ConfigValueError(
+                f"attenuation is a rain layer's; a {self.kind} layer's follows from liquid_water (ITU-R P.840)"
+            )
         return self
 
     def model_layer(self, f: float, half_band: float = 0.0):
@@ -547,7 +572,9 @@ class WeatherLayer(_Model):
             power_law = self.attenuation.coefficients_at(f, half_band)
             if power_law is None:
                 return None
-        return AtmosphereLayer(self.kind, self.base, self.top, self.liquid_water, self.rain_rate, power_law, self.scattering)
+        return AtmosphereLayer(
+            self.kind, self.base, self.top, self.liquid_water, self.rain_rate, power_law, self.scattering
+        )
 
 
 class AtmosphereConfig(_Model):
@@ -593,8 +620,10 @@ class AtmosphereConfig(_Model):
             object.__setattr__(self, "loss", self.loss if self.loss is not None else 0.0)
             object.__setattr__(self, "temperature", self.temperature if self.temperature is not None else 288.0)
         elif self.loss is not None or self.temperature is not None:
-            raise ConfigValueError("loss/temperature set a uniform atmosphere (model: uniform); the layered "
-                                   "model takes profile, ground_temperature, humidity and layers")
+            raise ConfigValueError(
+                "loss/temperature set a uniform atmosphere (model: uniform); the layered "
+                "model takes profile, ground_temperature, humidity and layers"
+            )
         return self
 
     def weather_at(self, f: float, half_band: float = 0.0, file=None) -> tuple:
@@ -611,9 +640,12 @@ class AtmosphereConfig(_Model):
             m = layer.model_layer(f, half_band)
             if m is None:
                 listed = ", ".join(layer.attenuation.coefficients)
-                raise UserError(f"no power-law coefficients for {f / 1e9:.6g} GHz (given for {listed}): add "
-                                f"'{f / 1e9:.6g} GHz: {{a: ..., b: ...}}' or use model: p838", file,
-                                f"atmosphere.layers[{i}].attenuation.coefficients")
+                raise UserError(
+                    f"no power-law coefficients for {f / 1e9:.6g} GHz (given for {listed}): add "
+                    f"'{f / 1e9:.6g} GHz: {{a: ..., b: ...}}' or use model: p838",
+                    file,
+                    f"atmosphere.layers[{i}].attenuation.coefficients",
+                )
             out.append(m)
         return tuple(out)
 
@@ -635,8 +667,9 @@ class Sky(_Model):
     @field_validator("temperature", "ground_temperature")
     @classmethod
     def _t(cls, t, info: ValidationInfo):
-        hint = " (a sky that emits nothing: give the cosmic background, 2.7 K)" if info.field_name == "temperature" \
-            else ""
+        hint = (
+            " (a sky that emits nothing: give the cosmic background, 2.7 K)" if info.field_name == "temperature" else ""
+        )
         return None if t is None else _positive_temperature(t, hint)
 
     @model_validator(mode="before")
@@ -761,20 +794,24 @@ class Region(_Model):
             try:
                 float(text)
             except ValueError:
-                raise ConfigValueError(f"radius is pixels (a number), a length ('0.3 m') or an angle ('0.5 deg'); "
-                                       f"got {text!r}") from None
+                raise ConfigValueError(
+                    f"radius is pixels (a number), a length ('0.3 m') or an angle ('0.5 deg'); got {text!r}"
+                ) from None
         return data
 
     @model_validator(mode="after")
     def _one(self):
         if sum(x is not None for x in (self.center, self.box, self.bounds)) != 1:
-            raise ConfigValueError("give exactly one of 'center' (world point [m]) with a radius, 'bounds' (world "
-                                   "box [[x0, y0, z0], [x1, y1, z1]] [m]) or 'box' ([x0, y0, x1, y1] pixels)")
+            raise ConfigValueError(
+                "give exactly one of 'center' (world point [m]) with a radius, 'bounds' (world "
+                "box [[x0, y0, z0], [x1, y1, z1]] [m]) or 'box' ([x0, y0, x1, y1] pixels)"
+            )
         if self.box is not None and not (self.box[0] < self.box[2] and self.box[1] < self.box[3]):
             raise ConfigValueError(f"box must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got {list(self.box)}")
         if self.bounds is not None and not all(a <= b for a, b in zip(*self.bounds)):
-            raise ConfigValueError("bounds must be [[x0, y0, z0], [x1, y1, z1]] with each lower corner coordinate "
-                                   "at most the upper one")
+            raise ConfigValueError(
+                "bounds must be [[x0, y0, z0], [x1, y1, z1]] with each lower corner coordinate at most the upper one"
+            )
         return self
 
     def scaled(self, sx: float, sy: float) -> "Region":
@@ -783,8 +820,12 @@ class Region(_Model):
         scene units are unchanged."""
         if self.box is not None:
             x0, y0, x1, y1 = self.box
-            box = (math.floor(x0 * sx), math.floor(y0 * sy), max(math.ceil(x1 * sx), math.floor(x0 * sx) + 1),
-                   max(math.ceil(y1 * sy), math.floor(y0 * sy) + 1))
+            box = (
+                math.floor(x0 * sx),
+                math.floor(y0 * sy),
+                max(math.ceil(x1 * sx), math.floor(x0 * sx) + 1),
+                max(math.ceil(y1 * sy), math.floor(y0 * sy) + 1),
+            )
             return self.model_copy(update={"box": box})
         if self.center is not None and self.radius_unit == "px":
             return self.model_copy(update={"radius": self.radius * math.sqrt(sx * sy)})
@@ -828,8 +869,10 @@ class OutputConfig(_Model):
     def _previews(cls, v):
         if isinstance(v, bool) or v in ("all", "quick"):
             return v
-        raise ConfigValueError(f"expected true or all (every channel's, and the ideal image beside the sensor's), "
-                               f"quick (the image of I and the regions) or false, got {v!r}")
+        raise ConfigValueError(
+            f"expected true or all (every channel's, and the ideal image beside the sensor's), "
+            f"quick (the image of I and the regions) or false, got {v!r}"
+        )
 
     @field_validator("aux", mode="before")
     @classmethod
@@ -869,8 +912,10 @@ class ScenarioConfig(_Model):
         if not v.strip() or v.strip() in (".", "..") or _NAME_FORBIDDEN & set(v) or not v.isprintable():
             raise ConfigValueError(f"name {v!r} must be a plain file name: not empty, no / or \\")
         if set(_NAME_MARKS) & set(v) or _FREQUENCY_SUFFIX.search(v):
-            raise ConfigValueError(f"name {v!r} may not hold '@' nor end like '_35GHz': pmmw adds those to the names "
-                                   "of a multi-frequency scenario's files, which could then be another scenario's")
+            raise ConfigValueError(
+                f"name {v!r} may not hold '@' nor end like '_35GHz': pmmw adds those to the names "
+                "of a multi-frequency scenario's files, which could then be another scenario's"
+            )
         if len(v) > MAX_NAME or len(v.encode("utf-8")) > 2 * MAX_NAME:
             raise ConfigValueError(f"name is {len(v)} characters long; at most {MAX_NAME} (it names the output files)")
         return v
@@ -895,8 +940,10 @@ class ScenarioConfig(_Model):
             raise ConfigValueError("a frequency is listed twice")
         labels = [f"{f / 1e9:g}" for f in out]
         if len(out) > 1 and len(set(labels)) != len(labels):
-            raise ConfigValueError("two frequencies agree to 6 digits and would write the same files "
-                                   f"(_{labels[0]}GHz ...): give frequencies that differ within 6 digits")
+            raise ConfigValueError(
+                "two frequencies agree to 6 digits and would write the same files "
+                f"(_{labels[0]}GHz ...): give frequencies that differ within 6 digits"
+            )
         return out
 
     @field_validator("materials", mode="before")
@@ -922,8 +969,10 @@ class ScenarioConfig(_Model):
         if self.sky.model is None:
             object.__setattr__(self, "sky", self.sky.model_copy(update={"model": "atmosphere" if layered else "slab"}))
         elif self.sky.model == "atmosphere" and not layered:
-            raise ConfigValueError("sky model 'atmosphere' needs a layered atmosphere (atmosphere: {profile: ...}), "
-                                   "not 'none' or model: uniform")
+            raise ConfigValueError(
+                "sky model 'atmosphere' needs a layered atmosphere (atmosphere: {profile: ...}), "
+                "not 'none' or model: uniform"
+            )
         return self
 
     @model_validator(mode="after")
@@ -952,6 +1001,8 @@ class ScenarioConfig(_Model):
         lo, hi = FREQUENCY_RANGE
         half = self.imager.bandwidth / 2.0
         if half > 0 and any(not (lo <= f - half and f + half <= hi) for f in self.frequencies):
-            raise ConfigValueError(f"imager.bandwidth {2 * half / 1e9:g} GHz reaches outside {lo / 1e9:g}-"
-                                   f"{hi / 1e9:g} GHz around a frequency")
+            raise ConfigValueError(
+                f"imager.bandwidth {2 * half / 1e9:g} GHz reaches outside {lo / 1e9:g}-"
+                f"{hi / 1e9:g} GHz around a frequency"
+            )
         return self

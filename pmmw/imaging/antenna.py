@@ -65,9 +65,9 @@ def illumination(rho, kind: str = "uniform", edge_taper_db: float = 0.0, blockag
     if kind == "uniform":
         f = np.ones_like(rho)
     elif kind == "parabolic":
-        f = c + (1.0 - c) * (1.0 - rho ** 2)
+        f = c + (1.0 - c) * (1.0 - rho**2)
     elif kind == "gaussian":
-        f = np.exp(-np.log(1.0 / c) * rho ** 2)
+        f = np.exp(-np.log(1.0 / c) * rho**2)
     else:
         raise ValueError(f"unknown illumination {kind!r}; known: {', '.join(ILLUMINATIONS)}")
     return np.where(rho < blockage, 0.0, f)
@@ -99,7 +99,7 @@ class Aperture:
         fw = illumination(rho, self.kind, self.edge_taper_db, self.blockage) * rho * w
         out = np.empty_like(flat)
         for s in range(0, flat.size, 4096):  # rows of (4096, nodes): bounded memory
-            out[s:s + 4096] = j0(np.outer(flat[s:s + 4096], rho)) @ fw
+            out[s : s + 4096] = j0(np.outer(flat[s : s + 4096], rho)) @ fw
         return out.reshape(u.shape)
 
     def power(self, u):
@@ -137,8 +137,12 @@ class Aperture:
         dp = np.diff(p)
         i_min = int(np.argmax(dp[k:] > 0)) + k  # first minimum after the half-power point
         i_max = int(np.argmax(dp[i_min:] < 0)) + i_min  # the sidelobe's peak after it
-        return {"hpbw_u": float(2.0 * u_half), "first_null_u": float(u[i_min]),
-                "first_sidelobe_u": float(u[i_max]), "first_sidelobe_dB": float(10.0 * np.log10(p[i_max]))}
+        return {
+            "hpbw_u": float(2.0 * u_half),
+            "first_null_u": float(u[i_min]),
+            "first_sidelobe_u": float(u[i_max]),
+            "first_sidelobe_dB": float(10.0 * np.log10(p[i_max])),
+        }
 
     def main_beam_efficiency(self) -> float:
         """(1 - spillover) x the beam's energy within its first null [-]."""
@@ -150,8 +154,9 @@ def gaussian_feed_spillover(edge_taper_db: float) -> float:
     return 10.0 ** (-edge_taper_db / 10.0)
 
 
-def antenna_kernel(pixel_angle: float, k0: float, aperture_diameter: float, aperture: Aperture,
-                   max_radius: int = _MAX_RADIUS_PX):
+def antenna_kernel(
+    pixel_angle: float, k0: float, aperture_diameter: float, aperture: Aperture, max_radius: int = _MAX_RADIUS_PX
+):
     """Pixel-integrated PSF of ``aperture``, normalized to unit sum (as `imaging.imager.psf_kernel`
     does for the Airy pattern, with the same radius: that enclosing all but `PSF_ENERGY_TAIL` of
     the Airy pattern's energy, which tapered beams' lower sidelobes enclose better).
@@ -186,27 +191,37 @@ def beam_report(aperture: Aperture, k0: float, aperture_diameter: float, pixel_a
     nyquist = lam / (2.0 * aperture_diameter)
     spill = aperture.spillover
     in_null = float(aperture.encircled_energy(shape["first_null_u"])[0])
-    return _floats({
-        "illumination": aperture.kind,
-        **({"edge_taper_dB": aperture.edge_taper_db} if aperture.kind != "uniform" else {}),
-        "blockage": aperture.blockage,
-        "hpbw_mrad": 1e3 * float(np.arcsin(min(1.0, shape["hpbw_u"] / 2.0 / (k0 * a)))) * 2.0,
-        "hpbw_lambda_over_D": shape["hpbw_u"] / np.pi,
-        "first_null_mrad": 1e3 * float(np.arcsin(min(1.0, shape["first_null_u"] / (k0 * a)))),
-        "first_sidelobe_dB": shape["first_sidelobe_dB"],
-        "taper_efficiency": aperture.taper_efficiency(),
-        "energy_budget": {"main_beam": (1.0 - spill) * in_null, "sidelobes": (1.0 - spill) * (1.0 - in_null),
-                          "spillover": spill, "spillover_temperature_K": aperture.spillover_temperature},
-        "main_beam_efficiency": (1.0 - spill) * in_null,
-        "pixel_pitch_mrad": 1e3 * pixel_angle,
-        "nyquist_pitch_mrad": 1e3 * nyquist,
-        "pitch_over_nyquist": pixel_angle / nyquist,
-        "sampling": ("under-sampled: the pixel pitch is coarser than lambda / 2D, the beam aliases"
-                     if pixel_angle > nyquist * (1 + 1e-9) else "Nyquist-sampled (pitch <= lambda / 2D)"),
-    })
+    return _floats(
+        {
+            "illumination": aperture.kind,
+            **({"edge_taper_dB": aperture.edge_taper_db} if aperture.kind != "uniform" else {}),
+            "blockage": aperture.blockage,
+            "hpbw_mrad": 1e3 * float(np.arcsin(min(1.0, shape["hpbw_u"] / 2.0 / (k0 * a)))) * 2.0,
+            "hpbw_lambda_over_D": shape["hpbw_u"] / np.pi,
+            "first_null_mrad": 1e3 * float(np.arcsin(min(1.0, shape["first_null_u"] / (k0 * a)))),
+            "first_sidelobe_dB": shape["first_sidelobe_dB"],
+            "taper_efficiency": aperture.taper_efficiency(),
+            "energy_budget": {
+                "main_beam": (1.0 - spill) * in_null,
+                "sidelobes": (1.0 - spill) * (1.0 - in_null),
+                "spillover": spill,
+                "spillover_temperature_K": aperture.spillover_temperature,
+            },
+            "main_beam_efficiency": (1.0 - spill) * in_null,
+            "pixel_pitch_mrad": 1e3 * pixel_angle,
+            "nyquist_pitch_mrad": 1e3 * nyquist,
+            "pitch_over_nyquist": pixel_angle / nyquist,
+            "sampling": (
+                "under-sampled: the pixel pitch is coarser than lambda / 2D, the beam aliases"
+                if pixel_angle > nyquist * (1 + 1e-9)
+                else "Nyquist-sampled (pitch <= lambda / 2D)"
+            ),
+        }
+    )
 
 
 def _floats(d):
     """numpy scalars -> Python floats, through nested dicts (a report is YAML and JSON)."""
-    return {k: _floats(v) if isinstance(v, dict) else float(v) if isinstance(v, np.floating) else v
-            for k, v in d.items()}
+    return {
+        k: _floats(v) if isinstance(v, dict) else float(v) if isinstance(v, np.floating) else v for k, v in d.items()
+    }

@@ -41,8 +41,10 @@ import numpy as np
 #: Rose's threshold: a matched-filter SNR of at least 5 is a detection (Rose 1948; Burgess 1999).
 ROSE_SNR = 5.0
 
-CRITERION = ("detectable when the matched-filter signal-to-noise ratio over the target's blurred "
-             f"footprint is at least {ROSE_SNR:g} (Rose 1948)")
+CRITERION = (
+    "detectable when the matched-filter signal-to-noise ratio over the target's blurred "
+    f"footprint is at least {ROSE_SNR:g} (Rose 1948)"
+)
 
 #: Channels whose noise is the imager's per-pixel sigma (`apply_imager` adds it to each); I and Q,
 #: the sum and difference of the noisy Ex2 and Ey2, carry sqrt(2) sigma.
@@ -181,8 +183,11 @@ def contrast_verdict(pair: str, by_channel) -> str:
 
     yes = [f"{c} ({snr(c, s, e)})" for c, s, e in known if detectable(s)]
     no = [f"{c} ({snr(c, s, e)})" for c, s, e in known if not detectable(s)]
-    words = (f"detectable in {', '.join(yes)}" + (f"; not in {', '.join(no)}" if no else "")) if yes else \
-        f"not detectable in {', '.join(no)}"
+    words = (
+        (f"detectable in {', '.join(yes)}" + (f"; not in {', '.join(no)}" if no else ""))
+        if yes
+        else f"not detectable in {', '.join(no)}"
+    )
     near = [c for c, s, e in known if e is not None and abs(s - ROSE_SNR) < 2.0 * e]
     if near:
         words += f" ({', '.join(near)} within the Monte Carlo error of the threshold: render more samples)"
@@ -216,8 +221,11 @@ def detection_limit(xs, snrs, snr_stderrs=None) -> dict:
     """
     x = np.asarray(xs, dtype=float)
     s = np.asarray(snrs, dtype=float)
-    e = np.zeros_like(s) if snr_stderrs is None else np.array([np.nan if v is None else v for v in snr_stderrs],
-                                                               dtype=float)
+    e = (
+        np.zeros_like(s)
+        if snr_stderrs is None
+        else np.array([np.nan if v is None else v for v in snr_stderrs], dtype=float)
+    )
     det = s >= ROSE_SNR
     if det.all():
         return {"kind": "all"}
@@ -234,6 +242,13 @@ def detection_limit(xs, snrs, snr_stderrs=None) -> dict:
     spacing = abs(x[j] - x[i]) / 2.0
     e_at = (1 - t) * e[i] + t * e[j]
     mc = float(e_at / abs(slope)) if np.isfinite(e_at) and slope != 0 else float("nan")
-    return {"kind": "limit", "detected_x": float(x[i]), "missed_x": float(x[j]), "crossing_x": float(crossing),
-            "spacing_error": float(spacing), "mc_error": mc,
-            "error": float(np.hypot(spacing, mc)) if np.isfinite(mc) else float(spacing), "falls_with_x": falls}
+    return {
+        "kind": "limit",
+        "detected_x": float(x[i]),
+        "missed_x": float(x[j]),
+        "crossing_x": float(crossing),
+        "spacing_error": float(spacing),
+        "mc_error": mc,
+        "error": float(np.hypot(spacing, mc)) if np.isfinite(mc) else float(spacing),
+        "falls_with_x": falls,
+    }

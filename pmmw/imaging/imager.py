@@ -171,9 +171,20 @@ def blur_adjoint(weights, kernel):
     return np.bincount(index.ravel(), weights=g.ravel(), minlength=h * w).reshape(h, w)
 
 
-def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diameter: float,
-                 noise: float, seed: int, kernel=None, spillover: float = 0.0, spillover_temperature: float = 0.0,
-                 receiver=None, noise_maps: dict | None = None):
+def apply_imager(
+    ideal: dict,
+    *,
+    pixel_angle: float,
+    k0: float,
+    aperture_diameter: float,
+    noise: float,
+    seed: int,
+    kernel=None,
+    spillover: float = 0.0,
+    spillover_temperature: float = 0.0,
+    receiver=None,
+    noise_maps: dict | None = None,
+):
     """The sensor image from the ideal one.
 
     Parameters
@@ -208,8 +219,10 @@ def apply_imager(ideal: dict, *, pixel_angle: float, k0: float, aperture_diamete
         kern = kernel if kernel is not None else psf_kernel(pixel_angle, k0, aperture_diameter)
         base = {c: blur(v, kern) for c, v in base.items()}
     if spillover > 0.0:
-        base = {c: (1.0 - spillover) * v + (spillover * spillover_temperature if c in ("Ex2", "Ey2") else 0.0)
-                for c, v in base.items()}
+        base = {
+            c: (1.0 - spillover) * v + (spillover * spillover_temperature if c in ("Ex2", "Ey2") else 0.0)
+            for c, v in base.items()
+        }
     if receiver is not None:
         maps = receiver.sigma_maps(base)
         if noise_maps is not None:

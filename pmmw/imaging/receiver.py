@@ -49,8 +49,15 @@ def dwell_time(frame_rate: float, pixels_per_receiver: int) -> float:
     return 1.0 / (frame_rate * pixels_per_receiver)
 
 
-def radiometer_sigma(t_a, t_rec: float, bandwidth: float, tau: float, mode: str = "total_power",
-                     gain_fluctuation: float = 0.0, t_ref=None):
+def radiometer_sigma(
+    t_a,
+    t_rec: float,
+    bandwidth: float,
+    tau: float,
+    mode: str = "total_power",
+    gain_fluctuation: float = 0.0,
+    t_ref=None,
+):
     """1-sigma noise [K] of a radiometer reading antenna temperature ``t_a`` (module docstring).
 
     Parameters
@@ -76,11 +83,12 @@ def radiometer_sigma(t_a, t_rec: float, bandwidth: float, tau: float, mode: str 
     t_a = np.asarray(t_a, dtype=float)
     bt = bandwidth * tau
     if mode == "total_power":
-        out = (t_a + t_rec) * np.sqrt(1.0 / bt + gain_fluctuation ** 2)
+        out = (t_a + t_rec) * np.sqrt(1.0 / bt + gain_fluctuation**2)
     elif mode == "dicke":
         ref = t_a if t_ref is None else t_ref
-        out = np.sqrt((2.0 * (t_a + t_rec) ** 2 + 2.0 * (ref + t_rec) ** 2) / bt
-                      + gain_fluctuation ** 2 * (t_a - ref) ** 2)
+        out = np.sqrt(
+            (2.0 * (t_a + t_rec) ** 2 + 2.0 * (ref + t_rec) ** 2) / bt + gain_fluctuation**2 * (t_a - ref) ** 2
+        )
     else:
         raise ValueError(f"unknown receiver mode {mode!r}; known: {', '.join(MODES)}")
     return out if out.ndim else float(out)
@@ -99,8 +107,7 @@ class Receiver:
 
     def sigma(self, t_a):
         """`radiometer_sigma` of this receiver at antenna temperature ``t_a`` [K]."""
-        return radiometer_sigma(t_a, self.t_rec, self.bandwidth, self.tau, self.mode, self.gain_fluctuation,
-                                self.t_ref)
+        return radiometer_sigma(t_a, self.t_rec, self.bandwidth, self.tau, self.mode, self.gain_fluctuation, self.t_ref)
 
     def netd(self, t_scene: float = NETD_SCENE_K) -> float:
         """Noise-equivalent temperature difference [K] at scene temperature ``t_scene`` [K]."""
@@ -118,11 +125,17 @@ class Receiver:
     def summary(self, noise_maps: dict | None = None) -> dict:
         """What a report states: the receiver, its NETD at `NETD_SCENE_K` and, given the image's
         per-pixel noise (`sigma_maps`), the range of that of Ex2 and Ey2."""
-        out = {"noise_temperature_K": float(self.t_rec), "bandwidth_GHz": self.bandwidth / 1e9,
-               "integration_time_s": self.tau, "mode": self.mode, "gain_fluctuation": self.gain_fluctuation,
-               **({"reference_temperature_K": self.t_ref} if self.t_ref is not None else {}),
-               "bandwidth_time_product": float(self.bandwidth * self.tau),
-               "netd_K": self.netd(), "netd_scene_K": NETD_SCENE_K}
+        out = {
+            "noise_temperature_K": float(self.t_rec),
+            "bandwidth_GHz": self.bandwidth / 1e9,
+            "integration_time_s": self.tau,
+            "mode": self.mode,
+            "gain_fluctuation": self.gain_fluctuation,
+            **({"reference_temperature_K": self.t_ref} if self.t_ref is not None else {}),
+            "bandwidth_time_product": float(self.bandwidth * self.tau),
+            "netd_K": self.netd(),
+            "netd_scene_K": NETD_SCENE_K,
+        }
         if noise_maps:
             s = np.concatenate([np.ravel(noise_maps["Ex2"]), np.ravel(noise_maps["Ey2"])])
             out["pixel_noise_K"] = {"min": float(s.min()), "mean": float(s.mean()), "max": float(s.max())}

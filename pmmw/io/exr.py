@@ -58,8 +58,7 @@ def _set_double(spec: oiio.ImageSpec, name: str, value: float) -> None:
     text = repr(float(value))  # exact round trip; 'nan', 'inf' and '-inf' parse too
     holder = oiio.ImageSpec()
     holder.from_xml(
-        f'<ImageSpec version="27"><attrib name={quoteattr(name)} type="double">'
-        f"{escape(text)}</attrib></ImageSpec>"
+        f'<ImageSpec version="27"><attrib name={quoteattr(name)} type="double">{escape(text)}</attrib></ImageSpec>'
     )
     for pv in holder.extra_attribs:
         spec.extra_attribs.add_or_replace(pv)
@@ -97,8 +96,9 @@ def _set_attribute(spec: oiio.ImageSpec, name: str, value) -> None:
         raise TypeError(f"EXR attribute {name!r}: unsupported type {type(value).__name__}")
 
 
-def write_exr(path: str | os.PathLike, channels: Mapping[str, np.ndarray],
-              attrs: Mapping[str, object] | None = None) -> None:
+def write_exr(
+    path: str | os.PathLike, channels: Mapping[str, np.ndarray], attrs: Mapping[str, object] | None = None
+) -> None:
     """Write float32 channels and header attributes to an OpenEXR file, atomically.
 
     Parameters
@@ -183,18 +183,26 @@ def _check_size(spec, path: Path, key, names, bytes_per_pixel: float) -> None:
     w, h = spec.width, spec.height * max(spec.depth, 1)
     px = w * h
     if max(w, h) > MAX_IMAGE_SIDE or px > MAX_IMAGE_PIXELS:
-        raise UserError(f"{w} x {h} pixels ({px / 2**20:.3g} Mpx) is more than pmmw reads: at most "
-                        f"{MAX_IMAGE_SIDE} a side and {MAX_IMAGE_PIXELS // 2**20} Mpx in all; use a smaller image",
-                        file=path, key=key)
+        raise UserError(
+            f"{w} x {h} pixels ({px / 2**20:.3g} Mpx) is more than pmmw reads: at most "
+            f"{MAX_IMAGE_SIDE} a side and {MAX_IMAGE_PIXELS // 2**20} Mpx in all; use a smaller image",
+            file=path,
+            key=key,
+        )
     per_sample = READ_BYTES_PER_SAMPLE if names is None else READ_BYTES_PER_SAMPLE // 2
     n_read = spec.nchannels if names is None else len(names)
-    check_fits(px * (per_sample * n_read + bytes_per_pixel),
-               f"reading this {w} x {h} image ({n_read} channel{'s' if n_read != 1 else ''})",
-               file=path, key=key, remedy="use a smaller image or free memory")
+    check_fits(
+        px * (per_sample * n_read + bytes_per_pixel),
+        f"reading this {w} x {h} image ({n_read} channel{'s' if n_read != 1 else ''})",
+        file=path,
+        key=key,
+        remedy="use a smaller image or free memory",
+    )
 
 
-def read_exr(path: str | os.PathLike, *, key: str | None = None, channels=None,
-             bytes_per_pixel: float = 0.0) -> tuple[dict[str, np.ndarray], dict]:
+def read_exr(
+    path: str | os.PathLike, *, key: str | None = None, channels=None, bytes_per_pixel: float = 0.0
+) -> tuple[dict[str, np.ndarray], dict]:
     """Read the channels and the header attributes of an image file (OpenEXR or any OIIO format).
 
     The size comes from the header first: an image beyond `MAX_IMAGE_SIDE` a side or

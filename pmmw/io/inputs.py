@@ -43,8 +43,7 @@ def path_problem(path) -> str | None:
     for part in Path(text).parts:
         n = len(os.fsencode(part))
         if n > NAME_MAX:
-            return (f"a name in the path is {n:,} bytes long; file systems take at most {NAME_MAX} per name: "
-                    f"shorten it")
+            return f"a name in the path is {n:,} bytes long; file systems take at most {NAME_MAX} per name: shorten it"
     return None
 
 
@@ -61,8 +60,9 @@ def name_too_long(e: BaseException, path=None) -> UserError | None:
         return None
     name = e.filename if e.filename is not None else path
     why = path_problem(name) if name is not None else None
-    return UserError(why or "the path is too long for the file system: shorten it",
-                     file=shown(name) if name is not None else None)
+    return UserError(
+        why or "the path is too long for the file system: shorten it", file=shown(name) if name is not None else None
+    )
 
 
 def format_suffix(path) -> str:
@@ -86,5 +86,7 @@ def no_extension(path, what: str, known) -> str:
             target = f" (nor has the file it links to, {shown(os.path.realpath(p), 60)})"
     except OSError:
         pass
-    return (f"{p.name!r} has no extension to tell its {what} format{target}; give the file or link a name "
-            f"ending in one of {', '.join(known)}")
+    return (
+        f"{p.name!r} has no extension to tell its {what} format{target}; give the file or link a name "
+        f"ending in one of {', '.join(known)}"
+    )

@@ -48,7 +48,7 @@ def process_start(pid: int) -> int | None:
     try:
         with open(f"/proc/{pid}/stat", "rb") as f:
             stat = f.read().decode("ascii", "replace")
-        return int(stat[stat.rindex(")") + 2:].split()[19])  # field 22, after the command name
+        return int(stat[stat.rindex(")") + 2 :].split()[19])  # field 22, after the command name
     except (OSError, ValueError, IndexError):
         return None
 
@@ -65,9 +65,16 @@ def _alive(pid: int, start: int | None) -> bool:
 
 
 def _holder_record(mode: str, command: str) -> dict:
-    return {"kind": "pmmw lock", "mode": mode, "host": socket.gethostname(), "pid": os.getpid(),
-            "start": process_start(os.getpid()), "command": command[:300],
-            "since": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "token": secrets.token_hex(8)}
+    return {
+        "kind": "pmmw lock",
+        "mode": mode,
+        "host": socket.gethostname(),
+        "pid": os.getpid(),
+        "start": process_start(os.getpid()),
+        "command": command[:300],
+        "since": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+        "token": secrets.token_hex(8),
+    }
 
 
 def _read(path: Path) -> tuple[dict | None, float | None]:
@@ -111,8 +118,10 @@ def describe(rec: dict | None) -> str:
     if not rec:
         return "another pmmw run (its lock file is unreadable)"
     what = "a shard of a render" if rec.get("mode") == "shard" else "another pmmw run"
-    return (f"{what} (pid {rec.get('pid')} on host {rec.get('host')}, since {rec.get('since')}: "
-            f"`{str(rec.get('command', '?'))[:120]}`)")
+    return (
+        f"{what} (pid {rec.get('pid')} on host {rec.get('host')}, since {rec.get('since')}: "
+        f"`{str(rec.get('command', '?'))[:120]}`)"
+    )
 
 
 def _create(path: Path, rec: dict) -> bool:
@@ -174,8 +183,11 @@ class FolderLock:
         self.mode = mode
         self.what = what
         self.record = _holder_record(mode, command or " ".join(["pmmw", *sys.argv[1:]]))
-        name = LOCK_NAME if mode == "write" else \
-            f"{SHARD_PREFIX}{self.record['host']}-{self.record['pid']}-{self.record['token']}"
+        name = (
+            LOCK_NAME
+            if mode == "write"
+            else f"{SHARD_PREFIX}{self.record['host']}-{self.record['pid']}-{self.record['token']}"
+        )
         self.path = self.folder / name
         self._stop = threading.Event()
         self._thread = None
@@ -197,8 +209,11 @@ class FolderLock:
         return self
 
     def _refuse(self, rec) -> UserError:
-        return UserError(f"the folder is in use by {describe(rec)}; wait for it to finish or choose another "
-                         "output folder", self.folder, self.what)
+        return UserError(
+            f"the folder is in use by {describe(rec)}; wait for it to finish or choose another output folder",
+            self.folder,
+            self.what,
+        )
 
     def _acquire_write(self) -> None:
         for _ in range(3):
@@ -268,8 +283,11 @@ class FolderLock:
         """Raise `EnvironmentProblem` when another run took the lock over (this run was stopped
         longer than the lock's staleness limit): its outputs must not be committed."""
         if not self.held():
-            raise EnvironmentProblem("another pmmw run took over the lock of this output folder while this "
-                                     "one was stopped; nothing more is written", self.folder)
+            raise EnvironmentProblem(
+                "another pmmw run took over the lock of this output folder while this "
+                "one was stopped; nothing more is written",
+                self.folder,
+            )
 
     def _heartbeat(self) -> None:
         while not self._stop.wait(HEARTBEAT_S):

@@ -130,8 +130,15 @@ def write_preview(path: str | os.PathLike, img, clip_fraction: float = CLIP_FRAC
 MIN_DISPLAY_WIDTH = 480
 
 
-def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: float = CLIP_FRACTION,
-                 units: str = "K", quantity: str = "brightness temperature") -> tuple[float, float]:
+def write_figure(
+    path: str | os.PathLike,
+    panels,
+    *,
+    title: str,
+    clip_fraction: float = CLIP_FRACTION,
+    units: str = "K",
+    quantity: str = "brightness temperature",
+) -> tuple[float, float]:
     """A preview a person reads: the image(s) in grey, each on its own display range with its own
     colour bar in kelvin stating that range, and a title; small images scaled up with nearest
     neighbour, pixels never smoothed.
@@ -165,8 +172,9 @@ def write_figure(path: str | os.PathLike, panels, *, title: str, clip_fraction: 
         if label:
             ax.set_title(label, fontsize=9)
         bar = fig.colorbar(shown, ax=ax, fraction=0.05, pad=0.02)
-        bar.set_label(f"{quantity} [{units}]" + (f"\nblack {low:.4g}, white {high:.4g}" if len(imgs) > 1 else ""),
-                      fontsize=8)
+        bar.set_label(
+            f"{quantity} [{units}]" + (f"\nblack {low:.4g}, white {high:.4g}" if len(imgs) > 1 else ""), fontsize=8
+        )
         bar.ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
     save_figure(fig, path)
@@ -181,8 +189,16 @@ def panel_ranges(imgs, clip_fraction: float = CLIP_FRACTION) -> list[tuple[float
 REGION_COLOURS = ("#ff3b30", "#34c759", "#0a84ff", "#ffcc00", "#ff2dfc", "#00e5ff")  # outlines on grey
 
 
-def write_regions_figure(path: str | os.PathLike, img, shapes, *, title: str, caption: str | None = None,
-                         units: str = "K", quantity: str = "brightness temperature") -> tuple[float, float]:
+def write_regions_figure(
+    path: str | os.PathLike,
+    img,
+    shapes,
+    *,
+    title: str,
+    caption: str | None = None,
+    units: str = "K",
+    quantity: str = "brightness temperature",
+) -> tuple[float, float]:
     """The image with its report's regions outlined and named, each in its own colour.
 
     Parameters
@@ -217,14 +233,26 @@ def write_regions_figure(path: str | os.PathLike, img, shapes, *, title: str, ca
             patch, at = mpatches.Circle((u - 0.5, v - 0.5), r, fill=False, ec=colour, lw=1.5), (u - 0.5, v - 0.5 - r)
         else:
             _, x0, y0, x1, y1 = shape
-            patch, at = (mpatches.Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, ec=colour, lw=1.5),
-                         ((x0 + x1) / 2 - 0.5, y0 - 0.5))
+            patch, at = (
+                mpatches.Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, ec=colour, lw=1.5),
+                ((x0 + x1) / 2 - 0.5, y0 - 0.5),
+            )
         ax.add_patch(patch)
         # names staggered upwards, each joined to its region: close regions' names stay apart
-        ax.annotate(name, at, xytext=(0, 4 + 11 * k), textcoords="offset points", ha="center", va="bottom",
-                    color=colour, fontsize=8, fontweight="bold", annotation_clip=False,
-                    bbox={"boxstyle": "round,pad=0.15", "fc": "black", "alpha": 0.65, "lw": 0},
-                    arrowprops={"arrowstyle": "-", "color": colour, "lw": 0.8, "shrinkA": 0, "shrinkB": 0})
+        ax.annotate(
+            name,
+            at,
+            xytext=(0, 4 + 11 * k),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            color=colour,
+            fontsize=8,
+            fontweight="bold",
+            annotation_clip=False,
+            bbox={"boxstyle": "round,pad=0.15", "fc": "black", "alpha": 0.65, "lw": 0},
+            arrowprops={"arrowstyle": "-", "color": colour, "lw": 0.8, "shrinkA": 0, "shrinkB": 0},
+        )
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_xticks([])
@@ -286,9 +314,10 @@ def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
     ax = axes[0, 0]
     cmap = matplotlib.colormaps["viridis"].with_extremes(bad="#bcd7ee")
     finite = d[np.isfinite(d)]
-    lo, hi = (display_range(finite, 0.0) if finite.size else (0.0, 1.0))
-    shown = ax.imshow(np.where(np.isfinite(d), d, np.nan), cmap=cmap, vmin=lo, vmax=max(hi, lo + 1e-9),
-                      interpolation="nearest")
+    lo, hi = display_range(finite, 0.0) if finite.size else (0.0, 1.0)
+    shown = ax.imshow(
+        np.where(np.isfinite(d), d, np.nan), cmap=cmap, vmin=lo, vmax=max(hi, lo + 1e-9), interpolation="nearest"
+    )
     ax.set_xticks([])
     ax.set_yticks([])
     bar = fig.colorbar(shown, ax=ax, fraction=0.05, pad=0.02)
@@ -317,7 +346,13 @@ def write_material_figure(path: str | os.PathLike, material, names, *, title: st
     ax.set_xticks([])
     ax.set_yticks([])
     labels = [("sky" if i < 0 else (names[i] if 0 <= i < len(names) else f"medium {i}")) for i in present]
-    ax.legend(handles=[mpatches.Patch(color=colours[i], label=lab) for i, lab in zip(present, labels)],
-              loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=7, title="first hit", title_fontsize=8)
+    ax.legend(
+        handles=[mpatches.Patch(color=colours[i], label=lab) for i, lab in zip(present, labels)],
+        loc="center left",
+        bbox_to_anchor=(1.02, 0.5),
+        fontsize=7,
+        title="first hit",
+        title_fontsize=8,
+    )
     fig.suptitle(title, fontsize=10)
     save_figure(fig, path, bbox_inches="tight")

@@ -69,8 +69,11 @@ def _snr_cell(contrast: Mapping) -> str:
     if snr is None:
         return "-"
     err = contrast.get("snr_stderr")
-    return f"{_num(snr, '.3g')}" + (f" ± {_pm(err)}" if err is not None else "") + \
-        (" (yes)" if contrast.get("detectable") else " (no)")
+    return (
+        f"{_num(snr, '.3g')}"
+        + (f" ± {_pm(err)}" if err is not None else "")
+        + (" (yes)" if contrast.get("detectable") else " (no)")
+    )
 
 
 def _cell(text) -> str:
@@ -115,34 +118,51 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
     if regions.get("verdicts") is not None or report.get("regions_preview"):
         lines += ["## Detection", ""]
         if regions.get("criterion"):
-            lines += [f"Criterion: a target is {regions['criterion']}; the SNR of a pair of regions \"a - b\" "
-                      "is the contrast of their means in the ideal image times the norm of a's footprint "
-                      "blurred by the imager's PSF, over the channel's noise per pixel "
-                      + (f"({_num(regions.get('noise_K'))} K in Ex2 and Ey2, sqrt(2) times it in I)"
-                         if not (report.get("imager") or {}).get("receiver") else
-                         "(the receiver's, pixel by pixel, whitened over the footprint; "
-                         f"{_num(regions.get('noise_K'))} K on average in Ex2 and Ey2)")
-                      + "; ± its Monte Carlo standard error.", ""]
+            lines += [
+                f'Criterion: a target is {regions["criterion"]}; the SNR of a pair of regions "a - b" '
+                "is the contrast of their means in the ideal image times the norm of a's footprint "
+                "blurred by the imager's PSF, over the channel's noise per pixel "
+                + (
+                    f"({_num(regions.get('noise_K'))} K in Ex2 and Ey2, sqrt(2) times it in I)"
+                    if not (report.get("imager") or {}).get("receiver")
+                    else "(the receiver's, pixel by pixel, whitened over the footprint; "
+                    f"{_num(regions.get('noise_K'))} K on average in Ex2 and Ey2)"
+                )
+                + "; ± its Monte Carlo standard error.",
+                "",
+            ]
         lines += [f"- {_cell(v)}" for v in (regions.get("verdicts") or {}).values()]
         if regions.get("verdicts"):
             lines.append("")
         lead = regions.get("channel", "Ey2")
-        pds = {pair: ch[lead]["pd"] for pair, ch in (regions.get("contrasts") or {}).items()
-               if ch.get(lead, {}).get("pd") is not None}
+        pds = {
+            pair: ch[lead]["pd"]
+            for pair, ch in (regions.get("contrasts") or {}).items()
+            if ch.get(lead, {}).get("pd") is not None
+        }
         if pds:
-            lines += [f"Probability of detection in {lead} by the matched filter at a false-alarm probability of "
-                      f"{_num(regions.get('false_alarm'), 'g')} per target-sized test (Pd = Q(Q^-1(Pfa) - SNR), "
-                      "Kay 1998, eq. 4.14; `output.false_alarm`): "
-                      + "; ".join(f"{_cell(p)} {_num(v, '.3g')}" for p, v in pds.items()) + ".", ""]
+            lines += [
+                f"Probability of detection in {lead} by the matched filter at a false-alarm probability of "
+                f"{_num(regions.get('false_alarm'), 'g')} per target-sized test (Pd = Q(Q^-1(Pfa) - SNR), "
+                "Kay 1998, eq. 4.14; `output.false_alarm`): "
+                + "; ".join(f"{_cell(p)} {_num(v, '.3g')}" for p, v in pds.items())
+                + ".",
+                "",
+            ]
         if report.get("regions_preview"):
             rel = str(report["regions_preview"])
-            lines += [f"![regions]({_md_link(rel)})", "",
-                      f"The regions on the sensor image ({regions.get('channel', 'Ey2')}).", ""]
+            lines += [
+                f"![regions]({_md_link(rel)})",
+                "",
+                f"The regions on the sensor image ({regions.get('channel', 'Ey2')}).",
+                "",
+            ]
 
     channels = report.get("channels") or {}
     if channels:
         lines += [
-            "## Channels [K]", "",
+            "## Channels [K]",
+            "",
             "| channel | min | mean | max | display range |",
             "| --- | ---: | ---: | ---: | --- |",
         ]
@@ -156,34 +176,43 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
 
     if previews:
         lines += [
-            "## Previews", "",
+            "## Previews",
+            "",
             "Display scaling: the coldest and hottest 1/256 of the pixels clip to black and white "
-            "(Murakowski 2014 sec. 3.2).", "",
+            "(Murakowski 2014 sec. 3.2).",
+            "",
         ]
         for name, rel in previews.items():
             stats = channels.get(name) or {}
             lines += [f"### {name}", "", f"![{name}]({_md_link(str(rel))})", ""]
             if _range(stats) != "-":
-                lines += [f"black {_num(stats.get('display_low'))} K, "
-                          f"white {_num(stats.get('display_high'))} K", ""]
+                lines += [f"black {_num(stats.get('display_low'))} K, white {_num(stats.get('display_high'))} K", ""]
 
     if report.get("side_by_side"):
-        lines += ["## Ideal and sensor", "",
-                  "Left: the ideal image; right: after the imager's PSF and noise. Each on its own display "
-                  "range (the coldest and hottest 1/256 of its pixels clip), stated on its colour bar.", ""]
+        lines += [
+            "## Ideal and sensor",
+            "",
+            "Left: the ideal image; right: after the imager's PSF and noise. Each on its own display "
+            "range (the coldest and hottest 1/256 of its pixels clip), stated on its colour bar.",
+            "",
+        ]
         for name, rel in report["side_by_side"].items():
             lines += [f"### {name}", "", f"![{name}: ideal | sensor]({_md_link(str(rel))})", ""]
 
     if regions.get("means"):
         chans = list(next(iter(regions["means"].values())).keys())
         errors, trunc = regions.get("stderr") or {}, regions.get("truncation") or {}
-        lines += ["## Regions of interest", "",
-                  "Mean sensor temperatures [K] over each region declared in `output.regions`, with the "
-                  "Monte Carlo standard error of each mean (± s.e.; `n/a` with one sample per pixel) "
-                  "and the truncation bound: the largest change of the Ex2/Ey2 mean that paths ended at "
-                  "`render.max_depth` could bring (fraction of the region's power they carry).", "",
-                  "| region | pixels | " + " | ".join(chans) + " | truncation bound [K] (power) |",
-                  "| --- | ---: | " + " | ".join("---:" for _ in chans) + " | ---: |"]
+        lines += [
+            "## Regions of interest",
+            "",
+            "Mean sensor temperatures [K] over each region declared in `output.regions`, with the "
+            "Monte Carlo standard error of each mean (± s.e.; `n/a` with one sample per pixel) "
+            "and the truncation bound: the largest change of the Ex2/Ey2 mean that paths ended at "
+            "`render.max_depth` could bring (fraction of the region's power they carry).",
+            "",
+            "| region | pixels | " + " | ".join(chans) + " | truncation bound [K] (power) |",
+            "| --- | ---: | " + " | ".join("---:" for _ in chans) + " | ---: |",
+        ]
         for name, m in regions["means"].items():
             e = errors.get(name) or {}
             t = trunc.get(name)
@@ -192,40 +221,52 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
             lines.append(f"| {_cell(name)} | {regions['pixels'][name]} | " + " | ".join(cells) + f" | {tcell} |")
         lines.append("")
         if regions.get("contrasts"):
-            lines += ["Contrast between regions (first minus second) in the sensor image, in kelvin ± its "
-                      "Monte Carlo standard error (figures above "
-                      f"{_num(regions.get('limit_K'), '.3g')} K are warned about), and its SNR by the detection "
-                      "criterion above (yes: detectable):", "",
-                      "| regions | " + " | ".join(f"{c} [K] | {c} SNR" for c in chans) + " | truncation bound [K] |",
-                      "| --- | " + " | ".join("---: | ---:" for _ in chans) + " | ---: |"]
+            lines += [
+                "Contrast between regions (first minus second) in the sensor image, in kelvin ± its "
+                "Monte Carlo standard error (figures above "
+                f"{_num(regions.get('limit_K'), '.3g')} K are warned about), and its SNR by the detection "
+                "criterion above (yes: detectable):",
+                "",
+                "| regions | " + " | ".join(f"{c} [K] | {c} SNR" for c in chans) + " | truncation bound [K] |",
+                "| --- | " + " | ".join("---: | ---:" for _ in chans) + " | ---: |",
+            ]
             for pair, cs in regions["contrasts"].items():
                 first = cs[chans[0]] if chans else {}
-                lines.append(f"| {_cell(pair)} | " + " | ".join(
-                    f"{_num(cs[c]['K'])} ± {_pm(cs[c].get('stderr_K'))} | {_snr_cell(cs[c])}" for c in chans)
-                    + f" | {_num(first.get('truncation_bound_K'), '.3g')} |")
+                lines.append(
+                    f"| {_cell(pair)} | "
+                    + " | ".join(
+                        f"{_num(cs[c]['K'])} ± {_pm(cs[c].get('stderr_K'))} | {_snr_cell(cs[c])}" for c in chans
+                    )
+                    + f" | {_num(first.get('truncation_bound_K'), '.3g')} |"
+                )
             lines.append("")
 
     atm = report.get("atmosphere") or {}
     if atm:
-        rows = [("specific attenuation at the ground", "specific_attenuation_at_ground_dB_per_km", "dB/km", ".3g"),
-                ("zenith opacity", "zenith_opacity_Np", "Np", ".3g"),
-                ("zenith sky brightness", "zenith_sky_K", "K", ".1f"),
-                ("distance to the target (the view's centre on the scene)", "target_distance_m", "m", ".0f"),
-                ("path loss from the imager to the target", "path_loss_imager_to_target_dB", "dB", ".3g")]
+        rows = [
+            ("specific attenuation at the ground", "specific_attenuation_at_ground_dB_per_km", "dB/km", ".3g"),
+            ("zenith opacity", "zenith_opacity_Np", "Np", ".3g"),
+            ("zenith sky brightness", "zenith_sky_K", "K", ".1f"),
+            ("distance to the target (the view's centre on the scene)", "target_distance_m", "m", ".0f"),
+            ("path loss from the imager to the target", "path_loss_imager_to_target_dB", "dB", ".3g"),
+        ]
         lines += ["## Atmosphere", "", "| quantity | value |", "| --- | ---: |"]
         lines += [f"| {label} | {_num(atm[key], fmt)} {unit} |" for label, key, unit, fmt in rows if key in atm]
         lines.append("")
 
     trunc = report.get("truncation")
     if trunc:
-        lines += ["## Path truncation", "",
-                  f"Paths still carrying power at `render.max_depth` = {trunc.get('max_depth')} end on the last "
-                  "object's temperature. Per pixel (`aux.truncated`, `aux.truncation_bound`): mean fraction of "
-                  f"power ended {_num(100 * trunc['mean_fraction'], '.3g')} % (largest "
-                  f"{_num(100 * trunc['max_fraction'], '.3g')} %, {_num(100 * trunc['pixels_truncated'], '.3g')} % "
-                  f"of the pixels); bound on the change of Ex2/Ey2: mean {_num(trunc['mean_bound_K'], '.3g')} K, "
-                  f"99th percentile {_num(trunc['p99_bound_K'], '.3g')} K, largest {_num(trunc['max_bound_K'], '.3g')} K.",
-                  ""]
+        lines += [
+            "## Path truncation",
+            "",
+            f"Paths still carrying power at `render.max_depth` = {trunc.get('max_depth')} end on the last "
+            "object's temperature. Per pixel (`aux.truncated`, `aux.truncation_bound`): mean fraction of "
+            f"power ended {_num(100 * trunc['mean_fraction'], '.3g')} % (largest "
+            f"{_num(100 * trunc['max_fraction'], '.3g')} %, {_num(100 * trunc['pixels_truncated'], '.3g')} % "
+            f"of the pixels); bound on the change of Ex2/Ey2: mean {_num(trunc['mean_bound_K'], '.3g')} K, "
+            f"99th percentile {_num(trunc['p99_bound_K'], '.3g')} K, largest {_num(trunc['max_bound_K'], '.3g')} K.",
+            "",
+        ]
 
     timing = report.get("timing") or {}
     if timing:
@@ -253,35 +294,42 @@ def _imager_lines(imager: Mapping) -> list[str]:
         return []
     lines = ["## Imager", ""]
     if rx:
-        lines += [f"- receiver: {_num(rx.get('noise_temperature_K'), '.4g')} K noise temperature, "
-                  f"{_num(rx.get('bandwidth_GHz'), '.4g')} GHz pre-detection bandwidth, "
-                  f"{_num(rx.get('integration_time_s'), '.3g')} s per pixel, {rx.get('mode')}, "
-                  f"dG/G {_num(rx.get('gain_fluctuation'), '.3g')}",
-                  f"- NETD: {_num(rx.get('netd_K'), '.3g')} K at a {_num(rx.get('netd_scene_K'), 'g')} K scene "
-                  "(radiometer equation)"]
+        lines += [
+            f"- receiver: {_num(rx.get('noise_temperature_K'), '.4g')} K noise temperature, "
+            f"{_num(rx.get('bandwidth_GHz'), '.4g')} GHz pre-detection bandwidth, "
+            f"{_num(rx.get('integration_time_s'), '.3g')} s per pixel, {rx.get('mode')}, "
+            f"dG/G {_num(rx.get('gain_fluctuation'), '.3g')}",
+            f"- NETD: {_num(rx.get('netd_K'), '.3g')} K at a {_num(rx.get('netd_scene_K'), 'g')} K scene "
+            "(radiometer equation)",
+        ]
         px = rx.get("pixel_noise_K")
         if px:
-            lines.append(f"- per-pixel noise in this image (Ex2, Ey2): {_num(px['min'], '.3g')} to "
-                         f"{_num(px['max'], '.3g')} K, mean {_num(px['mean'], '.3g')} K")
+            lines.append(
+                f"- per-pixel noise in this image (Ex2, Ey2): {_num(px['min'], '.3g')} to "
+                f"{_num(px['max'], '.3g')} K, mean {_num(px['mean'], '.3g')} K"
+            )
     if beam:
         eb = beam.get("energy_budget") or {}
-        lines += [f"- beam: {beam.get('illumination')} illumination"
-                  + (f", {_num(beam['edge_taper_dB'], 'g')} dB edge taper" if "edge_taper_dB" in beam else "")
-                  + f", blockage {_num(beam.get('blockage'), 'g')}; half-power width "
-                  f"{_num(beam.get('hpbw_mrad'), '.3g')} mrad ({_num(beam.get('hpbw_lambda_over_D'), '.4g')} "
-                  f"lambda/D), first sidelobe {_num(beam.get('first_sidelobe_dB'), '.3g')} dB",
-                  f"- energy budget: main beam {_num(eb.get('main_beam'), '.3f')}, sidelobes "
-                  f"{_num(eb.get('sidelobes'), '.3f')}, spillover {_num(eb.get('spillover'), '.3f')} (seeing "
-                  f"{_num(eb.get('spillover_temperature_K'), 'g')} K); main-beam efficiency "
-                  f"{_num(beam.get('main_beam_efficiency'), '.3f')}, taper efficiency "
-                  f"{_num(beam.get('taper_efficiency'), '.3f')}",
-                  f"- sampling: pixel pitch {_num(beam.get('pixel_pitch_mrad'), '.3g')} mrad, Nyquist pitch "
-                  f"{_num(beam.get('nyquist_pitch_mrad'), '.3g')} mrad: {beam.get('sampling')}"]
+        lines += [
+            f"- beam: {beam.get('illumination')} illumination"
+            + (f", {_num(beam['edge_taper_dB'], 'g')} dB edge taper" if "edge_taper_dB" in beam else "")
+            + f", blockage {_num(beam.get('blockage'), 'g')}; half-power width "
+            f"{_num(beam.get('hpbw_mrad'), '.3g')} mrad ({_num(beam.get('hpbw_lambda_over_D'), '.4g')} "
+            f"lambda/D), first sidelobe {_num(beam.get('first_sidelobe_dB'), '.3g')} dB",
+            f"- energy budget: main beam {_num(eb.get('main_beam'), '.3f')}, sidelobes "
+            f"{_num(eb.get('sidelobes'), '.3f')}, spillover {_num(eb.get('spillover'), '.3f')} (seeing "
+            f"{_num(eb.get('spillover_temperature_K'), 'g')} K); main-beam efficiency "
+            f"{_num(beam.get('main_beam_efficiency'), '.3f')}, taper efficiency "
+            f"{_num(beam.get('taper_efficiency'), '.3f')}",
+            f"- sampling: pixel pitch {_num(beam.get('pixel_pitch_mrad'), '.3g')} mrad, Nyquist pitch "
+            f"{_num(beam.get('nyquist_pitch_mrad'), '.3g')} mrad: {beam.get('sampling')}",
+        ]
     return lines + [""]
 
 
-def write_report(out_dir: str | os.PathLike, report: Mapping, previews: Mapping[str, str], *,
-                 basename: str = "report") -> tuple[Path, Path]:
+def write_report(
+    out_dir: str | os.PathLike, report: Mapping, previews: Mapping[str, str], *, basename: str = "report"
+) -> tuple[Path, Path]:
     """Write ``<basename>.json`` and ``<basename>.md`` in ``out_dir``, each atomically.
 
     Parameters

@@ -104,8 +104,9 @@ def made_by_pmmw(path: Path) -> bool:
         with open(path, "rb") as f:
             head = f.read(4096)
         if suffix == ".png":
-            return head.startswith(b"\x89PNG") and (b"tEXtSoftware\x00pmmw" in head or
-                                                     b"tEXtSoftware\x00Matplotlib" in head)
+            return head.startswith(b"\x89PNG") and (
+                b"tEXtSoftware\x00pmmw" in head or b"tEXtSoftware\x00Matplotlib" in head
+            )
         if suffix == ".md":
             return b"\n- pmmw version: " in head
         if suffix == ".json":
@@ -133,8 +134,16 @@ def _report_owner(path: Path) -> str | None:
         return None
 
 
-def check_outputs(out_dir: Path, outputs, inputs, *, key: str = "output.dir", disk_bytes: int = 0,
-                  force: bool = False, scenario_name: str | None = None) -> None:
+def check_outputs(
+    out_dir: Path,
+    outputs,
+    inputs,
+    *,
+    key: str = "output.dir",
+    disk_bytes: int = 0,
+    force: bool = False,
+    scenario_name: str | None = None,
+) -> None:
     """Refuse, before rendering, what would fail or do harm after it.
 
     Parameters
@@ -165,14 +174,21 @@ def check_outputs(out_dir: Path, outputs, inputs, *, key: str = "output.dir", di
     name_max, path_max = _name_max(existing), _path_max(existing)
     for part in out_dir.parts:
         if len(part.encode("utf-8")) > name_max:
-            raise UserError(f"a folder name of {len(part.encode('utf-8'))} bytes is longer than the file system "
-                            f"takes ({name_max})", str(out_dir)[:200], key)
+            raise UserError(
+                f"a folder name of {len(part.encode('utf-8'))} bytes is longer than the file system takes ({name_max})",
+                str(out_dir)[:200],
+                key,
+            )
     outputs = list(outputs)
     for rel in outputs:
         target = out_dir / rel
         if len(str(target).encode("utf-8")) + TEMP_NAME_EXTRA + len(STAGING_PREFIX) + 40 > path_max:
-            raise UserError(f"the output path {str(target)[:60]!r}... is longer than the file system takes "
-                            f"({path_max} bytes): choose a shorter output folder or name", str(out_dir)[:200], key)
+            raise UserError(
+                f"the output path {str(target)[:60]!r}... is longer than the file system takes "
+                f"({path_max} bytes): choose a shorter output folder or name",
+                str(out_dir)[:200],
+                key,
+            )
     if out_dir.exists() and not out_dir.is_dir():
         raise UserError("is a file; the output folder must be a folder", out_dir, None)
     resolved_inputs = [Path(p).resolve() for p in inputs]
@@ -180,9 +196,12 @@ def check_outputs(out_dir: Path, outputs, inputs, *, key: str = "output.dir", di
         target = out_dir / rel
         for part in Path(rel).parts:
             if len(part.encode("utf-8")) + TEMP_NAME_EXTRA > name_max:
-                raise UserError(f"output file name {part[:40]!r}... is {len(part.encode('utf-8'))} bytes; the file "
-                                f"system takes {name_max} (with pmmw's temporary suffix): shorten `name`",
-                                out_dir, key)
+                raise UserError(
+                    f"output file name {part[:40]!r}... is {len(part.encode('utf-8'))} bytes; the file "
+                    f"system takes {name_max} (with pmmw's temporary suffix): shorten `name`",
+                    out_dir,
+                    key,
+                )
         for parent in list(Path(rel).parents)[:-1]:  # e.g. previews/: must be a folder if it exists
             p = out_dir / parent
             if p.exists() and not p.is_dir():
@@ -191,19 +210,33 @@ def check_outputs(out_dir: Path, outputs, inputs, *, key: str = "output.dir", di
                 raise EnvironmentProblem(f"cannot write in {parent}/: permission denied", out_dir)
         for src in resolved_inputs:
             if _same_file(target.resolve(), src):
-                raise UserError(f"the render would overwrite its own input {src} with {rel}; choose another "
-                                "output folder or name", out_dir, key)
+                raise UserError(
+                    f"the render would overwrite its own input {src} with {rel}; choose another output folder or name",
+                    out_dir,
+                    key,
+                )
         if target.is_dir():
-            raise UserError(f"{rel} is a folder where the render writes its file: move it away or choose "
-                            "another output folder", out_dir, key)
+            raise UserError(
+                f"{rel} is a folder where the render writes its file: move it away or choose another output folder",
+                out_dir,
+                key,
+            )
         if os.path.lexists(target):
             if not made_by_pmmw(target):
-                raise UserError(f"{rel} exists and was not written by pmmw; pmmw never overwrites a file it did "
-                                "not make: move it away or choose another output folder", out_dir, key)
+                raise UserError(
+                    f"{rel} exists and was not written by pmmw; pmmw never overwrites a file it did "
+                    "not make: move it away or choose another output folder",
+                    out_dir,
+                    key,
+                )
             owner = _report_owner(target) if target.suffix == ".json" else None
             if scenario_name is not None and owner is not None and owner != scenario_name:
-                raise UserError(f"{rel} is the report of scenario {owner!r}; rendering {scenario_name!r} here would "
-                                "replace it: choose another output folder (--out)", out_dir, key)
+                raise UserError(
+                    f"{rel} is the report of scenario {owner!r}; rendering {scenario_name!r} here would "
+                    "replace it: choose another output folder (--out)",
+                    out_dir,
+                    key,
+                )
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -213,8 +246,11 @@ def check_outputs(out_dir: Path, outputs, inputs, *, key: str = "output.dir", di
     if disk_bytes and not force:
         free = shutil.disk_usage(out_dir).free
         if disk_bytes > free:
-            raise EnvironmentProblem(f"the render needs about {disk_bytes / 1e9:.3g} GB on this disk and "
-                                     f"{free / 1e9:.3g} GB are free (pass --force to try anyway)", out_dir)
+            raise EnvironmentProblem(
+                f"the render needs about {disk_bytes / 1e9:.3g} GB on this disk and "
+                f"{free / 1e9:.3g} GB are free (pass --force to try anyway)",
+                out_dir,
+            )
 
 
 class Staging:
@@ -302,11 +338,12 @@ def remove_stale_staging(out_dir: Path) -> None:
     if not out_dir.is_dir():
         return
     host = socket.gethostname()
-    folders = [out_dir] + [p for p in out_dir.iterdir() if p.is_dir() and not p.is_symlink()
-                           and not p.name.startswith(STAGING_PREFIX)]
+    folders = [out_dir] + [
+        p for p in out_dir.iterdir() if p.is_dir() and not p.is_symlink() and not p.name.startswith(STAGING_PREFIX)
+    ]
     for folder in folders:
         for p in folder.glob(f"{STAGING_PREFIX}*"):
-            fields = p.name[len(STAGING_PREFIX):].split("-", 2)
+            fields = p.name[len(STAGING_PREFIX) :].split("-", 2)
             if len(fields) != 3 or fields[2] != host or not fields[0].isdigit() or p.is_symlink() or not p.is_dir():
                 continue
             if not _alive(int(fields[0])):

@@ -25,8 +25,10 @@ MANIFEST_KIND = "pmmw tiles"
 MAX_MANIFEST_BYTES = 4 << 20  # a manifest is a few kB (the resolved scenario); more is not one of ours
 # the only names pmmw writes in a tile folder: tiles, the manifest, and their temporary files
 # (`io.atomic.temp_path_for`: ".<stem>.tmp-<pid>-<8 hex><suffix>")
-OWN_FILE = re.compile(r"(tile_\d{6}\.npz|manifest\.json|\.tile_\d{6}\.tmp-\d+-[0-9a-f]{8}\.npz"
-                      r"|\.manifest\.tmp-\d+-[0-9a-f]{8}\.json)")
+OWN_FILE = re.compile(
+    r"(tile_\d{6}\.npz|manifest\.json|\.tile_\d{6}\.tmp-\d+-[0-9a-f]{8}\.npz"
+    r"|\.manifest\.tmp-\d+-[0-9a-f]{8}\.json)"
+)
 
 
 def read_manifest(folder: Path) -> dict | None:
@@ -79,24 +81,33 @@ def claim(folder: Path, manifest: dict, what: str) -> None:
     if not root.is_symlink() and root.exists() and not root.is_dir():
         raise UserError(f"{root.name} is a file where pmmw keeps its tile folders: move it away", root.parent, what)
     if folder.is_symlink():
-        raise UserError(f"{folder} is a symbolic link; pmmw keeps tiles only in folders it makes itself: "
-                        "remove the link", folder.parent, what)
+        raise UserError(
+            f"{folder} is a symbolic link; pmmw keeps tiles only in folders it makes itself: remove the link",
+            folder.parent,
+            what,
+        )
     if folder.exists() and not folder.is_dir():
-        raise UserError(f"{folder.name} is a file where pmmw keeps this render's tiles: move it away",
-                        folder.parent, what)
+        raise UserError(
+            f"{folder.name} is a file where pmmw keeps this render's tiles: move it away", folder.parent, what
+        )
     if folder.is_dir():
         rec = read_manifest(folder)
         if rec is not None and rec.get("hash") == manifest["hash"]:
             return
         foreign = [p.name for p in folder.iterdir() if not OWN_FILE.fullmatch(p.name)]
         if rec is not None or foreign or any(p.name == MANIFEST for p in folder.iterdir()):
-            raise UserError(f"{folder.name} is not a tile folder of this render (no pmmw manifest of its settings"
-                            f"{': it holds ' + ', '.join(sorted(foreign)[:3]) if foreign else ''}); pmmw neither "
-                            "writes into nor deletes it: move it away", folder.parent, what)
+            raise UserError(
+                f"{folder.name} is not a tile folder of this render (no pmmw manifest of its settings"
+                f"{': it holds ' + ', '.join(sorted(foreign)[:3]) if foreign else ''}); pmmw neither "
+                "writes into nor deletes it: move it away",
+                folder.parent,
+                what,
+            )
         # an empty folder, or one a shard of this render is creating right now: adopt it
     folder.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(folder / MANIFEST, json.dumps({**manifest, "kind": MANIFEST_KIND, "folder": folder.name},
-                                                    indent=1, default=str))
+    write_text_atomic(
+        folder / MANIFEST, json.dumps({**manifest, "kind": MANIFEST_KIND, "folder": folder.name}, indent=1, default=str)
+    )
 
 
 def own_folders(tile_root: Path) -> list[tuple[Path, dict]]:

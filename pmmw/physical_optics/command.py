@@ -121,8 +121,22 @@ MAX_BOUNCES = 16
 METHODS = ("auto", "direct", "octree")
 
 
-def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, polarization="theta",
-           theta=None, phi=None, monostatic=False, bounces=1, method="auto", tube=None, force=False) -> Result:
+def run_po(
+    mesh,
+    *,
+    material=None,
+    eps=None,
+    frequency: float,
+    incidence: str,
+    polarization="theta",
+    theta=None,
+    phi=None,
+    monostatic=False,
+    bounces=1,
+    method="auto",
+    tube=None,
+    force=False,
+) -> Result:
     """The ``pmmw po`` job; see the command's help. ``tube``: ray-tube side [m] for bounces > 1
     (default a quarter wavelength); ``force``: solve past the memory check (`compute`)."""
     if polarization not in ("theta", "phi"):
@@ -139,8 +153,22 @@ def run_po(mesh, *, material=None, eps=None, frequency: float, incidence: str, p
     tt, pp = grid(thetas, phis)
     t0 = time.perf_counter()
     target = load_target(Path(mesh), material, eps, frequency)
-    res = compute(target, frequency, th_i, ph_i, polarization, tt, pp, monostatic=monostatic, bounces=bounces,
-                  method=method, tube=tube, t0=t0, force=force, source=mesh)
+    res = compute(
+        target,
+        frequency,
+        th_i,
+        ph_i,
+        polarization,
+        tt,
+        pp,
+        monostatic=monostatic,
+        bounces=bounces,
+        method=method,
+        tube=tube,
+        t0=t0,
+        force=force,
+        source=mesh,
+    )
     res.axes = (thetas, phis)
     return res
 
@@ -163,8 +191,16 @@ SOLVE_BYTES_PER_DIRECTION = 2500  # angles, far field, the rows written (1530 me
 SOLVE_BYTES_PER_TUBE = 1500  # a ray tube's field, side vectors, hit and reflection (520 measured, a plate)
 
 
-def memory_estimate(target, k0: float, directions: int, *, method: str = "auto", bounces: int = 1,
-                    tube: float | None = None, monostatic: bool = False) -> float:
+def memory_estimate(
+    target,
+    k0: float,
+    directions: int,
+    *,
+    method: str = "auto",
+    bounces: int = 1,
+    tube: float | None = None,
+    monostatic: bool = False,
+) -> float:
     """Peak memory [bytes] of `compute` beyond the loaded ``target``, before it solves anything.
 
     The facets' terms (`SOLVE_BYTES_PER_FACET`, all facets counted lit), the directions'
@@ -177,8 +213,9 @@ def memory_estimate(target, k0: float, directions: int, *, method: str = "auto",
     need = SOLVE_BASE_BYTES + SOLVE_BYTES_PER_FACET * facets + SOLVE_BYTES_PER_DIRECTION * directions
     if not monostatic:  # a monostatic solve is one direction at a time: the direct sum
         d = directions + 1  # the backscatter rides along
-        octree = method == "octree" or (method == "auto" and d >= solver.OCTREE_DIRECTIONS
-                                        and float(facets) * d >= solver.OCTREE_TERMS)
+        octree = method == "octree" or (
+            method == "auto" and d >= solver.OCTREE_DIRECTIONS and float(facets) * d >= solver.OCTREE_TERMS
+        )
         if octree and facets:
             from pmmw.physical_optics.octree import memory_bytes
 
@@ -193,8 +230,23 @@ def memory_estimate(target, k0: float, directions: int, *, method: str = "auto",
     return need
 
 
-def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=False, bounces=1,
-            method="auto", tube=None, t0=None, force=False, source=None) -> Result:
+def compute(
+    target,
+    frequency,
+    th_i,
+    ph_i,
+    polarization,
+    tt,
+    pp,
+    *,
+    monostatic=False,
+    bounces=1,
+    method="auto",
+    tube=None,
+    t0=None,
+    force=False,
+    source=None,
+) -> Result:
     """RCS of ``target`` at ``frequency`` [Hz] on the directions (tt, pp) [rad].
 
     Before solving, its memory (`memory_estimate`) is checked against the memory available: more
@@ -203,10 +255,15 @@ def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=F
     t0 = time.perf_counter() if t0 is None else t0
     k0 = 2.0 * np.pi * frequency / solver.C0
     need = memory_estimate(target, k0, tt.size, method=method, bounces=bounces, tube=tube, monostatic=monostatic)
-    check_fits(need, f"physical optics of {len(target.faces)} facets toward {tt.size} directions at "
-               f"{frequency / 1e9:g} GHz", file=source, force=force, option="--force",
-               remedy="fewer directions (--theta, --phi), a coarser mesh or a lower frequency"
-               + (", or --method direct" if not monostatic and method != "direct" else ""))
+    check_fits(
+        need,
+        f"physical optics of {len(target.faces)} facets toward {tt.size} directions at {frequency / 1e9:g} GHz",
+        file=source,
+        force=force,
+        option="--force",
+        remedy="fewer directions (--theta, --phi), a coarser mesh or a lower frequency"
+        + (", or --method direct" if not monostatic and method != "direct" else ""),
+    )
     if monostatic:
         s_t, s_p, n_lit = solver.monostatic(target, k0, polarization, tt, pp, bounces, tube)
         back = None
@@ -215,8 +272,9 @@ def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=F
             raise UserError("no facet is lit from any of the directions", "--theta")
     else:
         # the backscatter direction rides along as one more observation direction
-        s_t, s_p, lit = solver.bistatic(target, k0, th_i, ph_i, polarization, np.append(tt, th_i),
-                                        np.append(pp, ph_i), bounces, tube, method)
+        s_t, s_p, lit = solver.bistatic(
+            target, k0, th_i, ph_i, polarization, np.append(tt, th_i), np.append(pp, ph_i), bounces, tube, method
+        )
         if lit == 0:
             raise UserError("no facet of the mesh is lit from this direction", "--incidence")
         back = float(s_t[-1] + s_p[-1])
@@ -224,13 +282,22 @@ def compute(target, frequency, th_i, ph_i, polarization, tt, pp, *, monostatic=F
     total = s_t + s_p
     peak = int(np.argmax(total))
     summary = {
-        "frequency_hz": float(frequency), "wavelength_m": solver.C0 / frequency,
-        "incidence_deg": [math.degrees(th_i), math.degrees(ph_i)], "polarization": polarization,
-        "monostatic": bool(monostatic), "method": method, "bounces": bounces,
-        "facets": int(len(target.faces)), "facets_lit": lit,
+        "frequency_hz": float(frequency),
+        "wavelength_m": solver.C0 / frequency,
+        "incidence_deg": [math.degrees(th_i), math.degrees(ph_i)],
+        "polarization": polarization,
+        "monostatic": bool(monostatic),
+        "method": method,
+        "bounces": bounces,
+        "facets": int(len(target.faces)),
+        "facets_lit": lit,
         "backscatter_rcs_m2": back if back is not None else None,
-        "peak": {"theta_deg": math.degrees(tt[peak]), "phi_deg": math.degrees(pp[peak]),
-                 "rcs_m2": float(total[peak]), "rcs_dBsm": _dbsm(total[peak])},
+        "peak": {
+            "theta_deg": math.degrees(tt[peak]),
+            "phi_deg": math.degrees(pp[peak]),
+            "rcs_m2": float(total[peak]),
+            "rcs_dBsm": _dbsm(total[peak]),
+        },
         "time_s": round(time.perf_counter() - t0, 3),
     }
     if monostatic:
@@ -251,24 +318,39 @@ def dbsm_text(x: float, width: int = 0, digits: int = 3) -> str:
 
 
 def format_rows(res: Result, fmt: str) -> str:
-    rows = [(math.degrees(t), math.degrees(p), a, b)
-            for t, p, a, b in zip(res.theta, res.phi, res.rcs_theta, res.rcs_phi)]
+    rows = [
+        (math.degrees(t), math.degrees(p), a, b) for t, p, a, b in zip(res.theta, res.phi, res.rcs_theta, res.rcs_phi)
+    ]
     if fmt == "csv":
         return "\n".join([CSV_HEADER] + [f"{t:.6g},{p:.6g},{a:.9g},{b:.9g}" for t, p, a, b in rows])
     if fmt == "json":
-        return json.dumps({**res.summary, "rows": [
-            {"theta_deg": t, "phi_deg": p, "rcs_theta_m2": a, "rcs_phi_m2": b} for t, p, a, b in rows]}, indent=2)
+        return json.dumps(
+            {
+                **res.summary,
+                "rows": [{"theta_deg": t, "phi_deg": p, "rcs_theta_m2": a, "rcs_phi_m2": b} for t, p, a, b in rows],
+            },
+            indent=2,
+        )
     if fmt == "table":
         s = res.summary
-        head = [f"{s['frequency_hz'] / 1e9:g} GHz, {s['polarization']} polarization, "
-                + ("monostatic" if s["monostatic"] else f"incidence theta {s['incidence_deg'][0]:g} deg, "
-                   f"phi {s['incidence_deg'][1]:g} deg")
-                + f"; {s['facets_lit']} of {s['facets']} facets lit; {s['time_s']:.2f} s"]
+        head = [
+            f"{s['frequency_hz'] / 1e9:g} GHz, {s['polarization']} polarization, "
+            + (
+                "monostatic"
+                if s["monostatic"]
+                else f"incidence theta {s['incidence_deg'][0]:g} deg, phi {s['incidence_deg'][1]:g} deg"
+            )
+            + f"; {s['facets_lit']} of {s['facets']} facets lit; {s['time_s']:.2f} s"
+        ]
         if s["backscatter_rcs_m2"] is not None:
-            head.append(f"backscatter {s['backscatter_rcs_m2']:.4g} m^2 ({dbsm_text(s['backscatter_rcs_m2'], 0, 2)} dBsm)")
+            head.append(
+                f"backscatter {s['backscatter_rcs_m2']:.4g} m^2 ({dbsm_text(s['backscatter_rcs_m2'], 0, 2)} dBsm)"
+            )
         p = s["peak"]
-        head.append(f"peak {p['rcs_m2']:.4g} m^2 ({dbsm_text(p['rcs_m2'], 0, 2)} dBsm) at theta {p['theta_deg']:g}, "
-                    f"phi {p['phi_deg']:g} deg")
+        head.append(
+            f"peak {p['rcs_m2']:.4g} m^2 ({dbsm_text(p['rcs_m2'], 0, 2)} dBsm) at theta {p['theta_deg']:g}, "
+            f"phi {p['phi_deg']:g} deg"
+        )
         lines = [f"{'theta_deg':>9} {'phi_deg':>8} {'rcs_theta_dBsm':>15} {'rcs_phi_dBsm':>13}"]
         lines += [f"{t:9.3f} {p_:8.3f} {dbsm_text(a, 15)} {dbsm_text(b, 13)}" for t, p_, a, b in rows]
         return "\n".join(head + lines)
@@ -277,8 +359,10 @@ def format_rows(res: Result, fmt: str) -> str:
 
 def write_outputs(res: Result, out: Path, stem: str = "po") -> list[Path]:
     """``<stem>.csv`` and ``<stem>.json`` in ``out``, atomically."""
-    return [write_text_atomic(out / f"{stem}.csv", format_rows(res, "csv") + "\n"),
-            write_text_atomic(out / f"{stem}.json", format_rows(res, "json") + "\n")]
+    return [
+        write_text_atomic(out / f"{stem}.csv", format_rows(res, "csv") + "\n"),
+        write_text_atomic(out / f"{stem}.json", format_rows(res, "json") + "\n"),
+    ]
 
 
 def write_map(res: Result, thetas, phis, path: Path) -> Path:
@@ -287,12 +371,21 @@ def write_map(res: Result, thetas, phis, path: Path) -> Path:
     from pmmw.io.exr import write_exr
 
     shape = (phis.size, thetas.size)
-    attrs = {"pmmw:units": "m^2 (bistatic RCS)", "pmmw:frequency_hz": res.summary["frequency_hz"],
-             "pmmw:theta_deg": f"{math.degrees(thetas[0]):g}:{math.degrees(thetas[-1]):g}:{thetas.size}",
-             "pmmw:phi_deg": f"{math.degrees(phis[0]):g}:{math.degrees(phis[-1]):g}:{phis.size}",
-             "pmmw:polarization": res.summary["polarization"]}
-    write_exr(path, {"rcs_theta": res.rcs_theta.reshape(shape).T.astype(np.float32),
-                     "rcs_phi": res.rcs_phi.reshape(shape).T.astype(np.float32)}, attrs)
+    attrs = {
+        "pmmw:units": "m^2 (bistatic RCS)",
+        "pmmw:frequency_hz": res.summary["frequency_hz"],
+        "pmmw:theta_deg": f"{math.degrees(thetas[0]):g}:{math.degrees(thetas[-1]):g}:{thetas.size}",
+        "pmmw:phi_deg": f"{math.degrees(phis[0]):g}:{math.degrees(phis[-1]):g}:{phis.size}",
+        "pmmw:polarization": res.summary["polarization"],
+    }
+    write_exr(
+        path,
+        {
+            "rcs_theta": res.rcs_theta.reshape(shape).T.astype(np.float32),
+            "rcs_phi": res.rcs_phi.reshape(shape).T.astype(np.float32),
+        },
+        attrs,
+    )
     return path
 
 
@@ -304,8 +397,9 @@ def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
     fig, ax = subplots(figsize=(7.0, 4.4), dpi=110)
     thetas, phis = np.unique(res.theta), np.unique(res.phi)
     # x: theta, one line per phi cut; an azimuth cut (one theta) runs along phi instead
-    along, across, x_name = ((res.phi, res.theta, "phi") if thetas.size == 1 and phis.size > 1
-                             else (res.theta, res.phi, "theta"))
+    along, across, x_name = (
+        (res.phi, res.theta, "phi") if thetas.size == 1 and phis.size > 1 else (res.theta, res.phi, "theta")
+    )
     cuts = np.unique(across)
     if cuts.size > 8:  # a full grid: the 8 cuts nearest evenly spread values
         cuts = cuts[np.linspace(0, cuts.size - 1, 8).round().astype(int)]
@@ -314,8 +408,12 @@ def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
         for comp, name, style in ((res.rcs_theta, "theta", "-"), (res.rcs_phi, "phi", "--")):
             if comp[sel].max() > 1e-12 * s["peak"]["rcs_m2"]:
                 cut = f"{'phi' if x_name == 'theta' else 'theta'} {math.degrees(c):g} deg, " if cuts.size > 1 else ""
-                ax.plot(np.degrees(along[sel]), 10 * np.log10(np.maximum(comp[sel], 1e-30)), style,
-                        label=f"{cut}sigma_{name}")
+                ax.plot(
+                    np.degrees(along[sel]),
+                    10 * np.log10(np.maximum(comp[sel], 1e-30)),
+                    style,
+                    label=f"{cut}sigma_{name}",
+                )
     ax.set_xlabel(f"{x_name} [deg]")
     mode = "monostatic" if s["monostatic"] else f"incidence ({s['incidence_deg'][0]:g}, {s['incidence_deg'][1]:g}) deg"
     ax.set_title(f"{mesh_name}: {s['frequency_hz'] / 1e9:g} GHz, {s['polarization']} polarization, {mode}")
@@ -331,8 +429,13 @@ def write_plot(res: Result, path: Path, mesh_name: str) -> Path:
 
 def full_sphere(thetas, phis) -> bool:
     """Whether the grid axes [rad] cover the whole sphere (then an EXR map is written)."""
-    return (thetas.size > 1 and phis.size > 1 and thetas.min() <= 1e-9 and thetas.max() >= math.pi - 1e-9
-            and phis.max() - phis.min() >= 2 * math.pi * (1 - 1.0 / phis.size) - 1e-9)
+    return (
+        thetas.size > 1
+        and phis.size > 1
+        and thetas.min() <= 1e-9
+        and thetas.max() >= math.pi - 1e-9
+        and phis.max() - phis.min() >= 2 * math.pi * (1 - 1.0 / phis.size) - 1e-9
+    )
 
 
 def write_run(res: Result, out: Path, stem: str, name: str, thetas, phis, plot: bool = True) -> list[Path]:
@@ -349,21 +452,31 @@ def write_run(res: Result, out: Path, stem: str, name: str, thetas, phis, plot: 
 def write_report(out: Path, name: str, source: str, runs, observation: str, plots: bool) -> Path:
     """``out/report.md`` of runs [(stem, Result)]: settings, then each run's backscatter and peak."""
     s0 = runs[0][1].summary
-    mode = "monostatic" if s0["monostatic"] else (
-        f"incidence theta {s0['incidence_deg'][0]:g} deg, phi {s0['incidence_deg'][1]:g} deg")
-    lines = [f"# {name}: physical optics", "",
-             f"- source: `{source}`", f"- {mode}; bounces {s0['bounces']}; method {s0['method']}",
-             f"- observation: {observation}", "",
-             "| run | frequency [GHz] | polarization | facets lit | backscatter [dBsm] | peak [dBsm] "
-             "| peak at (theta, phi) [deg] | time [s] |",
-             "| --- | ---: | --- | ---: | ---: | ---: | --- | ---: |"]
+    mode = (
+        "monostatic"
+        if s0["monostatic"]
+        else (f"incidence theta {s0['incidence_deg'][0]:g} deg, phi {s0['incidence_deg'][1]:g} deg")
+    )
+    lines = [
+        f"# {name}: physical optics",
+        "",
+        f"- source: `{source}`",
+        f"- {mode}; bounces {s0['bounces']}; method {s0['method']}",
+        f"- observation: {observation}",
+        "",
+        "| run | frequency [GHz] | polarization | facets lit | backscatter [dBsm] | peak [dBsm] "
+        "| peak at (theta, phi) [deg] | time [s] |",
+        "| --- | ---: | --- | ---: | ---: | ---: | --- | ---: |",
+    ]
     for stem, res in runs:
         s = res.summary
         back = "" if s["backscatter_rcs_m2"] is None else dbsm_text(s["backscatter_rcs_m2"], 0, 2)
         p = s["peak"]
-        lines.append(f"| {stem} | {s['frequency_hz'] / 1e9:g} | {s['polarization']} | {s['facets_lit']} / "
-                     f"{s['facets']} | {back} | {p['rcs_dBsm']:.2f} | ({p['theta_deg']:g}, {p['phi_deg']:g}) "
-                     f"| {s['time_s']:.2f} |")
+        lines.append(
+            f"| {stem} | {s['frequency_hz'] / 1e9:g} | {s['polarization']} | {s['facets_lit']} / "
+            f"{s['facets']} | {back} | {p['rcs_dBsm']:.2f} | ({p['theta_deg']:g}, {p['phi_deg']:g}) "
+            f"| {s['time_s']:.2f} |"
+        )
     if plots:
         lines.append("")
         lines += [f"![{stem}]({stem}.png)" for stem, _ in runs]

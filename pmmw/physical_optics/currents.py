@@ -140,8 +140,7 @@ def make_target(vertices, faces, face_material, material_ids, db, f: float) -> T
     from pmmw.trace.job import build_media
 
     media = build_media(db, material_ids, f)
-    return Target(np.asarray(vertices, float), np.asarray(faces, np.int64),
-                  np.asarray(face_material, int) + 1, media)
+    return Target(np.asarray(vertices, float), np.asarray(faces, np.int64), np.asarray(face_material, int) + 1, media)
 
 
 def lit_facets(target: Target, d_inc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -199,8 +198,11 @@ def surface_currents(media, medium, n, k_hat, e, k0):
     s_norm = np.linalg.norm(s, axis=1)
     # normal incidence: any tangent is s; take one perpendicular to n
     fallback = np.cross(n, np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
-    s = np.where(s_norm[:, None] > 1e-12, s / np.maximum(s_norm, 1e-300)[:, None],
-                 fallback / np.linalg.norm(fallback, axis=1)[:, None])
+    s = np.where(
+        s_norm[:, None] > 1e-12,
+        s / np.maximum(s_norm, 1e-300)[:, None],
+        fallback / np.linalg.norm(fallback, axis=1)[:, None],
+    )
     k_r = k_hat - 2.0 * np.einsum("ij,ij->i", n, k_hat)[:, None] * n
     rs, rp = np.zeros(R, complex), np.zeros(R, complex)
     job = SimpleNamespace(media=media, k0=k0)
@@ -220,8 +222,9 @@ def triangle_integral(tri: np.ndarray, area: np.ndarray, q: np.ndarray) -> np.nd
 
     tri : (F, 3, 3) vertices [m]; area : (F,) [m^2]; q : (D, 3) [1/m]. Returns (F, D) complex128.
     """
-    return kernels.triangle_integrals(np.ascontiguousarray(tri, float), np.ascontiguousarray(area, float),
-                                      np.ascontiguousarray(q, float))
+    return kernels.triangle_integrals(
+        np.ascontiguousarray(tri, float), np.ascontiguousarray(area, float), np.ascontiguousarray(q, float)
+    )
 
 
 def radiation_vectors(target: Target, lit, J, M, k_hat, k0, r_hat):

@@ -93,8 +93,9 @@ def load_job(path: Path, out: Path | None = None) -> PoJob:
     if "frequency" in data:
         data["frequencies"] = data.pop("frequency")
     if isinstance(data.get("targets"), list):
-        data["targets"] = [dict(e, key=f"targets[{i}]") if isinstance(e, dict) else e
-                           for i, e in enumerate(data["targets"])]
+        data["targets"] = [
+            dict(e, key=f"targets[{i}]") if isinstance(e, dict) else e for i, e in enumerate(data["targets"])
+        ]
     if out is not None:
         data["output"] = dict(data.get("output") or {}, dir=str(out))
     try:
@@ -102,11 +103,21 @@ def load_job(path: Path, out: Path | None = None) -> PoJob:
     except ValidationError as exc:
         errors = []
         for err in exc.errors():
-            loc = ["frequency" if p == "frequencies" else p for p in err["loc"]
-                   if not (isinstance(p, str) and ("[" in p or p.startswith("function-")))]
+            loc = [
+                "frequency" if p == "frequencies" else p
+                for p in err["loc"]
+                if not (isinstance(p, str) and ("[" in p or p.startswith("function-")))
+            ]
             key = "".join(f"[{p}]" if isinstance(p, int) else (f".{p}" if i else str(p)) for i, p in enumerate(loc))
-            msg = "unknown key" if err["type"] == "extra_forbidden" else (
-                "required key missing" if err["type"] == "missing" else str(err.get("ctx", {}).get("error", err["msg"])))
+            msg = (
+                "unknown key"
+                if err["type"] == "extra_forbidden"
+                else (
+                    "required key missing"
+                    if err["type"] == "missing"
+                    else str(err.get("ctx", {}).get("error", err["msg"]))
+                )
+            )
             errors.append(UserError(msg, path, key or None))
         raise (UserErrors(errors) if len(errors) > 1 else errors[0]) from None
     if job.output.dir is not None and not job.output.dir.is_absolute():
@@ -152,15 +163,28 @@ def _run_locked(job, out_dir: Path, thetas, phis, tt, pp, force: bool = False) -
     for f in job.frequencies:
         target = _targets(job, f)
         for pol in job.polarization:
-            res = command.compute(target, f, th_i, ph_i, pol, tt, pp, monostatic=job.monostatic,
-                                  bounces=job.bounces, method=job.method, tube=job.tube, force=force,
-                                  source=job.source_file)
+            res = command.compute(
+                target,
+                f,
+                th_i,
+                ph_i,
+                pol,
+                tt,
+                pp,
+                monostatic=job.monostatic,
+                bounces=job.bounces,
+                method=job.method,
+                tube=job.tube,
+                force=force,
+                source=job.source_file,
+            )
             stem = f"{job.name}_{f / 1e9:g}GHz_{pol}"
-            interrupt.outcome(f"files already written in {out_dir} are complete, the others missing; run the "
-                              "job again to write them all")
+            interrupt.outcome(
+                f"files already written in {out_dir} are complete, the others missing; run the "
+                "job again to write them all"
+            )
             written += command.write_run(res, out_dir, stem, job.name, thetas, phis, job.output.plot)
             runs.append((stem, res))
     observation = f"theta `{job.observation.theta}`, phi `{job.observation.phi}` (degrees)"
-    written.append(command.write_report(out_dir, job.name, str(job.source_file), runs, observation,
-                                        job.output.plot))
+    written.append(command.write_report(out_dir, job.name, str(job.source_file), runs, observation, job.output.plot))
     return written

@@ -55,8 +55,7 @@ def triangle_phase(a0, a1, a2, area):
     if spread > TAYLOR:
         g = (_phi1(t) - _phi1(s)) / complex(0.0, spread)
     else:
-        g = complex(0.5 - (s * s + s * t + t * t) / 24.0,
-                    (s + t) / 6.0 - (s**3 + s * s * t + s * t * t + t**3) / 120.0)
+        g = complex(0.5 - (s * s + s * t + t * t) / 24.0, (s + t) / 6.0 - (s**3 + s * s * t + s * t * t + t**3) / 120.0)
     return 2.0 * area * complex(math.cos(mid), math.sin(mid)) * g
 
 
@@ -69,9 +68,12 @@ def triangle_integrals(tri, area, q):
     for f in numba.prange(F):
         for d in range(D):
             qx, qy, qz = q[d, 0], q[d, 1], q[d, 2]
-            out[f, d] = triangle_phase(qx * tri[f, 0, 0] + qy * tri[f, 0, 1] + qz * tri[f, 0, 2],
-                                       qx * tri[f, 1, 0] + qy * tri[f, 1, 1] + qz * tri[f, 1, 2],
-                                       qx * tri[f, 2, 0] + qy * tri[f, 2, 1] + qz * tri[f, 2, 2], area[f])
+            out[f, d] = triangle_phase(
+                qx * tri[f, 0, 0] + qy * tri[f, 0, 1] + qz * tri[f, 0, 2],
+                qx * tri[f, 1, 0] + qy * tri[f, 1, 1] + qz * tri[f, 1, 2],
+                qx * tri[f, 2, 0] + qy * tri[f, 2, 1] + qz * tri[f, 2, 2],
+                area[f],
+            )
     return out
 
 
@@ -113,8 +115,9 @@ def box_patterns(tri, area, src, start, centres, q, r_hat, eta):
             x2, y2, z2 = tri[f, 2, 0] - cx, tri[f, 2, 1] - cy, tri[f, 2, 2] - cz
             for d in range(D):
                 qx, qy, qz = q[d, 0], q[d, 1], q[d, 2]
-                w = triangle_phase(qx * x0 + qy * y0 + qz * z0, qx * x1 + qy * y1 + qz * z1,
-                                   qx * x2 + qy * y2 + qz * z2, area[f])
+                w = triangle_phase(
+                    qx * x0 + qy * y0 + qz * z0, qx * x1 + qy * y1 + qz * z1, qx * x2 + qy * y2 + qz * z2, area[f]
+                )
                 for c in range(6):
                     acc[d, c] += src[f, c] * w
         for d in range(D):

@@ -82,7 +82,7 @@ def _resample(spec: np.ndarray, n: int, axis: int) -> np.ndarray:
     n_pos, n_neg = (m + 1) // 2, (m - 1) // 2  # frequencies 0..n_pos-1 and -n_neg..-1
     out[:n_pos] = spec[:n_pos]
     if n_neg:
-        out[n - n_neg:] = spec[m - n_neg:]
+        out[n - n_neg :] = spec[m - n_neg :]
     if m % 2 == 0:
         out[m // 2] = 0.5 * spec[m // 2]
         out[n - m // 2] += 0.5 * spec[m // 2]
@@ -130,7 +130,7 @@ def _leaf_patterns(tri, area, src, box, centres, k_hat, k0, n):
     centres = np.ascontiguousarray(centres)
     half = np.empty((B, 3, r_hat.shape[0]), np.complex128)
     for run in call_slices(np.diff(start) * r_hat.shape[0]):  # boxes in runs: Ctrl-C between them
-        half[run] = kernels.box_patterns(tri, area, src, start[run.start:run.stop + 1], centres[run], q, r_hat, ETA0)
+        half[run] = kernels.box_patterns(tri, area, src, start[run.start : run.stop + 1], centres[run], q, r_hat, ETA0)
     return _unfold(half.reshape(B, 3, n // 2 + 1, n))
 
 
@@ -198,14 +198,12 @@ def _tree(tri, k0, tol):
     # boxes per level, deepest first; each facet's box index at that level
     levels = []
     for lev in range(depth, -1, -1):
-        keys, first, inv = np.unique(morton >> (3 * (depth - lev)), return_index=True,
-                                     return_inverse=True)
+        keys, first, inv = np.unique(morton >> (3 * (depth - lev)), return_index=True, return_inverse=True)
         side = side0 / 2**lev
         c = ijk[first] >> (depth - lev)
         centres = lo + (c + 0.5) * side
         R = float(np.linalg.norm(tri - centres[inv][:, None, :], axis=2).max())
-        levels.append(dict(lev=lev, keys=keys, ijk=c, centres=centres, box=inv,
-                           n=_grid_size(k0 * R, tol)))
+        levels.append(dict(lev=lev, keys=keys, ijk=c, centres=centres, box=inv, n=_grid_size(k0 * R, tol)))
     # a parent's grid is never coarser than its children's
     for a, b in zip(levels[:-1], levels[1:]):
         b["n"] = max(b["n"], a["n"])
@@ -233,13 +231,15 @@ def memory_bytes(tri, k0: float, directions: int, tol: float = 1e-3) -> float:
         nc, n_p = child["n"], parent["n"]
         step = max(1, _CHUNK // (3 * n_p * n_p))
         block = min(step, len(child["centres"])) * 3 * cplx * (2 * nc * nc + n_p * nc + 3 * n_p * n_p)
-        stages.append((len(child["centres"]) * nc * nc + len(parent["centres"]) * n_p * n_p) * 3 * cplx
-                      + block + 88.0 * n_p * n_p)
+        stages.append(
+            (len(child["centres"]) * nc * nc + len(parent["centres"]) * n_p * n_p) * 3 * cplx + block + 88.0 * n_p * n_p
+        )
     n_r = levels[-1]["n"]
     n_fine = sfft.next_fast_len(int(np.ceil(_OVERSAMPLE * n_r)))
     n_fine += n_fine % 2
-    stages.append(3 * cplx * (3 * n_r * n_r + n_fine * n_r + 3 * n_fine * n_fine) + _CHUNK * 2 * cplx
-                  + directions * 200.0)
+    stages.append(
+        3 * cplx * (3 * n_r * n_r + n_fine * n_r + 3 * n_fine * n_fine) + _CHUNK * 2 * cplx + directions * 200.0
+    )
     return facets + max(stages)
 
 
@@ -282,10 +282,10 @@ def far_field_octree(target, lit, J, M, k_hat, k0, theta, phi, tol=1e-3):
         for o in np.unique(slot):
             # each parent has at most one child per octant: one translation, no repeated index
             sel = np.flatnonzero(slot == o)
-            shift = (octant[sel[0]] - 0.5) * (0.5 * side0 / 2**parent["lev"])
+            shift = (octant[sel[0]] - 0.5) * (0.5 * side0 / 2 ** parent["lev"])
             phase = np.exp(1j * (q @ shift))  # Xia et al. 2023: e^{j k0 (c_child - c) . r_hat}
             for b0 in range(0, len(sel), step):
-                part = sel[b0:b0 + step]
+                part = sel[b0 : b0 + step]
                 up = _upsample(P[part], n)
                 up *= phase
                 Pp[pid[part]] += up

@@ -42,8 +42,11 @@ def tube_grid(target: solver.Target, d_inc: np.ndarray, tube: float):
     b_hat = np.cross(d_inc, a_hat)
     n = int(np.ceil(radius / tube))
     if (2 * n + 1) ** 2 > MAX_TUBES:
-        raise UserError(f"{(2 * n + 1) ** 2} ray tubes of {tube:.3g} m over a target {2 * radius:.3g} m across, "
-                        f"more than {MAX_TUBES}: give a larger --tube", "--tube")
+        raise UserError(
+            f"{(2 * n + 1) ** 2} ray tubes of {tube:.3g} m over a target {2 * radius:.3g} m across, "
+            f"more than {MAX_TUBES}: give a larger --tube",
+            "--tube",
+        )
     i, j = np.meshgrid(np.arange(-n, n + 1), np.arange(-n, n + 1), indexing="ij")
     keep = (i * i + j * j) * tube * tube <= radius * radius
     i, j = i[keep].astype(float), j[keep].astype(float)
@@ -92,13 +95,16 @@ def bounce_radiation(target: solver.Target, k0: float, d_inc, e_inc, bounces: in
             area = np.linalg.norm(np.cross(u, v), axis=1)
             step = max(1, _CHUNK // max(1, len(r)))
             for d0 in range(0, D, step):
-                rh = r_hat[d0:d0 + step]
+                rh = r_hat[d0 : d0 + step]
                 q = k0 * (d[:, None, :] - rh[None, :, :])  # (R, Dc, 3)
-                w = (np.exp(-1j * k0 * (r @ rh.T)) * area[:, None]
-                     * np.sinc(np.einsum("rdc,rc->rd", q, u) / (2.0 * np.pi))
-                     * np.sinc(np.einsum("rdc,rc->rd", q, v) / (2.0 * np.pi)))
-                N[d0:d0 + step] += w.T @ J
-                L[d0:d0 + step] += w.T @ M
+                w = (
+                    np.exp(-1j * k0 * (r @ rh.T))
+                    * area[:, None]
+                    * np.sinc(np.einsum("rdc,rc->rd", q, u) / (2.0 * np.pi))
+                    * np.sinc(np.einsum("rdc,rc->rd", q, v) / (2.0 * np.pi))
+                )
+                N[d0 : d0 + step] += w.T @ J
+                L[d0 : d0 + step] += w.T @ M
         # the reflected tube leaves the hit point, its side vectors mirrored
         origins = offset_origins(r, n, k_r, scale=isect.face_scale[prim])
         ta = ta - 2.0 * np.einsum("ij,ij->i", ta, n)[:, None] * n

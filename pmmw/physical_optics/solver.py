@@ -35,8 +35,18 @@ OCTREE_TERMS = 1e8
 OCTREE_DIRECTIONS = 1000
 
 
-def bistatic(target: Target, k0: float, theta_i: float, phi_i: float, polarization: str, theta, phi,
-             bounces: int = 1, tube: float | None = None, method: str = "auto"):
+def bistatic(
+    target: Target,
+    k0: float,
+    theta_i: float,
+    phi_i: float,
+    polarization: str,
+    theta,
+    phi,
+    bounces: int = 1,
+    tube: float | None = None,
+    method: str = "auto",
+):
     """Bistatic RCS [m^2] (sigma_theta, sigma_phi) at observation angles [rad], and the number of
     lit facets. ``bounces`` > 1 adds the currents of waves reflected that many times, by shooting
     and bouncing ray tubes of side ``tube`` [m] (`pmmw.physical_optics.sbr`). ``method``: ``direct`` sums
@@ -70,14 +80,14 @@ def bistatic(target: Target, k0: float, theta_i: float, phi_i: float, polarizati
     return (scale * np.abs(ft) ** 2).reshape(shape), (scale * np.abs(fp) ** 2).reshape(shape), int(lit.sum())
 
 
-def monostatic(target: Target, k0: float, polarization: str, theta, phi, bounces: int = 1,
-               tube: float | None = None):
+def monostatic(target: Target, k0: float, polarization: str, theta, phi, bounces: int = 1, tube: float | None = None):
     """Backscatter RCS [m^2] (sigma_theta, sigma_phi) with the radar at each of the angles [rad]
     (incidence = observation), and the lit facets at each."""
     theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
     s_t, s_p, n_lit = np.zeros(theta.shape), np.zeros(theta.shape), np.zeros(theta.shape, int)
     for idx in np.ndindex(theta.shape):
-        a, b, n = bistatic(target, k0, float(theta[idx]), float(phi[idx]), polarization,
-                           theta[idx], phi[idx], bounces, tube)
+        a, b, n = bistatic(
+            target, k0, float(theta[idx]), float(phi[idx]), polarization, theta[idx], phi[idx], bounces, tube
+        )
         s_t[idx], s_p[idx], n_lit[idx] = a, b, n
     return s_t, s_p, n_lit

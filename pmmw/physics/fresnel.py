@@ -175,8 +175,9 @@ def _root(z, scale, branch):
     """``sqrt(z)`` on ``branch`` (see `normal_component`); ``scale`` bounds |terms| of z [-]."""
     z, scale = np.broadcast_arrays(np.asarray(z, np.complex128), np.asarray(scale, np.float64))
     out = np.empty(z.shape, np.complex128)
-    _root_loop(np.ascontiguousarray(z).ravel(), np.ascontiguousarray(scale).ravel(), branch == "decaying",
-               out.reshape(-1))
+    _root_loop(
+        np.ascontiguousarray(z).ravel(), np.ascontiguousarray(scale).ravel(), branch == "decaying", out.reshape(-1)
+    )
     return out
 
 
@@ -216,8 +217,9 @@ def _incident(eps1, cos1):
     """
     eps1, cos1 = np.broadcast_arrays(np.asarray(eps1, np.complex128), np.asarray(cos1, np.float64))
     q1, q1sq = np.empty(eps1.shape, np.complex128), np.empty(eps1.shape, np.complex128)
-    _incident_loop(np.ascontiguousarray(eps1).ravel(), np.ascontiguousarray(cos1).ravel(), q1.reshape(-1),
-                   q1sq.reshape(-1))
+    _incident_loop(
+        np.ascontiguousarray(eps1).ravel(), np.ascontiguousarray(cos1).ravel(), q1.reshape(-1), q1sq.reshape(-1)
+    )
     return q1, q1sq
 
 
@@ -336,8 +338,9 @@ def _close1(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque):
 @_jit
 def _close_loop(q1, eps1, bs, cs, bp, cp, amp_s, amp_p, yexit_s, yexit_p, opaque, amp, power):
     for i in range(q1.shape[0]):
-        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = _close1(q1[i], eps1[i], bs[i], cs[i], bp[i], cp[i], amp_s[i],
-                                                         amp_p[i], yexit_s[i], yexit_p[i], opaque)
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = _close1(
+            q1[i], eps1[i], bs[i], cs[i], bp[i], cp[i], amp_s[i], amp_p[i], yexit_s[i], yexit_p[i], opaque
+        )
         amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
         power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 
@@ -441,8 +444,9 @@ def interface(eps1, eps2, cos1, with_q2=False):
         Only with ``with_q2``: the exit medium's normal component (outgoing branch), which
         refraction reuses.
     """
-    eps1, eps2, cos1 = np.broadcast_arrays(np.asarray(eps1, np.complex128), np.asarray(eps2, np.complex128),
-                                           np.asarray(cos1, np.float64))
+    eps1, eps2, cos1 = np.broadcast_arrays(
+        np.asarray(eps1, np.complex128), np.asarray(eps2, np.complex128), np.asarray(cos1, np.float64)
+    )
     shape = eps1.shape
     n = eps1.size
     amp, power, q2 = np.empty((n, 4), np.complex128), np.empty((n, 6)), np.empty(n, np.complex128)

@@ -190,8 +190,7 @@ def stack(eps, thickness, cos1, k0, substrate="dielectric"):
     n_media = eps.shape[-1]
     thickness = np.asarray(thickness, dtype=np.float64)
     if thickness.ndim == 0 or thickness.shape[-1] != n_media - 2:
-        raise ValueError(f"thickness must have {n_media - 2} layers along its last axis, "
-                         f"shape {thickness.shape}")
+        raise ValueError(f"thickness must have {n_media - 2} layers along its last axis, shape {thickness.shape}")
     if np.any(thickness < 0.0):
         raise ValueError("layer thicknesses must be >= 0")
     cos1 = np.asarray(cos1, dtype=np.float64)
@@ -203,6 +202,13 @@ def stack(eps, thickness, cos1, k0, substrate="dielectric"):
 
     n = int(np.prod(shape, dtype=np.int64))
     amp, power = np.empty((n, 4), np.complex128), np.empty((n, 6))
-    _stack_loop(np.ascontiguousarray(eps).reshape(n, n_media), np.ascontiguousarray(thickness).reshape(n, n_media - 2),
-                np.ascontiguousarray(cos1).reshape(n), float(k0), metal, amp, power)
+    _stack_loop(
+        np.ascontiguousarray(eps).reshape(n, n_media),
+        np.ascontiguousarray(thickness).reshape(n, n_media - 2),
+        np.ascontiguousarray(cos1).reshape(n),
+        float(k0),
+        metal,
+        amp,
+        power,
+    )
     return _as_fresnel(amp, power, shape)

@@ -323,7 +323,7 @@ def _ggx_d(m, ax, ay):
     cz = m[:, 2]
     t = _slopes2(m, ax, ay)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        val = 1.0 / (np.pi * ax * ay * cz ** 4 * (1.0 + t) ** 2)
+        val = 1.0 / (np.pi * ax * ay * cz**4 * (1.0 + t) ** 2)
     return np.where(cz > 0.0, np.nan_to_num(val, nan=0.0, posinf=0.0), 0.0)
 
 
@@ -398,8 +398,14 @@ def _frame1(z0, z1, z2, t0, t1, t2, orientation):
     y0, y1, y2 = z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0
     if orientation != 0.0:
         co, so = math.cos(orientation), math.sin(orientation)
-        x0, x1, x2, y0, y1, y2 = (co * x0 + so * y0, co * x1 + so * y1, co * x2 + so * y2,
-                                  -so * x0 + co * y0, -so * x1 + co * y1, -so * x2 + co * y2)
+        x0, x1, x2, y0, y1, y2 = (
+            co * x0 + so * y0,
+            co * x1 + so * y1,
+            co * x2 + so * y2,
+            -so * x0 + co * y0,
+            -so * x1 + co * y1,
+            -so * x2 + co * y2,
+        )
     return (x0, x1, x2), (y0, y1, y2)
 
 
@@ -453,8 +459,7 @@ def ggx_draw1(n, t, wo, u1, u2, ax, ay, orientation):
     else:
         mx, my, mz = mx / nm, my / nm, mz / nm
     w = 1.0 if mx * wx + my * wy + mz * wz > 0.0 else 0.0
-    return (mx * x[0] + my * y[0] + mz * n[0], mx * x[1] + my * y[1] + mz * n[1], mx * x[2] + my * y[2] + mz * n[2],
-            w)
+    return (mx * x[0] + my * y[0] + mz * n[0], mx * x[1] + my * y[1] + mz * n[1], mx * x[2] + my * y[2] + mz * n[2], w)
 
 
 @_jit
@@ -462,16 +467,30 @@ def _ggx_sample_rows(n, t, wo, u1, u2, ax, ay, orientation, m_out, w_out):
     """`ggx_draw1` of arrays of rays, shape (N, 3) and (N,), filled in ``m_out`` and ``w_out``."""
     for i in range(n.shape[0]):
         m_out[i, 0], m_out[i, 1], m_out[i, 2], w_out[i] = ggx_draw1(
-            (n[i, 0], n[i, 1], n[i, 2]), (t[i, 0], t[i, 1], t[i, 2]), (wo[i, 0], wo[i, 1], wo[i, 2]), u1[i], u2[i],
-            ax, ay, orientation)
+            (n[i, 0], n[i, 1], n[i, 2]),
+            (t[i, 0], t[i, 1], t[i, 2]),
+            (wo[i, 0], wo[i, 1], wo[i, 2]),
+            u1[i],
+            u2[i],
+            ax,
+            ay,
+            orientation,
+        )
 
 
 @_jit
 def _smith_masking_rows(n, t, w, code, ax, ay, orientation, out):
     """`smith_g1` of arrays of rays, shape (N, 3) -> ``out`` (N,)."""
     for i in range(n.shape[0]):
-        out[i] = smith_g1((n[i, 0], n[i, 1], n[i, 2]), (t[i, 0], t[i, 1], t[i, 2]), (w[i, 0], w[i, 1], w[i, 2]),
-                          code, ax, ay, orientation)
+        out[i] = smith_g1(
+            (n[i, 0], n[i, 1], n[i, 2]),
+            (t[i, 0], t[i, 1], t[i, 2]),
+            (w[i, 0], w[i, 1], w[i, 2]),
+            code,
+            ax,
+            ay,
+            orientation,
+        )
 
 
 def _rows(n_macro, tangent, v):
@@ -522,8 +541,9 @@ class _Microfacet:
                 raise ValueError(f"{self.name}: an anisotropic model needs the tangent")
             tangent = np.array([1.0, 0.0, 0.0])
         if n_macro.ndim == 1:  # one macro frame for all rays: build it once
-            x, y, z = local_frame(n_macro[None, :], np.asarray(tangent, dtype=np.float64).reshape(1, 3),
-                                  self.orientation)
+            x, y, z = local_frame(
+                n_macro[None, :], np.asarray(tangent, dtype=np.float64).reshape(1, 3), self.orientation
+            )
             return x[0], y[0], z[0]
         return local_frame(n_macro, tangent, self.orientation)
 
@@ -639,8 +659,9 @@ class _Microfacet:
         weight = np.ones(n)
 
         def area_ggx(w):
-            return _area_any(lambda v: _ggx_a_up(v[:, 2], v[:, 0] ** 2 + v[:, 1] ** 2,
-                                                  _directional_alpha2(v, ax, ay)), w)
+            return _area_any(
+                lambda v: _ggx_a_up(v[:, 2], v[:, 0] ** 2 + v[:, 1] ** 2, _directional_alpha2(v, ax, ay)), w
+            )
 
         def weighted(idx, v1, v2):
             cand = _ggx_vndf_local(wo[idx], ax, ay, v1, v2)
@@ -783,8 +804,12 @@ class _ASProjectedArea:
         ip = np.clip((phi / dphi).astype(np.int64), 0, self._N_PHI - 2)
         tp = np.clip(phi / dphi - ip, 0.0, 1.0)
         r = self.ratio
-        corr = ((1 - tc) * (1 - tp) * r[ic, ip] + tc * (1 - tp) * r[ic + 1, ip]
-                + (1 - tc) * tp * r[ic, ip + 1] + tc * tp * r[ic + 1, ip + 1])
+        corr = (
+            (1 - tc) * (1 - tp) * r[ic, ip]
+            + tc * (1 - tp) * r[ic + 1, ip]
+            + (1 - tc) * tp * r[ic, ip + 1]
+            + tc * tp * r[ic + 1, ip + 1]
+        )
         return approx * corr
 
 
@@ -821,8 +846,13 @@ class AshikhminShirley(_Microfacet):
         best = None
         for gamma in np.linspace(1.0, 4.0, 301):
             log_h = self._log_hstar(emin, gamma)
-            log_k = (self._log_norm + math.log(math.pi) + math.log(gamma)
-                     - 0.5 * (math.log(self.ex + 4.0) + math.log(self.ey + 4.0)) + log_h)
+            log_k = (
+                self._log_norm
+                + math.log(math.pi)
+                + math.log(gamma)
+                - 0.5 * (math.log(self.ex + 4.0) + math.log(self.ey + 4.0))
+                + log_h
+            )
             if best is None or log_k < best[0]:
                 best = (log_k, gamma, log_h)
         _, self._gamma, self._log_hsup = best
@@ -836,8 +866,9 @@ class AshikhminShirley(_Microfacet):
             return 0.0
         if e < 1e-9:  # the e -> 0 limit; h* decreases with e, so this only raises the bound
             return 2.0 * math.log(4.0 / gamma)
-        return (2.0 * math.log1p((4.0 - gamma) * (e + 4.0) / (gamma * e))
-                - 0.5 * (e + 4.0) * math.log1p((4.0 - gamma) / e))
+        return 2.0 * math.log1p((4.0 - gamma) * (e + 4.0) / (gamma * e)) - 0.5 * (e + 4.0) * math.log1p(
+            (4.0 - gamma) / e
+        )
 
     def _exponent(self, v):
         """e(phi) of Optics Express 2016 eq. 9 for local vectors (any length); ex where v is along z."""
@@ -845,7 +876,9 @@ class AshikhminShirley(_Microfacet):
         if not self.anisotropic:
             return np.full(v.shape[0], self.ex)
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(r2 > 0.0, (self.ex * v[:, 0] ** 2 + self.ey * v[:, 1] ** 2) / np.where(r2 > 0.0, r2, 1.0), self.ex)
+            return np.where(
+                r2 > 0.0, (self.ex * v[:, 0] ** 2 + self.ey * v[:, 1] ** 2) / np.where(r2 > 0.0, r2, 1.0), self.ex
+            )
 
     def _d_local(self, m):
         cz = m[:, 2]
@@ -975,8 +1008,18 @@ class GGX(_Microfacet):
             raise ValueError(f"{self.name}: an anisotropic model needs the tangent")
         n, t, wo = _rows(n_macro, tangent, wo)
         m, weight = np.empty_like(wo), np.empty(wo.shape[0])
-        _ggx_sample_rows(n, t, wo, np.ascontiguousarray(u1, dtype=np.float64),
-                         np.ascontiguousarray(u2, dtype=np.float64), self.ax, self.ay, self.orientation, m, weight)
+        _ggx_sample_rows(
+            n,
+            t,
+            wo,
+            np.ascontiguousarray(u1, dtype=np.float64),
+            np.ascontiguousarray(u2, dtype=np.float64),
+            self.ax,
+            self.ay,
+            self.orientation,
+            m,
+            weight,
+        )
         return m, weight
 
     def masking(self, n_macro, tangent, w):
@@ -990,7 +1033,7 @@ class GGX(_Microfacet):
     def _dcos_local(self, u1, u2):
         # tan^2 theta = alpha_phi^2 u/(1-u); tan phi = (ay/ax) tan(2 pi u1)
         phi = np.arctan2(self.ay * np.sin(2.0 * np.pi * u1), self.ax * np.cos(2.0 * np.pi * u1))
-        a2 = 1.0 / (np.cos(phi) ** 2 / self.ax ** 2 + np.sin(phi) ** 2 / self.ay ** 2)
+        a2 = 1.0 / (np.cos(phi) ** 2 / self.ax**2 + np.sin(phi) ** 2 / self.ay**2)
         t2 = a2 * u2 / np.maximum(1.0 - u2, _TINY)
         cz = 1.0 / np.sqrt(1.0 + t2)
         sz = np.sqrt(np.clip(1.0 - cz * cz, 0.0, 1.0))
@@ -1007,7 +1050,7 @@ class Beckmann(GGX):
         cz = m[:, 2]
         t = _slopes2(m, self.ax, self.ay)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            val = np.exp(-np.minimum(t, 745.0)) / (np.pi * self.ax * self.ay * cz ** 4)
+            val = np.exp(-np.minimum(t, 745.0)) / (np.pi * self.ax * self.ay * cz**4)
         return np.where((cz > 0.0) & (t < 745.0), np.nan_to_num(val, nan=0.0, posinf=0.0), 0.0)
 
     def _a_up_local(self, w):
@@ -1029,7 +1072,7 @@ class Beckmann(GGX):
 
     def _dcos_local(self, u1, u2):
         phi = np.arctan2(self.ay * np.sin(2.0 * np.pi * u1), self.ax * np.cos(2.0 * np.pi * u1))
-        a2 = 1.0 / (np.cos(phi) ** 2 / self.ax ** 2 + np.sin(phi) ** 2 / self.ay ** 2)
+        a2 = 1.0 / (np.cos(phi) ** 2 / self.ax**2 + np.sin(phi) ** 2 / self.ay**2)
         t2 = -a2 * np.log(np.maximum(1.0 - u2, _TINY))
         cz = 1.0 / np.sqrt(1.0 + t2)
         sz = np.sqrt(np.clip(1.0 - cz * cz, 0.0, 1.0))
@@ -1067,7 +1110,7 @@ class BlenderGloss(_Microfacet):
         if self.L == 0.0:
             return np.zeros(m.shape[0])  # a delta at n
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            val = np.exp((0.5 / self.L - 1.0) * np.log1p(-np.minimum(t2, 1.0))) / (2.0 * np.pi * self.L * cz ** 3)
+            val = np.exp((0.5 / self.L - 1.0) * np.log1p(-np.minimum(t2, 1.0))) / (2.0 * np.pi * self.L * cz**3)
         return np.where((cz > 0.0) & (t2 < 1.0), np.nan_to_num(val, nan=0.0, posinf=0.0), 0.0)
 
     def _d_local(self, m):
@@ -1231,8 +1274,11 @@ def make_model(spec, *, file=None, key=None) -> MicrofacetModel:
         path); ``alpha`` given together with ``alpha_x``/``alpha_y``.
     """
     if not isinstance(spec, Mapping):
-        raise UserError(f"a roughness entry is a mapping like {{model: ashikhmin_shirley, ex: 15, ey: 15}}, "
-                        f"got {spec!r}", file=file, key=key)
+        raise UserError(
+            f"a roughness entry is a mapping like {{model: ashikhmin_shirley, ex: 15, ey: 15}}, got {spec!r}",
+            file=file,
+            key=key,
+        )
     known = ", ".join(REGISTRY)
     name = spec.get("model")
     if name is None:
@@ -1246,8 +1292,13 @@ def make_model(spec, *, file=None, key=None) -> MicrofacetModel:
         if pkey == "model":
             continue
         if pkey not in table:
-            errors.append(UserError(f"unknown parameter {pkey!r} for roughness model {name}; expected: "
-                                    f"{', '.join(table)}", file=file, key=_join(key, str(pkey))))
+            errors.append(
+                UserError(
+                    f"unknown parameter {pkey!r} for roughness model {name}; expected: {', '.join(table)}",
+                    file=file,
+                    key=_join(key, str(pkey)),
+                )
+            )
             continue
         lo, lo_incl, hi, _default, what = table[pkey]
         if isinstance(raw, bool) or not isinstance(raw, (int, float)):
@@ -1257,20 +1308,25 @@ def make_model(spec, *, file=None, key=None) -> MicrofacetModel:
         ok = math.isfinite(val) and (val >= lo if lo_incl else val > lo) and (hi is None or val <= hi)
         if not ok:
             bound = f">= {lo:g}" if lo_incl else f"> {lo:g}"
-            errors.append(UserError(f"{pkey} must be {bound} and <= {hi:g} ({what}), got {raw!r}",
-                                    file=file, key=_join(key, pkey)))
+            errors.append(
+                UserError(
+                    f"{pkey} must be {bound} and <= {hi:g} ({what}), got {raw!r}", file=file, key=_join(key, pkey)
+                )
+            )
             continue
         values[pkey] = val
     for pkey, (_lo, _li, _hi, default, what) in table.items():
         if default is _REQUIRED and pkey not in values and pkey not in spec:
-            errors.append(UserError(f"missing {pkey} ({what}) for roughness model {name}", file=file,
-                                    key=_join(key, pkey)))
+            errors.append(
+                UserError(f"missing {pkey} ({what}) for roughness model {name}", file=file, key=_join(key, pkey))
+            )
     if name in ("ggx", "beckmann") and not errors:
         has_a = "alpha" in values
         has_xy = [k for k in ("alpha_x", "alpha_y") if k in values]
         if has_a and has_xy:
-            errors.append(UserError("give either alpha or alpha_x and alpha_y, not both", file=file,
-                                    key=_join(key, has_xy[0])))
+            errors.append(
+                UserError("give either alpha or alpha_x and alpha_y, not both", file=file, key=_join(key, has_xy[0]))
+            )
         elif not has_a and len(has_xy) != 2:
             errors.append(UserError("missing alpha (or both alpha_x and alpha_y)", file=file, key=_join(key, "alpha")))
     if errors:

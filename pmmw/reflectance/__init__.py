@@ -104,4 +104,3 @@ __all__ = [
     "roughness_spec_from_options",
     "run_brdf",
 ]
-

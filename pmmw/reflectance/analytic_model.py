@@ -36,8 +36,7 @@ SHADOWING = ("smith", "ashikhmin", "torrance_sparrow", "none")
 _DOUBLE_STEP = 2
 
 
-def _facet_jones(itf: _Interface, m, k_in, k_out, s_in_basis, p_in_basis, s_out_basis, p_out_basis,
-                 out_basis=True):
+def _facet_jones(itf: _Interface, m, k_in, k_out, s_in_basis, p_in_basis, s_out_basis, p_out_basis, out_basis=True):
     """Jones matrix of one specular facet reflection, shape (N, 2, 2), from the (s_in, p_in)
     basis of the incoming wave to the (s_out, p_out) basis of the outgoing one, or with
     ``out_basis=False`` to the facet's own (s, k_out x s); also returns that s and p."""
@@ -52,8 +51,7 @@ def _facet_jones(itf: _Interface, m, k_in, k_out, s_in_basis, p_in_basis, s_out_
     return j, s, p_out
 
 
-def analytic_mueller(stack: Stack, wi, wo, *, phi_o=None, shadowing="smith", double=True, double_samples=256,
-                     seed=0):
+def analytic_mueller(stack: Stack, wi, wo, *, phi_o=None, shadowing="smith", double=True, double_samples=256, seed=0):
     """Stryjewski et al. 2009's polarized Ashikhmin BRDF for given outgoing directions (`pmmw.reflectance` docstring).
 
     Parameters
@@ -80,15 +78,21 @@ def analytic_mueller(stack: Stack, wi, wo, *, phi_o=None, shadowing="smith", dou
         its BRDF is a delta, see `analytic`).
     """
     if len(stack.layers) != 1:
-        raise UserError("the analytic model is for one rough interface (a substrate, optionally coated); "
-                        "use --method mc for layered stacks", "--method")
+        raise UserError(
+            "the analytic model is for one rough interface (a substrate, optionally coated); "
+            "use --method mc for layered stacks",
+            "--method",
+        )
     if shadowing not in SHADOWING:
         raise UserError(f"unknown shadowing {shadowing!r}; known: {', '.join(SHADOWING)}", "--shadowing")
     itf = _Interface(stack, 0)
     model = itf.model
     if isinstance(model, rough.BlenderGloss):
-        raise UserError("blender_gloss is Blender's normal perturbation, not a microfacet distribution: it has no "
-                        "analytic BRDF; use --method mc", "--method")
+        raise UserError(
+            "blender_gloss is Blender's normal perturbation, not a microfacet distribution: it has no "
+            "analytic BRDF; use --method mc",
+            "--method",
+        )
     wo = np.asarray(wo, dtype=np.float64)
     nc = wo.shape[0]
     phi_o = np.arctan2(wo[:, 1], wo[:, 0]) if phi_o is None else np.asarray(phi_o, dtype=np.float64)
@@ -166,11 +170,18 @@ def _double_term(itf: _Interface, model, wi, wo, h_in, v_in, h_out, v_out, n_sam
     def accumulate(sel, h1, h2, w12, c1, c2, dc1, dc2, a12, ja, s_a, p_a):
         """acc[sel] += M(J) f/(q1 + q2), arrays over the cells ``sel`` (broadcastable)."""
         q = dc1 / (4.0 * c1) + dc2 / (4.0 * c2)
-        fw = (g1_i * g1_o[sel] * (dc1 / h1[..., 2]) * (dc2 / h2[..., 2])
-              / (16.0 * cos_i * cos_o[sel] * a12 * q))
+        fw = g1_i * g1_o[sel] * (dc1 / h1[..., 2]) * (dc2 / h2[..., 2]) / (16.0 * cos_i * cos_o[sel] * a12 * q)
         n = sel.size
-        jb, _, _ = _facet_jones(itf, h2, np.broadcast_to(w12, (n, 3)), wo[sel], np.broadcast_to(s_a, (n, 3)),
-                                np.broadcast_to(p_a, (n, 3)), h_out[sel], v_out[sel])
+        jb, _, _ = _facet_jones(
+            itf,
+            h2,
+            np.broadcast_to(w12, (n, 3)),
+            wo[sel],
+            np.broadcast_to(s_a, (n, 3)),
+            np.broadcast_to(p_a, (n, 3)),
+            h_out[sel],
+            v_out[sel],
+        )
         acc[sel] += mueller_from_jones(jb @ ja) * np.maximum(fw, 0.0)[:, None, None]  # distinct cells
 
     for h in hs:
@@ -186,8 +197,9 @@ def _double_term(itf: _Interface, model, wi, wo, h_in, v_in, h_out, v_out, n_sam
             dc2 = model.D(z, tx, h2) * h2[:, 2]
             ok = (c2 > 0.0) & (dc2 > 0.0) & (h2[:, 2] > 0.0)
             if np.any(ok):
-                ja, s_a, p_a = _facet_jones(itf, h[None, :], k_in1, w12[None, :], h_in[:1], v_in[:1], None, None,
-                                            out_basis=False)
+                ja, s_a, p_a = _facet_jones(
+                    itf, h[None, :], k_in1, w12[None, :], h_in[:1], v_in[:1], None, None, out_basis=False
+                )
                 a12 = float(area_up(w12[None, :])[0])
                 accumulate(cells[ok], h, h2[ok], w12, c1, c2[ok], dch, dc2[ok], a12, ja, s_a[0], p_a[0])
         # strategy 2: h is facet 2, seen from wo (the reversed path); w12 and facet 1 per cell
@@ -203,8 +215,9 @@ def _double_term(itf: _Interface, model, wi, wo, h_in, v_in, h_out, v_out, n_sam
             if np.any(ok):
                 sel, w12, h1, c1v, dc1, cov = sel[ok], w12[ok], h1[ok], c1v[ok], dc1[ok], co[m2][ok]
                 n = sel.size
-                ja, s_a, p_a = _facet_jones(itf, h1, np.broadcast_to(k_in1, (n, 3)), w12, h_in[sel], v_in[sel],
-                                            None, None, out_basis=False)
+                ja, s_a, p_a = _facet_jones(
+                    itf, h1, np.broadcast_to(k_in1, (n, 3)), w12, h_in[sel], v_in[sel], None, None, out_basis=False
+                )
                 accumulate(sel, h1, np.broadcast_to(h, (n, 3)), w12, c1v, cov, dc1, dch, area_up(w12), ja, s_a, p_a)
     return acc / n_samples
 
@@ -270,8 +283,11 @@ def analytic_totals(stack: Stack, wi, *, shadowing="smith", double=True, n_point
     a12 = model.projected_area(z, tx, up)
     g1_o = model.masking(z, tx, wo2)
     with np.errstate(divide="ignore", invalid="ignore"):
-        w2 = np.where(ok2 & (a12 > 0.0), g1_i * g1_o * c1 * c2 /
-                      (cos_i * a12 * np.maximum(h1[:, 2], _TINY) * np.maximum(h2[:, 2], _TINY)), 0.0)
+        w2 = np.where(
+            ok2 & (a12 > 0.0),
+            g1_i * g1_o * c1 * c2 / (cos_i * a12 * np.maximum(h1[:, 2], _TINY) * np.maximum(h2[:, 2], _TINY)),
+            0.0,
+        )
     ja, s_a, p_a = _facet_jones(itf, h1, k_in, w12, h_in, v_in, None, None, out_basis=False)
     h2_out, v2_out = _hv(wo2, np.arctan2(wo2[:, 1], wo2[:, 0]))
     jb, _, _ = _facet_jones(itf, h2, w12, wo2, s_a, p_a, h2_out, v2_out)
@@ -290,8 +306,9 @@ def analytic(stack: Stack, wi, *, shadowing="smith", double=True, double_samples
     single, double : ndarray, shape (91, 360, 4, 4), float64 [1/sr]
     """
     _, ph, wgrid = grid_directions()
-    single, _ = analytic_mueller(stack, wi, wgrid.reshape(-1, 3), phi_o=ph.reshape(-1), shadowing=shadowing,
-                                 double=False)
+    single, _ = analytic_mueller(
+        stack, wi, wgrid.reshape(-1, 3), phi_o=ph.reshape(-1), shadowing=shadowing, double=False
+    )
     single = single.reshape(N_THETA, N_PHI, 4, 4)
     dbl = np.zeros_like(single)
     if double and stack.layers[0].roughness is not None:
@@ -301,8 +318,9 @@ def analytic(stack: Stack, wi, *, shadowing="smith", double=True, double_samples
         rows, cols = np.arange(0, N_THETA, st), np.arange(0, N_PHI, st)
         sub_w = wgrid[np.ix_(rows, cols)].reshape(-1, 3)
         sub_ph = ph[np.ix_(rows, cols)].reshape(-1)
-        _, sub = analytic_mueller(stack, wi, sub_w, phi_o=sub_ph, shadowing=shadowing, double=True,
-                                  double_samples=double_samples, seed=seed)
+        _, sub = analytic_mueller(
+            stack, wi, sub_w, phi_o=sub_ph, shadowing=shadowing, double=True, double_samples=double_samples, seed=seed
+        )
         sub = sub.reshape(rows.size, cols.size, 4, 4)
         sub = np.concatenate([sub, sub[:, :1]], axis=1)  # wrap azimuth
         r = np.arange(N_THETA) / st
@@ -321,7 +339,8 @@ def analytic(stack: Stack, wi, *, shadowing="smith", double=True, double_samples
         row, col = _cells(ws)
         h_in, v_in = _hv(-wi[None, :], np.array([phi_i + math.pi]))
         h_out, v_out = _hv(ws, np.array([phi_i + math.pi]))
-        jj, _, _ = _facet_jones(_Interface(stack, 0), np.array([[0.0, 0.0, 1.0]]), -wi[None, :], ws, h_in, v_in,
-                                h_out, v_out)
+        jj, _, _ = _facet_jones(
+            _Interface(stack, 0), np.array([[0.0, 0.0, 1.0]]), -wi[None, :], ws, h_in, v_in, h_out, v_out
+        )
         single[row[0], col[0]] = mueller_from_jones(jj)[0] / projected_solid_angle()[row[0], col[0]]
     return single, dbl

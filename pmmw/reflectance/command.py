@@ -62,9 +62,15 @@ class BrdfResult:
 # shared with stack files and locate problems by key (`--n.n`, `roughness.ex`); a user who typed
 # options is told the option alone.
 _ROUGHNESS_OPTIONS = {
-    "roughness.model": "--model", "roughness.ex": "--ex", "roughness.ey": "--ey", "roughness.m": "--m",
-    "roughness.alpha": "--alpha", "roughness.alpha_x": "--alpha", "roughness.alpha_y": "--alpha-y",
-    "roughness.gloss": "--gloss", "roughness.orientation_deg": "--orientation",
+    "roughness.model": "--model",
+    "roughness.ex": "--ex",
+    "roughness.ey": "--ey",
+    "roughness.m": "--m",
+    "roughness.alpha": "--alpha",
+    "roughness.alpha_x": "--alpha",
+    "roughness.alpha_y": "--alpha-y",
+    "roughness.gloss": "--gloss",
+    "roughness.orientation_deg": "--orientation",
 }
 
 
@@ -80,14 +86,19 @@ def _stack_from_options(n, eps, material, roughness_spec, frequency, wavelength)
     f = _frequency(frequency, wavelength, "command line", "--frequency", "--wavelength")
     given = [k for k, v in (("--n", n), ("--eps", eps), ("--material", material)) if v is not None]
     if len(given) != 1:
-        raise UserError("give exactly one of --n, --eps, --material (or --stack FILE)", "command line",
-                        given[1] if len(given) > 1 else "--n")
+        raise UserError(
+            "give exactly one of --n, --eps, --material (or --stack FILE)",
+            "command line",
+            given[1] if len(given) > 1 else "--n",
+        )
     entry = {"n": n} if n is not None else {"eps": eps} if eps is not None else {"material": material}
     eps_val, metal = _medium_eps(entry, frequency=f, file="command line", key=given[0])
     model = rough.make_model(roughness_spec, file="command line", key="roughness") if roughness_spec else None
     if material is not None:
         return _material_stack(material, eps_val, metal, model, f)
-    return Stack(layers=(StackLayer(eps=eps_val, roughness=model, metal=metal, name=given[0].lstrip("-")),), frequency=f)
+    return Stack(
+        layers=(StackLayer(eps=eps_val, roughness=model, metal=metal, name=given[0].lstrip("-")),), frequency=f
+    )
 
 
 def _material_stack(mid, eps_val, metal, model, f):
@@ -100,21 +111,32 @@ def _material_stack(mid, eps_val, metal, model, f):
     db = MaterialDB.load()
     mat = db.get(mid, file="command line", key="--material")
     rough_layers, films = split_coating(  # the renderer's grouping (temperatures do not matter here)
-        [(db.get(x.material).eps_at(f), x.thickness, 0.0, x.roughness) for x in mat.coating], 2.0 * math.pi * f / _C0)
+        [(db.get(x.material).eps_at(f), x.thickness, 0.0, x.roughness) for x in mat.coating], 2.0 * math.pi * f / _C0
+    )
 
     def pairs(coat):
         return () if coat is None else tuple(zip(coat.eps.tolist(), coat.thickness.tolist()))
 
     names = [x.material for x in mat.coating if x.roughness is not None]
-    layers = [StackLayer(eps=x.eps, roughness=x.roughness, thickness=x.thickness, coating=pairs(x.films), name=name)
-              for x, name in zip(rough_layers, names)]
-    layers.append(StackLayer(eps=eps_val, roughness=model if model is not None else mat.roughness, metal=metal,
-                        coating=pairs(films), name=mid))
+    layers = [
+        StackLayer(eps=x.eps, roughness=x.roughness, thickness=x.thickness, coating=pairs(x.films), name=name)
+        for x, name in zip(rough_layers, names)
+    ]
+    layers.append(
+        StackLayer(
+            eps=eps_val,
+            roughness=model if model is not None else mat.roughness,
+            metal=metal,
+            coating=pairs(films),
+            name=mid,
+        )
+    )
     return Stack(layers=tuple(layers), frequency=f)
 
 
-def roughness_spec_from_options(model=None, ex=None, ey=None, m=None, alpha=None, alpha_y=None, gloss=None,
-                                orientation=None):
+def roughness_spec_from_options(
+    model=None, ex=None, ey=None, m=None, alpha=None, alpha_y=None, gloss=None, orientation=None
+):
     """The ``roughness:`` record implied by the command-line options (None: smooth)."""
     opts = {"ex": ex, "ey": ey, "m": m, "alpha": alpha, "alpha_y": alpha_y, "gloss": gloss}
     given = {k: v for k, v in opts.items() if v is not None}
@@ -165,15 +187,45 @@ def _specular(mueller, wi):
     row, col = _cells(ws[None, :])
     m = mueller[row[0], col[0]]
     norm = m[0, 0] if m[0, 0] != 0 else 1.0
-    return {"cell": [int(row[0]), int(col[0])], "M00": float(m[0, 0]),
-            "m12": float(m[0, 1] / norm), "m33": float(m[2, 2] / norm), "m34": float(m[2, 3] / norm)}
+    return {
+        "cell": [int(row[0]), int(col[0])],
+        "M00": float(m[0, 0]),
+        "m12": float(m[0, 1] / norm),
+        "m33": float(m[2, 2] / norm),
+        "m34": float(m[2, 3] / norm),
+    }
 
 
-def run_brdf(*, n=None, eps=None, material=None, stack=None, frequency=None, wavelength=None,
-             incidence=0.0, azimuth=0.0, stokes=(1.0, 0.0, 0.0, 0.0), model=None, ex=None, ey=None, m=None,
-             alpha=None, alpha_y=None, gloss=None, orientation=None, method="mc", samples=1_000_000, seed=0,
-             shadowing="smith", double=True, double_samples=256, mueller=False, threshold=1e-3, out=None,
-             plots=True) -> BrdfResult:
+def run_brdf(
+    *,
+    n=None,
+    eps=None,
+    material=None,
+    stack=None,
+    frequency=None,
+    wavelength=None,
+    incidence=0.0,
+    azimuth=0.0,
+    stokes=(1.0, 0.0, 0.0, 0.0),
+    model=None,
+    ex=None,
+    ey=None,
+    m=None,
+    alpha=None,
+    alpha_y=None,
+    gloss=None,
+    orientation=None,
+    method="mc",
+    samples=1_000_000,
+    seed=0,
+    shadowing="smith",
+    double=True,
+    double_samples=256,
+    mueller=False,
+    threshold=1e-3,
+    out=None,
+    plots=True,
+) -> BrdfResult:
     """The ``pmmw brdf`` job: build the surface, run the method(s), write the files.
 
     Parameters mirror the command-line options (docs/brdf.md). ``stack`` is a Stack or a path
@@ -203,8 +255,12 @@ def run_brdf(*, n=None, eps=None, material=None, stack=None, frequency=None, wav
         stokes_in = np.array([float(v) for v in stokes], dtype=np.float64)
     except (TypeError, ValueError):
         raise UserError(f"expected four numbers I,Q,U,V, got {stokes!r}", "--stokes") from None
-    if stokes_in.shape != (4,) or not np.all(np.isfinite(stokes_in)) or not stokes_in[0] > 0.0 or \
-            np.sqrt(np.sum(stokes_in[1:] ** 2)) > stokes_in[0] * (1.0 + 1e-9):
+    if (
+        stokes_in.shape != (4,)
+        or not np.all(np.isfinite(stokes_in))
+        or not stokes_in[0] > 0.0
+        or np.sqrt(np.sum(stokes_in[1:] ** 2)) > stokes_in[0] * (1.0 + 1e-9)
+    ):
         raise UserError(f"a Stokes vector needs I > 0 and Q^2 + U^2 + V^2 <= I^2, got {stokes!r}", "--stokes")
     if not (0.0 <= float(incidence) < 90.0):
         raise UserError(f"incidence must lie in [0, 90) degrees, got {incidence!r}", "--incidence")
@@ -218,8 +274,10 @@ def run_brdf(*, n=None, eps=None, material=None, stack=None, frequency=None, wav
         raise UserError(f"double-samples must be >= 1, got {double_samples!r}", "--double-samples")
     spec = roughness_spec_from_options(model, ex, ey, m, alpha, alpha_y, gloss, orientation)
     if stack is not None and (any(v is not None for v in (n, eps, material)) or spec is not None):
-        raise UserError("--stack describes the layers and their roughness: drop --n/--eps/--material and the "
-                        "roughness options", "--stack")
+        raise UserError(
+            "--stack describes the layers and their roughness: drop --n/--eps/--material and the roughness options",
+            "--stack",
+        )
     try:
         if stack is not None:
             st = stack if isinstance(stack, Stack) else load_stack(stack, frequency=frequency, wavelength=wavelength)
@@ -239,7 +297,7 @@ def run_brdf(*, n=None, eps=None, material=None, stack=None, frequency=None, wav
             by_order = tally.by_order / (int(samples) * proj[None, :, :, None, None])
             mm = by_order.sum(axis=0)
             mean_i = tally.i_sum / int(samples) / stokes_in[0]
-            var_i = max(tally.i_sq / int(samples) / stokes_in[0] ** 2 - mean_i ** 2, 0.0)
+            var_i = max(tally.i_sq / int(samples) / stokes_in[0] ** 2 - mean_i**2, 0.0)
             extra = {
                 "total_reflectance_stderr": math.sqrt(var_i / int(samples)),
                 "total_transmittance": tally.transmitted / int(samples),
@@ -248,13 +306,16 @@ def run_brdf(*, n=None, eps=None, material=None, stack=None, frequency=None, wav
                 "samples": int(samples),
                 "facet_interactions_per_ray": tally.events / int(samples),
                 "rejection_fallbacks": tally.fallback_weights,
-                "reflectance_by_order": [float(np.einsum("ij,ij->", proj, by_order[o, :, :, 0, :] @ (stokes_in / stokes_in[0])))
-                                         for o in range(3)],
+                "reflectance_by_order": [
+                    float(np.einsum("ij,ij->", proj, by_order[o, :, :, 0, :] @ (stokes_in / stokes_in[0])))
+                    for o in range(3)
+                ],
             }
             parts = {"by_order": by_order}
         else:
-            single, dbl = analytic(st, wi, shadowing=shadowing, double=bool(double),
-                                   double_samples=int(double_samples), seed=int(seed))
+            single, dbl = analytic(
+                st, wi, shadowing=shadowing, double=bool(double), double_samples=int(double_samples), seed=int(seed)
+            )
             mm = single + dbl
             sn = stokes_in / stokes_in[0]
             if st.layers[0].roughness is None:
@@ -290,8 +351,11 @@ def run_brdf(*, n=None, eps=None, material=None, stack=None, frequency=None, wav
         "azimuth_deg": float(azimuth),
         "stokes_in": [float(v) for v in stokes_in],
         "stack": _describe(st),
-        "grid": {"rows": "zenith 0..90 deg (1 deg cells)", "columns": "azimuth 0..359 deg (1 deg cells)",
-                 "shape": [N_THETA, N_PHI]},
+        "grid": {
+            "rows": "zenith 0..90 deg (1 deg cells)",
+            "columns": "azimuth 0..359 deg (1 deg cells)",
+            "shape": [N_THETA, N_PHI],
+        },
         "flat_reflectance": flat_r,
         "methods": {k: v.summary for k, v in results.items()},
         "total_reflectance": results[methods[0]].summary["total_reflectance"],

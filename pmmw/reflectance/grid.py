@@ -77,7 +77,7 @@ def mueller_from_jones(j):
         `pmmw.physics.jones` (``U = 2 Re(E1 E2*)``, ``V = 2 Im(E1 E2*)``), written out.
     """
     a, b, c, d = j[:, 0, 0], j[:, 0, 1], j[:, 1, 0], j[:, 1, 1]
-    aa, bb, cc, dd = (x.real ** 2 + x.imag ** 2 for x in (a, b, c, d))
+    aa, bb, cc, dd = (x.real**2 + x.imag**2 for x in (a, b, c, d))
     ab, cd = a * np.conj(b), c * np.conj(d)
     ac, bd = a * np.conj(c), b * np.conj(d)
     ad, bc = a * np.conj(d), b * np.conj(c)

@@ -42,14 +42,14 @@ _STACK = 4
 
 @dataclass
 class _Tally:
-    by_order: np.ndarray                 # (3, 91, 360, 4, 4) summed path Mueller, orders 1, 2, >= 3
-    i_sum: float = 0.0                   # sum over paths of reflected I (for S_in)
-    i_sq: float = 0.0                    # sum of squares (standard error)
-    transmitted: float = 0.0             # unpolarized power into a lossless substrate
-    absorbed: float = 0.0                # at interfaces, in sinks, in layers, ended re-hit chains
-    lost: float = 0.0                    # paths ended at _MAX_EVENTS
+    by_order: np.ndarray  # (3, 91, 360, 4, 4) summed path Mueller, orders 1, 2, >= 3
+    i_sum: float = 0.0  # sum over paths of reflected I (for S_in)
+    i_sq: float = 0.0  # sum of squares (standard error)
+    transmitted: float = 0.0  # unpolarized power into a lossless substrate
+    absorbed: float = 0.0  # at interfaces, in sinks, in layers, ended re-hit chains
+    lost: float = 0.0  # paths ended at _MAX_EVENTS
     events: int = 0
-    fallback_weights: int = 0            # rejection fallbacks (roughness module)
+    fallback_weights: int = 0  # rejection fallbacks (roughness module)
 
 
 def stack_media(stack: Stack) -> Media:
@@ -79,9 +79,15 @@ def stack_media(stack: Stack) -> Media:
     sub = stack.layers[-1]
     kind = METAL if sub.metal else OPAQUE if complex(sub.eps).imag > 0.0 else DIELECTRIC
     return Media(
-        ids=["ambient", sub.name or "substrate"], eps=np.array([stack.ambient_eps, sub.eps], complex),
-        kind=np.array([DIELECTRIC, kind], np.int8), temperature=np.full(2, _T_ABSORBER), alpha=np.zeros(2),
-        coating=(None, films(sub)), roughness=(None, sub.roughness), bump=(), layers=((), tuple(rough)),
+        ids=["ambient", sub.name or "substrate"],
+        eps=np.array([stack.ambient_eps, sub.eps], complex),
+        kind=np.array([DIELECTRIC, kind], np.int8),
+        temperature=np.full(2, _T_ABSORBER),
+        alpha=np.zeros(2),
+        coating=(None, films(sub)),
+        roughness=(None, sub.roughness),
+        bump=(),
+        layers=((), tuple(rough)),
     )
 
 
@@ -112,8 +118,14 @@ def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, thres
     media = stack_media(stack)
     faces = Faces(np.ones(1, np.int32), np.array([[0.0, 0.0, 1.0]]), np.full(1, _STEP))
     # the branch drawn by power (``stochastic``); depth counts facet events, ending at _MAX_EVENTS
-    surfaces = Surfaces(media, stack.frequency or 1.0, faces, Limits(_MAX_EVENTS, float(threshold), True, 0.0, 0.0),
-                        (kernels.STRATEGIES["stochastic"], 0), count_facets=True)
+    surfaces = Surfaces(
+        media,
+        stack.frequency or 1.0,
+        faces,
+        Limits(_MAX_EVENTS, float(threshold), True, 0.0, 0.0),
+        (kernels.STRATEGIES["stochastic"], 0),
+        count_facets=True,
+    )
     tally = _Tally(by_order=np.zeros((3, N_THETA, N_PHI, 4, 4)))
     phi_i = math.atan2(wi[1], wi[0])
     k_in = -np.asarray(wi, dtype=np.float64)
@@ -125,12 +137,29 @@ def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, thres
         surfaces.start(rng, acc, cut)
         m = np.zeros((n, 2, 2), complex)
         m[:, 0, 0] = m[:, 1, 1] = 1.0
-        wave = Wave(o=np.zeros((n, 3)), d=np.tile(k_in, (n, 1)), s=np.tile(h_in[0], (n, 1)), p=np.tile(v_in[0], (n, 1)),
-                    m=m, sid=np.arange(n), depth=np.zeros(n, np.int32), stack=np.zeros((n, _STACK), np.int16),
-                    top=np.zeros(n, np.int32), last_t=np.full(n, _T_ABSORBER))
+        wave = Wave(
+            o=np.zeros((n, 3)),
+            d=np.tile(k_in, (n, 1)),
+            s=np.tile(h_in[0], (n, 1)),
+            p=np.tile(v_in[0], (n, 1)),
+            m=m,
+            sid=np.arange(n),
+            depth=np.zeros(n, np.int32),
+            stack=np.zeros((n, _STACK), np.int16),
+            top=np.zeros(n, np.int32),
+            last_t=np.full(n, _T_ABSORBER),
+        )
         # every ray meets the substrate's face (medium 1) from the ambient side, as `kernels.arrive` leaves it
-        hit = Hit(np.zeros((n, 3)), np.tile(faces.normal[0], (n, 1)), np.full(n, float(wi[2])), np.zeros(n, np.int64),
-                  np.ones(n, np.int64), np.ones(n, np.int64), np.zeros(n, bool), np.full(n, HitCode.INTERACTS, np.int8))
+        hit = Hit(
+            np.zeros((n, 3)),
+            np.tile(faces.normal[0], (n, 1)),
+            np.full(n, float(wi[2])),
+            np.zeros(n, np.int64),
+            np.ones(n, np.int64),
+            np.ones(n, np.int64),
+            np.zeros(n, bool),
+            np.full(n, HitCode.INTERACTS, np.int8),
+        )
         out = Wave.concat(surfaces.interact(wave, hit, np.zeros(n, np.int64), np.arange(n)))
         # the ended paths' power (`kernels.survive` at _MAX_EVENTS); the rest of what was deposited was absorbed
         lost = float(cut[:, 0].sum())
@@ -163,7 +192,8 @@ def _collect(g: Wave, tally: _Tally, stokes_in):
         if np.any(sel):
             tally.by_order[o] += np.stack(
                 [np.bincount(flat[sel], weights=mm[sel, a, b], minlength=size) for a in range(4) for b in range(4)],
-                axis=-1).reshape(N_THETA, N_PHI, 4, 4)
+                axis=-1,
+            ).reshape(N_THETA, N_PHI, 4, 4)
     i_out = mm[:, 0, :] @ stokes_in
     tally.i_sum += float(i_out.sum())
-    tally.i_sq += float((i_out ** 2).sum())
+    tally.i_sq += float((i_out**2).sum())

@@ -65,7 +65,9 @@ class _Interface:
         eps = np.array([eps1] + [e for e, _ in films] + [eps2], dtype=np.complex128)
         thick = np.array([d for _, d in films], dtype=np.float64)
         k0 = self.k0 if self.k0 is not None else 1.0  # films need k0 (checked at load time)
-        return multilayer.stack(eps[None, :], thick[None, :], cos1, k0, substrate="metal" if self.metal else "dielectric")
+        return multilayer.stack(
+            eps[None, :], thick[None, :], cos1, k0, substrate="metal" if self.metal else "dielectric"
+        )
 
 
 def flat_reflectance(stack: Stack, theta_i):

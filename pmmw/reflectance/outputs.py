@@ -33,8 +33,14 @@ def write_outputs(out: Path, results, summary, wi, mueller, plots):
     files = []
     for meth, res in results.items():
         dop, aop = _dop_aop(res.stokes)
-        channels = {"I": res.stokes[0], "Q": res.stokes[1], "U": res.stokes[2], "V": res.stokes[3],
-                    "DoP": dop, "AoP": aop}
+        channels = {
+            "I": res.stokes[0],
+            "Q": res.stokes[1],
+            "U": res.stokes[2],
+            "V": res.stokes[3],
+            "DoP": dop,
+            "AoP": aop,
+        }
         if mueller:
             for a in range(4):
                 for b in range(4):
@@ -67,9 +73,14 @@ def _plot_maps(path: Path, res: MethodResult, title: str):
     from pmmw.io.preview import subplots
 
     dop, aop = _dop_aop(res.stokes)
-    maps = [("I [1/sr]", res.stokes[0], "viridis"), ("Q [1/sr]", res.stokes[1], "RdBu_r"),
-            ("U [1/sr]", res.stokes[2], "RdBu_r"), ("V [1/sr]", res.stokes[3], "RdBu_r"),
-            ("DoP", dop, "magma"), ("AoP [deg]", aop, "twilight")]
+    maps = [
+        ("I [1/sr]", res.stokes[0], "viridis"),
+        ("Q [1/sr]", res.stokes[1], "RdBu_r"),
+        ("U [1/sr]", res.stokes[2], "RdBu_r"),
+        ("V [1/sr]", res.stokes[3], "RdBu_r"),
+        ("DoP", dop, "magma"),
+        ("AoP [deg]", aop, "twilight"),
+    ]
     th_edges = np.concatenate([[0.0], np.arange(N_THETA - 1) + 0.5, [90.0]])
     ph_edges = np.radians(np.arange(N_PHI + 1) - 0.5)
     fig, axes = subplots(2, 3, figsize=(12, 8), subplot_kw={"projection": "polar"})

@@ -83,8 +83,11 @@ def parse_complex(value, *, file=None, key=None) -> complex:
         raise UserError(f"expected a complex number like 0.23+3.46j, got {value!r}", file, key)
     if isinstance(value, (int, float)):
         return complex(float(value), 0.0)
-    if isinstance(value, (list, tuple)) and len(value) == 2 and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+    if (
+        isinstance(value, (list, tuple))
+        and len(value) == 2
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    ):
         return complex(float(value[0]), float(value[1]))
     if isinstance(value, str):
         text = value.replace(" ", "").replace("i", "j").replace("J", "j")
@@ -133,15 +136,17 @@ def _medium_eps(entry: dict, *, frequency, file, key, db=None):
         from pmmw.scene.materials import MaterialDB
 
         if frequency is None:
-            raise UserError("a material from the database needs the frequency (frequency: or --frequency)",
-                            file, f"{key}.material")
+            raise UserError(
+                "a material from the database needs the frequency (frequency: or --frequency)", file, f"{key}.material"
+            )
         db = db or MaterialDB.load()
         mat = db.get(entry["material"], file=file, key=f"{key}.material")
         if mat.kind == "metal":
             return 0j, True
         if mat.kind == "blackbody":
-            raise UserError(f"material {mat.id!r} is a blackbody: it has no surface to scatter from", file,
-                            f"{key}.material")
+            raise UserError(
+                f"material {mat.id!r} is a blackbody: it has no surface to scatter from", file, f"{key}.material"
+            )
         eps = complex(mat.eps_at(frequency))
     _check_eps(eps, file, f"{key}.{which}")
     return eps, False
@@ -250,8 +255,9 @@ def load_stack(path, *, frequency=None, wavelength=None) -> Stack:
                 fkey = f"{key}.coating[{j}]"
                 if not isinstance(film, dict) or "thickness" not in film:
                     raise UserError("a coating film is {n: ..., thickness: '0.1 mm'} (or eps:, material:)", file, fkey)
-                feps, fmetal = _medium_eps({k: v for k, v in film.items() if k != "thickness"}, frequency=f,
-                                           file=file, key=fkey)
+                feps, fmetal = _medium_eps(
+                    {k: v for k, v in film.items() if k != "thickness"}, frequency=f, file=file, key=fkey
+                )
                 if fmetal:
                     raise UserError("a coating film cannot be a metal", file, fkey)
                 d = parse_quantity(film["thickness"], "length", file=file, key=f"{fkey}.thickness")
@@ -262,8 +268,16 @@ def load_stack(path, *, frequency=None, wavelength=None) -> Stack:
                 raise UserError("a coating needs the frequency (frequency: or --frequency)", file, f"{key}.coating")
             if thickness and eps.imag > 0.0 and f is None and i != len(layers_raw) - 1:
                 raise UserError("an absorbing layer with a thickness needs the frequency", file, f"{key}.thickness")
-            layers.append(StackLayer(eps=eps, roughness=model, thickness=thickness, coating=tuple(coating), metal=metal,
-                                name=str(entry.get("name", f"layer {i}"))))
+            layers.append(
+                StackLayer(
+                    eps=eps,
+                    roughness=model,
+                    thickness=thickness,
+                    coating=tuple(coating),
+                    metal=metal,
+                    name=str(entry.get("name", f"layer {i}")),
+                )
+            )
         except UserErrors as ex:
             errors.extend(ex.errors)
         except UserError as ex:

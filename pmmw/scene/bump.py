@@ -103,8 +103,16 @@ class BumpMap:
         shading normals cannot model that shadowing)."""
         normals = np.ascontiguousarray(normals, dtype=np.float64)
         out = np.empty_like(normals)
-        _shade_rows(np.ascontiguousarray(pos, dtype=np.float64), normals, np.ascontiguousarray(d, dtype=np.float64),
-                    self.gu, self.gv, self.du, self.dv, out)
+        _shade_rows(
+            np.ascontiguousarray(pos, dtype=np.float64),
+            normals,
+            np.ascontiguousarray(d, dtype=np.float64),
+            self.gu,
+            self.gv,
+            self.du,
+            self.dv,
+            out,
+        )
         return out
 
 
@@ -116,8 +124,12 @@ def _bilinear(grid, x, y):
     fx, fy = x - x0, y - y0
     i0, j0 = int(x0 % nu), int(y0 % nv)
     i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
-    return ((1 - fx) * (1 - fy) * grid[j0, i0] + fx * (1 - fy) * grid[j0, i1]
-            + (1 - fx) * fy * grid[j1, i0] + fx * fy * grid[j1, i1])
+    return (
+        (1 - fx) * (1 - fy) * grid[j0, i0]
+        + fx * (1 - fy) * grid[j0, i1]
+        + (1 - fx) * fy * grid[j1, i0]
+        + fx * fy * grid[j1, i1]
+    )
 
 
 @inline()
@@ -211,21 +223,27 @@ def make_bump(spec, *, file=None, key=None) -> BumpMap:
     """
     key = key or "bump"
     if not isinstance(spec, Mapping):
-        raise UserError("a bump entry is {model: gaussian, rms: 3 mm, correlation: 3 cm, size: 1 m} "
-                        f"or {{texture: FILE, height: 5 mm, size: 1 m}}, got {spec!r}", file, key)
+        raise UserError(
+            "a bump entry is {model: gaussian, rms: 3 mm, correlation: 3 cm, size: 1 m} "
+            f"or {{texture: FILE, height: 5 mm, size: 1 m}}, got {spec!r}",
+            file,
+            key,
+        )
     errors: list[UserError] = []
     if "texture" in spec:
         allowed = ("texture", "height", "size")
     else:
         model = spec.get("model")
         if model != "gaussian":
-            raise UserError(f"unknown bump model {model!r}: use `model: gaussian` or `texture: FILE`", file,
-                            f"{key}.model")
+            raise UserError(
+                f"unknown bump model {model!r}: use `model: gaussian` or `texture: FILE`", file, f"{key}.model"
+            )
         allowed = ("model", "rms", "correlation", "size", "seed")
     for k in spec:
         if k not in allowed:
-            errors.append(UserError(f"unknown key {k!r} for this bump map (allowed: {', '.join(allowed)})", file,
-                                    f"{key}.{k}"))
+            errors.append(
+                UserError(f"unknown key {k!r} for this bump map (allowed: {', '.join(allowed)})", file, f"{key}.{k}")
+            )
     size = _length(spec, "size", file, key, errors)
     if "texture" in spec:
         height = _length(spec, "height", file, key, errors)
@@ -247,10 +265,18 @@ def make_bump(spec, *, file=None, key=None) -> BumpMap:
     if isinstance(seed, bool) or not isinstance(seed, int):
         errors.append(UserError(f"seed must be an integer, got {seed!r}", file, f"{key}.seed"))
     if size is not None and corr is not None and size / corr * _POINTS_PER_CORRELATION > _MAX_GRID:
-        errors.append(UserError(
-            f"size / correlation = {size / corr:.0f} is too large (at most {_MAX_GRID // _POINTS_PER_CORRELATION}): "
-            "the surface repeats every `size`, so a smaller size tiles the same statistics", file, f"{key}.size"))
+        errors.append(
+            UserError(
+                f"size / correlation = {size / corr:.0f} is too large (at most {_MAX_GRID // _POINTS_PER_CORRELATION}): "
+                "the surface repeats every `size`, so a smaller size tiles the same statistics",
+                file,
+                f"{key}.size",
+            )
+        )
     if errors:
         raise errors[0] if len(errors) == 1 else UserErrors(errors)
-    return BumpMap(gaussian_surface(rms, corr, size, seed), size,
-                   f"gaussian, rms {rms:g} m, correlation {corr:g} m, size {size:g} m")
+    return BumpMap(
+        gaussian_surface(rms, corr, size, seed),
+        size,
+        f"gaussian, rms {rms:g} m, correlation {corr:g} m, size {size:g} m",
+    )

@@ -58,8 +58,17 @@ class Camera:
         x = np.cross(k, np.asarray(up, float))
         x /= np.linalg.norm(x)
         y = np.cross(x, k)
-        return cls(position, x, y, k, float(fov), int(resolution[0]), int(resolution[1]),
-                   float(aperture_radius), focus_distance)
+        return cls(
+            position,
+            x,
+            y,
+            k,
+            float(fov),
+            int(resolution[0]),
+            int(resolution[1]),
+            float(aperture_radius),
+            focus_distance,
+        )
 
     def rays(self, u, v, keys, seed: int):
         """Primary rays through image-plane positions, with depth of field when focused, and
@@ -90,10 +99,25 @@ class Camera:
         n = np.shape(u)[0]
         o, d, s, p = (np.empty((n, 3)) for _ in range(4))
         lens = self.focus_distance is not None and self.aperture_radius > 0.0
-        _rays_loop(np.ascontiguousarray(u, float), np.ascontiguousarray(v, float),
-                   np.ascontiguousarray(keys, np.int64), np.int64(seed), self.position, self.x, self.y, self.k,
-                   np.tan(self.fov / 2.0), float(self.width), float(self.height),
-                   self.aperture_radius if lens else 0.0, float(self.focus_distance) if lens else 0.0, o, d, s, p)
+        _rays_loop(
+            np.ascontiguousarray(u, float),
+            np.ascontiguousarray(v, float),
+            np.ascontiguousarray(keys, np.int64),
+            np.int64(seed),
+            self.position,
+            self.x,
+            self.y,
+            self.k,
+            np.tan(self.fov / 2.0),
+            float(self.width),
+            float(self.height),
+            self.aperture_radius if lens else 0.0,
+            float(self.focus_distance) if lens else 0.0,
+            o,
+            d,
+            s,
+            p,
+        )
         return o, d, s, p
 
     def image_coordinates(self, points):
@@ -241,6 +265,17 @@ def pixel_samples(width: int, pixels, spp: int, seed: int, start: int = 0, total
     n = pixels.size * spp
     u, v, pix = np.empty(n), np.empty(n), np.empty(n, np.int64)
     centre = (total if total is not None else start + spp) == 1
-    _pixel_samples(int(width), pixels, int(spp), np.int64(seed), int(start), centre, float(R2_ALPHA[0]),
-                   float(R2_ALPHA[1]), u, v, pix)
+    _pixel_samples(
+        int(width),
+        pixels,
+        int(spp),
+        np.int64(seed),
+        int(start),
+        centre,
+        float(R2_ALPHA[0]),
+        float(R2_ALPHA[1]),
+        u,
+        v,
+        pix,
+    )
     return u, v, pix

@@ -77,7 +77,9 @@ class ModelSpec:
     """One registered model: its function eps(f [Hz], T [K], **params), ranges and source."""
 
     name: str
-    fn: Callable[..., complex] = field(repr=False, compare=False)  # repr: the scenario hash holds repr(material), no address
+    fn: Callable[..., complex] = field(
+        repr=False, compare=False
+    )  # repr: the scenario hash holds repr(material), no address
     f_range: tuple[float, float]  # [Hz]
     t_range: tuple[float, float]  # [K]
     t_ref: float  # [K] temperature when the material gives none
@@ -86,10 +88,18 @@ class ModelSpec:
     optional: tuple[str, ...] = ()  # parameters with defaults in `fn`
     parsers: dict = field(default_factory=dict, repr=False, compare=False)  # name -> parse(v, file, key)
     example: str = ""  # a complete ``model:`` mapping, for error messages
-    check: Callable[[dict, object, str], None] | None = field(default=None, repr=False, compare=False)  # check(params, file, key): cross-parameter rules
-    outside: Callable[[float, float, dict], str | None] | None = field(default=None, repr=False, compare=False)  # outside(f, T, params) -> reason or None
-    ranges: Callable[[dict], str] | None = field(default=None, repr=False, compare=False)  # ranges(params) -> text of the valid range
-    params_text: Callable[[dict], str] | None = field(default=None, repr=False, compare=False)  # params_text(params) -> their text
+    check: Callable[[dict, object, str], None] | None = field(
+        default=None, repr=False, compare=False
+    )  # check(params, file, key): cross-parameter rules
+    outside: Callable[[float, float, dict], str | None] | None = field(
+        default=None, repr=False, compare=False
+    )  # outside(f, T, params) -> reason or None
+    ranges: Callable[[dict], str] | None = field(
+        default=None, repr=False, compare=False
+    )  # ranges(params) -> text of the valid range
+    params_text: Callable[[dict], str] | None = field(
+        default=None, repr=False, compare=False
+    )  # params_text(params) -> their text
 
 
 @dataclass(frozen=True)
@@ -127,8 +137,9 @@ class DielectricModel:
         if self.spec.ranges is not None:
             f_text = self.spec.ranges(self.params)
         t_text = "at any temperature" if t0 <= 0.0 and t1 >= 1e4 else f"{t0:g}-{t1:g} K"
-        return (f"model {self.spec.name}{' (' + extra + ')' if extra else ''}: {self.spec.source}; valid "
-                f"{f_text}, {t_text}")
+        return (
+            f"model {self.spec.name}{' (' + extra + ')' if extra else ''}: {self.spec.source}; valid {f_text}, {t_text}"
+        )
 
 
 def _water(f, T):
@@ -172,8 +183,7 @@ def _p2040_material(v, file, key):
     from pmmw.scene.itu_materials import P2040_BUILDING_MATERIALS
 
     if v not in P2040_BUILDING_MATERIALS:
-        raise UserError(f"unknown ITU-R P.2040 material {v!r}; known: {', '.join(P2040_BUILDING_MATERIALS)}",
-                        file, key)
+        raise UserError(f"unknown ITU-R P.2040 material {v!r}; known: {', '.join(P2040_BUILDING_MATERIALS)}", file, key)
     return str(v)
 
 
@@ -184,8 +194,10 @@ def _vegetation(f, T, gravimetric_moisture):
     if eps.imag < 0.0:  # the fit's free-water fraction turns negative for dry vegetation
         from pmmw.errors import warn
 
-        warn(f"ITU-R P.527-6's vegetation fit gives a gain (eps'' {eps.imag:.3g}) at {f / 1e9:g} GHz, {T:g} K for "
-             f"gravimetric moisture {gravimetric_moisture:g}; taken as lossless")
+        warn(
+            f"ITU-R P.527-6's vegetation fit gives a gain (eps'' {eps.imag:.3g}) at {f / 1e9:g} GHz, {T:g} K for "
+            f"gravimetric moisture {gravimetric_moisture:g}; taken as lossless"
+        )
         eps = complex(eps.real, 0.0)
     return eps
 
@@ -198,8 +210,10 @@ def _vegetation_outside(f, T, params):
 
     t_hi = P527_VEGETATION_T_RANGE_FROZEN_PHYSICAL[1]
     if t_hi < T <= P527_VEGETATION_T_FREEZE:
-        return (f"{T:g} K lies between -6.5 and 0 C, where P.527-6's frozen-vegetation fit grows without bound; "
-                "the value is computed all the same")
+        return (
+            f"{T:g} K lies between -6.5 and 0 C, where P.527-6's frozen-vegetation fit grows without bound; "
+            "the value is computed all the same"
+        )
     return None
 
 
@@ -220,10 +234,16 @@ def _conductor(f, T, conductivity):
 # Gabriel, Lau and Gabriel 1996, Table 1 (digits as the IFAC-CNR tabulation of it gives them):
 # eps_inf, then (d_eps [1], tau [s], alpha [1]) of the four dispersions, then sigma_i [S/m].
 GABRIEL_1996 = {
-    "skin_dry": (4.0, ((32.0, 7.234e-12, 0.0), (1100.0, 32.481e-9, 0.20), (0.0, 159.155e-6, 0.20),
-                       (0.0, 15.915e-3, 0.20)), 0.0002),
-    "skin_wet": (4.0, ((39.0, 7.958e-12, 0.10), (280.0, 79.577e-9, 0.0), (3.0e4, 1.592e-6, 0.16),
-                       (3.0e4, 1.592e-3, 0.20)), 0.0004),
+    "skin_dry": (
+        4.0,
+        ((32.0, 7.234e-12, 0.0), (1100.0, 32.481e-9, 0.20), (0.0, 159.155e-6, 0.20), (0.0, 15.915e-3, 0.20)),
+        0.0002,
+    ),
+    "skin_wet": (
+        4.0,
+        ((39.0, 7.958e-12, 0.10), (280.0, 79.577e-9, 0.0), (3.0e4, 1.592e-6, 0.16), (3.0e4, 1.592e-3, 0.20)),
+        0.0004,
+    ),
 }
 
 
@@ -289,8 +309,11 @@ def _time(v, file, key):
             except ValueError:
                 x = None
     if x is None or not (math.isfinite(x) and x > 0.0):
-        raise UserError(f"expected a relaxation time above 0 with its unit ({', '.join(_SECONDS)}), e.g. "
-                        f"'8 ps', got {v!r}", file, key)
+        raise UserError(
+            f"expected a relaxation time above 0 with its unit ({', '.join(_SECONDS)}), e.g. '8 ps', got {v!r}",
+            file,
+            key,
+        )
     return x
 
 
@@ -299,8 +322,9 @@ def _debye_terms(v, file, key):
     from pmmw.errors import UserError
 
     if not isinstance(v, (list, tuple)) or not v:
-        raise UserError(f"expected a list of [d_eps, tau] pairs, e.g. [[10.0, 8 ps], [1.0, 0.2 ps]], got {v!r}",
-                        file, key)
+        raise UserError(
+            f"expected a list of [d_eps, tau] pairs, e.g. [[10.0, 8 ps], [1.0, 0.2 ps]], got {v!r}", file, key
+        )
     terms = []
     for i, term in enumerate(v):
         if not isinstance(term, (list, tuple)) or len(term) != 2:
@@ -375,16 +399,20 @@ def _soil(f, T, sand, clay, moisture, bulk_density=None, particle_density=2.66):
     if sigma_eff_i < 0.0:
         from pmmw.errors import warn
 
-        warn(f"ITU-R P.527-6's effective conductivity of soil with sand {sand:g} %, clay {clay:g} %, bulk density "
-             f"{rho_b:.3g} g/cm3 is negative (sigma_2 {sigma_2:.3g} S/m: Dobson's regression outside its data); the "
-             "soil's conduction loss is taken as 0")
+        warn(
+            f"ITU-R P.527-6's effective conductivity of soil with sand {sand:g} %, clay {clay:g} %, bulk density "
+            f"{rho_b:.3g} g/cm3 is negative (sigma_2 {sigma_2:.3g} S/m: Dobson's regression outside its data); the "
+            "soil's conduction loss is taken as 0"
+        )
         sigma_eff_i = 0.0
     eps_pw = complex(p527_water_permittivity(f, T))
     # eqs. (69)-(70), eps_fw = eps_pw + 18 (rho_s - rho_b) / (f rho_s mv) sigma_eff, enter eqs. (63)-(64)
     # as mv^(beta/alpha) eps_fw: written so, nothing divides by mv (beta/alpha > 1 for every texture)
     c = 18.0 * (rho_s - rho_b) / (f_ghz * rho_s)
     a_r, a_i = mv ** (beta_r / alpha), mv ** (beta_i / alpha)
-    w_r = max(a_r * eps_pw.real + c * sigma_eff_r * mv ** (beta_r / alpha - 1.0), a_r)  # mv^(beta'/alpha) max(eps_fw', 1)
+    w_r = max(
+        a_r * eps_pw.real + c * sigma_eff_r * mv ** (beta_r / alpha - 1.0), a_r
+    )  # mv^(beta'/alpha) max(eps_fw', 1)
     w_i = a_i * eps_pw.imag + c * sigma_eff_i * mv ** (beta_i / alpha - 1.0)  # mv^(beta''/alpha) eps_fw''
     eps_r = (dry + w_r**alpha - mv) ** (1.0 / alpha)  # eq. (63)
     eps_i = w_i  # eq. (64): (mv^beta'' eps_fw''^alpha)^(1/alpha)
@@ -427,8 +455,11 @@ def _check_soil(params, file, key):
     rho_s = params.get("particle_density", 2.66)
     rho_b = params.get("bulk_density", p527_bulk_density(sand, clay))
     if rho_b >= rho_s:
-        raise UserError(f"bulk density {rho_b:g} g/cm3 must be below the particle density {rho_s:g} g/cm3 "
-                        "(no pore space left)", file, key)
+        raise UserError(
+            f"bulk density {rho_b:g} g/cm3 must be below the particle density {rho_s:g} g/cm3 (no pore space left)",
+            file,
+            key,
+        )
 
 
 _PERCENT = _number(0.0, 100.0, "%", "'40 %'")
@@ -436,57 +467,147 @@ _DENSITY = _number(0.5, 3.0, "g/cm3", "'1.5 g/cm3'")
 
 
 MODELS = {
-    "water": ModelSpec("water", _water, (1e9, 1e12), (263.0, 373.0), 293.15, (),
-                       "Liebe, Hufford and Manabe 1991 double-Debye model as ITU-R P.840-8 eqs. 4-10"),
-    "pure_water": ModelSpec("pure_water", _p527_water, (1e9, 1e12), (269.15, 313.15), 293.15, (),
-                            "ITU-R P.527-6 sec. 5.1.1 (Liebe, Hufford and Manabe 1991 double Debye)"),
-    "sea_water": ModelSpec("sea_water", _sea_water, (1e9, 1e12), (269.15, 313.15), 293.15, (),
-                           "ITU-R P.527-6 sec. 5.1.2 (Meissner and Wentz 2004 salinity terms, Stogryn et al. "
-                           "1995 conductivity)",
-                           optional=("salinity",),
-                           parsers={"salinity": _number(0.0, 40.0, "g/kg", "'35 g/kg'")},
-                           example="{name: sea_water, salinity: 35 g/kg}"),
-    "ice": ModelSpec("ice", _ice, (1e7, 3e12), (20.0, 273.15), 263.15, (),
-                     "Maetzler 2006 (Hufford 1991, Mishima et al. 1983)"),
-    "conductor": ModelSpec("conductor", _conductor, (1e6, 1e12), (0.0, 1e4), 293.15, ("conductivity",),
-                           "eps = 1 + i sigma / (eps0 omega) (Drude metal well below its collision frequency)",
-                           parsers={"conductivity": _siemens_per_metre},
-                           example="{name: conductor, conductivity: 3.5e7 S/m} for aluminium"),
-    "skin_dry": ModelSpec("skin_dry", _skin_dry, (10.0, 100e9), (298.15, 313.15), 310.15, (),
-                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (dry)', at 37 C"),
-    "skin_wet": ModelSpec("skin_wet", _skin_wet, (10.0, 100e9), (298.15, 313.15), 310.15, (),
-                          "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (wet)', at 37 C"),
-    "debye": ModelSpec("debye", _debye, (0.0, math.inf), (0.0, 1e4), 293.15, ("eps_inf", "terms", "valid"),
-                       "a sum of Debye relaxations (Debye 1929) with the entry's published parameters",
-                       optional=("conductivity",),
-                       parsers={"eps_inf": _number(1.0, math.inf, "", "2.0"), "terms": _debye_terms,
-                                "valid": _frequency_range, "conductivity": _number(0.0, math.inf, "S/m", "'0.5 S/m'")},
-                       example="{name: debye, eps_inf: 2.0, terms: [[10.0, 8 ps]], valid: [10 GHz, 1 THz]}",
-                       outside=_debye_outside, ranges=_debye_ranges, params_text=_debye_text),
-    "leaves": ModelSpec("leaves", _leaves, (1e9, 100e9), (273.15, 313.15), 293.15, ("dry_matter",),
-                        "Maetzler 1994 leaf model with ITU-R P.527-6 saline water as the sap",
-                        optional=("salinity",),
-                        parsers={"dry_matter": _number(0.0, 0.75, "", "0.35"),
-                                 "salinity": _number(0.0, 40.0, "g/kg", "'10 g/kg'")},
-                        example="{name: leaves, dry_matter: 0.35, salinity: 10}"),
-    "p2040": ModelSpec("p2040", _p2040, (1e6, 450e9), (0.0, 1e4), 293.15, ("material",),
-                       "ITU-R P.2040-4 (2025) Table 3: eps' = a f^b, sigma = c f^d (f in GHz), per row",
-                       parsers={"material": _p2040_material}, example="{name: p2040, material: concrete}",
-                       outside=_p2040_outside, ranges=_p2040_ranges),
-    "vegetation": ModelSpec("vegetation", _vegetation, (0.2e9, 1e12), (253.15, 313.15), 293.15,
-                            ("gravimetric_moisture",),
-                            "ITU-R P.527-6 sec. 5.3 (Ulaby and El-Rayes 1987 above 0 C, with P.527-6's pure water; "
-                            "sec. 5.3.2's fit at or below 0 C), applied by the Recommendation to 1000 GHz; its "
-                            "fits rest on 0.2-20 GHz measurements",
-                            parsers={"gravimetric_moisture": _number(0.1, 0.7, "", "0.5")},
-                            example="{name: vegetation, gravimetric_moisture: 0.5}", outside=_vegetation_outside),
-    "soil": ModelSpec("soil", _soil, (0.3e9, 1e12), (273.15, 313.15), 293.15, ("sand", "clay", "moisture"),
-                      "ITU-R P.527-6 sec. 5.2 (Dobson et al. 1985 mixing, Peplinski et al. 1995 conductivities), "
-                      "applied by the Recommendation to 1000 GHz; its fits rest on 0.3-18 GHz measurements",
-                      optional=("bulk_density", "particle_density"),
-                      parsers={"sand": _PERCENT, "clay": _PERCENT, "moisture": _number(0.0, 0.6, "", "0.2"),
-                               "bulk_density": _DENSITY, "particle_density": _DENSITY},
-                      example="{name: soil, sand: 40, clay: 20, moisture: 0.2}", check=_check_soil),
+    "water": ModelSpec(
+        "water",
+        _water,
+        (1e9, 1e12),
+        (263.0, 373.0),
+        293.15,
+        (),
+        "Liebe, Hufford and Manabe 1991 double-Debye model as ITU-R P.840-8 eqs. 4-10",
+    ),
+    "pure_water": ModelSpec(
+        "pure_water",
+        _p527_water,
+        (1e9, 1e12),
+        (269.15, 313.15),
+        293.15,
+        (),
+        "ITU-R P.527-6 sec. 5.1.1 (Liebe, Hufford and Manabe 1991 double Debye)",
+    ),
+    "sea_water": ModelSpec(
+        "sea_water",
+        _sea_water,
+        (1e9, 1e12),
+        (269.15, 313.15),
+        293.15,
+        (),
+        "ITU-R P.527-6 sec. 5.1.2 (Meissner and Wentz 2004 salinity terms, Stogryn et al. 1995 conductivity)",
+        optional=("salinity",),
+        parsers={"salinity": _number(0.0, 40.0, "g/kg", "'35 g/kg'")},
+        example="{name: sea_water, salinity: 35 g/kg}",
+    ),
+    "ice": ModelSpec(
+        "ice", _ice, (1e7, 3e12), (20.0, 273.15), 263.15, (), "Maetzler 2006 (Hufford 1991, Mishima et al. 1983)"
+    ),
+    "conductor": ModelSpec(
+        "conductor",
+        _conductor,
+        (1e6, 1e12),
+        (0.0, 1e4),
+        293.15,
+        ("conductivity",),
+        "eps = 1 + i sigma / (eps0 omega) (Drude metal well below its collision frequency)",
+        parsers={"conductivity": _siemens_per_metre},
+        example="{name: conductor, conductivity: 3.5e7 S/m} for aluminium",
+    ),
+    "skin_dry": ModelSpec(
+        "skin_dry",
+        _skin_dry,
+        (10.0, 100e9),
+        (298.15, 313.15),
+        310.15,
+        (),
+        "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (dry)', at 37 C",
+    ),
+    "skin_wet": ModelSpec(
+        "skin_wet",
+        _skin_wet,
+        (10.0, 100e9),
+        (298.15, 313.15),
+        310.15,
+        (),
+        "Gabriel, Lau and Gabriel 1996, four-term Cole-Cole, Table 1 'skin (wet)', at 37 C",
+    ),
+    "debye": ModelSpec(
+        "debye",
+        _debye,
+        (0.0, math.inf),
+        (0.0, 1e4),
+        293.15,
+        ("eps_inf", "terms", "valid"),
+        "a sum of Debye relaxations (Debye 1929) with the entry's published parameters",
+        optional=("conductivity",),
+        parsers={
+            "eps_inf": _number(1.0, math.inf, "", "2.0"),
+            "terms": _debye_terms,
+            "valid": _frequency_range,
+            "conductivity": _number(0.0, math.inf, "S/m", "'0.5 S/m'"),
+        },
+        example="{name: debye, eps_inf: 2.0, terms: [[10.0, 8 ps]], valid: [10 GHz, 1 THz]}",
+        outside=_debye_outside,
+        ranges=_debye_ranges,
+        params_text=_debye_text,
+    ),
+    "leaves": ModelSpec(
+        "leaves",
+        _leaves,
+        (1e9, 100e9),
+        (273.15, 313.15),
+        293.15,
+        ("dry_matter",),
+        "Maetzler 1994 leaf model with ITU-R P.527-6 saline water as the sap",
+        optional=("salinity",),
+        parsers={"dry_matter": _number(0.0, 0.75, "", "0.35"), "salinity": _number(0.0, 40.0, "g/kg", "'10 g/kg'")},
+        example="{name: leaves, dry_matter: 0.35, salinity: 10}",
+    ),
+    "p2040": ModelSpec(
+        "p2040",
+        _p2040,
+        (1e6, 450e9),
+        (0.0, 1e4),
+        293.15,
+        ("material",),
+        "ITU-R P.2040-4 (2025) Table 3: eps' = a f^b, sigma = c f^d (f in GHz), per row",
+        parsers={"material": _p2040_material},
+        example="{name: p2040, material: concrete}",
+        outside=_p2040_outside,
+        ranges=_p2040_ranges,
+    ),
+    "vegetation": ModelSpec(
+        "vegetation",
+        _vegetation,
+        (0.2e9, 1e12),
+        (253.15, 313.15),
+        293.15,
+        ("gravimetric_moisture",),
+        "ITU-R P.527-6 sec. 5.3 (Ulaby and El-Rayes 1987 above 0 C, with P.527-6's pure water; "
+        "sec. 5.3.2's fit at or below 0 C), applied by the Recommendation to 1000 GHz; its "
+        "fits rest on 0.2-20 GHz measurements",
+        parsers={"gravimetric_moisture": _number(0.1, 0.7, "", "0.5")},
+        example="{name: vegetation, gravimetric_moisture: 0.5}",
+        outside=_vegetation_outside,
+    ),
+    "soil": ModelSpec(
+        "soil",
+        _soil,
+        (0.3e9, 1e12),
+        (273.15, 313.15),
+        293.15,
+        ("sand", "clay", "moisture"),
+        "ITU-R P.527-6 sec. 5.2 (Dobson et al. 1985 mixing, Peplinski et al. 1995 conductivities), "
+        "applied by the Recommendation to 1000 GHz; its fits rest on 0.3-18 GHz measurements",
+        optional=("bulk_density", "particle_density"),
+        parsers={
+            "sand": _PERCENT,
+            "clay": _PERCENT,
+            "moisture": _number(0.0, 0.6, "", "0.2"),
+            "bulk_density": _DENSITY,
+            "particle_density": _DENSITY,
+        },
+        example="{name: soil, sand: 40, clay: 20, moisture: 0.2}",
+        check=_check_soil,
+    ),
 }
 
 

@@ -80,8 +80,23 @@ _MAX_LINE = 1 << 16
 
 # MTL statements that name a texture file (the file name is the statement's last word).
 _MTL_MAPS = {
-    "map_ka", "map_kd", "map_ks", "map_ke", "map_ns", "map_d", "map_bump", "bump", "disp", "decal",
-    "refl", "norm", "map_pr", "map_pm", "map_ps", "map_rma", "map_orm",
+    "map_ka",
+    "map_kd",
+    "map_ks",
+    "map_ke",
+    "map_ns",
+    "map_d",
+    "map_bump",
+    "bump",
+    "disp",
+    "decal",
+    "refl",
+    "norm",
+    "map_pr",
+    "map_pm",
+    "map_ps",
+    "map_rma",
+    "map_orm",
 }
 
 
@@ -124,6 +139,7 @@ class SceneGeometry:
 
 
 # -- loading ----------------------------------------------------------------------------------
+
 
 def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh.Trimesh]]:
     """Read a mesh file into (mesh material name, mesh) parts, in the world frame (Z up).
@@ -231,18 +247,25 @@ def _warn_if_z_up(path: Path, parts) -> None:
         generator = ""
     flat_on_edge = ext[1] * FLAT_RATIO < min(ext[0], ext[2])
     if "trimesh" in generator.lower():
-        shape = (f"it lies on its edge, {ext[1]:.3g} m thick along y" if flat_on_edge else
-                 f"it now spans {ext[0]:.3g} x {ext[1]:.3g} m and stands {ext[2]:.3g} m tall")
-        warn(f"{path.name}: written by trimesh, which keeps its own (Z-up) coordinates in a glTF, yet read as "
-             f"glTF's Y-up: {shape}. If it was modelled Z-up, set `up_axis: z` on its scene entry; if it was "
-             "turned to Y-up before export, set `up_axis: y` there (or write asset.extras.up_axis in the file) "
-             "to say so")
+        shape = (
+            f"it lies on its edge, {ext[1]:.3g} m thick along y"
+            if flat_on_edge
+            else f"it now spans {ext[0]:.3g} x {ext[1]:.3g} m and stands {ext[2]:.3g} m tall"
+        )
+        warn(
+            f"{path.name}: written by trimesh, which keeps its own (Z-up) coordinates in a glTF, yet read as "
+            f"glTF's Y-up: {shape}. If it was modelled Z-up, set `up_axis: z` on its scene entry; if it was "
+            "turned to Y-up before export, set `up_axis: y` there (or write asset.extras.up_axis in the file) "
+            "to say so"
+        )
         return
     if flat_on_edge:
-        warn(f"{path.name}: the glTF is taken as Y-up (its specification) but lies on its edge, {ext[1]:.3g} m "
-             f"thick along y against {ext[0]:.3g} x {ext[2]:.3g} m"
-             + (f" (written by {generator.split()[0]!r}, which keeps Z-up coordinates)" if generator else "")
-             + ": if it is Z-up, set `up_axis: z` on its scene entry")
+        warn(
+            f"{path.name}: the glTF is taken as Y-up (its specification) but lies on its edge, {ext[1]:.3g} m "
+            f"thick along y against {ext[0]:.3g} x {ext[2]:.3g} m"
+            + (f" (written by {generator.split()[0]!r}, which keeps Z-up coordinates)" if generator else "")
+            + ": if it is Z-up, set `up_axis: z` on its scene entry"
+        )
 
 
 def asset_files(mesh_path) -> list[Path]:
@@ -311,9 +334,7 @@ def _mesh_format(path: Path) -> str:
         raise UserError(no_extension(path, "mesh", sorted(MESH_FORMATS)), file=path)
     fmt = MESH_FORMATS.get(suffix)
     if fmt is None:
-        raise UserError(
-            f"unsupported mesh format {suffix!r}; supported: {', '.join(sorted(MESH_FORMATS))}", file=path
-        )
+        raise UserError(f"unsupported mesh format {suffix!r}; supported: {', '.join(sorted(MESH_FORMATS))}", file=path)
     return fmt
 
 
@@ -334,6 +355,7 @@ def _describe(e: Exception) -> str:
 
 
 # -- light checks before trimesh reads a file -------------------------------------------------
+
 
 def _check_file(path: Path, fmt: str) -> None:
     """Raise a `UserError` for an unreadable or empty file and for what the format's own light
@@ -367,9 +389,12 @@ def _check_load_memory(path: Path, fmt: str) -> int:
     size = path.stat().st_size
     if fmt == "gltf" and format_suffix(path) != ".glb":
         size += sum(file.stat().st_size for _, _, file, _ in _gltf_external_files(path, _gltf_json(path)))
-    check_fits(LOAD_BYTES_PER_FILE_BYTE[fmt] * size,
-               f"reading this {size / 1e6:.4g} MB {_FORMAT_NAMES[fmt]} mesh", file=path,
-               remedy="simplify the mesh (fewer triangles) or free memory")
+    check_fits(
+        LOAD_BYTES_PER_FILE_BYTE[fmt] * size,
+        f"reading this {size / 1e6:.4g} MB {_FORMAT_NAMES[fmt]} mesh",
+        file=path,
+        remedy="simplify the mesh (fewer triangles) or free memory",
+    )
     return size
 
 
@@ -377,8 +402,11 @@ def _check_mtl(mtl: Path, path: Path) -> None:
     """Refuse a material library larger than `MAX_MTL_BYTES` (named by the OBJ ``path``)."""
     size = mtl.stat().st_size
     if size > MAX_MTL_BYTES:
-        raise UserError(f"material library {mtl.name!r} named by {path.name} is {size / 1e6:.4g} MB; an MTL is a "
-                        f"small text file, at most {MAX_MTL_BYTES >> 20} MiB: check its `mtllib` line", file=path)
+        raise UserError(
+            f"material library {mtl.name!r} named by {path.name} is {size / 1e6:.4g} MB; an MTL is a "
+            f"small text file, at most {MAX_MTL_BYTES >> 20} MiB: check its `mtllib` line",
+            file=path,
+        )
 
 
 def _check_stl(path: Path, size: int) -> None:
@@ -496,7 +524,7 @@ def _named_in(folder: Path, lines, whole_words: bool) -> list[Path]:
         words = line.split()
         if len(words) < 2:
             continue
-        rest = line.strip()[len(words[0]):].strip()
+        rest = line.strip()[len(words[0]) :].strip()
         candidates = [rest] if (folder / rest).is_file() else (words[1:] if whole_words else words[-1:])
         files += [folder / c for c in candidates if (folder / c).is_file()]
     return files
@@ -515,7 +543,7 @@ def _statements(path: Path, keywords: set) -> list[str]:
                 end = block.find(b"\n")
                 if end < 0:
                     continue
-                block, skipping = block[end + 1:], False
+                block, skipping = block[end + 1 :], False
             block = tail + block
             cut = block.rfind(b"\n") + 1
             block, tail = block[:cut], block[cut:]
@@ -547,7 +575,9 @@ def _read_obj(path: Path) -> trimesh.Scene:
         text = f"mtllib {_OBJ_NAMES_MTL}\n" + text
         library = "".join(f"newmtl {n}\n" for n in names).encode()
         resolver = trimesh.resolvers.ZipResolver({_OBJ_NAMES_MTL: io.BytesIO(library)})
-    return _load_scene(io.BytesIO(text.encode()), file_type="obj", resolver=resolver, process=False, group_material=True)
+    return _load_scene(
+        io.BytesIO(text.encode()), file_type="obj", resolver=resolver, process=False, group_material=True
+    )
 
 
 def _load_scene(file_obj, **kwargs) -> trimesh.Scene:
@@ -566,6 +596,7 @@ def _material_name(geom: trimesh.Trimesh, geom_name: str, fmt: str) -> str:
 
 
 # -- building ---------------------------------------------------------------------------------
+
 
 def entry_transform(transform) -> tuple[np.ndarray, np.ndarray]:
     """The affine map of a scene entry's ``transform``: x_world = A @ x + t.
@@ -647,9 +678,14 @@ def build_geometry(entries, scenario_file=None) -> SceneGeometry:
         label = f"{key}:{getattr(entry, 'name', None) or Path(entry.mesh).name}"
         reach = float(np.abs(v).max()) if len(v) else 0.0
         if not reach <= MAX_COORDINATE:
-            errors.append(UserError(f"{entry.mesh}: a vertex lies {reach:.3g} m from the origin (after the transform); "
-                                    f"pmmw scenes lie within {MAX_COORDINATE:g} m of it (is a unit or scale wrong?)",
-                                    scenario_file, f"{key}.mesh"))
+            errors.append(
+                UserError(
+                    f"{entry.mesh}: a vertex lies {reach:.3g} m from the origin (after the transform); "
+                    f"pmmw scenes lie within {MAX_COORDINATE:g} m of it (is a unit or scale wrong?)",
+                    scenario_file,
+                    f"{key}.mesh",
+                )
+            )
             continue
         closed, volume = _closed_and_volume(v, f)
         if closed and volume < 0.0:
@@ -704,7 +740,8 @@ def _build_entry(entry, key: str, scenario_file):
         raise UserError(
             "no material: give `material` (one database id for every face) or `materials` "
             "(mesh material name -> database id)",
-            file=scenario_file, key=key,
+            file=scenario_file,
+            key=key,
         )
     if material is not None and materials:
         raise UserError("give either `material` or `materials`, not both", file=scenario_file, key=key)
@@ -723,9 +760,7 @@ def _build_entry(entry, key: str, scenario_file):
             raise UserError(_unmapped_names(mesh_path, have, missing), file=scenario_file, key=f"{key}.materials")
         unused = [n for n in materials if n not in have]
         if unused:
-            warn(
-                f"{key}.materials: {_quoted(unused)} not used by {mesh_path.name}, which has {_quoted(have)}"
-            )
+            warn(f"{key}.materials: {_quoted(unused)} not used by {mesh_path.name}, which has {_quoted(have)}")
 
     a, t = entry_transform(getattr(entry, "transform", None))
     det = float(np.linalg.det(a))
@@ -761,21 +796,31 @@ def _unmapped_names(mesh_path: Path, have: list[str], missing: list[str]) -> str
     fmt = _mesh_format(mesh_path)
     whole = "give `material: ID` instead of `materials:` (one database id for the whole mesh)"
     if have == [""]:
-        how = {"obj": f"{mesh_path.name} has no `usemtl` line, so its faces carry no material name: {whole}, or "
-                      "put `usemtl NAME` lines before its faces and map each NAME in `materials:`",
-               "gltf": f"{mesh_path.name}'s primitives have no material or mesh name: {whole}, or name its "
-                       "materials in the exporter",
-               }.get(fmt, f"{mesh_path.name} is {fmt.upper()}, which carries no material names: {whole}, or split it into one file per "
-                          "material, or export it as glTF or OBJ with material names")
-        return f"{how} (see docs/scenes.md, \"Material names\")"
+        how = {
+            "obj": f"{mesh_path.name} has no `usemtl` line, so its faces carry no material name: {whole}, or "
+            "put `usemtl NAME` lines before its faces and map each NAME in `materials:`",
+            "gltf": f"{mesh_path.name}'s primitives have no material or mesh name: {whole}, or name its "
+            "materials in the exporter",
+        }.get(
+            fmt,
+            f"{mesh_path.name} is {fmt.upper()}, which carries no material names: {whole}, or split it into one file per "
+            "material, or export it as glTF or OBJ with material names",
+        )
+        return f'{how} (see docs/scenes.md, "Material names")'
     named = [n for n in missing if n]
-    text = (f"mesh material name(s) {_quoted(named)} of {mesh_path.name} are not in the map; "
-            if named else f"{mesh_path.name} has faces without a material name; ")
+    text = (
+        f"mesh material name(s) {_quoted(named)} of {mesh_path.name} are not in the map; "
+        if named
+        else f"{mesh_path.name} has faces without a material name; "
+    )
     text += f"the mesh has {_quoted([n for n in have if n])}"
     if "" in missing:
-        text += (" and faces before its first `usemtl` line, which have no name: put a `usemtl NAME` before them"
-                 if fmt == "obj" else " and unnamed faces") + " or map the empty name ('': ID)"
-    return text + " (see docs/scenes.md, \"Material names\")"
+        text += (
+            " and faces before its first `usemtl` line, which have no name: put a `usemtl NAME` before them"
+            if fmt == "obj"
+            else " and unnamed faces"
+        ) + " or map the empty name ('': ID)"
+    return text + ' (see docs/scenes.md, "Material names")'
 
 
 def _quoted(names) -> str:

@@ -56,8 +56,19 @@ KINDS = ("dielectric", "metal", "blackbody", "opaque", "thin")
 _NO_EPS_KINDS = ("metal", "blackbody")
 # lower_snake_case, optionally in one named set: ``water``, ``murakowski2014.water``
 _ID_RE = re.compile(r"^(?:[a-z][a-z0-9]*\.)?[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
-_ENTRY_KEYS = ("name", "eps", "model", "temperature", "kind", "source", "coating", "thickness", "roughness",
-               "bump", "same_as")
+_ENTRY_KEYS = (
+    "name",
+    "eps",
+    "model",
+    "temperature",
+    "kind",
+    "source",
+    "coating",
+    "thickness",
+    "roughness",
+    "bump",
+    "same_as",
+)
 _LAYER_KEYS = ("material", "thickness", "temperature", "roughness")
 _EPS_EXAMPLE = "[eps', eps''] or {35 GHz: [eps', eps''], 95 GHz: [eps', eps'']}"
 _LAYER_EXAMPLE = "{material: ID, thickness: '0.8 mm', temperature: '300 K'}"
@@ -167,11 +178,15 @@ class Material:
         value, outside = self._lookup(f, temperature)
         if outside and self.model is not None:
             t = self.model_temperature(temperature)
-            warn(f"material {self.id!r}: {f / 1e9:g} GHz at {t:g} K is outside the {self.model.describe()}; "
-                 f"{self.outside_note(f, temperature)}")
+            warn(
+                f"material {self.id!r}: {f / 1e9:g} GHz at {t:g} K is outside the {self.model.describe()}; "
+                f"{self.outside_note(f, temperature)}"
+            )
         elif outside:
-            warn(f"material {self.id!r}: {f / 1e9:g} GHz is outside its table ({_range_text(self.freqs)}); "
-                 f"{self.outside_note(f, temperature)}")
+            warn(
+                f"material {self.id!r}: {f / 1e9:g} GHz is outside its table ({_range_text(self.freqs)}); "
+                f"{self.outside_note(f, temperature)}"
+            )
         return value
 
     def outside_note(self, f: float, temperature: float | None = None) -> str:
@@ -298,9 +313,7 @@ def _eps_pair(value, path: tuple, problems: list) -> complex | None:
         return None
     re_, im_ = out
     if im_ < 0:
-        problems.append(
-            (path + (1,), f"eps'' must be >= 0 (eps = eps' + i eps'', eps'' > 0 is lossy), got {im_:g}")
-        )
+        problems.append((path + (1,), f"eps'' must be >= 0 (eps = eps' + i eps'', eps'' > 0 is lossy), got {im_:g}"))
         return None
     if re_ == 0 and im_ == 0:
         problems.append((path, "eps = 0 is not a medium"))
@@ -397,8 +410,10 @@ def _pydantic_errors(ex: ValidationError, file, base_key: str) -> list[UserError
         elif typ == "extra_forbidden":
             allowed = _LAYER_KEYS if in_layer else _ENTRY_KEYS
             what = "coating layer" if in_layer else "material"
-            msg = (f"unknown key {loc[-1]!r} for a {what}{_suggest(loc[-1], allowed, 3)} "
-                   f"(allowed keys: {', '.join(allowed)})")
+            msg = (
+                f"unknown key {loc[-1]!r} for a {what}{_suggest(loc[-1], allowed, 3)} "
+                f"(allowed keys: {', '.join(allowed)})"
+            )
         elif typ == "missing":
             msg = f"missing required key {loc[-1]!r}"
             if in_layer:
@@ -451,8 +466,12 @@ def _parse_entry(mid, raw, file, base_key: str) -> tuple[dict | None, list[UserE
         fields["model"] = checked(make_dielectric, m.model, _join(base_key, "model"))
     if "coating" in fields:
         fields["coating"] = tuple(
-            CoatingLayer(layer.material, float(layer.thickness), layer.temperature,
-                         checked(make_model, layer.roughness, _join(base_key, "coating", i, "roughness")))
+            CoatingLayer(
+                layer.material,
+                float(layer.thickness),
+                layer.temperature,
+                checked(make_model, layer.roughness, _join(base_key, "coating", i, "roughness")),
+            )
             for i, layer in enumerate(m.coating or [])
         )
     return (None, errors) if errors else (fields, [])
@@ -468,27 +487,46 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
     values: tuple = ()
     if kind in _NO_EPS_KINDS:
         if eps is not None:
-            errors.append(UserError(
-                f"a {kind} has no permittivity (Murakowski 2014 sec. 2.2.9): remove `eps`, or use kind dielectric or opaque",
-                origin, _join(base_key, "eps")))
+            errors.append(
+                UserError(
+                    f"a {kind} has no permittivity (Murakowski 2014 sec. 2.2.9): remove `eps`, or use kind dielectric or opaque",
+                    origin,
+                    _join(base_key, "eps"),
+                )
+            )
     elif eps is not None and fields.get("model") is not None:
-        errors.append(UserError("give `eps` (a table) or `model` (a physical model), not both", origin,
-                                _join(base_key, "model")))
+        errors.append(
+            UserError("give `eps` (a table) or `model` (a physical model), not both", origin, _join(base_key, "model"))
+        )
     elif eps is None and fields.get("model") is None:
-        errors.append(UserError(f"kind {kind} needs `eps` ({_EPS_EXAMPLE}) or `model` (e.g. {{name: water}})",
-                                origin, base_key))
+        errors.append(
+            UserError(f"kind {kind} needs `eps` ({_EPS_EXAMPLE}) or `model` (e.g. {{name: water}})", origin, base_key)
+        )
     elif eps is not None:
         freqs, values = eps
     if kind == "thin" and thickness is None:
-        errors.append(UserError("kind thin needs `thickness` (the sheet's own thickness, e.g. 0.1 mm)", origin, base_key))
+        errors.append(
+            UserError("kind thin needs `thickness` (the sheet's own thickness, e.g. 0.1 mm)", origin, base_key)
+        )
     if kind == "thin":
-        errors += [UserError("a thin sheet's coating layers cannot be rough (the sheet is traced as one coherent "
-                             "stack): remove the layer's roughness", origin, _join(base_key, "coating", i, "roughness"))
-                   for i, layer in enumerate(fields.get("coating") or ()) if layer.roughness is not None]
+        errors += [
+            UserError(
+                "a thin sheet's coating layers cannot be rough (the sheet is traced as one coherent "
+                "stack): remove the layer's roughness",
+                origin,
+                _join(base_key, "coating", i, "roughness"),
+            )
+            for i, layer in enumerate(fields.get("coating") or ())
+            if layer.roughness is not None
+        ]
     if kind != "thin" and thickness is not None:
-        errors.append(UserError(
-            "`thickness` is only for kind thin (the sheet's own thickness); layers on a surface go in `coating`",
-            origin, _join(base_key, "thickness")))
+        errors.append(
+            UserError(
+                "`thickness` is only for kind thin (the sheet's own thickness); layers on a surface go in `coating`",
+                origin,
+                _join(base_key, "thickness"),
+            )
+        )
     if errors:
         return None, errors
     mat = Material(
@@ -513,8 +551,14 @@ def _check_id(mid, file, base_key: str) -> list[UserError]:
     if not isinstance(mid, str):
         return [UserError(f"a material id must be a string, got {mid!r}", file, base_key)]
     if not _ID_RE.match(mid):
-        return [UserError(f"material id {mid!r} must be lower_snake_case, optionally in a named set (e.g. "
-                          "moist_soil, murakowski2014.water)", file, base_key)]
+        return [
+            UserError(
+                f"material id {mid!r} must be lower_snake_case, optionally in a named set (e.g. "
+                "moist_soil, murakowski2014.water)",
+                file,
+                base_key,
+            )
+        ]
     return []
 
 
@@ -526,8 +570,11 @@ def _same_as(mid: str, fields: dict, known: dict[str, dict], file, base_key: str
     if target is None:
         return fields, []
     if target not in known:
-        return None, [UserError(f"unknown material {target!r} in same_as{_suggest(target, known, 3)}", file,
-                                _join(base_key, "same_as"))]
+        return None, [
+            UserError(
+                f"unknown material {target!r} in same_as{_suggest(target, known, 3)}", file, _join(base_key, "same_as")
+            )
+        ]
     own = {k: v for k, v in fields.items() if k != "same_as"}
     merged = {k: v for k, v in known[target].items() if k != "same_as"}
     merged.update(own)
@@ -583,11 +630,15 @@ def _database_files(paths) -> list[Path]:
     return files
 
 
-
 # Ids a user may look for that have no entry because no printed source was found
 # (docs/materials.md, "Not found"): the error says so instead of only "unknown".
-UNSOURCED = {"cotton": "cotton fabric", "wool": "wool fabric", "nylon_fabric": "nylon fabric",
-             "abs": "ABS plastic", "polycarbonate": "polycarbonate"}
+UNSOURCED = {
+    "cotton": "cotton fabric",
+    "wool": "wool fabric",
+    "nylon_fabric": "nylon fabric",
+    "abs": "ABS plastic",
+    "polycarbonate": "polycarbonate",
+}
 
 
 class MaterialDB:
@@ -634,8 +685,7 @@ class MaterialDB:
             if data is None:
                 continue
             if not isinstance(data, dict):
-                errors.append(UserError(
-                    f"expected a mapping of material id -> entry, got {type(data).__name__}", path))
+                errors.append(UserError(f"expected a mapping of material id -> entry, got {type(data).__name__}", path))
                 continue
             for mid, raw in data.items():
                 base_key = _join(None, mid if isinstance(mid, str) else str(mid))
@@ -644,8 +694,11 @@ class MaterialDB:
                     errors += id_errors
                     continue
                 if mid in where:
-                    errors.append(UserError(
-                        f"material id {mid!r} is defined twice: in {where[mid]} and in {path}", path, base_key))
+                    errors.append(
+                        UserError(
+                            f"material id {mid!r} is defined twice: in {where[mid]} and in {path}", path, base_key
+                        )
+                    )
                     continue
                 where[mid] = path
                 f, errs = _parse_entry(mid, raw, path, base_key)
@@ -659,8 +712,13 @@ class MaterialDB:
             ready = [mid for mid in pending if fields[mid]["same_as"] not in pending]
             if not ready:
                 for mid in sorted(pending):
-                    errors.append(UserError(f"same_as {fields[mid]['same_as']!r} goes round in a circle", where[mid],
-                                            _join(keys[mid], "same_as")))
+                    errors.append(
+                        UserError(
+                            f"same_as {fields[mid]['same_as']!r} goes round in a circle",
+                            where[mid],
+                            _join(keys[mid], "same_as"),
+                        )
+                    )
                     del fields[mid]
                 break
             for mid in ready:
@@ -705,7 +763,9 @@ class MaterialDB:
         if not isinstance(raw, dict):
             raise UserError(
                 f"expected a mapping of material id -> entry (fields as in materials/*.yaml), got {type(raw).__name__}",
-                file, key_prefix or None)
+                file,
+                key_prefix or None,
+            )
         errors: list[UserError] = []
         materials = dict(self._materials)
         fields = {k: dict(v) for k, v in self._fields.items()}
@@ -737,8 +797,11 @@ class MaterialDB:
                 base_source = self._materials[mid].source
                 changed = ", ".join(k for k in _ENTRY_KEYS if k in new and k not in ("source", "name"))
                 if "source" not in new and changed:
-                    merged["source"] = f"{base_source}; {changed} overridden in {file}" if base_source else \
-                        f"{changed} overridden in {file}"
+                    merged["source"] = (
+                        f"{base_source}; {changed} overridden in {file}"
+                        if base_source
+                        else f"{changed} overridden in {file}"
+                    )
                 new = merged
             mat, errs = _build(mid, new, str(file), base_key)
             if errs:
@@ -762,12 +825,17 @@ class MaterialDB:
             raise UserError(
                 f"no material {mid!r}: no printed measurement of {UNSOURCED[str(mid).lower()]} at 35-300 GHz was found "
                 "(docs/materials.md, 'Not found'); a scenario's `materials:` map can define it with its source",
-                file, key)
+                file,
+                key,
+            )
         close = difflib.get_close_matches(str(mid), list(self._materials), n=5, cutoff=0.6)
         hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
         raise UserError(
             f"unknown material {mid!r}{hint} (`pmmw materials list` shows every id; a scenario's "
-            "`materials:` map can define new ones)", file, key)
+            "`materials:` map can define new ones)",
+            file,
+            key,
+        )
 
     def ids(self) -> list[str]:
         """Every id, in load order (files by name, entries in file order; new overrides last)."""
@@ -796,13 +864,23 @@ class MaterialDB:
                     hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
                     errors.append(UserError(f"unknown coating material {layer.material!r}{hint}", mat.origin, key))
                 elif other.kind in _NO_EPS_KINDS:
-                    errors.append(UserError(
-                        f"coating layer material {layer.material!r} is a {other.kind}: a layer needs a permittivity "
-                        "(a metal or blackbody can be coated, but not be a coating layer)", mat.origin, key))
+                    errors.append(
+                        UserError(
+                            f"coating layer material {layer.material!r} is a {other.kind}: a layer needs a permittivity "
+                            "(a metal or blackbody can be coated, but not be a coating layer)",
+                            mat.origin,
+                            key,
+                        )
+                    )
                 elif other.coating:
-                    errors.append(UserError(
-                        f"coating layer material {layer.material!r} has a coating of its own; nested coatings are "
-                        "not supported: list all the layers here, outermost first", mat.origin, key))
+                    errors.append(
+                        UserError(
+                            f"coating layer material {layer.material!r} has a coating of its own; nested coatings are "
+                            "not supported: list all the layers here, outermost first",
+                            mat.origin,
+                            key,
+                        )
+                    )
         return errors
 
 
@@ -873,8 +951,10 @@ def format_material_table(db: MaterialDB, f: float | None = None) -> str:
         lines.append("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + "  " + r[4])
     lines.insert(1, "  ".join("-" * w for w in widths) + "  " + "-" * 6)
     if any_clamped:
-        lines.append(f"* {_fmt_f(f)} is outside the entry's stated range (a table's nearest value, a model "
-                     "extrapolated or interpolated): `pmmw materials show ID` says which")
+        lines.append(
+            f"* {_fmt_f(f)} is outside the entry's stated range (a table's nearest value, a model "
+            "extrapolated or interpolated): `pmmw materials show ID` says which"
+        )
     lines.append("T '-': the scenario's temperature applies")
     return "\n".join(line.rstrip() for line in lines)
 
@@ -914,8 +994,10 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
         elif mat.freqs and not any(abs(f - g) <= _REL_TOL * g for g in mat.freqs):
             how = " (interpolated linearly)"
         row(f"eps at {_fmt_f(f)}", f"{_fmt_eps(value)}{how}")
-    row("temperature", _fmt_t(mat.temperature)
-        + ("" if mat.temperature is not None else " (the scenario's temperature applies)"))
+    row(
+        "temperature",
+        _fmt_t(mat.temperature) + ("" if mat.temperature is not None else " (the scenario's temperature applies)"),
+    )
     if mat.thickness is not None:
         row("thickness", f"{_fmt_len(mat.thickness)} (the sheet's own)")
     row("roughness", repr(mat.roughness) if mat.roughness is not None else "smooth")
@@ -932,8 +1014,9 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
     return "\n".join(lines)
 
 
-def plot_materials(db: MaterialDB, ids: list[str], path, temperature: float | None = None,
-                   f_range=(10e9, 1000e9)) -> Path:
+def plot_materials(
+    db: MaterialDB, ids: list[str], path, temperature: float | None = None, f_range=(10e9, 1000e9)
+) -> Path:
     """eps' and eps'' of materials against frequency [GHz] (log axes), 35-300 GHz shaded: a model
     as a curve (at ``temperature`` [K], else the material's), a table as its points (circles)
     joined by the interpolation, and the nearest-value extension outside the table dashed."""

@@ -158,9 +158,21 @@ class AtmosphereSky:
         dz = np.ascontiguousarray(directions[:, 2], dtype=np.float64)
         heights = np.zeros(dz.shape) if heights is None else np.ascontiguousarray(heights, dtype=np.float64)
         t = np.empty(dz.shape)
-        while (missing := _sky_lookup(dz, heights, self.HEIGHT_STEP, self.model.top - 1.0, self._row, SKY_ELEVATIONS,
-                                      self._tables, self.ground_temperature, self._exact_h, self._exact_row,
-                                      t)) >= 0.0:
+        while (
+            missing := _sky_lookup(
+                dz,
+                heights,
+                self.HEIGHT_STEP,
+                self.model.top - 1.0,
+                self._row,
+                SKY_ELEVATIONS,
+                self._tables,
+                self.ground_temperature,
+                self._exact_h,
+                self._exact_row,
+                t,
+            )
+        ) >= 0.0:
             self._add(missing)
         down = np.flatnonzero((dz < 0.0) & (heights > 0.0))
         if down.size:

@@ -50,8 +50,10 @@ def _check_temperatures(name: str, t: np.ndarray) -> str | None:
     if not bad.any():
         return None
     v, u = np.argwhere(bad)[0]
-    return (f"channel {name!r} has {int(bad.sum())} negative, too hot or non-finite pixel(s), the first at "
-            f"row {v}, column {u}: {t[v, u]} (temperatures must be finite, 0 K to {TEMPERATURE_MAX:g} K)")
+    return (
+        f"channel {name!r} has {int(bad.sum())} negative, too hot or non-finite pixel(s), the first at "
+        f"row {v}, column {u}: {t[v, u]} (temperatures must be finite, 0 K to {TEMPERATURE_MAX:g} K)"
+    )
 
 
 class SkyTexture:
@@ -100,7 +102,8 @@ class SkyTexture:
                 f"sky texture lacks channel(s) {', '.join(missing)}: a sky texture needs channels "
                 f"'Tv' and 'Th' (vertical and horizontal brightness temperature [K]); "
                 f"this file has: {', '.join(have) or 'none'}",
-                file=path, key=key,
+                file=path,
+                key=key,
             )
         try:  # the float64 maps made and checked once, from the float32 channels
             return cls(*(channels.pop(c) for c in SKY_CHANNELS))
@@ -175,9 +178,13 @@ def write_sky_texture(path: str | os.PathLike, tv, th) -> None:
     th = np.asarray(th)
     if tv.ndim != 2 or tv.shape != th.shape:
         raise ValueError(f"Tv and Th must be (H, W) maps of one shape; got {tv.shape}, {th.shape}")
-    write_exr(path, {"Tv": tv, "Th": th}, {
-        "pmmw:units": "K",
-        "pmmw:content": "sky texture: Tv, Th brightness temperatures",
-        "pmmw:mapping": "equirectangular; column u: azimuth 2pi(u+0.5)/W from +X toward +Y; "
-                        "row v: elevation pi/2 - pi(v+0.5)/H (top row at the zenith); Z up",
-    })
+    write_exr(
+        path,
+        {"Tv": tv, "Th": th},
+        {
+            "pmmw:units": "K",
+            "pmmw:content": "sky texture: Tv, Th brightness temperatures",
+            "pmmw:mapping": "equirectangular; column u: azimuth 2pi(u+0.5)/W from +X toward +Y; "
+            "row v: elevation pi/2 - pi(v+0.5)/H (top row at the zenith); Z up",
+        },
+    )

@@ -41,8 +41,9 @@ from pmmw.surface.media import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
 from pmmw.surface.records import HitCode
 
 # `Hit.code` as compiled constants (numba reads a module's int globals as constants)
-_MISSED, _PASSED, _INTERACTS, _ENDED = (int(c) for c in (HitCode.MISSED, HitCode.PASSED, HitCode.INTERACTS,
-                                                          HitCode.ENDED))
+_MISSED, _PASSED, _INTERACTS, _ENDED = (
+    int(c) for c in (HitCode.MISSED, HitCode.PASSED, HitCode.INTERACTS, HitCode.ENDED)
+)
 A_ROUNDING = 1e-12  # absorbed fractions below this are rounding of lossless interfaces
 _TINY = 1e-12
 _NORMAL = 1e-9  # |n x k| below this: normal incidence, the ray keeps its own s
@@ -64,8 +65,26 @@ def at_point(src, branch):
 
 def masked(draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts):
     """`scatter`'s ``settle`` argument for rough faces (``MASKED``): see `scatter`."""
-    return (MASKED, _I64, _I8, (draw, u1, u2, n_geo, n_mac, u_leave, rough, bool(over), float(wavelength),
-                                int(rehit_depth), back_side, counts))
+    return (
+        MASKED,
+        _I64,
+        _I8,
+        (
+            draw,
+            u1,
+            u2,
+            n_geo,
+            n_mac,
+            u_leave,
+            rough,
+            bool(over),
+            float(wavelength),
+            int(rehit_depth),
+            back_side,
+            counts,
+        ),
+    )
+
 
 _jit = njit()
 _inline = inline()
@@ -75,8 +94,8 @@ _inline = inline()
 def _add(acc, k, n00, n01, n10, n11, ta, tb):
     """acc[k] += (Ex2, Ey2, U, V) of emission (Ta, Tb) seen through N (`jones.stokes_terms`)."""
     c = n00 * np.conj(n10) * ta + n01 * np.conj(n11) * tb
-    acc[k, 0] += (n00.real ** 2 + n00.imag ** 2) * ta + (n01.real ** 2 + n01.imag ** 2) * tb
-    acc[k, 1] += (n10.real ** 2 + n10.imag ** 2) * ta + (n11.real ** 2 + n11.imag ** 2) * tb
+    acc[k, 0] += (n00.real**2 + n00.imag**2) * ta + (n01.real**2 + n01.imag**2) * tb
+    acc[k, 1] += (n10.real**2 + n10.imag**2) * ta + (n11.real**2 + n11.imag**2) * tb
     acc[k, 2] += 2.0 * c.real
     acc[k, 3] += 2.0 * c.imag
 
@@ -92,8 +111,10 @@ def emit(acc, sid, m, ta, tb):
 @_inline
 def _row_powers(m00, m01, m10, m11):
     """The powers of the two rows of a Jones matrix (`jones.row_power` of one ray)."""
-    return (m00.real ** 2 + m00.imag ** 2 + m01.real ** 2 + m01.imag ** 2,
-            m10.real ** 2 + m10.imag ** 2 + m11.real ** 2 + m11.imag ** 2)
+    return (
+        m00.real**2 + m00.imag**2 + m01.real**2 + m01.imag**2,
+        m10.real**2 + m10.imag**2 + m11.real**2 + m11.imag**2,
+    )
 
 
 @_inline
@@ -230,9 +251,9 @@ def _off_surface1(ox, oy, oz, dx, dy, dz, sx, sy, sz, gx, gy, gz, step):
 @_inline
 def _off_surface(o, d, s, p, c, gx, gy, gz, step):
     """`_off_surface1` of ray c of a wave, in place."""
-    (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
-     mirrored) = _off_surface1(o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
-                               gx, gy, gz, step)
+    (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored) = _off_surface1(
+        o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], gx, gy, gz, step
+    )
     if mirrored:
         p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
 
@@ -294,11 +315,11 @@ def _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
         buf_eps[1 + q], buf_d[q] = f_eps[f], f_d[f]
     # a blackbody is index-matched to the films' innermost layer
     buf_eps[nf + 1] = f_eps[st + nf - 1] if kd == BLACKBODY else _far_eps1(kd, e1, eps[other])
-    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(buf_eps[:nf + 2], buf_d[:nf], cos1, k0, kd == METAL)
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(buf_eps[: nf + 2], buf_d[:nf], cos1, k0, kd == METAL)
     q2 = complex(np.nan, 0.0)
     if kd == DIELECTRIC:
         eo = eps[other]
-        kpar2 = e1 * (1.0 - cos1 ** 2)
+        kpar2 = e1 * (1.0 - cos1**2)
         q2 = fresnel._root1(eo - kpar2, fresnel._l1(eo) + fresnel._l1(kpar2), False)
     return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, f_temp[fm]
 
@@ -310,7 +331,8 @@ def coefficients(cur, face_med, other, leaving, cos1, media, films, amp, power, 
     buf_eps, buf_d = _film_buffers(films)
     for i in range(cos1.shape[0]):
         rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2[i], t_absorb[i] = _coefficients1(
-            face_med[i], cur[i], other[i], leaving[i], cos1[i], media, films, buf_eps, buf_d)
+            face_med[i], cur[i], other[i], leaving[i], cos1[i], media, films, buf_eps, buf_d
+        )
         amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
         power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 
@@ -379,19 +401,72 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         other, leaving, sign) as `settle` fills them. ``counts`` receives (draws of weight other
         than 1, uniforms of ``u_leave`` used, children that came back).
     """
-    return _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out,
-                    settle[0], settle[1], settle[2], settle[3])
+    return _scatter(
+        rows,
+        wave,
+        hit,
+        films,
+        prim,
+        faces,
+        media,
+        choice,
+        u_choose,
+        u_roul,
+        limits,
+        acc,
+        cut,
+        out,
+        settle[0],
+        settle[1],
+        settle[2],
+        settle[3],
+    )
 
 
 @_jit
-def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, mode, src,
-             branch, facets):
+def _scatter(
+    rows,
+    wave,
+    hit,
+    films,
+    prim,
+    faces,
+    media,
+    choice,
+    u_choose,
+    u_roul,
+    limits,
+    acc,
+    cut,
+    out,
+    mode,
+    src,
+    branch,
+    facets,
+):
     """`scatter` with its ``settle`` unpacked: ``facets`` is None but with ``MASKED``, so that
     numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
     6 % of an interaction as run-time branches)."""
     finish = mode == FINISH
-    d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top
-    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving
+    d, s_old, p_old, m, sid, depth, stack, top = (
+        wave.d,
+        wave.s,
+        wave.p,
+        wave.m,
+        wave.sid,
+        wave.depth,
+        wave.stack,
+        wave.top,
+    )
+    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = (
+        hit.pos,
+        hit.n_in,
+        hit.cos1,
+        hit.cur,
+        hit.face_med,
+        hit.other,
+        hit.leaving,
+    )
     oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
     if facets is not None:
         draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts = facets
@@ -399,8 +474,14 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
         b_src, b_cur, b_other, b_leaving, b_sign = back_side
     buf_eps, buf_d = _film_buffers(films)
     face_offset = faces.offset
-    kind, alpha, temperature, n1_real, has_coat, eps = (media.kind, media.alpha, media.temperature, media.n1_real,
-                                                        media.has_coat, media.eps)
+    kind, alpha, temperature, n1_real, has_coat, eps = (
+        media.kind,
+        media.alpha,
+        media.temperature,
+        media.n1_real,
+        media.has_coat,
+        media.eps,
+    )
     strategy, split_depth = choice
     roulette = u_roul.shape[0] > 0
     cap = stack.shape[1]
@@ -422,8 +503,16 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
             if code != roughness.NOT_ROUGH:
                 tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
             if draw[fm]:  # the facet visible from the ray (GGX)
-                fx, fy, fz, w = roughness.ggx_draw1((n_mac[i, 0], n_mac[i, 1], n_mac[i, 2]), (tx, ty, tz),
-                                                    (-dx, -dy, -dz), u1[i], u2[i], r_ax[fm], r_ay[fm], r_orient[fm])
+                fx, fy, fz, w = roughness.ggx_draw1(
+                    (n_mac[i, 0], n_mac[i, 1], n_mac[i, 2]),
+                    (tx, ty, tz),
+                    (-dx, -dy, -dz),
+                    u1[i],
+                    u2[i],
+                    r_ax[fm],
+                    r_ay[fm],
+                    r_orient[fm],
+                )
                 if w != 1.0:
                     drawn_off += 1
                 if w > 0.0:
@@ -444,15 +533,24 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
         # p = k x s
         px, py, pz = _k_cross(dx, dy, dz, sx, sy, sz)
         # M re-expressed in (s, p) (eq. 2.35)
-        ml00, ml01, ml10, ml11 = _rebase1(m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
-                                          (s_old[i, 0], s_old[i, 1], s_old[i, 2]),
-                                          (p_old[i, 0], p_old[i, 1], p_old[i, 2]), (sx, sy, sz), (px, py, pz))
+        ml00, ml01, ml10, ml11 = _rebase1(
+            m[i, 0, 0],
+            m[i, 0, 1],
+            m[i, 1, 0],
+            m[i, 1, 1],
+            (s_old[i, 0], s_old[i, 1], s_old[i, 2]),
+            (p_old[i, 0], p_old[i, 1], p_old[i, 2]),
+            (sx, sy, sz),
+            (px, py, pz),
+        )
         if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(fm, cur_a[i], other_a[i], leaving_a[i],
-                                                                          cos1, media, films, buf_eps, buf_d)
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(
+                fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d
+            )
         else:
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(kd, eps[cur_a[i]], eps[other_a[i]], cos1,
-                                                                        temperature[cur_a[i]], t_body)
+            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(
+                kd, eps[cur_a[i]], eps[other_a[i]], cos1, temperature[cur_a[i]], t_body
+            )
         # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
         if As > A_ROUNDING or Ap > A_ROUNDING:
             ea, eb = math.sqrt(As), math.sqrt(Ap)
@@ -466,8 +564,8 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
         if strategy != 0 and trans and (strategy == 1 or depth[i] >= split_depth):
             # the branches' shares of the power this ray carries (its Jones columns' powers
             # times R and T): for a lossless interface the chosen child keeps that power exactly
-            c0 = ml00.real ** 2 + ml00.imag ** 2 + ml10.real ** 2 + ml10.imag ** 2
-            c1 = ml01.real ** 2 + ml01.imag ** 2 + ml11.real ** 2 + ml11.imag ** 2
+            c0 = ml00.real**2 + ml00.imag**2 + ml10.real**2 + ml10.imag**2
+            c1 = ml01.real**2 + ml01.imag**2 + ml11.real**2 + ml11.imag**2
             r_sum, t_sum = c0 * Rs + c1 * Rp, c0 * Ts + c1 * Tp
             p_r = r_sum / max(r_sum + t_sum, _TINY)
             if u_choose[j] < p_r:
@@ -507,8 +605,15 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
             m00, m01, m10, m11 = ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p
             leaves = True
             if facets is not None and code != roughness.NOT_ROUGH:  # masked by the microsurface? (as `settle`)
-                g1 = roughness.smith_g1((side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz),
-                                        (cx, cy, cz), code, r_ax[fm], r_ay[fm], r_orient[fm])
+                g1 = roughness.smith_g1(
+                    (side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]),
+                    (tx, ty, tz),
+                    (cx, cy, cz),
+                    code,
+                    r_ax[fm],
+                    r_ay[fm],
+                    r_orient[fm],
+                )
                 leaves = not u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
                 used += 1
             if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
@@ -525,8 +630,20 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
             if facets is not None:
                 if leaves:  # along the face's side normal (a wrong-side child mirrored)
                     ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
-                        ox, oy, oz, cx, cy, cz, sx, sy, sz, side * n_geo[i, 0], side * n_geo[i, 1], side * n_geo[i, 2],
-                        step)
+                        ox,
+                        oy,
+                        oz,
+                        cx,
+                        cy,
+                        cz,
+                        sx,
+                        sy,
+                        sz,
+                        side * n_geo[i, 0],
+                        side * n_geo[i, 1],
+                        side * n_geo[i, 2],
+                        step,
+                    )
                 else:
                     if over:  # the chain's end: its power emitted where it is
                         _add(acc, k, m00, m01, m10, m11, t_body, t_body)
@@ -616,8 +733,29 @@ def compact(wave, keep):
 
 
 @_jit
-def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain_end, media, rough, wavelength, acc,
-           leave, back, back_side, leave_side, finish, rehit_depth, fate):
+def settle(
+    kids,
+    src,
+    branch,
+    u_leave,
+    p_leave,
+    hit,
+    n_mac,
+    tangent,
+    step,
+    chain_end,
+    media,
+    rough,
+    wavelength,
+    acc,
+    leave,
+    back,
+    back_side,
+    leave_side,
+    finish,
+    rehit_depth,
+    fate,
+):
     """Children of a rough surface's facets (`scatter` with ``finish`` False) sent off the
     surface or back onto it (`Surfaces._settle`, which describes the rule), or between the
     interfaces of rough coating layers (`Surfaces._layer_step`: ``finish`` False).
@@ -694,14 +832,21 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
         if code == roughness.OTHER_CODE:
             g1 = p_leave[c]
         elif code != roughness.NOT_ROUGH:
-            g1 = roughness.smith_g1((sg * n_mac[i, 0], sg * n_mac[i, 1], sg * n_mac[i, 2]),
-                                    (tangent[i, 0], tangent[i, 1], tangent[i, 2]), (d[c, 0], d[c, 1], d[c, 2]),
-                                    code, r_ax[fm], r_ay[fm], r_orient[fm])
+            g1 = roughness.smith_g1(
+                (sg * n_mac[i, 0], sg * n_mac[i, 1], sg * n_mac[i, 2]),
+                (tangent[i, 0], tangent[i, 1], tangent[i, 2]),
+                (d[c, 0], d[c, 1], d[c, 2]),
+                code,
+                r_ax[fm],
+                r_ay[fm],
+                r_orient[fm],
+            )
         if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
             if finish:  # terminated (as `scatter` does)
                 m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
-                g = _fate(m00, m01, m10, m11, k_depth[c], u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0,
-                          limits)
+                g = _fate(
+                    m00, m01, m10, m11, k_depth[c], u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0, limits
+                )
                 if g < 0.0:
                     _end(acc, cut, sid[c], m00, m01, m10, m11, k_last[c], limits.t_lo, limits.t_hi)
                 if g <= 0.0:
@@ -710,9 +855,23 @@ def settle(kids, src, branch, u_leave, p_leave, hit, n_mac, tangent, step, chain
                     m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
             l_src[nl], l_sign[nl] = i, sg
             if finish:  # off the surface (a wrong-side child mirrored), written out here: see `scatter`
-                (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2],
-                 mirrored) = _off_surface1(o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1],
-                                           s[c, 2], gx, gy, gz, step[i])
+                (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored) = (
+                    _off_surface1(
+                        o[c, 0],
+                        o[c, 1],
+                        o[c, 2],
+                        d[c, 0],
+                        d[c, 1],
+                        d[c, 2],
+                        s[c, 0],
+                        s[c, 1],
+                        s[c, 2],
+                        gx,
+                        gy,
+                        gz,
+                        step[i],
+                    )
+                )
                 if mirrored:
                     p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
             l_rows[nl] = c
@@ -762,5 +921,3 @@ def cross_layer(wave, n, rows, alpha, thickness, temperature, acc):
             m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
             _add(acc, sid[c], m00 * e, m01 * e, m10 * e, m11 * e, temperature, temperature)
             m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
-
-

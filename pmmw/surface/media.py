@@ -151,5 +151,4 @@ class Media:
     @property
     def any_rough(self) -> bool:
         """Whether any surface is rough or bumped (smooth scenes skip all of that work)."""
-        return (any(r is not None for r in self.roughness) or any(b is not None for b in self.bump)
-                or any(self.layers))
+        return any(r is not None for r in self.roughness) or any(b is not None for b in self.bump) or any(self.layers)

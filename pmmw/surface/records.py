@@ -60,8 +60,16 @@ class Hit(NamedTuple):
     @staticmethod
     def empty(n: int) -> Hit:
         """Room for ``n`` rays (filled by `kernels.arrive`)."""
-        return Hit(np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n, np.int64), np.empty(n, np.int64),
-                   np.empty(n, np.int64), np.empty(n, bool), np.empty(n, np.int8))
+        return Hit(
+            np.empty((n, 3)),
+            np.empty((n, 3)),
+            np.empty(n),
+            np.empty(n, np.int64),
+            np.empty(n, np.int64),
+            np.empty(n, np.int64),
+            np.empty(n, bool),
+            np.empty(n, np.int8),
+        )
 
 
 class Faces(NamedTuple):

@@ -76,8 +76,16 @@ class Surfaces:
         Facet draws whose weight was not 1 (a model's rare fallback, `roughness`).
     """
 
-    def __init__(self, media: Media, frequency: float, faces, limits, choice, compiled: bool | None = None,
-                 count_facets: bool = False):
+    def __init__(
+        self,
+        media: Media,
+        frequency: float,
+        faces,
+        limits,
+        choice,
+        compiled: bool | None = None,
+        count_facets: bool = False,
+    ):
         self.media = media
         self.wavelength = C0 / frequency
         # which media have rough coating layers (None: none, the common case)
@@ -131,13 +139,29 @@ class Surfaces:
             self.events += rows.size
             u_choose, u_roul = self._uniforms(rows.size)
             kids = Wave.empty(2 * rows.size, wave.stack.shape[1])
-            count = kernels.scatter(rows, wave.arrays(), hit, self._films, prim, self._faces, self._media, self._choice,
-                                    u_choose, u_roul, self._limits, self.acc, self.cut, kids.arrays(), kernels.NO_SETTLE)
+            count = kernels.scatter(
+                rows,
+                wave.arrays(),
+                hit,
+                self._films,
+                prim,
+                self._faces,
+                self._media,
+                self._choice,
+                u_choose,
+                u_roul,
+                self._limits,
+                self.acc,
+                self.cut,
+                kids.arrays(),
+                kernels.NO_SETTLE,
+            )
             return [kids.head(count)]
         # the interacting rays to the front of the wave, in place (its other rays are done with)
         wv = wave.head(kernels.compact(wave.arrays(), hit.code == HitCode.INTERACTS))
-        pos, n_in, cur, face_med, other, leaving = (a[rows] for a in (hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other,
-                                                                     hit.leaving))
+        pos, n_in, cur, face_med, other, leaving = (
+            a[rows] for a in (hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving)
+        )
         prim = prim[rows]
         n_mac = self._bumped(pos, wv.d, n_in, face_med)
         layered = self.layered[face_med] if self.layered is not None else None
@@ -146,10 +170,14 @@ class Surfaces:
         if layered is None or not layered.any():
             return self._interact(wv, pos, n_in, n_mac, cur, face_med, other, leaving, prim)
         a, b = np.nonzero(~layered)[0], np.nonzero(layered)[0]
-        kids = self._interact(wv.take(a), pos[a], n_in[a], n_mac[a], cur[a], face_med[a], other[a], leaving[a],
-                              prim[a]) if a.size else []
-        walked = self._walk_layers(wv.take(b), pos[b], n_in[b], n_mac[b], cur[b], face_med[b], other[b], leaving[b],
-                                   prim[b])
+        kids = (
+            self._interact(wv.take(a), pos[a], n_in[a], n_mac[a], cur[a], face_med[a], other[a], leaving[a], prim[a])
+            if a.size
+            else []
+        )
+        walked = self._walk_layers(
+            wv.take(b), pos[b], n_in[b], n_mac[b], cur[b], face_med[b], other[b], leaving[b], prim[b]
+        )
         return kids + [w for w in (self._terminate(part) for part in walked) if len(w)]
 
     def _uniforms(self, n):
@@ -232,16 +260,48 @@ class Surfaces:
         u_choose, u_roul = self._uniforms(nr)
         hit = Hit(np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
-        side = (np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int64),
-                np.empty(2 * nr, bool), np.empty(2 * nr))
+        side = (
+            np.empty(2 * nr, np.int64),
+            np.empty(2 * nr, np.int64),
+            np.empty(2 * nr, np.int64),
+            np.empty(2 * nr, bool),
+            np.empty(2 * nr),
+        )
         counts = np.zeros(3, np.int64)
         generator = self.rng.bit_generator
         state = generator.state
         u_leave = self.rng.random(2 * nr)
-        settle = kernels.masked(self._rough[0] == GGX_CODE, u1, u2, np.ascontiguousarray(n_geo), n_mac, u_leave,
-                                self._rough, rehit + 1 > MAX_REHITS, self.wavelength, self._rehit_depth, side, counts)
-        nl = kernels.scatter(np.arange(nr), wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice,
-                             u_choose, u_roul, self._limits, self.acc, self.cut, kids.arrays(), settle)
+        settle = kernels.masked(
+            self._rough[0] == GGX_CODE,
+            u1,
+            u2,
+            np.ascontiguousarray(n_geo),
+            n_mac,
+            u_leave,
+            self._rough,
+            rehit + 1 > MAX_REHITS,
+            self.wavelength,
+            self._rehit_depth,
+            side,
+            counts,
+        )
+        nl = kernels.scatter(
+            np.arange(nr),
+            wv.arrays(),
+            hit,
+            self._films,
+            prim,
+            self._faces,
+            self._media,
+            self._choice,
+            u_choose,
+            u_roul,
+            self._limits,
+            self.acc,
+            self.cut,
+            kids.arrays(),
+            settle,
+        )
         generator.state = state
         generator.advance(int(counts[1]))
         self.fallbacks += int(counts[0])
@@ -250,8 +310,17 @@ class Surfaces:
             return kids.head(nl), None
         back = kids.take(np.arange(2 * nr - 1, 2 * nr - 1 - nb, -1))  # written from the end, in order
         j, cur, other, leaving, sign = (a[:nb] for a in side)
-        return kids.head(nl), (back, pos[j], sign[:, None] * n_geo[j], sign[:, None] * n_mac[j], cur, face_med[j],
-                               other, leaving, prim[j])
+        return kids.head(nl), (
+            back,
+            pos[j],
+            sign[:, None] * n_geo[j],
+            sign[:, None] * n_mac[j],
+            cur,
+            face_med[j],
+            other,
+            leaving,
+            prim[j],
+        )
 
     def _draws(self, wv: Wave, n_mac, face_med):
         """The facet draws of `_scatter_masked`'s rays: normals (n, 3) (macro normals, or the
@@ -287,11 +356,41 @@ class Surfaces:
         u_choose, u_roul = self._uniforms(nr)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
-        count = kernels.scatter(rows, wv.arrays(), hit, self._films, prim, self._faces, self._media, self._choice,
-                                u_choose, _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(),
-                                kernels.at_point(src, branch))
-        return self._settle(kids.head(count), src[:count], branch[:count], pos, n_geo, n_mac, tangent, rough,
-                            face_med, prim, step, cur, other, leaving, rehit, u_roul)
+        count = kernels.scatter(
+            rows,
+            wv.arrays(),
+            hit,
+            self._films,
+            prim,
+            self._faces,
+            self._media,
+            self._choice,
+            u_choose,
+            _NO_RANDOM,
+            self._limits,
+            self.acc,
+            self.cut,
+            kids.arrays(),
+            kernels.at_point(src, branch),
+        )
+        return self._settle(
+            kids.head(count),
+            src[:count],
+            branch[:count],
+            pos,
+            n_geo,
+            n_mac,
+            tangent,
+            rough,
+            face_med,
+            prim,
+            step,
+            cur,
+            other,
+            leaving,
+            rehit,
+            u_roul,
+        )
 
     def _facets(self, wv: Wave, n_mac, face_med):
         """Microfacet normals for the rays on rough faces (the macro normal elsewhere).
@@ -338,8 +437,25 @@ class Surfaces:
             wv.m[rows[scaled]] *= np.sqrt(w[scaled])[:, None, None]
         return np.where(w[:, None] > 0.0, m, n)
 
-    def _settle(self, child: Wave, i, branch, pos, n_geo, n_mac, tangent, rough, face_med, prim, step, cur, other,
-                leaving, rehit, u_roul):
+    def _settle(
+        self,
+        child: Wave,
+        i,
+        branch,
+        pos,
+        n_geo,
+        n_mac,
+        tangent,
+        rough,
+        face_med,
+        prim,
+        step,
+        cur,
+        other,
+        leaving,
+        rehit,
+        u_roul,
+    ):
         """Send children off the surface, or back onto it.
 
         Returns the children that leave and, for those that do not, the arguments of their
@@ -376,15 +492,43 @@ class Surfaces:
         hit = Hit(pos, n_geo, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         t_face = self._media.temperature[face_med]
         chain_end = (np.full(len(pos), rehit + 1 > MAX_REHITS), np.stack([t_face, t_face], axis=1))
-        nl, nb = kernels.settle(child.arrays(), i, branch, u, p_leave, hit, n_mac, tangent, step, chain_end,
-                                self._media, self._rough, self.wavelength, self.acc, leave.arrays(),
-                                back.arrays(), side, (np.empty(n, np.int64), np.empty(n)), True, self._rehit_depth,
-                                (u_roul, self._limits, self.cut))
+        nl, nb = kernels.settle(
+            child.arrays(),
+            i,
+            branch,
+            u,
+            p_leave,
+            hit,
+            n_mac,
+            tangent,
+            step,
+            chain_end,
+            self._media,
+            self._rough,
+            self.wavelength,
+            self.acc,
+            leave.arrays(),
+            back.arrays(),
+            side,
+            (np.empty(n, np.int64), np.empty(n)),
+            True,
+            self._rehit_depth,
+            (u_roul, self._limits, self.cut),
+        )
         if not nb:
             return leave.head(nl), None
         j, cur, other, leaving, sign = (a[:nb] for a in side)
-        return leave.head(nl), (back.head(nb), pos[j], sign[:, None] * n_geo[j], sign[:, None] * n_mac[j], cur,
-                                face_med[j], other, leaving, prim[j])
+        return leave.head(nl), (
+            back.head(nb),
+            pos[j],
+            sign[:, None] * n_geo[j],
+            sign[:, None] * n_mac[j],
+            cur,
+            face_med[j],
+            other,
+            leaving,
+            prim[j],
+        )
 
     # -- rough coating layers (Optics Express 2016) ----------------------------------------------------------
     def _walk_layers(self, wv: Wave, pos, n_geo, n_mac, cur, face_med, other, leaving, prim):
@@ -433,12 +577,25 @@ class Surfaces:
                             continue
                         n_fac = n_in[sel]
                         if model is not None:
-                            n_fac = self._draw_facets(model, w, sel, n_fac, tangent[rows[sel]],
-                                                      pile.end_temperature(j, a))
-                        exits, more = self._layer_step(w.take(sel), p_g[rows[sel]], pile, j, a, n_in[sel], n_fac,
-                                                       tangent[rows[sel]], rehits[sel], rows[sel])
-                        out += [self._layer_exit(child, r, exit_up, lv, k, p_g, g_up, step, pile.t_body)
-                                for exit_up, child, r in exits]
+                            n_fac = self._draw_facets(
+                                model, w, sel, n_fac, tangent[rows[sel]], pile.end_temperature(j, a)
+                            )
+                        exits, more = self._layer_step(
+                            w.take(sel),
+                            p_g[rows[sel]],
+                            pile,
+                            j,
+                            a,
+                            n_in[sel],
+                            n_fac,
+                            tangent[rows[sel]],
+                            rehits[sel],
+                            rows[sel],
+                        )
+                        out += [
+                            self._layer_exit(child, r, exit_up, lv, k, p_g, g_up, step, pile.t_body)
+                            for exit_up, child, r in exits
+                        ]
                         walk += more
                 walk = _merge_walk(walk)
                 if walk is None:
@@ -469,15 +626,37 @@ class Surfaces:
         cur, other = pile.index(j, a), pile.index(j, not a)
         fm = pile.index(j, False)  # the medium whose top surface interface j is
         cos1 = np.clip(-np.einsum("ij,ij->i", w.d, n_fac), 0.0, 1.0)
-        hit = Hit(np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, np.full(nr, cur), np.full(nr, fm),
-                  np.full(nr, other), np.full(nr, not a), _NO_CODE)
+        hit = Hit(
+            np.ascontiguousarray(pos),
+            np.ascontiguousarray(n_fac),
+            cos1,
+            np.full(nr, cur),
+            np.full(nr, fm),
+            np.full(nr, other),
+            np.full(nr, not a),
+            _NO_CODE,
+        )
         u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
         kids = Wave.empty(2 * nr, w.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
         none = np.zeros(nr, np.int64)
-        count = kernels.scatter(np.arange(nr), w.arrays(), hit, self._films, none, self._faces, self._media,
-                                self._choice, u_choose, _NO_RANDOM, self._limits, self.acc, self.cut, kids.arrays(),
-                                kernels.at_point(src, branch))
+        count = kernels.scatter(
+            np.arange(nr),
+            w.arrays(),
+            hit,
+            self._films,
+            none,
+            self._faces,
+            self._media,
+            self._choice,
+            u_choose,
+            _NO_RANDOM,
+            self._limits,
+            self.acc,
+            self.cut,
+            kids.arrays(),
+            kernels.at_point(src, branch),
+        )
         kids, src, branch = kids.head(count), src[:count], branch[:count]
         kids.top[:] = w.top[src]  # inside the pile the media stack stays as it was (`_layer_exit`)
         model = self._rough_models[fm]
@@ -489,13 +668,37 @@ class Surfaces:
         t_end = np.array([pile.end_temperature(j, a), pile.end_temperature(j, not a)])
         chain_end = (rehits + 1 > MAX_REHITS, np.broadcast_to(t_end, (nr, 2)).copy())
         leave, back = Wave.empty(count, w.stack.shape[1]), Wave.empty(count, w.stack.shape[1])
-        b_side = (np.empty(count, np.int64), np.empty(count, np.int64), np.empty(count, np.int64),
-                  np.empty(count, bool), np.empty(count))
+        b_side = (
+            np.empty(count, np.int64),
+            np.empty(count, np.int64),
+            np.empty(count, np.int64),
+            np.empty(count, bool),
+            np.empty(count),
+        )
         l_side = (np.empty(count, np.int64), np.empty(count))
-        nl, nb = kernels.settle(kids.arrays(), src, branch, u, p_leave, hit, np.ascontiguousarray(n_in),
-                                np.ascontiguousarray(tangent), np.zeros(nr), chain_end, self._media, self._rough,
-                                self.wavelength, self.acc, leave.arrays(), back.arrays(), b_side, l_side,
-                                False, self._rehit_depth, (_NO_RANDOM, self._limits, self.cut))
+        nl, nb = kernels.settle(
+            kids.arrays(),
+            src,
+            branch,
+            u,
+            p_leave,
+            hit,
+            np.ascontiguousarray(n_in),
+            np.ascontiguousarray(tangent),
+            np.zeros(nr),
+            chain_end,
+            self._media,
+            self._rough,
+            self.wavelength,
+            self.acc,
+            leave.arrays(),
+            back.arrays(),
+            b_side,
+            l_side,
+            False,
+            self._rehit_depth,
+            (_NO_RANDOM, self._limits, self.cut),
+        )
         exits, walk = [], []
         if nb:
             i, sign = b_side[0][:nb], b_side[4][:nb]
@@ -514,10 +717,24 @@ class Surfaces:
                 continue
             # across the layer it is in to the neighbouring interface
             lay = pile.layers[j - 1] if side else pile.layers[j]
-            kernels.cross_layer(fwd.arrays(), np.ascontiguousarray(n_in, dtype=np.float64), i, float(lay.alpha),
-                                float(lay.thickness), float(lay.temperature), self.acc)
-            walk.append((fwd, np.full(len(fwd), j - 1 if side else j + 1), np.full(len(fwd), not side),
-                         np.zeros(len(fwd), np.int64), rows[i]))
+            kernels.cross_layer(
+                fwd.arrays(),
+                np.ascontiguousarray(n_in, dtype=np.float64),
+                i,
+                float(lay.alpha),
+                float(lay.thickness),
+                float(lay.temperature),
+                self.acc,
+            )
+            walk.append(
+                (
+                    fwd,
+                    np.full(len(fwd), j - 1 if side else j + 1),
+                    np.full(len(fwd), not side),
+                    np.zeros(len(fwd), np.int64),
+                    rows[i],
+                )
+            )
         return exits, walk
 
     def _layer_exit(self, child, r, exit_up, leaving, k, pos, g_up, step, t_body):

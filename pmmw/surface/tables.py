@@ -51,19 +51,31 @@ def kernel_tables(media: Media, k0: float):
             models.append(layer.roughness)
         layer_media.append(idx)
     eps = np.array(eps, complex)
-    media = MediaTable(np.array(kind, np.int8), np.array(alpha, float), np.array(temp, float), np.sqrt(eps).real.copy(),
-                       np.array([c is not None for c in coats]), eps)
+    media = MediaTable(
+        np.array(kind, np.int8),
+        np.array(alpha, float),
+        np.array(temp, float),
+        np.sqrt(eps).real.copy(),
+        np.array([c is not None for c in coats]),
+        eps,
+    )
     sizes = [0 if c is None else c.eps.size for c in coats]
     present = [c for c in coats if c is not None]
-    films = (np.cumsum([0] + sizes[:-1]).astype(np.int64), np.array(sizes, np.int64),
-             np.concatenate([c.eps for c in present] + [np.ones(1)]).astype(complex),
-             np.concatenate([c.thickness for c in present] + [np.zeros(1)]).astype(float),
-             np.array([0.0 if c is None else c.temperature for c in coats], float), float(k0))
+    films = (
+        np.cumsum([0] + sizes[:-1]).astype(np.int64),
+        np.array(sizes, np.int64),
+        np.concatenate([c.eps for c in present] + [np.ones(1)]).astype(complex),
+        np.concatenate([c.thickness for c in present] + [np.zeros(1)]).astype(float),
+        np.array([0.0 if c is None else c.temperature for c in coats], float),
+        float(k0),
+    )
     # GGX and Beckmann are masked in the kernel; others (``OTHER_CODE``) by their array code
-    rough = (np.array([NOT_ROUGH if r is None else getattr(r, "code", OTHER_CODE) for r in models], np.int8),
-             np.array([getattr(r, "ax", 1.0) for r in models], float),
-             np.array([getattr(r, "ay", 1.0) for r in models], float),
-             np.array([getattr(r, "orientation", 0.0) for r in models], float))
+    rough = (
+        np.array([NOT_ROUGH if r is None else getattr(r, "code", OTHER_CODE) for r in models], np.int8),
+        np.array([getattr(r, "ax", 1.0) for r in models], float),
+        np.array([getattr(r, "ay", 1.0) for r in models], float),
+        np.array([getattr(r, "orientation", 0.0) for r in models], float),
+    )
     return media, films, rough, models, layer_media
 
 
@@ -105,8 +117,9 @@ def surface_response(job, cur, face_med, other, leaving, cos1):
     """`surface_coefficients` for a group of rays with the same media and orientation (scalars
     ``cur``, ``face_med``, ``other``, ``leaving``); ``t_coat`` is then one temperature."""
     n = cos1.shape[0]
-    c, t_coat, q2 = surface_coefficients(job, np.full(n, cur), np.full(n, face_med), np.full(n, other),
-                                         np.full(n, bool(leaving)), cos1)
+    c, t_coat, q2 = surface_coefficients(
+        job, np.full(n, cur), np.full(n, face_med), np.full(n, other), np.full(n, bool(leaving)), cos1
+    )
     return c, (float(t_coat[0]) if n else 0.0), (q2 if n and not np.isnan(q2[0]) else None)
 
 
@@ -141,7 +154,17 @@ def surface_coefficients(job, cur, face_med, other, leaving, cos1):
     media, films = kernel_tables(job.media, job.k0)[:2]
     n = cos1.shape[0]
     amp, power, q2, t_coat = np.empty((n, 4), complex), np.empty((n, 6)), np.empty(n, complex), np.empty(n)
-    kernels.coefficients(np.ascontiguousarray(cur, np.int64), np.ascontiguousarray(face_med, np.int64),
-                         np.ascontiguousarray(other, np.int64), np.ascontiguousarray(leaving, bool),
-                         np.ascontiguousarray(cos1, float), media, films, amp, power, q2, t_coat)
+    kernels.coefficients(
+        np.ascontiguousarray(cur, np.int64),
+        np.ascontiguousarray(face_med, np.int64),
+        np.ascontiguousarray(other, np.int64),
+        np.ascontiguousarray(leaving, bool),
+        np.ascontiguousarray(cos1, float),
+        media,
+        films,
+        amp,
+        power,
+        q2,
+        t_coat,
+    )
     return fresnel.Fresnel(*(amp[:, k] for k in range(4)), *(power[:, k] for k in range(6))), t_coat, q2

@@ -51,10 +51,14 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
     """``report.md``: the table, the detectable variants, a plot of each contrast's SNR against
     the swept keys, heat maps, a contact sheet and animations (module docstring)."""
     keys = [k for k, _ in spec.grid]
-    lines = [f"# Sweep of `{spec.scenario.name}`", "",
-             f"- grid (every combination{'; side by side: ' + ', '.join(zipped_keys(spec)) if spec.zip else ''}): "
-             + "; ".join(f"`{k}` = {', '.join(map(str, v))}" for k, v in spec.grid),
-             f"- executor: {spec.executor}; {sum(r['status'] == 'done' for r in table)} of {len(table)} done", ""]
+    lines = [
+        f"# Sweep of `{spec.scenario.name}`",
+        "",
+        f"- grid (every combination{'; side by side: ' + ', '.join(zipped_keys(spec)) if spec.zip else ''}): "
+        + "; ".join(f"`{k}` = {', '.join(map(str, v))}" for k, v in spec.grid),
+        f"- executor: {spec.executor}; {sum(r['status'] == 'done' for r in table)} of {len(table)} done",
+        "",
+    ]
     snr_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.startswith("snr ")]
     k_cols = [f"contrast {' '.join(_pair_channel(c))} [K]" for c in snr_cols]
     det_cols = [c.replace("snr ", "detectable ", 1) for c in snr_cols]
@@ -68,8 +72,11 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
             cells.append(f"{v:.3g}" if isinstance(v, float) and math.isfinite(v) else str(v))
         lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     if snr_cols:
-        lines += ["", f"Detection: a target is {CRITERION}; SNR of each contrast in the channel its reports "
-                  "lead with.", ""]
+        lines += [
+            "",
+            f"Detection: a target is {CRITERION}; SNR of each contrast in the channel its reports lead with.",
+            "",
+        ]
         lines += _detection_lines(spec, table, snr_cols)
     lines += _warning_lines(out, table)
     plots = _plots(out, spec, table, snr_cols) + _heatmaps(out, spec, table, snr_cols)
@@ -130,8 +137,9 @@ def _detection_lines(spec: SweepSpec, table: list[dict], snr_cols: list[str]) ->
             yes = [name(r) for r in rows if r[col] >= ROSE_SNR]
             no = [name(r) for r in rows if r[col] < ROSE_SNR]
             at, there = (f"at {x_key} =", "at") if x_key else ("in", "in")
-            words = ((f"detectable {at} {', '.join(yes)}" if yes else "not detectable")
-                     + (f"; not {there} {', '.join(no)}" if yes and no else f" {at} {', '.join(no)}" if no else ""))
+            words = (f"detectable {at} {', '.join(yes)}" if yes else "not detectable") + (
+                f"; not {there} {', '.join(no)}" if yes and no else f" {at} {', '.join(no)}" if no else ""
+            )
             lines.append(f"- {pair} ({chan}{', ' + label if label else ''}): {words}")
             if x_key and len(rows) > 1:
                 lines[-1] += f"; {_limit_words(_axis_label(spec, x_key), _limit(rows, col, x_key, x_of))}"
@@ -153,10 +161,13 @@ def _limit_words(x_key: str, lim: dict) -> str:
     if lim["kind"] == "none":
         return f"detected nowhere on the swept {x_key}"
     mc = lim["mc_error"]
-    return (f"detection limit ({'largest' if lim['falls_with_x'] else 'smallest'} {x_key} detected) "
-            f"{lim['crossing_x']:.3g} ± {lim['error']:.2g} (SNR {ROSE_SNR:g} crossed between {lim['detected_x']:g}, "
-            f"detected, and {lim['missed_x']:g}; ± {lim['spacing_error']:.2g} from the spacing"
-            + (f", ± {mc:.2g} from the Monte Carlo" if math.isfinite(mc) else "") + ")")
+    return (
+        f"detection limit ({'largest' if lim['falls_with_x'] else 'smallest'} {x_key} detected) "
+        f"{lim['crossing_x']:.3g} ± {lim['error']:.2g} (SNR {ROSE_SNR:g} crossed between {lim['detected_x']:g}, "
+        f"detected, and {lim['missed_x']:g}; ± {lim['spacing_error']:.2g} from the spacing"
+        + (f", ± {mc:.2g} from the Monte Carlo" if math.isfinite(mc) else "")
+        + ")"
+    )
 
 
 def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -> list[Path]:
@@ -184,15 +195,34 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
             rows = sorted(rows, key=lambda r: x_of[r[x_key]])
             xs, ys = [x_of[r[x_key]] for r in rows], [r[col] for r in rows]
             values += ys
-            line, = ax.plot(xs, ys, "-", label=label or None)
-            ax.scatter(xs, ys, s=28, zorder=3, edgecolors=line.get_color(),
-                       facecolors=[line.get_color() if y >= ROSE_SNR else "white" for y in ys])
+            (line,) = ax.plot(xs, ys, "-", label=label or None)
+            ax.scatter(
+                xs,
+                ys,
+                s=28,
+                zorder=3,
+                edgecolors=line.get_color(),
+                facecolors=[line.get_color() if y >= ROSE_SNR else "white" for y in ys],
+            )
             lim = _limit(rows, col, x_key, x_of) if len(rows) > 1 else {"kind": "all"}
             if lim["kind"] == "limit":  # the detection limit and its uncertainty, on the threshold
-                ax.errorbar([lim["crossing_x"]], [ROSE_SNR], xerr=[lim["error"]], fmt="D", ms=5, capsize=3,
-                            color=line.get_color(), zorder=4)
-        ax.axhline(ROSE_SNR, color="k", lw=0.9, ls="--",
-                   label=f"SNR {ROSE_SNR:g}: detectable above (Rose); diamonds: detection limit ± error")
+                ax.errorbar(
+                    [lim["crossing_x"]],
+                    [ROSE_SNR],
+                    xerr=[lim["error"]],
+                    fmt="D",
+                    ms=5,
+                    capsize=3,
+                    color=line.get_color(),
+                    zorder=4,
+                )
+        ax.axhline(
+            ROSE_SNR,
+            color="k",
+            lw=0.9,
+            ls="--",
+            label=f"SNR {ROSE_SNR:g}: detectable above (Rose); diamonds: detection limit ± error",
+        )
         if min(values) > 0 and max(values) > 20 * min(values):
             ax.set_yscale("log")
         ax.set_xlabel(_axis_label(spec, x_key))
@@ -310,9 +340,16 @@ def _heatmaps(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]
             shown = ax.imshow(z, cmap="viridis", vmin=0.0, vmax=top, origin="lower", aspect="auto")
             for (i, j), v in np.ndenumerate(z):
                 if math.isfinite(v):
-                    ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7,
-                            fontweight="bold" if v >= ROSE_SNR else "normal",
-                            color="k" if v > 0.6 * top else "w")
+                    ax.text(
+                        j,
+                        i,
+                        f"{v:.3g}",
+                        ha="center",
+                        va="center",
+                        fontsize=7,
+                        fontweight="bold" if v >= ROSE_SNR else "normal",
+                        color="k" if v > 0.6 * top else "w",
+                    )
                     if v >= ROSE_SNR:
                         ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, lw=1.4, ec="r"))
             ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs], fontsize=7)
@@ -365,8 +402,12 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
             if img.shape != (h, w):
                 continue
             shown.set_data(img)
-            ax.set_title(f"{spec.scenario.stem}: " + ", ".join(f"{k.split('.')[-1]}={r[k]}" for k in zipped[:2])
-                         + (f" ({label})" if label else ""), fontsize=8)
+            ax.set_title(
+                f"{spec.scenario.stem}: "
+                + ", ".join(f"{k.split('.')[-1]}={r[k]}" for k in zipped[:2])
+                + (f" ({label})" if label else ""),
+                fontsize=8,
+            )
             fig.canvas.draw()
             frames.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()))
         path = out / ("sequence_" + (re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "all") + ".gif")

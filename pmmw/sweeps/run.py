@@ -60,8 +60,9 @@ from pmmw.sweeps.spec import (  # noqa: F401
 )
 
 
-def render_variant(scenario: str, overrides: list[str], out_dir: str, workers: int | None, shash: str,
-                   ship: bool = False) -> dict:
+def render_variant(
+    scenario: str, overrides: list[str], out_dir: str, workers: int | None, shash: str, ship: bool = False
+) -> dict:
     """Render one variant (a Dask task or a local call); never raises for a user error: the
     outcome is in ``status``.
 
@@ -96,11 +97,17 @@ def _render_shipped(scenario: str, overrides: list[str], workers: int | None) ->
         row = _render_row(scenario, overrides, out, workers)
         if row["status"] == "done":
             try:
-                row["files"] = {p.relative_to(out).as_posix(): p.read_bytes() for p in sorted(out.rglob("*"))
-                                if p.is_file() and not any(part.startswith(".") for part in p.relative_to(out).parts)}
+                row["files"] = {
+                    p.relative_to(out).as_posix(): p.read_bytes()
+                    for p in sorted(out.rglob("*"))
+                    if p.is_file() and not any(part.startswith(".") for part in p.relative_to(out).parts)
+                }
             except OSError as e:
-                return {"status": f"failed: reading the rendered files in {tmp}: {e}", "exr": "",
-                        "wall_s": row["wall_s"]}
+                return {
+                    "status": f"failed: reading the rendered files in {tmp}: {e}",
+                    "exr": "",
+                    "wall_s": row["wall_s"],
+                }
             row["exr"] = Path(row["exr"]).relative_to(out).as_posix() if row["exr"] else ""
             row["rendered_in"] = str(out)
     return row
@@ -118,16 +125,23 @@ def _render_row(scenario: str, overrides: list[str], out: Path, workers: int | N
         return {"status": f"failed: {e}", "exr": "", "wall_s": round(time.perf_counter() - t0, 3)}
     except Exception as e:  # noqa: BLE001 - a bug or the machine: recorded as text; an exception object
         # crossing Dask can hang its client when the traceback does not pickle
-        return {"status": f"failed: {type(e).__name__}: {str(e)[:300]} ({exception_text(e, 600)})", "exr": "",
-                "wall_s": round(time.perf_counter() - t0, 3)}
+        return {
+            "status": f"failed: {type(e).__name__}: {str(e)[:300]} ({exception_text(e, 600)})",
+            "exr": "",
+            "wall_s": round(time.perf_counter() - t0, 3),
+        }
     rays = 0
     for path in out.glob("report*.json"):  # one report per frequency
         try:
             rays += int(json.loads(path.read_text()).get("rays", 0))
         except (OSError, ValueError, TypeError):
             pass
-    return {"status": "done", "exr": str(exrs[0]) if exrs else "", "wall_s": round(time.perf_counter() - t0, 3),
-            "rays": rays}
+    return {
+        "status": "done",
+        "exr": str(exrs[0]) if exrs else "",
+        "wall_s": round(time.perf_counter() - t0, 3),
+        "rays": rays,
+    }
 
 
 def _variant_hash(scenario: Path, overrides: list[str]) -> str:
@@ -212,8 +226,10 @@ def _sweep_into(spec: SweepSpec, out: Path, *, resume: bool, quiet: bool) -> int
     write_report(out, spec, table)
     if lost:
         done = sum(r["status"] == "done" for r in table)
-        raise EnvironmentProblem(f"the Dask scheduler at {lost} went away during the sweep ({done} of {len(table)} "
-                                 "variants done; rerun with --resume to keep them)")
+        raise EnvironmentProblem(
+            f"the Dask scheduler at {lost} went away during the sweep ({done} of {len(table)} "
+            "variants done; rerun with --resume to keep them)"
+        )
     failed = [r for r in table if r["status"] != "done"]
     say(f"sweep: {len(table) - len(failed)} of {len(table)} variants done -> {out / 'sweep.csv'}", result=True)
     for r in failed:
@@ -233,8 +249,12 @@ def _render_on_dask(spec: SweepSpec, plans: list, rows: dict, log: _Log) -> str 
 
     with dask_client(spec.scheduler, spec.cluster, min(spec.workers or default_workers(), len(plans))) as client:
         # render_variant returns its errors; a lost worker's task is rescheduled (`distributed`)
-        futures = {client.submit(render_variant, str(spec.scenario), ov, str(vd), 1, sh, True, key=f"pmmw-{name}-{sh}",
-                                 pure=False): (name, ov, vd, sh) for name, ov, vd, sh in plans}
+        futures = {
+            client.submit(
+                render_variant, str(spec.scenario), ov, str(vd), 1, sh, True, key=f"pmmw-{name}-{sh}", pure=False
+            ): (name, ov, vd, sh)
+            for name, ov, vd, sh in plans
+        }
         try:
             for fut in as_completed(list(futures)):
                 name, overrides, vdir, shash = futures.pop(fut)
@@ -244,8 +264,14 @@ def _render_on_dask(spec: SweepSpec, plans: list, rows: dict, log: _Log) -> str 
                     if scheduler_lost(client, e):
                         address = client.scheduler.address
                         for n, *_ in plans:
-                            rows.setdefault(n, {"status": f"failed: not rendered: the Dask scheduler at {address} "
-                                                          "went away", "exr": "", "wall_s": 0.0})
+                            rows.setdefault(
+                                n,
+                                {
+                                    "status": f"failed: not rendered: the Dask scheduler at {address} went away",
+                                    "exr": "",
+                                    "wall_s": 0.0,
+                                },
+                            )
                         return address
                     result = {"status": f"failed: {type(e).__name__}: {str(e)[:200]}", "exr": "", "wall_s": 0.0}
                 fut.release()  # its files are no longer held on the cluster
@@ -309,14 +335,21 @@ class _Log:
         rendered = done - self.skipped
         left = f"{now / rendered * (self.total - done):.0f} s" if rendered else "?"
         rays = sum(r.get("rays", 0) for r in rows.values())
-        self.line.show(f"sweep: {done}/{self.total} variants, {rays / max(now, 1e-9) / 1e6:.3g} Mrays/s, {now:.0f} s, "
-                       f"{left} left", now, done == self.total)
+        self.line.show(
+            f"sweep: {done}/{self.total} variants, {rays / max(now, 1e-9) / 1e6:.3g} Mrays/s, {now:.0f} s, {left} left",
+            now,
+            done == self.total,
+        )
 
 
 def _row(spec, out: Path, name: str, params: dict, result: dict) -> dict:
-    row = {"variant": name, **{k: _label(spec, k, v) for k, v in params.items()},
-           "status": result["status"], "exr": (str(Path(result["exr"]).relative_to(out)) if result.get("exr") else ""),
-           "wall_s": result["wall_s"]}
+    row = {
+        "variant": name,
+        **{k: _label(spec, k, v) for k, v in params.items()},
+        "status": result["status"],
+        "exr": (str(Path(result["exr"]).relative_to(out)) if result.get("exr") else ""),
+        "wall_s": result["wall_s"],
+    }
     report = out / name / "report.json"
     if result["status"] == "done" and report.is_file():
         rep = json.loads(report.read_text())

@@ -97,7 +97,9 @@ def load_sweep_file(path: Path) -> SweepSpec:
     if not isinstance(raw, dict):
         raise UserError("a sweep file is a mapping with scenario and grid", path)
     allowed = {"scenario", "grid", "zip", "executor", "scheduler", "cluster", "out", "workers", "names", "axis"}
-    errors = [UserError(f"unknown key; allowed: {', '.join(sorted(allowed))}", path, k) for k in raw if k not in allowed]
+    errors = [
+        UserError(f"unknown key; allowed: {', '.join(sorted(allowed))}", path, k) for k in raw if k not in allowed
+    ]
     for k in ("scenario", "grid"):
         if k not in raw:
             errors.append(UserError("required key missing", path, k))
@@ -118,19 +120,29 @@ def load_sweep_file(path: Path) -> SweepSpec:
         raise UserError("expected a mapping of grid key -> list of labels", path, "names")
     for k, labels in names.items():
         if k not in lengths or not isinstance(labels, list) or len(labels) != lengths[k]:
-            raise UserError(f"names.{k} must label each of the grid's {lengths.get(k, 0)} values of {k!r}", path,
-                            f"names.{k}")
+            raise UserError(
+                f"names.{k} must label each of the grid's {lengths.get(k, 0)} values of {k!r}", path, f"names.{k}"
+            )
     axis = raw.get("axis") or {}
-    if axis and (not isinstance(axis, dict) or axis.get("key") not in lengths
-                 or not isinstance(axis.get("values", []), list)
-                 or ("values" in axis and len(axis["values"]) != lengths[axis["key"]])):
+    if axis and (
+        not isinstance(axis, dict)
+        or axis.get("key") not in lengths
+        or not isinstance(axis.get("values", []), list)
+        or ("values" in axis and len(axis["values"]) != lengths[axis["key"]])
+    ):
         raise UserError("expected {key: a grid key, label: text, values: one number per value}", path, "axis")
     return SweepSpec(
-        scenario=scn if scn.is_absolute() else base / scn, grid=grid, zip=zipped,
-        executor=str(raw.get("executor", "local")), scheduler=raw.get("scheduler"),
+        scenario=scn if scn.is_absolute() else base / scn,
+        grid=grid,
+        zip=zipped,
+        executor=str(raw.get("executor", "local")),
+        scheduler=raw.get("scheduler"),
         cluster=None if cluster is None else (Path(cluster) if Path(cluster).is_absolute() else base / cluster),
-        out=None if raw.get("out") is None else Path(str(raw["out"])), source=str(path),
-        workers=raw.get("workers"), names={k: [str(x) for x in v] for k, v in names.items()}, axis=dict(axis),
+        out=None if raw.get("out") is None else Path(str(raw["out"])),
+        source=str(path),
+        workers=raw.get("workers"),
+        names={k: [str(x) for x in v] for k, v in names.items()},
+        axis=dict(axis),
     )
 
 
@@ -155,14 +167,18 @@ def variants(spec: SweepSpec) -> list[dict]:
     if zipped:
         lists = [dict(spec.grid)[k] for k in zipped]
         if len({len(v) for v in lists}) != 1:
-            raise UserError(f"zipped lists must have one length, got {[len(v) for v in lists]} for {zipped}",
-                            spec.source, "zip")
+            raise UserError(
+                f"zipped lists must have one length, got {[len(v) for v in lists]} for {zipped}", spec.source, "zip"
+            )
     # the grid's size from its axes' lengths, before a combination is made
     lengths = ([len(lists[0])] if zipped else []) + [len(values) for k, values in spec.grid if k not in zipped]
     count = math.prod(lengths)
     if count > MAX_VARIANTS:
-        raise UserError(f"{count:,} variants ({' x '.join(map(str, lengths))}); a sweep has at most "
-                        f"{MAX_VARIANTS:,}: sweep fewer values or zip keys side by side", spec.source)
+        raise UserError(
+            f"{count:,} variants ({' x '.join(map(str, lengths))}); a sweep has at most "
+            f"{MAX_VARIANTS:,}: sweep fewer values or zip keys side by side",
+            spec.source,
+        )
     if zipped:
         axes.append([dict(zip(zipped, c)) for c in zip(*lists)])
     axes += [[{k: v} for v in values] for k, values in spec.grid if k not in zipped]

@@ -216,15 +216,24 @@ class Integrator:
         bounds = brightness_bounds(job, atmosphere_source_range(job))
         # what a path ended on a guessed temperature could have brought instead (truncation bound)
         self.t_bounds = bounds if bounds is not None else (-np.inf, np.inf)
-        limits = Limits(int(st.max_depth), float(st.threshold), st.termination == "roulette",
-                        float(self.t_bounds[0]), float(self.t_bounds[1]))
-        faces = Faces(np.ascontiguousarray(job.face_medium, np.int32), np.ascontiguousarray(job.face_normals, float),
-                      np.ascontiguousarray(intersector.face_offset, float))
+        limits = Limits(
+            int(st.max_depth),
+            float(st.threshold),
+            st.termination == "roulette",
+            float(self.t_bounds[0]),
+            float(self.t_bounds[1]),
+        )
+        faces = Faces(
+            np.ascontiguousarray(job.face_medium, np.int32),
+            np.ascontiguousarray(job.face_normals, float),
+            np.ascontiguousarray(intersector.face_offset, float),
+        )
         # the surfaces' interactions (`pmmw.surface`); ``compiled=False`` sends smooth scenes
         # through the rough-surface steps (the reference of tests/trace/test_compiled_tracer.py)
         self.roulette, self.threshold = limits.roulette, limits.threshold
-        self.surfaces = Surfaces(job.media, job.frequency, faces, limits,
-                                 (kernels.STRATEGIES[st.strategy], int(st.split_depth)), compiled)
+        self.surfaces = Surfaces(
+            job.media, job.frequency, faces, limits, (kernels.STRATEGIES[st.strategy], int(st.split_depth)), compiled
+        )
         self._faces, self._media = faces, self.surfaces.media_table
         self.compiled = self.surfaces.compiled
         self.atm_skip_length = atmosphere_skip_length(job)
@@ -272,8 +281,23 @@ class Integrator:
                 nb = min(end - done, max(1, MAX_WAVE // active.size))
                 vals, first_t, first_m, cut = self._trace(pixels[active], done, nb)
                 # the sums of the samples' values shifted by the first chunk's mean (`kernels.tally`)
-                kernels.tally(active, vals, cut, first_t, first_m, done, REPLICATES, ref, s1, s2, r1, count, trunc,
-                              depth, material)
+                kernels.tally(
+                    active,
+                    vals,
+                    cut,
+                    first_t,
+                    first_m,
+                    done,
+                    REPLICATES,
+                    ref,
+                    s1,
+                    s2,
+                    r1,
+                    count,
+                    trunc,
+                    depth,
+                    material,
+                )
                 done += nb
             if not adaptive:
                 break
@@ -290,10 +314,17 @@ class Integrator:
         mean, stderr, diff = np.empty((npx, 4)), np.empty((npx, 4)), np.empty((npx, 4))
         kernels.tile_means(ref, s1, s2, r1, count, mean, stderr, diff)
         return TileResult(
-            index, (x0, y0, x1, y1), mean.reshape(h, w, 4), stderr.reshape(h, w, 4),
-            depth.reshape(h, w), material.reshape(h, w), self.rays,
-            count.reshape(h, w).astype(np.int32), self.t_isect,
-            (trunc / count[:, None]).reshape(h, w, 2), diff.reshape(h, w, 4),
+            index,
+            (x0, y0, x1, y1),
+            mean.reshape(h, w, 4),
+            stderr.reshape(h, w, 4),
+            depth.reshape(h, w),
+            material.reshape(h, w),
+            self.rays,
+            count.reshape(h, w).astype(np.int32),
+            self.t_isect,
+            (trunc / count[:, None]).reshape(h, w, 2),
+            diff.reshape(h, w, 4),
         )
 
     def _trace(self, pixels, start, nb):
@@ -313,9 +344,16 @@ class Integrator:
         m = np.zeros((n, 2, 2), complex)
         m[:, 0, 0] = m[:, 1, 1] = 1.0
         wave = Wave(
-            o=origins, d=d, s=s, p=p, m=m,
-            sid=np.arange(n), depth=np.zeros(n, np.int32), stack=np.zeros((n, st.stack_size), np.int16),
-            top=np.zeros(n, np.int32), last_t=np.full(n, np.nan),
+            o=origins,
+            d=d,
+            s=s,
+            p=p,
+            m=m,
+            sid=np.arange(n),
+            depth=np.zeros(n, np.int32),
+            stack=np.zeros((n, st.stack_size), np.int16),
+            top=np.zeros(n, np.int32),
+            last_t=np.full(n, np.nan),
         )
         first = True
         while wave is not None and len(wave) > 0:
@@ -352,7 +390,9 @@ class Integrator:
         if job.atmosphere is not None:
             # the layered atmosphere along ambient segments (shorter ones: below the error budget)
             z0, z1, length = np.empty(n), np.empty(n), np.empty(n)
-            if kernels.ambient_segments(wave.arrays(), t, prim, self.atm_skip_length, job.atmosphere.top, z0, z1, length):
+            if kernels.ambient_segments(
+                wave.arrays(), t, prim, self.atm_skip_length, job.atmosphere.top, z0, z1, length
+            ):
                 atm = (np.empty(n), np.empty(n))
                 if first and self.column is not None:  # the imager's rays: the column above the scene tabulated
                     job.atmosphere.walk_below(self.column, z0, z1, length, *atm)

@@ -168,8 +168,11 @@ def _plane_distance(o, d, v0, normals, prim, t):
             continue
         cos = d[i, 0] * normals[f, 0] + d[i, 1] * normals[f, 1] + d[i, 2] * normals[f, 2]
         if abs(cos) > _REFINE_MIN_COS:
-            num = ((v0[f, 0] - o[i, 0]) * normals[f, 0] + (v0[f, 1] - o[i, 1]) * normals[f, 1]
-                   + (v0[f, 2] - o[i, 2]) * normals[f, 2])
+            num = (
+                (v0[f, 0] - o[i, 0]) * normals[f, 0]
+                + (v0[f, 1] - o[i, 1]) * normals[f, 1]
+                + (v0[f, 2] - o[i, 2]) * normals[f, 2]
+            )
             t[i] = max(num / cos, 0.0)
         else:
             grazing[i] = True

@@ -124,12 +124,25 @@ def build_media(db, material_ids, f: float, t_default: float = 290.0, atm=None) 
         layers = []
         for layer in m.coating:
             lm = db.get(layer.material)
-            t_l = layer.temperature if layer.temperature is not None else (lm.temperature if lm.temperature is not None else t_m)
+            t_l = (
+                layer.temperature
+                if layer.temperature is not None
+                else (lm.temperature if lm.temperature is not None else t_m)
+            )
             layers.append((lm.eps_at(f, t_l), layer.thickness, t_l, layer.roughness))
         if code == THIN:
             layers.append((e, m.thickness or 0.0, t_m, None))
         rough_layers, films = split_coating(layers, k0)
         coat.append(films)
         stacks.append(rough_layers)
-    return Media(ids, np.array(eps), np.array(kind, np.int8), np.array(temp, float), np.array(alpha, float),
-                 tuple(coat), tuple(rough), tuple(bump), tuple(stacks))
+    return Media(
+        ids,
+        np.array(eps),
+        np.array(kind, np.int8),
+        np.array(temp, float),
+        np.array(alpha, float),
+        tuple(coat),
+        tuple(rough),
+        tuple(bump),
+        tuple(stacks),
+    )

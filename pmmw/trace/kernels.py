@@ -90,8 +90,9 @@ def sky_emit(rows, wave, ta, tb, polarized, acc):
         else:
             hx, hy, hz = s[i, 0], s[i, 1], s[i, 2]
         vx, vy, vz = ky * hz - kz * hy, kz * hx - kx * hz, kx * hy - ky * hx  # k x h
-        n00, n01, n10, n11 = _rebase1(m00, m01, m10, m11, (s[i, 0], s[i, 1], s[i, 2]), (p[i, 0], p[i, 1], p[i, 2]),
-                                      (hx, hy, hz), (vx, vy, vz))
+        n00, n01, n10, n11 = _rebase1(
+            m00, m01, m10, m11, (s[i, 0], s[i, 1], s[i, 2]), (p[i, 0], p[i, 1], p[i, 2]), (hx, hy, hz), (vx, vy, vz)
+        )
         _add(acc, sid[i], n00, n01, n10, n11, tb[j], ta[j])
 
 
@@ -152,7 +153,15 @@ def arrive(wave, t, prim, atm, faces, media, acc, hit, u, threshold):
     face_medium, face_normals, face_offset = faces.medium, faces.normal, faces.offset
     kind, alpha, temperature = media.kind, media.alpha, media.temperature
     trans, emission = atm
-    pos, n_in, cos1, cur_o, fm_o, other_o, leaving_o = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving
+    pos, n_in, cos1, cur_o, fm_o, other_o, leaving_o = (
+        hit.pos,
+        hit.n_in,
+        hit.cos1,
+        hit.cur,
+        hit.face_med,
+        hit.other,
+        hit.leaving,
+    )
     code = hit.code
     cap = stack.shape[1]
     with_atm = trans.shape[0] > 0
@@ -319,37 +328,122 @@ def warm(stack_size: int = 8) -> None:
     cos1, eps = np.array([0.5]), np.array([2.0 + 0.1j])
     fresnel.interface(eps, eps * 2.0, cos1, with_q2=True)
     multilayer.stack(np.array([[1.0, 2.0 + 0.1j, 3.0]]), np.array([[1e-3]]), cos1, 1e3)
-    _plane_distance(np.zeros((1, 3)), np.ones((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), np.zeros(1, np.int64),
-                    np.zeros(1))
+    _plane_distance(
+        np.zeros((1, 3)), np.ones((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), np.zeros(1, np.int64), np.zeros(1)
+    )
     n = 1
-    wave = WaveArrays(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
-                      np.zeros((n, 2, 2), complex), np.zeros(n, np.int64), np.zeros(n, np.int32),
-                      np.zeros((n, stack_size), np.int16), np.zeros(n, np.int32), np.zeros(n))
+    wave = WaveArrays(
+        np.zeros((n, 3)),
+        np.zeros((n, 3)),
+        np.zeros((n, 3)),
+        np.zeros((n, 3)),
+        np.zeros((n, 2, 2), complex),
+        np.zeros(n, np.int64),
+        np.zeros(n, np.int32),
+        np.zeros((n, stack_size), np.int16),
+        np.zeros(n, np.int32),
+        np.zeros(n),
+    )
     acc, cut = np.zeros((n, 4)), np.zeros((n, 2))
     t, prim = np.ones(n), np.full(n, -1, np.int64)
     faces = Faces(np.zeros(1, np.int32), np.zeros((1, 3)), np.zeros(1))
-    media = MediaTable(np.zeros(1, np.int8), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1, bool), np.ones(1, complex))
+    media = MediaTable(
+        np.zeros(1, np.int8), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1, bool), np.ones(1, complex)
+    )
     hit = Hit.empty(n)
     empty = np.zeros(0)
     arrive(wave, t, prim, (empty, empty), faces, media, acc, hit, empty, 1e-3)
     ambient_segments(wave, t, prim, 0.0, 1e3, np.zeros(n), np.zeros(n), np.zeros(n))
     limits = Limits(32, 1e-3, True, 0.0, 300.0)
     films = (np.zeros(1, np.int64), np.zeros(1, np.int64), np.ones(1, complex), np.zeros(1), np.zeros(1), 1.0)
-    coefficients(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool), empty, media,
-                 films, np.zeros((0, 4), complex), np.zeros((0, 6)), np.zeros(0, complex), empty)
-    scatter(np.zeros(0, np.int64), wave, hit, films, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave,
-            NO_SETTLE)
+    coefficients(
+        np.zeros(0, np.int64),
+        np.zeros(0, np.int64),
+        np.zeros(0, np.int64),
+        np.zeros(0, bool),
+        empty,
+        media,
+        films,
+        np.zeros((0, 4), complex),
+        np.zeros((0, 6)),
+        np.zeros(0, complex),
+        empty,
+    )
+    scatter(
+        np.zeros(0, np.int64),
+        wave,
+        hit,
+        films,
+        prim,
+        faces,
+        media,
+        (0, 0),
+        empty,
+        empty,
+        limits,
+        acc,
+        cut,
+        wave,
+        NO_SETTLE,
+    )
     survivors(wave, empty, limits, acc, cut, np.zeros(n, bool))
     ints = np.zeros(0, np.int64)
     compact(wave, np.zeros(n, bool))
     rough = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
     # rough faces with compiled masking (`Surfaces._scatter_masked`)
-    scatter(np.zeros(0, np.int64), wave, hit, films, prim, faces, media, (0, 0), empty, empty, limits, acc, cut, wave,
-            masked(np.zeros(1, bool), empty, empty, np.zeros((n, 3)), np.zeros((n, 3)), empty, rough, False, 1e-3, -1,
-                   (ints, ints, ints, np.zeros(0, bool), empty), np.zeros(3, np.int64)))
-    settle(wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
-           (np.zeros(n, bool), np.zeros((n, 2))), media, rough, 1e-3, acc, wave, wave,
-           (ints, ints, ints, np.zeros(0, bool), empty), (ints, empty), True, -1, (empty, limits, cut))
+    scatter(
+        np.zeros(0, np.int64),
+        wave,
+        hit,
+        films,
+        prim,
+        faces,
+        media,
+        (0, 0),
+        empty,
+        empty,
+        limits,
+        acc,
+        cut,
+        wave,
+        masked(
+            np.zeros(1, bool),
+            empty,
+            empty,
+            np.zeros((n, 3)),
+            np.zeros((n, 3)),
+            empty,
+            rough,
+            False,
+            1e-3,
+            -1,
+            (ints, ints, ints, np.zeros(0, bool), empty),
+            np.zeros(3, np.int64),
+        ),
+    )
+    settle(
+        wave,
+        ints,
+        np.zeros(0, np.int8),
+        empty,
+        empty,
+        hit,
+        np.zeros((n, 3)),
+        np.zeros((n, 3)),
+        np.zeros(n),
+        (np.zeros(n, bool), np.zeros((n, 2))),
+        media,
+        rough,
+        1e-3,
+        acc,
+        wave,
+        wave,
+        (ints, ints, ints, np.zeros(0, bool), empty),
+        (ints, empty),
+        True,
+        -1,
+        (empty, limits, cut),
+    )
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
     frozen = np.zeros(0)
     frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
@@ -365,8 +459,23 @@ def warm(stack_size: int = 8) -> None:
     cross_layer(wave, v3, np.zeros(n, np.int64), 1.0, 1e-3, 300.0, acc)
     # a tile's per-pixel sums (`Integrator.render_tile`)
     px4, ints1 = np.zeros((1, 4)), np.zeros(1, np.int64)
-    tally(ints1, px4, np.zeros((1, 2)), np.zeros(1), np.zeros(1), 0, 2, px4, px4, px4, np.zeros((1, 2, 4)), ints1,
-          np.zeros((1, 2)), np.zeros(1), np.zeros(1))
+    tally(
+        ints1,
+        px4,
+        np.zeros((1, 2)),
+        np.zeros(1),
+        np.zeros(1),
+        0,
+        2,
+        px4,
+        px4,
+        px4,
+        np.zeros((1, 2, 4)),
+        ints1,
+        np.zeros((1, 2)),
+        np.zeros(1),
+        np.zeros(1),
+    )
     tile_means(px4, px4, px4, np.zeros((1, 2, 4)), ints1 + 1, px4.copy(), px4.copy(), px4.copy())
     stderr(px4, px4, ints1, px4.copy())
     # camera samples (`Integrator._trace`)
@@ -375,8 +484,19 @@ def warm(stack_size: int = 8) -> None:
     sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
     from pmmw.scene.sky import _sky_lookup
 
-    _sky_lookup(empty, empty, 1.0, 1.0, np.zeros(1, np.int64), cells3 := np.array([0.0, 1.0]), cells3[None], 0.0,
-                empty, np.zeros(0, np.int64), empty)
+    _sky_lookup(
+        empty,
+        empty,
+        1.0,
+        1.0,
+        np.zeros(1, np.int64),
+        cells3 := np.array([0.0, 1.0]),
+        cells3[None],
+        0.0,
+        empty,
+        np.zeros(0, np.int64),
+        empty,
+    )
     camera.Camera(np.zeros(3), *np.eye(3), 1.0, 2, 2).rays(np.ones(1), np.ones(1), np.zeros(1, np.int64), 0)
     # the layered atmosphere's cell walk (`AtmosphereModel.path`)
     from pmmw.atmosphere.model import _path_loop

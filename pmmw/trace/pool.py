@@ -99,8 +99,15 @@ def _render(tile) -> TileResult:
 
 
 #: A tile's per-pixel arrays (`TileResult`) and their channels, in the order of a `_Slots` row.
-_PLANES = (("mean", 4), ("stderr", 4), ("depth", 1), ("material", 1), ("samples", 1), ("truncated", 2),
-           ("replicate_diff", 4))
+_PLANES = (
+    ("mean", 4),
+    ("stderr", 4),
+    ("depth", 1),
+    ("material", 1),
+    ("samples", 1),
+    ("truncated", 2),
+    ("replicate_diff", 4),
+)
 _WIDTH = sum(c for _, c in _PLANES)
 
 
@@ -123,7 +130,7 @@ class _Slots:
         c = 0
         for name, channels in _PLANES:
             a = getattr(r, name)
-            self.rows[k, :a.shape[0] * a.shape[1], c:c + channels] = a.reshape(-1, channels)
+            self.rows[k, : a.shape[0] * a.shape[1], c : c + channels] = a.reshape(-1, channels)
             setattr(r, name, None)
             c += channels
         return r
@@ -134,7 +141,7 @@ class _Slots:
         h, w = y1 - y0, x1 - x0
         c = 0
         for name, channels in _PLANES:
-            a = self.rows[k, :h * w, c:c + channels].reshape((h, w) if channels == 1 else (h, w, channels))
+            a = self.rows[k, : h * w, c : c + channels].reshape((h, w) if channels == 1 else (h, w, channels))
             setattr(r, name, a.astype(np.int32) if name == "samples" else a.copy())
             c += channels
         return r
@@ -165,7 +172,7 @@ def _by_cost(job: TraceJob, tiles: list) -> list:
     cam, ts = job.camera, job.settings.tile
     nx, ny = -(-cam.width // ts), -(-cam.height // ts)
     # every triangle up to _COST_TRIANGLES, an even sample of them beyond (a few ms either way)
-    faces = job.faces[::-(-len(job.faces) // _COST_TRIANGLES)] if len(job.faces) else job.faces
+    faces = job.faces[:: -(-len(job.faces) // _COST_TRIANGLES)] if len(job.faces) else job.faces
     tri = job.vertices[faces] - cam.position  # (n, 3 corners, 3), from the imager
     z = tri @ cam.k
     near = 1e-9 * max(float(np.abs(z).max(initial=0.0)), 1.0)
@@ -202,9 +209,19 @@ def _save_tile(tile_dir: Path, r: TileResult):
     # not fsync'ed (0.4 s per 256 tiles here): `_load_tile` checks every tile it resumes from, so
     # one that a crash of the machine left empty or torn is rendered again
     save_npz_atomic(
-        _tile_path(tile_dir, r.index), durable=False, index=r.index, box=np.array(r.box), mean=r.mean,
-        stderr=r.stderr, depth=r.depth, material=r.material, rays=r.rays, samples=r.samples,
-        t_isect=r.t_isect, truncated=r.truncated, replicate_diff=r.replicate_diff,
+        _tile_path(tile_dir, r.index),
+        durable=False,
+        index=r.index,
+        box=np.array(r.box),
+        mean=r.mean,
+        stderr=r.stderr,
+        depth=r.depth,
+        material=r.material,
+        rays=r.rays,
+        samples=r.samples,
+        t_isect=r.t_isect,
+        truncated=r.truncated,
+        replicate_diff=r.replicate_diff,
     )
 
 
@@ -216,9 +233,17 @@ def _load_tile(path: Path, tile) -> TileResult | None:
         with np.load(path) as z:
             arrays = {k: z[k] for k in _TILE_ARRAYS}
             r = TileResult(
-                int(z["index"]), tuple(int(v) for v in z["box"]), arrays["mean"], arrays["stderr"],
-                arrays["depth"], arrays["material"], int(z["rays"]), arrays["samples"],
-                float(z["t_isect"]), arrays["truncated"], arrays["replicate_diff"],
+                int(z["index"]),
+                tuple(int(v) for v in z["box"]),
+                arrays["mean"],
+                arrays["stderr"],
+                arrays["depth"],
+                arrays["material"],
+                int(z["rays"]),
+                arrays["samples"],
+                float(z["t_isect"]),
+                arrays["truncated"],
+                arrays["replicate_diff"],
             )
     except Exception:  # unreadable, a key missing, a scalar that is not one
         return None
@@ -239,9 +264,18 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
-def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | None = None,
-                 resume: bool = False, intersector: str = "embree", progress=None,
-                 tiles=None, counts: dict | None = None, client=None, notify=None) -> list[TileResult]:
+def render_tiles(
+    job: TraceJob,
+    workers: int | None = None,
+    tile_dir: Path | None = None,
+    resume: bool = False,
+    intersector: str = "embree",
+    progress=None,
+    tiles=None,
+    counts: dict | None = None,
+    client=None,
+    notify=None,
+) -> list[TileResult]:
     """Render ``tiles`` (default: all of the job's tiles) and return their results.
 
     Parameters
@@ -301,8 +335,10 @@ def render_tiles(job: TraceJob, workers: int | None = None, tile_dir: Path | Non
             _render_on_dask(client, job, intersector, todo, _collect)
         except _SchedulerGone as e:
             kept = "; rerun with --resume to keep them" if tile_dir is not None else ""
-            raise EnvironmentProblem(f"the Dask scheduler at {e} went away during the render ({len(results)} of "
-                                     f"{len(tiles)} tiles done{kept})") from None
+            raise EnvironmentProblem(
+                f"the Dask scheduler at {e} went away during the render ({len(results)} of "
+                f"{len(tiles)} tiles done{kept})"
+            ) from None
     elif todo and workers == 1:
         _init_worker(job, intersector)
         timings.mark("first tile sent")
@@ -320,8 +356,9 @@ def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
     code is ready too and the first tile's time is its own. Returns the seconds it took."""
     cold = not (jit.is_cached("trace/kernels.py") and jit.is_cached("surface/kernels.py"))
     if cold and notify is not None:
-        notify("compiling the tracer's kernels: once after an install or an update of pmmw, about a minute "
-               "on 2 cores ...")
+        notify(
+            "compiling the tracer's kernels: once after an install or an update of pmmw, about a minute on 2 cores ..."
+        )
     t0 = time.perf_counter()
     kernels.warm(job.settings.stack_size)
     if cold:  # the camera's, sky's and atmosphere's compiled code too, with this job's types: one pixel
@@ -453,16 +490,20 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                         idle_deaths += 1
                         if idle_deaths > n:
                             how = _death(w.process.exitcode, "use fewer --workers")
-                            raise EnvironmentProblem(f"{idle_deaths} worker processes died before rendering a "
-                                                     f"tile, the last one {how}; {_KEPT}")
+                            raise EnvironmentProblem(
+                                f"{idle_deaths} worker processes died before rendering a "
+                                f"tile, the last one {how}; {_KEPT}"
+                            )
                     else:
                         index, x0, y0, x1, y1 = w.tiles[0]  # the one it was rendering
                         deaths[index] += 1
                         if deaths[index] > _RETRIES:
                             how = _death(w.process.exitcode, "lower render.spp or render.tile, or use fewer --workers")
-                            raise EnvironmentProblem(f"tile {index} (pixels x {x0}..{x1 - 1}, y {y0}..{y1 - 1}): the "
-                                                     f"worker process rendering it {how}, on each of "
-                                                     f"{deaths[index]} tries; {_KEPT}")
+                            raise EnvironmentProblem(
+                                f"tile {index} (pixels x {x0}..{x1 - 1}, y {y0}..{y1 - 1}): the "
+                                f"worker process rendering it {how}, on each of "
+                                f"{deaths[index]} tries; {_KEPT}"
+                            )
                         queue.extendleft(reversed(w.tiles))  # back to the front, in their order
                     if queue:
                         start()
@@ -535,10 +576,14 @@ def _render_on_dask(client, job: TraceJob, kind: str, todo: list, collect):
             if scheduler_lost(client):
                 raise _SchedulerGone(client.scheduler.address) from None
             # a TimeoutError is an OSError, which the caller would blame on the tile folder
-            raise EnvironmentProblem(f"the Dask cluster at {client.scheduler.address} did not take the job "
-                                     f"({type(e).__name__}: {str(e)[:200]}): does it have workers?") from None
-        futures = {client.submit(_dask_tile, job_f, kind, token, t, key=f"pmmw-tile-{token}-{t[0]}", pure=False): t
-                   for t in todo}
+            raise EnvironmentProblem(
+                f"the Dask cluster at {client.scheduler.address} did not take the job "
+                f"({type(e).__name__}: {str(e)[:200]}): does it have workers?"
+            ) from None
+        futures = {
+            client.submit(_dask_tile, job_f, kind, token, t, key=f"pmmw-tile-{token}-{t[0]}", pure=False): t
+            for t in todo
+        }
         for fut in as_completed(futures):
             t = futures[fut]
             try:
@@ -550,7 +595,8 @@ def _render_on_dask(client, job: TraceJob, kind: str, todo: list, collect):
             if isinstance(r, str):
                 raise EnvironmentProblem(
                     f"tile {t[0]} (pixels x {t[1]}..{t[3] - 1}, y {t[2]}..{t[4] - 1}) failed on the Dask cluster: "
-                    f"{r.strip()}; finished tiles are kept: run again with --resume")
+                    f"{r.strip()}; finished tiles are kept: run again with --resume"
+                )
             collect(r)
     finally:
         cancel_quietly(client, futures)
@@ -567,8 +613,17 @@ def assemble(job: TraceJob, results: list[TileResult]):
         (H, W, 4) (`TileResult`).
     """
     w, h = job.camera.width, job.camera.height
-    img = Image(np.zeros((h, w, 4)), np.zeros((h, w, 4)), np.zeros((h, w)), np.zeros((h, w)),
-                np.zeros((h, w), np.int32), 0, 0.0, np.zeros((h, w, 2)), np.zeros((h, w, 4)))
+    img = Image(
+        np.zeros((h, w, 4)),
+        np.zeros((h, w, 4)),
+        np.zeros((h, w)),
+        np.zeros((h, w)),
+        np.zeros((h, w), np.int32),
+        0,
+        0.0,
+        np.zeros((h, w, 2)),
+        np.zeros((h, w, 4)),
+    )
     for r in results:
         x0, y0, x1, y1 = r.box
         img.mean[y0:y1, x0:x1] = r.mean

@@ -69,8 +69,14 @@ WALL_Y, WALL_HEIGHT = 14.0, 12.0  # Evans Hall's face, its height
 SIDE_X, SIDE_HEIGHT = 20.0, 10.0  # the side buildings' faces at +-x, their height
 BACK_Y, BACK_HEIGHT = -26.0, 6.0  # the building behind the imager
 BUILDING_DEPTH = 10.0
-WINDOWS = {"xs": np.arange(-10.5, 10.6, 3.0), "width": 1.2, "z": (0.9, 2.4), "recess": 0.12, "pane": 0.008,
-           "pane_depth": 0.06}
+WINDOWS = {
+    "xs": np.arange(-10.5, 10.6, 3.0),
+    "width": 1.2,
+    "z": (0.9, 2.4),
+    "recess": 0.12,
+    "pane": 0.008,
+    "pane_depth": 0.06,
+}
 
 # Facets of posts, rails and caps: a cylinder of n facets mirrors n directions only (16 facets
 # would send a post's reflections 22.5 deg apart); 48 keep them 7.5 deg apart.
@@ -95,9 +101,14 @@ WHEEL_RADIUS, TIRE_SECTION = 0.34, 0.014  # outer radius, tire cross-section rad
 RIM = (0.270, 0.306, 0.020)  # inner, outer radius, width
 WHEELBASE = 1.08
 BIKE_POINTS = {  # frame joints [m]
-    "rear_hub": (0.0, 0.0, WHEEL_RADIUS), "front_hub": (WHEELBASE, 0.0, WHEEL_RADIUS),
-    "bb": (0.41, 0.0, 0.27), "seat": (0.28, 0.0, 0.80), "head_top": (0.91, 0.0, 0.84),
-    "head_bottom": (0.95, 0.0, 0.72), "seat_post": (0.25, 0.0, 0.93), "stem": (0.89, 0.0, 0.97),
+    "rear_hub": (0.0, 0.0, WHEEL_RADIUS),
+    "front_hub": (WHEELBASE, 0.0, WHEEL_RADIUS),
+    "bb": (0.41, 0.0, 0.27),
+    "seat": (0.28, 0.0, 0.80),
+    "head_top": (0.91, 0.0, 0.84),
+    "head_bottom": (0.95, 0.0, 0.72),
+    "seat_post": (0.25, 0.0, 0.93),
+    "stem": (0.89, 0.0, 0.97),
 }
 TUBE_RADIUS = 0.016
 # Where the bicycles stand: (rear hub x, y, yaw [deg] of their forward axis from +x towards +y,
@@ -113,6 +124,7 @@ CANOPY = ((0.0, -9.0, 6.0), (11.0, 7.0, 4.0))
 
 
 # -- mesh helpers -----------------------------------------------------------------------------------
+
 
 def cylinder(p0, p1, radius: float, sections: int = 12) -> trimesh.Trimesh:
     """Closed cylinder of ``radius`` [m] from p0 to p1."""
@@ -138,8 +150,9 @@ def cone(base_centre, radius: float, height: float, sections: int = 16) -> trime
 def annulus(r_in: float, r_out: float, width: float, sections: int) -> trimesh.Trimesh:
     """Closed annular solid about the y axis, centred on the origin: radii r_in..r_out, ``width``
     along y [m]."""
-    profile = np.array([[r_in, -width / 2], [r_out, -width / 2], [r_out, width / 2], [r_in, width / 2],
-                        [r_in, -width / 2]])  # (radius, axial), counter-clockwise: positive volume
+    profile = np.array(
+        [[r_in, -width / 2], [r_out, -width / 2], [r_out, width / 2], [r_in, width / 2], [r_in, -width / 2]]
+    )  # (radius, axial), counter-clockwise: positive volume
     m = trimesh.creation.revolve(profile, sections=sections)  # about z
     m.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))  # z -> y
     return m
@@ -159,8 +172,9 @@ def tube_loop(path: np.ndarray, radius: float, sides: int = 8) -> trimesh.Trimes
     side = np.cross(tangent, out)
     angles = (np.arange(sides) + 0.5) * 2 * np.pi / sides  # corners between the faces
     corner_r = radius / np.cos(np.pi / sides)  # the faces at ``radius``
-    vertices = np.vstack([path[i] + corner_r * (np.cos(a) * out[i] + np.sin(a) * side[i])
-                          for i in range(n) for a in angles])
+    vertices = np.vstack(
+        [path[i] + corner_r * (np.cos(a) * out[i] + np.sin(a) * side[i]) for i in range(n) for a in angles]
+    )
     faces = []
     for i in range(n):
         j = (i + 1) % n
@@ -187,6 +201,7 @@ def rotation(axis, angle_deg: float) -> np.ndarray:
 
 # -- ground and buildings ---------------------------------------------------------------------------
 
+
 def paving_and_grass(gap: float) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
     """The paved yard, and the grass around it out to the buildings with a notch that holds the
     yard (``gap`` all round); both top faces at z = 0."""
@@ -204,8 +219,10 @@ def evans_hall(gap: float) -> tuple[trimesh.Trimesh, list[trimesh.Trimesh]]:
     """The brick wall ahead with its window recesses, and the window panes in them."""
     w = WINDOWS
     y0 = WALL_Y + gap
-    edges = sorted({-SIDE_X - BUILDING_DEPTH, SIDE_X + BUILDING_DEPTH}
-                   | {float(c + s * w["width"] / 2) for c in w["xs"] for s in (-1, 1)})
+    edges = sorted(
+        {-SIDE_X - BUILDING_DEPTH, SIDE_X + BUILDING_DEPTH}
+        | {float(c + s * w["width"] / 2) for c in w["xs"] for s in (-1, 1)}
+    )
     ys = [y0, y0 + w["recess"], y0 + BUILDING_DEPTH]
     zs = [-GROUND_THICKNESS - 0.2, w["z"][0], w["z"][1], WALL_HEIGHT]
     occupied = np.ones((len(edges) - 1, 2, 3), dtype=bool)
@@ -227,11 +244,14 @@ def other_buildings(gap: float) -> dict[str, trimesh.Trimesh]:
     return {
         "building_left": box([-SIDE_X - BUILDING_DEPTH, BACK_Y + gap, bottom], [-SIDE_X, WALL_Y - gap, SIDE_HEIGHT]),
         "building_right": box([SIDE_X, BACK_Y + gap, bottom], [SIDE_X + BUILDING_DEPTH, WALL_Y - gap, SIDE_HEIGHT]),
-        "building_back": box([-SIDE_X - BUILDING_DEPTH, BACK_Y - BUILDING_DEPTH, bottom], [SIDE_X + BUILDING_DEPTH, BACK_Y, BACK_HEIGHT]),
+        "building_back": box(
+            [-SIDE_X - BUILDING_DEPTH, BACK_Y - BUILDING_DEPTH, bottom], [SIDE_X + BUILDING_DEPTH, BACK_Y, BACK_HEIGHT]
+        ),
     }
 
 
 # -- fence and racks --------------------------------------------------------------------------------
+
 
 def capped_post(x: float, y: float, radius: float, height: float, cap, gap: float) -> trimesh.Trimesh:
     post = cylinder([x, y, gap], [x, y, height], radius, ROUND_SECTIONS)
@@ -272,7 +292,10 @@ def fence(gap: float) -> dict[str, tuple[str, trimesh.Trimesh]]:
     for i, x in enumerate(FENCE_XS):
         nodes[f"post_{i}"] = ("posts", capped_post(x, FENCE_Y, POST_RADIUS, POST_HEIGHT, (CAP_RADIUS, CAP_HEIGHT), gap))
     for i in range(len(FENCE_XS) - 1):
-        nodes[f"chain_{i}"] = ("chain", chain(FENCE_XS[i] + POST_RADIUS * 0.5, FENCE_XS[i + 1] - POST_RADIUS * 0.5, FENCE_Y))
+        nodes[f"chain_{i}"] = (
+            "chain",
+            chain(FENCE_XS[i] + POST_RADIUS * 0.5, FENCE_XS[i + 1] - POST_RADIUS * 0.5, FENCE_Y),
+        )
     return nodes
 
 
@@ -303,6 +326,7 @@ def u_lock(x: float, y: float) -> trimesh.Trimesh:
 
 # -- bicycles ---------------------------------------------------------------------------------------
 
+
 def wheel(gap: float) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
     """(tire, rim and hub) about the origin, axle along y."""
     major = WHEEL_RADIUS - TIRE_SECTION
@@ -321,11 +345,20 @@ def bicycle(gap: float, steer_deg: float = 0.0) -> dict[str, tuple[str, trimesh.
     rear, front = P["rear_hub"], P["front_hub"]
     stay = np.array([0.0, 0.065, 0.0])  # stays and fork legs pass either side of the wheels
     wishbone = np.array([0.0, 0.02, 0.0])
-    tubes = [(P["bb"], P["seat"]), (P["seat"], P["head_top"]), (P["bb"], P["head_bottom"]),
-             (P["head_bottom"], P["head_top"]), (P["seat"], P["seat_post"]), (P["head_top"], P["stem"])]
+    tubes = [
+        (P["bb"], P["seat"]),
+        (P["seat"], P["head_top"]),
+        (P["bb"], P["head_bottom"]),
+        (P["head_bottom"], P["head_top"]),
+        (P["seat"], P["seat_post"]),
+        (P["head_top"], P["stem"]),
+    ]
     for s in (-1.0, 1.0):
-        tubes += [(P["bb"] + s * stay * 0.5, rear + s * stay), (P["seat"] + s * wishbone, rear + s * stay),
-                  (P["head_bottom"] + s * stay, front + s * stay)]
+        tubes += [
+            (P["bb"] + s * stay * 0.5, rear + s * stay),
+            (P["seat"] + s * wishbone, rear + s * stay),
+            (P["head_bottom"] + s * stay, front + s * stay),
+        ]
     tubes.append((P["head_bottom"] - stay, P["head_bottom"] + stay))  # the fork crown
     frame = [tube(a, b, TUBE_RADIUS * (0.7 if (a[1] or b[1]) else 1.0)) for a, b in tubes]
     bar = P["stem"] + [0.0, 0.0, 0.0]
@@ -340,8 +373,12 @@ def bicycle(gap: float, steer_deg: float = 0.0) -> dict[str, tuple[str, trimesh.
         a = np.radians(angle)
         end = P["bb"] + [0.17 * np.cos(a), s * 0.095, 0.17 * np.sin(a)]
         frame.append(tube(P["bb"] + [0.0, s * 0.095, 0.0], end, 0.01, 8))
-        pedals.append(box(end + [-0.045, s * 0.01 + (0.0 if s > 0 else -0.08), -0.012],
-                          end + [0.045, s * 0.01 + (0.08 if s > 0 else 0.0), 0.012]))
+        pedals.append(
+            box(
+                end + [-0.045, s * 0.01 + (0.0 if s > 0 else -0.08), -0.012],
+                end + [0.045, s * 0.01 + (0.08 if s > 0 else 0.0), 0.012],
+            )
+        )
     saddle = box(P["seat_post"] + [-0.16, -0.07, gap], P["seat_post"] + [0.10, 0.07, 0.05])
     grips = [cylinder(bar + [0.0, s * (0.20 + gap), 0.0], bar + [0.0, s * 0.32, 0.0], 0.016, 24) for s in (-1.0, 1.0)]
     tire_r, metal_r = wheel(gap)
@@ -354,10 +391,15 @@ def bicycle(gap: float, steer_deg: float = 0.0) -> dict[str, tuple[str, trimesh.
         m.apply_translation(front + [0.0, 0.0, gap])
     return {
         "frame": ("frame", trimesh.util.concatenate(frame)),
-        "wheel_rear": ("frame", metal_r), "wheel_front": ("frame", metal_f),
-        "tire_rear": ("tires", tire_r), "tire_front": ("tires", tire_f),
-        "saddle": ("plastics", saddle), "grip_left": ("plastics", grips[1]), "grip_right": ("plastics", grips[0]),
-        "pedal_left": ("plastics", pedals[1]), "pedal_right": ("plastics", pedals[0]),
+        "wheel_rear": ("frame", metal_r),
+        "wheel_front": ("frame", metal_f),
+        "tire_rear": ("tires", tire_r),
+        "tire_front": ("tires", tire_f),
+        "saddle": ("plastics", saddle),
+        "grip_left": ("plastics", grips[1]),
+        "grip_right": ("plastics", grips[0]),
+        "pedal_left": ("plastics", pedals[1]),
+        "pedal_right": ("plastics", pedals[0]),
     }
 
 
@@ -365,11 +407,15 @@ def bike_transform(x: float, y: float, yaw_deg: float, lean_deg: float) -> np.nd
     """The bicycle's frame -> world: lean (top away from the imager, about its forward axis, the
     tire contact line fixed), then yaw, then the rear hub's ground point to (x, y)."""
     away = -1.0 if np.cos(np.radians(yaw_deg)) >= 0.0 else 1.0  # its left (+Y) is away when it faces +x
-    return (trimesh.transformations.translation_matrix([x, y, 0.0]) @ rotation([0, 0, 1], yaw_deg)
-            @ rotation([1, 0, 0], away * lean_deg))
+    return (
+        trimesh.transformations.translation_matrix([x, y, 0.0])
+        @ rotation([0, 0, 1], yaw_deg)
+        @ rotation([1, 0, 0], away * lean_deg)
+    )
 
 
 # -- the tree ---------------------------------------------------------------------------------------
+
 
 def tree(gap: float) -> trimesh.Trimesh:
     """Trunk and canopy as two closed meshes (one material); the trunk stops below the canopy."""
@@ -382,6 +428,7 @@ def tree(gap: float) -> trimesh.Trimesh:
 
 
 # -- the scene --------------------------------------------------------------------------------------
+
 
 def build(args) -> dict[str, tuple[str, trimesh.Trimesh]]:
     """Node name -> (material name, mesh), Z-up, everything but the tree."""
@@ -436,8 +483,13 @@ def main(argv=None) -> None:
     here = Path(__file__).resolve().parent
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out-dir", type=Path, default=here, help="writes bikeracks.glb and bikeracks_tree.glb there")
-    p.add_argument("--omit", nargs="*", default=[], metavar="PREFIX",
-                   help="leave out the nodes whose names start so (lock, near_bike, far_bike_tire, post_3, chain_, ...)")
+    p.add_argument(
+        "--omit",
+        nargs="*",
+        default=[],
+        metavar="PREFIX",
+        help="leave out the nodes whose names start so (lock, near_bike, far_bike_tire, post_3, chain_, ...)",
+    )
     p.add_argument("--no-tree", action="store_true", help="do not write bikeracks_tree.glb")
     p.add_argument("--gap", type=float, default=0.001, help="clearance of every dielectric part [m]")
     args = p.parse_args(argv)
@@ -455,8 +507,10 @@ def main(argv=None) -> None:
         export_glb(tree_nodes, tree_out)
         check_glb(tree_nodes, tree_out)
         print(f"wrote {tree_out} ({len(tree_nodes['tree'][1].faces)} triangles)")
-    print(f"suggested imager: position [0, 0, {IMAGER_HEIGHT}], look_at [0, 8, 0.1], up [0, 0, 1], "
-          "fov 50 deg, resolution [250, 140]")
+    print(
+        f"suggested imager: position [0, 0, {IMAGER_HEIGHT}], look_at [0, 8, 0.1], up [0, 0, 1], "
+        "fov 50 deg, resolution [250, 140]"
+    )
 
 
 if __name__ == "__main__":

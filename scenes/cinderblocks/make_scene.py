@@ -87,8 +87,9 @@ def extruded_cells(xs, ys, occupied, z0: float, z1: float) -> trimesh.Trimesh:
             if not occupied[i, j]:
                 continue
             for k, sign in ((1, 1.0), (0, -1.0)):  # top, bottom
-                faces += _quad(vid(i, j, k), vid(i + 1, j, k), vid(i + 1, j + 1, k), vid(i, j + 1, k),
-                               positions, [0.0, 0.0, sign])
+                faces += _quad(
+                    vid(i, j, k), vid(i + 1, j, k), vid(i + 1, j + 1, k), vid(i, j + 1, k), positions, [0.0, 0.0, sign]
+                )
             for di, dj in ((-1, 0), (1, 0), (0, -1), (0, 1)):
                 ni, nj = i + di, j + dj
                 if 0 <= ni < nx and 0 <= nj < ny and occupied[ni, nj]:
@@ -183,8 +184,10 @@ def main(argv=None) -> None:
     mid = (np.array(args.near) + np.array(args.far)) / 2
     dist = float(np.hypot(*mid))
     look_z = IMAGER_HEIGHT - dist * np.tan(np.radians(18.0))  # centre the view 18 deg below level
-    print(f"suggested imager: position [0, 0, {IMAGER_HEIGHT}], look_at [{mid[0]:.2f}, {mid[1]:.2f}, {look_z:.2f}], "
-          "up [0, 0, 1], fov 30 deg, resolution [256, 256]")
+    print(
+        f"suggested imager: position [0, 0, {IMAGER_HEIGHT}], look_at [{mid[0]:.2f}, {mid[1]:.2f}, {look_z:.2f}], "
+        "up [0, 0, 1], fov 30 deg, resolution [256, 256]"
+    )
 
 
 if __name__ == "__main__":

@@ -66,35 +66,63 @@ def _mirror(cones):
 
 
 BODY = {
-    "head": (0.03, [
-        ((0.0, 0.005, 1.695), (0.0, 0.005, 1.70), 0.098, 0.098),  # cranium, top at 1.798
-        ((0.0, -0.015, 1.610), (0.0, -0.005, 1.675), 0.055, 0.088),  # jaw and face
-        ((0.0, -0.080, 1.675), (0.0, -0.098, 1.645), 0.012, 0.016),  # nose
-    ]),
+    "head": (
+        0.03,
+        [
+            ((0.0, 0.005, 1.695), (0.0, 0.005, 1.70), 0.098, 0.098),  # cranium, top at 1.798
+            ((0.0, -0.015, 1.610), (0.0, -0.005, 1.675), 0.055, 0.088),  # jaw and face
+            ((0.0, -0.080, 1.675), (0.0, -0.098, 1.645), 0.012, 0.016),  # nose
+        ],
+    ),
     "neck": (0.03, [((0.0, 0.015, 1.43), (0.0, 0.010, 1.62), 0.058, 0.052)]),
-    "torso": (0.06, [
-        *_mirror([
-            ((0.075, 0.000, 0.90), (0.068, 0.000, 1.08), 0.110, 0.094),  # hips to waist
-            ((0.068, 0.000, 1.08), (0.075, -0.005, 1.29), 0.094, 0.108),  # waist to chest
-            ((0.075, -0.005, 1.29), (0.065, 0.010, 1.40), 0.108, 0.095),  # upper chest
-        ]),
-        ((-0.16, 0.012, 1.420), (0.16, 0.012, 1.420), 0.058, 0.058),  # shoulder girdle
-    ]),
-    "arms": (0.02, _mirror([
-        ((0.195, 0.012, 1.415), (0.295, 0.030, 1.135), 0.050, 0.041),  # upper arm, ~20 deg out
-        ((0.295, 0.030, 1.135), (0.345, -0.020, 0.880), 0.041, 0.031),  # forearm
-    ])),
-    "hands": (0.02, _mirror([
-        ((0.348, -0.022, 0.865), (0.366, -0.032, 0.725), 0.030, 0.022),
-    ])),
-    "legs": (0.03, _mirror([
-        ((0.090, 0.000, 0.900), (0.098, 0.005, 0.500), 0.078, 0.052),  # thigh
-        ((0.098, 0.005, 0.500), (0.105, 0.030, 0.106), 0.052, 0.036),  # shin, ankle at 0.106
-    ])),
-    "feet": (0.02, _mirror([
-        ((0.105, 0.040, 0.054), (0.115, -0.150, 0.044), 0.038, 0.028),  # heel to toes, sole at 0.016
-        ((0.105, 0.030, 0.106), (0.105, 0.040, 0.054), 0.036, 0.038),  # ankle
-    ])),
+    "torso": (
+        0.06,
+        [
+            *_mirror(
+                [
+                    ((0.075, 0.000, 0.90), (0.068, 0.000, 1.08), 0.110, 0.094),  # hips to waist
+                    ((0.068, 0.000, 1.08), (0.075, -0.005, 1.29), 0.094, 0.108),  # waist to chest
+                    ((0.075, -0.005, 1.29), (0.065, 0.010, 1.40), 0.108, 0.095),  # upper chest
+                ]
+            ),
+            ((-0.16, 0.012, 1.420), (0.16, 0.012, 1.420), 0.058, 0.058),  # shoulder girdle
+        ],
+    ),
+    "arms": (
+        0.02,
+        _mirror(
+            [
+                ((0.195, 0.012, 1.415), (0.295, 0.030, 1.135), 0.050, 0.041),  # upper arm, ~20 deg out
+                ((0.295, 0.030, 1.135), (0.345, -0.020, 0.880), 0.041, 0.031),  # forearm
+            ]
+        ),
+    ),
+    "hands": (
+        0.02,
+        _mirror(
+            [
+                ((0.348, -0.022, 0.865), (0.366, -0.032, 0.725), 0.030, 0.022),
+            ]
+        ),
+    ),
+    "legs": (
+        0.03,
+        _mirror(
+            [
+                ((0.090, 0.000, 0.900), (0.098, 0.005, 0.500), 0.078, 0.052),  # thigh
+                ((0.098, 0.005, 0.500), (0.105, 0.030, 0.106), 0.052, 0.036),  # shin, ankle at 0.106
+            ]
+        ),
+    ),
+    "feet": (
+        0.02,
+        _mirror(
+            [
+                ((0.105, 0.040, 0.054), (0.115, -0.150, 0.044), 0.038, 0.028),  # heel to toes, sole at 0.016
+                ((0.105, 0.030, 0.106), (0.105, 0.040, 0.054), 0.036, 0.038),  # ankle
+            ]
+        ),
+    ),
 }
 COVERED = ("neck", "torso", "arms", "legs")  # the clothing follows these
 # Open ends of the garments (faces beyond these planes are cut away) [m].
@@ -107,6 +135,7 @@ DRAPE_BLEND = 0.08  # [m], how far the shirt blends from the holster into the ch
 
 
 # -- implicit modelling ---------------------------------------------------------------------------
+
 
 def round_cone(p, a, b, ra, rb):
     """Signed distance [m] from points p (N, 3) to the round cone (a, ra) -> (b, rb).
@@ -198,8 +227,14 @@ def surface_nets(field, lo, hi, h: float) -> trimesh.Trimesh:
     axes = [lo[i] + h * np.arange(n[i]) for i in range(3)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
     f = field(grid.reshape(-1, 3)).reshape(n)
-    if (f[0] <= 0).any() or (f[-1] <= 0).any() or (f[:, 0] <= 0).any() or (f[:, -1] <= 0).any() \
-            or (f[:, :, 0] <= 0).any() or (f[:, :, -1] <= 0).any():
+    if (
+        (f[0] <= 0).any()
+        or (f[-1] <= 0).any()
+        or (f[:, 0] <= 0).any()
+        or (f[:, -1] <= 0).any()
+        or (f[:, :, 0] <= 0).any()
+        or (f[:, :, -1] <= 0).any()
+    ):
         raise ValueError("the surface reaches the grid boundary")
     inside = f < 0.0
     # One solid without cavities: fill air pockets enclosed by the solid, drop loose specks.
@@ -213,7 +248,7 @@ def surface_nets(field, lo, hi, h: float) -> trimesh.Trimesh:
     else:
         specks = np.zeros_like(inside)
     f = np.where(pockets, -1e-9, np.where(specks, 1e-9, f))
-    inside = (f < 0.0)
+    inside = f < 0.0
     cells = n - 1
     acc = np.zeros((*cells, 3))
     cnt = np.zeros(cells)
@@ -267,10 +302,12 @@ def surface_nets(field, lo, hi, h: float) -> trimesh.Trimesh:
     d02 = np.linalg.norm(vertices[q[:, 0]] - vertices[q[:, 2]], axis=1)
     d13 = np.linalg.norm(vertices[q[:, 1]] - vertices[q[:, 3]], axis=1)
     split02 = d02 <= d13
-    faces = np.concatenate([
-        np.where(split02[:, None], q[:, [0, 1, 2]], q[:, [0, 1, 3]]),
-        np.where(split02[:, None], q[:, [0, 2, 3]], q[:, [1, 2, 3]]),
-    ])
+    faces = np.concatenate(
+        [
+            np.where(split02[:, None], q[:, [0, 1, 2]], q[:, [0, 1, 3]]),
+            np.where(split02[:, None], q[:, [0, 2, 3]], q[:, [1, 2, 3]]),
+        ]
+    )
     return trimesh.Trimesh(vertices, faces, process=False)
 
 
@@ -433,6 +470,7 @@ def surface_samples(mesh: trimesh.Trimesh, n: int = 6) -> np.ndarray:
 
 # -- the person -------------------------------------------------------------------------------------
 
+
 def person(args):
     """Node name -> (material name, mesh) of the body, clothing, shoes, holster and gun."""
     body = closed_surface(skin_field, (-0.45, -0.25, -0.02), (0.45, 0.2, 1.85), args.voxel)
@@ -495,6 +533,7 @@ def shoe(args, side: float) -> trimesh.Trimesh:
 
 # -- the surroundings -------------------------------------------------------------------------------
 
+
 def surroundings(variant: str, args):
     g = args.gap
     if variant == "outdoor":
@@ -509,6 +548,7 @@ def surroundings(variant: str, args):
 
 
 # -- export and checks ------------------------------------------------------------------------------
+
 
 def check_clearance(nodes) -> dict[str, float]:
     """Smallest distances [m] between parts that must not touch: to the skin from the body's
@@ -550,28 +590,48 @@ def main(argv=None) -> None:
     here = Path(__file__).resolve().parent
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--variant", choices=(*VARIANTS, "all"), default="all", help="surroundings to write")
-    p.add_argument("--clothing", choices=(*CLOTHINGS, "all"), default="all",
-                   help="shell: a denim shell mesh 'clothing' (cwd_<variant>.glb); coating: no clothing mesh, "
-                        "map 'skin' to clothed_skin (cwd_<variant>_coated.glb)")
+    p.add_argument(
+        "--clothing",
+        choices=(*CLOTHINGS, "all"),
+        default="all",
+        help="shell: a denim shell mesh 'clothing' (cwd_<variant>.glb); coating: no clothing mesh, "
+        "map 'skin' to clothed_skin (cwd_<variant>_coated.glb)",
+    )
     p.add_argument("--out-dir", type=Path, default=here, help="where the files are written")
     p.add_argument("--out", type=Path, help="output file (only with a single --variant and --clothing)")
     p.add_argument("--voxel", type=float, default=0.0125, help="surface-nets grid step of body and clothing [m]")
     p.add_argument("--shoe-voxel", type=float, default=0.008, help="surface-nets grid step of the shoes [m]")
-    p.add_argument("--clothing-thickness", type=float, default=0.0008, help="denim [m] (Murakowski 2014 sec. 3.2.1: 0.8 mm)")
+    p.add_argument(
+        "--clothing-thickness", type=float, default=0.0008, help="denim [m] (Murakowski 2014 sec. 3.2.1: 0.8 mm)"
+    )
     p.add_argument("--clothing-gap", type=float, default=0.006, help="air between skin and clothing [m]")
     p.add_argument("--shoe-thickness", type=float, default=0.004, help="[m]")
     p.add_argument("--shoe-gap", type=float, default=0.003, help="air between foot and shoe [m]")
-    p.add_argument("--holster-thickness", type=float, default=0.002, help="leather [m] (Murakowski 2014 sec. 3.2.1: 2 mm)")
+    p.add_argument(
+        "--holster-thickness", type=float, default=0.002, help="leather [m] (Murakowski 2014 sec. 3.2.1: 2 mm)"
+    )
     p.add_argument("--holster-clearance", type=float, default=0.002, help="gun to holster wall [m]")
     p.add_argument("--holster-gap", type=float, default=0.003, help="skin to holster [m]")
     p.add_argument("--holster-height", type=float, default=1.17, help="gun centre height [m]")
-    p.add_argument("--holster-azimuth", type=float, default=35.0,
-                   help="where on the left side of the chest [deg from +x towards the front]")
-    p.add_argument("--holster-tilt", type=float, default=75.0, help="barrel below horizontal [deg] (muzzle down, grip forward)")
+    p.add_argument(
+        "--holster-azimuth",
+        type=float,
+        default=35.0,
+        help="where on the left side of the chest [deg from +x towards the front]",
+    )
+    p.add_argument(
+        "--holster-tilt", type=float, default=75.0, help="barrel below horizontal [deg] (muzzle down, grip forward)"
+    )
     p.add_argument("--ground-size", type=float, default=400.0, help="outdoor asphalt square [m]")
     p.add_argument("--ground-thickness", type=float, default=0.3, help="[m]; the top face is z = 0")
-    p.add_argument("--room", type=float, nargs=3, default=(8.0, 26.0, 3.0), metavar=("W", "L", "H"),
-                   help="indoor room cavity [m]: x width, y length (holds the 20 m view), height")
+    p.add_argument(
+        "--room",
+        type=float,
+        nargs=3,
+        default=(8.0, 26.0, 3.0),
+        metavar=("W", "L", "H"),
+        help="indoor room cavity [m]: x width, y length (holds the 20 m view), height",
+    )
     p.add_argument("--room-back", type=float, default=3.0, help="back wall's inner face: y [m]")
     p.add_argument("--wall-thickness", type=float, default=0.2, help="[m]")
     p.add_argument("--gap", type=float, default=0.001, help="clearance between floor and walls, shoes and ground [m]")
@@ -603,9 +663,12 @@ def main(argv=None) -> None:
         print(f"  clearance {pair}: {d * 1e3:.1f} mm")
     for dist, vfov in IMAGER_VIEWS:
         hfov = 2 * np.degrees(np.arctan(np.tan(np.radians(vfov / 2)) * IMAGER_RESOLUTION[0] / IMAGER_RESOLUTION[1]))
-        print(f"suggested imager ({dist:g} m, {vfov:g} deg vertical field): position [0, {-dist:g}, {IMAGER_HEIGHT}], "
-              f"look_at [0, 0, {LOOK_AT_HEIGHT}], up [0, 0, 1], fov {hfov:.2f} deg (horizontal), "
-              f"resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}]")
+        print(
+            f"suggested imager ({dist:g} m, {vfov:g} deg vertical field): position [0, {-dist:g}, {IMAGER_HEIGHT}], "
+            f"look_at [0, 0, {LOOK_AT_HEIGHT}], up [0, 0, 1], fov {hfov:.2f} deg (horizontal), "
+            f"resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}]"
+        )
+
 
 if __name__ == "__main__":
     main()

@@ -48,6 +48,7 @@ GROUND_STEPS = (30.0, 100.0, 300.0, 1000.0, 3000.0)
 
 # -- meshes -------------------------------------------------------------------------------------
 
+
 def extrude_x(profile, caps, x0: float, x1: float) -> trimesh.Trimesh:
     """Closed prism of a simple polygon in the (y, z) plane, from x = x0 to x = x1.
 
@@ -76,8 +77,7 @@ def ground_mesh(args) -> trimesh.Trimesh:
     notch_y = (-g, args.runway_length + g)
     half = args.ground_size / 2
     xs = sorted({-half, *(-half_w - s for s in GROUND_STEPS), *notch_x, *(half_w + s for s in GROUND_STEPS), half})
-    ys = sorted({-half, *(-s for s in GROUND_STEPS), *notch_y,
-                 *(args.runway_length + s for s in GROUND_STEPS), half})
+    ys = sorted({-half, *(-s for s in GROUND_STEPS), *notch_y, *(args.runway_length + s for s in GROUND_STEPS), half})
     xs = [x for x in xs if -half <= x <= half]
     ys = [y for y in ys if -half <= y <= half]
     zs = [-args.ground_thickness, -args.runway_depth - g, 0.0]
@@ -102,10 +102,16 @@ def bracket(args) -> trimesh.Trimesh:
     th, leg, t = np.radians(args.tilt), args.bracket_leg, args.bracket_thickness
     c, s = leg * np.cos(th), leg * np.sin(th)
     foot = t / np.sin(th)  # width of each foot on the ground
-    profile = np.array([
-        [0.0, 0.0], [foot, 0.0], [c, s - t / np.cos(th)],  # front foot (outer, inner), inner apex
-        [2 * c - foot, 0.0], [2 * c, 0.0], [c, s],  # back foot (inner, outer), outer apex
-    ])
+    profile = np.array(
+        [
+            [0.0, 0.0],
+            [foot, 0.0],
+            [c, s - t / np.cos(th)],  # front foot (outer, inner), inner apex
+            [2 * c - foot, 0.0],
+            [2 * c, 0.0],
+            [c, s],  # back foot (inner, outer), outer apex
+        ]
+    )
     legs = [[0, 1, 2], [0, 2, 5], [2, 3, 4], [2, 4, 5]]  # the two legs as two convex quads
     return extrude_x(profile, legs, -args.beacon_size / 2, args.beacon_size / 2)
 
@@ -163,6 +169,7 @@ def build(style: str, args) -> dict[str, tuple[str, trimesh.Trimesh]]:
 
 # -- export and checks --------------------------------------------------------------------------
 
+
 def imager_pose(slant_range: float, args) -> tuple[np.ndarray, np.ndarray]:
     """Position on the glide slope at the slant range from the threshold, looking at the threshold."""
     gs = np.radians(args.glide_slope)
@@ -183,8 +190,10 @@ def coverage_note(slant_range: float, args) -> str:
     half_width = np.tan(np.radians(half_fov)) * np.hypot(far_edge, pos[2])
     if near_hit > pos[1] + args.ground_size / 2 or half_width > args.ground_size / 2:
         raise SystemExit(f"the ground does not fill the view from {slant_range} m")
-    return (f"view from {half_fov - depression:+.2f} to {-bottom:+.2f} deg elevation; ground from {near_hit:.0f} m "
-            f"ahead to its edge at {-edge_depression:+.2f} deg (beyond it, sky near the horizon)")
+    return (
+        f"view from {half_fov - depression:+.2f} to {-bottom:+.2f} deg elevation; ground from {near_hit:.0f} m "
+        f"ahead to its edge at {-edge_depression:+.2f} deg (beyond it, sky near the horizon)"
+    )
 
 
 def main(argv=None) -> None:
@@ -199,10 +208,15 @@ def main(argv=None) -> None:
     p.add_argument("--runway-depth", type=float, default=0.10, help="depth of the slab's bottom below ground [m]")
     p.add_argument("--ground-size", type=float, default=20000.0, help="ground square side [m], centred on the origin")
     p.add_argument("--ground-thickness", type=float, default=0.5, help="[m]")
-    p.add_argument("--gap", type=float, default=0.005,
-                   help="clearance between touching solids [m] (>= 10 float32 offsets at 1 km)")
-    p.add_argument("--tilt", type=float, default=45.0,
-                   help="mirror tilt from horizontal [deg] (43 bisects zenith and a 4 deg glide path)")
+    p.add_argument(
+        "--gap", type=float, default=0.005, help="clearance between touching solids [m] (>= 10 float32 offsets at 1 km)"
+    )
+    p.add_argument(
+        "--tilt",
+        type=float,
+        default=45.0,
+        help="mirror tilt from horizontal [deg] (43 bisects zenith and a 4 deg glide path)",
+    )
     p.add_argument("--beacon-size", type=float, default=1.0, help="plate side, bracket length along x [m]")
     p.add_argument("--plate-thickness", type=float, default=0.005, help="[m]")
     p.add_argument("--plate-clearance", type=float, default=0.05, help="plate's lower edge above the ground [m]")
@@ -215,7 +229,9 @@ def main(argv=None) -> None:
     p.add_argument("--end-spacing", type=float, default=5.0, help="beacon pitch across the ends [m]")
     p.add_argument("--end-offset", type=float, default=2.0, help="runway end to end-beacon footprint [m]")
     p.add_argument("--glide-slope", type=float, default=4.0, help="for the suggested imager poses [deg]")
-    p.add_argument("--ranges", type=float, nargs="+", default=(1000.0, 400.0), help="slant ranges [m] to print poses for")
+    p.add_argument(
+        "--ranges", type=float, nargs="+", default=(1000.0, 400.0), help="slant ranges [m] to print poses for"
+    )
     args = p.parse_args(argv)
     styles = STYLES if args.style == "all" else (args.style,)
     if args.out is not None and len(styles) > 1:
@@ -234,9 +250,11 @@ def main(argv=None) -> None:
         print(f"  beacon: {len(beacon)} closed meshes, {sum(len(m.faces) for m in beacon)} triangles")
     for r in args.ranges:
         pos, _ = imager_pose(r, args)
-        print(f"suggested imager ({r:.0f} m on the {args.glide_slope:g} deg glide slope): "
-              f"position [{pos[0]:.1f}, {pos[1]:.1f}, {pos[2]:.2f}], look_at [0, 0, 0], up [0, 0, 1], "
-              f"fov {IMAGER_FOV_DEG:g} deg, resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}]")
+        print(
+            f"suggested imager ({r:.0f} m on the {args.glide_slope:g} deg glide slope): "
+            f"position [{pos[0]:.1f}, {pos[1]:.1f}, {pos[2]:.2f}], look_at [0, 0, 0], up [0, 0, 1], "
+            f"fov {IMAGER_FOV_DEG:g} deg, resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}]"
+        )
         print(f"  {coverage_note(r, args)}")
 
 

@@ -33,8 +33,9 @@ def _module(name: str, path: Path):
 def main() -> None:
     landing = _module("landing_scene", HERE.parent / "landing" / "make_scene.py")
     cwd = _module("cwd_scene", HERE.parent / "cwd" / "make_scene.py")
-    args = landing.argparse.Namespace(tilt=45.0, beacon_size=1.0, plate_thickness=0.005, bracket_leg=0.10,
-                                      bracket_thickness=0.003)
+    args = landing.argparse.Namespace(
+        tilt=45.0, beacon_size=1.0, plate_thickness=0.005, bracket_leg=0.10, bracket_thickness=0.003
+    )
     landing.plate(args).export(HERE / "beacon_plate.ply")
     landing.bracket(args).export(HERE / "angle_bracket.ply")
     cwd.gun_local().export(HERE / "handgun.ply")

@@ -51,9 +51,17 @@ IMAGER_RESOLUTION = (300, 300)
 # Cessna 172 (8.28 m long, 11.0 m span, cabin about 1.1 m wide): fuselage stations along x from
 # the nose [m]: (x, half width, bottom z, top z), the aircraft lying on its belly (no gear).
 FUSELAGE = (
-    (0.00, 0.10, 0.55, 0.75), (0.25, 0.35, 0.30, 0.95), (0.90, 0.50, 0.10, 1.05), (1.70, 0.56, 0.02, 1.42),
-    (2.60, 0.56, 0.00, 1.48), (3.50, 0.52, 0.05, 1.42), (4.50, 0.40, 0.22, 1.20), (5.50, 0.29, 0.38, 1.05),
-    (6.50, 0.19, 0.52, 0.95), (7.50, 0.12, 0.62, 0.90), (8.10, 0.06, 0.68, 0.86),
+    (0.00, 0.10, 0.55, 0.75),
+    (0.25, 0.35, 0.30, 0.95),
+    (0.90, 0.50, 0.10, 1.05),
+    (1.70, 0.56, 0.02, 1.42),
+    (2.60, 0.56, 0.00, 1.48),
+    (3.50, 0.52, 0.05, 1.42),
+    (4.50, 0.40, 0.22, 1.20),
+    (5.50, 0.29, 0.38, 1.05),
+    (6.50, 0.19, 0.52, 0.95),
+    (7.50, 0.12, 0.62, 0.90),
+    (8.10, 0.06, 0.68, 0.86),
 )
 WING_ROOT_X, WING_Z = 1.75, 1.50  # leading edge at the root, underside height
 WING_ROOT, WING_TIP, WING_CHORDS = 0.45, 5.50, (1.63, 1.12)  # span stations from the axis, chords
@@ -61,6 +69,7 @@ FUSELAGE_RING = 20  # points per fuselage cross-section
 
 
 # -- mesh helpers -----------------------------------------------------------------------------------
+
 
 def loft(rings) -> trimesh.Trimesh:
     """Closed mesh through a sequence of closed rings of equal point count, capped at both ends
@@ -102,6 +111,7 @@ def airfoil(chord: float, thickness: float, n: int = 8) -> np.ndarray:
 
 
 # -- terrain ----------------------------------------------------------------------------------------
+
 
 class Terrain:
     """A heightfield on a regular grid, piecewise linear on the triangles of `solid`.
@@ -193,6 +203,7 @@ def pad_weight(r, r0: float, r1: float):
 
 # -- clutter ----------------------------------------------------------------------------------------
 
+
 def rock(rng, size: float) -> trimesh.Trimesh:
     """A closed convex hull of 10-18 random points on a squashed, lumpy ellipsoid of width ~size."""
     k = int(rng.integers(10, 19))
@@ -235,8 +246,11 @@ def scatter(terrain: Terrain, args, rng):
     half = args.terrain_size / 2
     placed = []  # (x, y, radius)
     nodes = {}
-    kinds = ([("wet", i) for i in range(args.wet_patches)] + [("rock", i) for i in range(args.rocks)]
-             + [("shrub", i) for i in range(args.shrubs)])
+    kinds = (
+        [("wet", i) for i in range(args.wet_patches)]
+        + [("rock", i) for i in range(args.rocks)]
+        + [("shrub", i) for i in range(args.shrubs)]
+    )
     for kind, i in kinds:
         if kind == "wet":
             size = float(np.exp(rng.uniform(np.log(args.wet_sizes[0]), np.log(args.wet_sizes[1]))))
@@ -283,6 +297,7 @@ def scatter(terrain: Terrain, args, rng):
 
 # -- targets ----------------------------------------------------------------------------------------
 
+
 def cessna(args) -> dict[str, trimesh.Trimesh]:
     """The wreck, nose towards -x before the heading turn; part name -> closed metal mesh."""
     t = np.linspace(0.0, 2 * np.pi, FUSELAGE_RING, endpoint=False)
@@ -307,12 +322,16 @@ def cessna(args) -> dict[str, trimesh.Trimesh]:
     parts["wing_right"] = right
     for name, (span, chord, z, x0) in {"stabilizer": (3.4, 0.85, 0.80, 7.05)}.items():
         foil = airfoil(chord, 0.10)
-        sections = [np.column_stack([x0 + foil[:, 0], np.full(len(foil), y), z + foil[:, 1]]) for y in (-span / 2, span / 2)]
+        sections = [
+            np.column_stack([x0 + foil[:, 0], np.full(len(foil), y), z + foil[:, 1]]) for y in (-span / 2, span / 2)
+        ]
         parts[name] = loft(sections)
     fin_sections = []
     for z, chord, x0 in ((0.85, 1.30, 6.75), (2.05, 0.70, 7.55)):
         foil = airfoil(chord, 0.10)
-        fin_sections.append(np.column_stack([x0 + foil[:, 0], foil[:, 1] - 0.6 * foil[:, 1].max(), np.full(len(foil), z)]))
+        fin_sections.append(
+            np.column_stack([x0 + foil[:, 0], foil[:, 1] - 0.6 * foil[:, 1].max(), np.full(len(foil), z)])
+        )
     parts["fin"] = loft(fin_sections)
     strut = box([-0.04, -0.015, 0.0], [0.04, 0.015, 2.5])  # right wing strut, from the cabin floor
     strut.apply_transform(rotation([1, 0, 0], 52.0))
@@ -373,6 +392,7 @@ def target_nodes(target: str, args) -> dict[str, tuple[str, trimesh.Trimesh]]:
 
 # -- export and checks ------------------------------------------------------------------------------
 
+
 def main(argv=None) -> None:
     here = Path(__file__).resolve().parent
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -384,15 +404,27 @@ def main(argv=None) -> None:
     p.add_argument("--cell", type=float, default=5.0, help="terrain grid step [m]")
     p.add_argument("--relief", type=float, default=1.5, help="RMS terrain height [m]")
     p.add_argument("--terrain-depth", type=float, default=2.0, help="flat bottom below the lowest ground [m]")
-    p.add_argument("--pad-radius", type=float, default=20.0, help="flat ground around the target [m]; "
-                   "the relief returns fully at 3x this")
+    p.add_argument(
+        "--pad-radius",
+        type=float,
+        default=20.0,
+        help="flat ground around the target [m]; the relief returns fully at 3x this",
+    )
     p.add_argument("--clear-radius", type=float, default=25.0, help="no clutter this close to the target [m]")
     p.add_argument("--wet-patches", type=int, default=200, help="number of damp patches of moist soil")
-    p.add_argument("--wet-sizes", type=float, nargs=2, default=(1.0, 6.0), metavar=("MIN", "MAX"),
-                   help="wet patch size across [m], log-uniform")
+    p.add_argument(
+        "--wet-sizes",
+        type=float,
+        nargs=2,
+        default=(1.0, 6.0),
+        metavar=("MIN", "MAX"),
+        help="wet patch size across [m], log-uniform",
+    )
     p.add_argument("--wet-thickness", type=float, default=0.03, help="wet slab thickness [m]")
     p.add_argument("--rocks", type=int, default=300)
-    p.add_argument("--rock-sizes", type=float, nargs=2, default=(0.3, 2.5), metavar=("MIN", "MAX"), help="[m], log-uniform")
+    p.add_argument(
+        "--rock-sizes", type=float, nargs=2, default=(0.3, 2.5), metavar=("MIN", "MAX"), help="[m], log-uniform"
+    )
     p.add_argument("--shrubs", type=int, default=400)
     p.add_argument("--shrub-sizes", type=float, nargs=2, default=(0.6, 2.5), metavar=("MIN", "MAX"), help="width [m]")
     p.add_argument("--heading", type=float, default=35.0, help="target heading [deg about z]")
@@ -419,18 +451,24 @@ def main(argv=None) -> None:
         tgt = np.vstack([m.vertices for mat, m in nodes.values() if mat == TARGET_MATERIAL[target]])
         tgt = tgt @ rotation([0, 0, 1], args.heading)[:3, :3]  # in the target's own axes
         ext = tgt.max(axis=0) - tgt.min(axis=0)
-        print(f"wrote {out} ({n_tri} triangles); target {ext[0]:.2f} x {ext[1]:.2f} x {ext[2]:.2f} m, "
-              f"{sum(len(m.faces) for mat, m in nodes.values() if mat == TARGET_MATERIAL[target])} triangles")
+        print(
+            f"wrote {out} ({n_tri} triangles); target {ext[0]:.2f} x {ext[1]:.2f} x {ext[2]:.2f} m, "
+            f"{sum(len(m.faces) for mat, m in nodes.values() if mat == TARGET_MATERIAL[target])} triangles"
+        )
     by_material = {}
     for material, m in clutter.values():
         by_material[material] = by_material.get(material, 0) + len(m.faces)
     print("  " + ", ".join(f"{k}: {v} triangles" for k, v in by_material.items()))
     wet_area = sum(m.area_faces[m.face_normals[:, 2] > 0.5].sum() for mat, m in clutter.values() if mat == "wet_ground")
-    print(f"  wet ground: {args.wet_patches} patches, {wet_area:.0f} m^2 ({wet_area / args.terrain_size ** 2 * 100:.2f} % "
-          f"of the terrain); terrain z {terrain.h.min():.2f}..{terrain.h.max():.2f} m")
-    print(f"suggested imager: position [0, 0, {IMAGER_ALTITUDE:g}], look_at [0, 0, 0], up [0, 1, 0], "
-          f"fov {IMAGER_FOV_DEG:g} deg, resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}] "
-          f"(swath {2 * IMAGER_ALTITUDE * np.tan(np.radians(IMAGER_FOV_DEG / 2)):.0f} m)")
+    print(
+        f"  wet ground: {args.wet_patches} patches, {wet_area:.0f} m^2 ({wet_area / args.terrain_size**2 * 100:.2f} % "
+        f"of the terrain); terrain z {terrain.h.min():.2f}..{terrain.h.max():.2f} m"
+    )
+    print(
+        f"suggested imager: position [0, 0, {IMAGER_ALTITUDE:g}], look_at [0, 0, 0], up [0, 1, 0], "
+        f"fov {IMAGER_FOV_DEG:g} deg, resolution [{IMAGER_RESOLUTION[0]}, {IMAGER_RESOLUTION[1]}] "
+        f"(swath {2 * IMAGER_ALTITUDE * np.tan(np.radians(IMAGER_FOV_DEG / 2)):.0f} m)"
+    )
 
 
 if __name__ == "__main__":

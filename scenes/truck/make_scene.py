@@ -120,13 +120,16 @@ REGION_POINTS = {
     "hood": (4.2, 0.0, 1.0 - HOOD_DROP * 0.5),  # the hood's middle
     "door": (2.7, HALF_WIDTH, 0.75),  # the driver's door
     "cab": (2.7, HALF_WIDTH, 1.33),  # through the side window
-    "front_well": (AXLES[1], HALF_WIDTH, 0.43), "rear_well": (AXLES[0], HALF_WIDTH, 0.43),  # the wells' openings
-    "under": (2.55, HALF_WIDTH, 0.22), "under_reflection": (2.55, HALF_WIDTH, -0.22),  # the gap under the body
+    "front_well": (AXLES[1], HALF_WIDTH, 0.43),
+    "rear_well": (AXLES[0], HALF_WIDTH, 0.43),  # the wells' openings
+    "under": (2.55, HALF_WIDTH, 0.22),
+    "under_reflection": (2.55, HALF_WIDTH, -0.22),  # the gap under the body
     "door_reflection": (2.7, HALF_WIDTH, -0.75),
 }
 
 
 # -- mesh helpers -----------------------------------------------------------------------------------
+
 
 def boxes_on_grid(ops) -> trimesh.Trimesh:
     """The closed mesh of boxes added (+1) and carved (-1) in order, on the grid of all their
@@ -150,14 +153,16 @@ def ring_solid(r_in: float, r_out: float, v0: float, v1: float, chamfer: float, 
     """Closed annular solid about the v axis (the w-v plane of the truck frame turned to it):
     radii r_in..r_out [m], from v0 to v1, its outer corners chamfered (a tire's cross-section)."""
     c = chamfer
-    profile = np.array([[r_in, v0], [r_out - c, v0], [r_out, v0 + c], [r_out, v1 - c], [r_out - c, v1],
-                        [r_in, v1], [r_in, v0]])  # (radius, axial), counter-clockwise: positive volume
+    profile = np.array(
+        [[r_in, v0], [r_out - c, v0], [r_out, v0 + c], [r_out, v1 - c], [r_out - c, v1], [r_in, v1], [r_in, v0]]
+    )  # (radius, axial), counter-clockwise: positive volume
     m = trimesh.creation.revolve(profile, sections=sections)  # about z
     m.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))  # z -> +y (v)
     return m
 
 
 # -- the truck --------------------------------------------------------------------------------------
+
 
 def bend(vertices: np.ndarray) -> np.ndarray:
     """The body's smooth bends, vertex by vertex (u, v, w) -> (u', v, w'): the cab leans back above
@@ -239,7 +244,7 @@ def check_clearances(gap: float) -> float:
             raise ValueError(f"interior_{name} reaches where the body is bent")
     names = list(INTERIOR_BOXES)
     for i, n1 in enumerate(names):
-        for n2 in names[i + 1:]:
+        for n2 in names[i + 1 :]:
             gaps[f"interior_{n1}-interior_{n2}"] = _box_gap(INTERIOR_BOXES[n1], INTERIOR_BOXES[n2])
     tire_top = 2 * TIRE_RADIUS + gap
     for ua in AXLES:
@@ -294,8 +299,12 @@ def main(argv=None) -> None:
     p.add_argument("--out", type=Path, help="output file (default: OUT_DIR/truck.glb)")
     p.add_argument("--distance", type=float, default=8.2, help="imager to the truck's middle, on the ground [m]")
     p.add_argument("--centre-x", type=float, default=0.4, help="x of the truck's middle [m]")
-    p.add_argument("--heading", type=float, default=35.0,
-                   help="the front's angle from the image plane towards the imager [deg]; 0: broadside, front left")
+    p.add_argument(
+        "--heading",
+        type=float,
+        default=35.0,
+        help="the front's angle from the image plane towards the imager [deg]; 0: broadside, front left",
+    )
     p.add_argument("--ground-size", type=float, default=100.0, help="ground square side [m]")
     p.add_argument("--ground-thickness", type=float, default=0.5, help="[m]; the top face is z = 0")
     p.add_argument("--ground-center", type=float, nargs=2, default=(0.0, 20.0), metavar=("X", "Y"))
@@ -314,8 +323,10 @@ def main(argv=None) -> None:
         x, y, z = to_world(uvw, centre, args.heading)
         print(f"  {label}: [{x:.3f}, {y:.3f}, {z:.3f}]")
     look_z = IMAGER_HEIGHT - args.distance * np.tan(np.radians(9.7))  # the view centred 9.7 deg below level
-    print(f"suggested imager: position [0, 0, {IMAGER_HEIGHT}], look_at [0.0, {args.distance:.1f}, {look_z:.1f}], "
-          "up [0, 0, 1], fov 50 deg, resolution [250, 140]")
+    print(
+        f"suggested imager: position [0, 0, {IMAGER_HEIGHT}], look_at [0.0, {args.distance:.1f}, {look_z:.1f}], "
+        "up [0, 0, 1], fov 50 deg, resolution [250, 140]"
+    )
 
 
 if __name__ == "__main__":

@@ -1,7 +1,6 @@
 """The Python API (`import pmmw`): scenarios from YAML or dicts, overrides, renders to arrays that
 equal the files the command writes, and the other commands' data."""
 
-
 import numpy as np
 import pytest
 import trimesh
@@ -14,8 +13,13 @@ from tests.scenes import ground_and_block
 SCENE = {
     "name": "tiny",
     "frequency": "35 GHz",
-    "imager": {"position": [0, 0, 1.5], "look_at": [0, 4, 0.1], "fov": "20 deg", "resolution": [24, 16],
-               "noise": "1 K"},
+    "imager": {
+        "position": [0, 0, 1.5],
+        "look_at": [0, 4, 0.1],
+        "fov": "20 deg",
+        "resolution": [24, 16],
+        "noise": "1 K",
+    },
     "scene": [{"mesh": "ground.obj", "material": "concrete"}, {"mesh": "block.obj", "material": "metal"}],
     "sky": {"model": "uniform", "temperature": "40 K"},
     "render": {"spp": 2, "max_depth": 4, "tile": 8, "workers": 1},
@@ -65,8 +69,9 @@ def test_validate_sky_po_and_sweep_return_data(folder, tmp_path):
     assert v["geometry"]["triangles"] == 24 and "35 GHz" in v["media"]
     sky = pmmw.sky("95 GHz", {"profile": "standard"}, elevations_deg=[10, 90])
     assert sky["Tv"].sel(elevation=90).item() < sky["Tv"].sel(elevation=10).item() < 290
-    plate = trimesh.Trimesh([[-0.05, -0.05, 0], [0.05, -0.05, 0], [0.05, 0.05, 0], [-0.05, 0.05, 0]],
-                            [[0, 1, 2], [0, 2, 3]])
+    plate = trimesh.Trimesh(
+        [[-0.05, -0.05, 0], [0.05, -0.05, 0], [0.05, 0.05, 0], [-0.05, 0.05, 0]], [[0, 1, 2], [0, 2, 3]]
+    )
     plate.export(tmp_path / "plate.ply")
     rcs = pmmw.po(tmp_path / "plate.ply", material="metal", frequency="95 GHz", theta="0:10:5", phi="0,90")
     lam = 299_792_458.0 / 95e9
@@ -78,8 +83,9 @@ def test_validate_sky_po_and_sweep_return_data(folder, tmp_path):
 def test_brdf_returns_mueller_maps():
     """A smooth-ish copper-like surface by the analytic model: the Mueller maps on the 1-degree
     grid, with the total reflectance of the summary."""
-    res = pmmw.brdf(method="analytic", eps="1+1e4j", frequency="95 GHz", incidence=30.0, model="beckmann", alpha=0.2,
-                    double=False)
+    res = pmmw.brdf(
+        method="analytic", eps="1+1e4j", frequency="95 GHz", incidence=30.0, model="beckmann", alpha=0.2, double=False
+    )
     ds = res["analytic"]
     assert ds["mueller"].shape == (91, 360, 4, 4) and ds["stokes"].sel(component="I").shape == (91, 360)
     assert 0.9 < ds.attrs["total_reflectance"] <= 1.0 + 1e-9

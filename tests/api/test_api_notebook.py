@@ -53,7 +53,7 @@ def test_the_image_plots_with_row_0_at_the_top():
     drawn = np.asarray(fig.canvas.buffer_rgba())[..., 0].astype(float) / 255.0
     plt.close(fig)
     rows = drawn.mean(axis=1)
-    top, bottom = rows[: len(rows) // 8].mean(), rows[-len(rows) // 8:].mean()
+    top, bottom = rows[: len(rows) // 8].mean(), rows[-len(rows) // 8 :].mean()
     assert top > 0.9 and bottom < 0.1, (top, bottom)
     # the coordinates: angles from the viewing direction [deg], the pinhole's closed form
     half = math.tan(math.radians(10.0))
@@ -97,8 +97,7 @@ def test_a_loaded_scene_renders_overrides_as_render_does_without_rebuilding(fold
         np.testing.assert_array_equal(got["I"].values, want["I"].values)
         assert float(got.frequency[0]) == float(want.frequency[0])
         builds.append(dict(scene.builds))
-    assert builds == [{"geometry": 1, "materials": 1}, {"geometry": 1, "materials": 1},
-                      {"geometry": 1, "materials": 2}]
+    assert builds == [{"geometry": 1, "materials": 1}, {"geometry": 1, "materials": 1}, {"geometry": 1, "materials": 2}]
     # the control: the overrides change the image (else the comparison above proves nothing)
     plain = scene.render()
     assert not np.array_equal(plain["I"].values, scene.render(pose={"position": [0.2, 0, 1.5]})["I"].values)

@@ -51,9 +51,7 @@ def test_gas_sea_level_matches_physics_md():
     np.testing.assert_allclose(gamma, [0.100, 0.412], atol=6e-4)
     # the model evaluates each cell at its midpoint (5 m up): 0.5 % is the gradient over 5 m
     for f, ref in ((35 * GHZ, 0.100), (95 * GHZ, 0.412)):
-        assert AtmosphereModel(Atmosphere(), f).specific_attenuation_db_km(0.0) == pytest.approx(
-            ref, rel=5e-3
-        )
+        assert AtmosphereModel(Atmosphere(), f).specific_attenuation_db_km(0.0) == pytest.approx(ref, rel=5e-3)
 
 
 def test_gas_matches_itur_p676_10_to_350_ghz():
@@ -69,9 +67,7 @@ def test_gas_matches_itur_p676_10_to_350_ghz():
         ref_o = _q(itur.models.itu676.gamma0_exact(f, P - e, rho, T))
         ref_w = _q(itur.models.itu676.gammaw_exact(f, P - e, rho, T))
         ours_o = itu.oxygen_specific_attenuation_db_km(f * GHZ, (P - e) * 100.0, rho * 1e-3, T)
-        ours_w = itu.water_vapour_specific_attenuation_db_km(
-            f * GHZ, (P - e) * 100.0, rho * 1e-3, T
-        )
+        ours_w = itu.water_vapour_specific_attenuation_db_km(f * GHZ, (P - e) * 100.0, rho * 1e-3, T)
         np.testing.assert_allclose(ours_o, ref_o, rtol=SAME_EQUATIONS_RTOL)
         np.testing.assert_allclose(ours_w, ref_w, rtol=SAME_EQUATIONS_RTOL, atol=1e-300)
 
@@ -80,9 +76,7 @@ def test_gas_broadcasts_over_layers_and_frequencies():
     f = np.array([35.0, 60.0, 95.0]) * GHZ
     T, p, rho = itu.reference_atmosphere("standard", np.array([0.0, 1e3, 5e3, 20e3]))
     e = itu.water_vapour_pressure(rho, T)
-    table = itu.gas_specific_attenuation_db_km(
-        f[None, :], (p - e)[:, None], rho[:, None], T[:, None]
-    )
+    table = itu.gas_specific_attenuation_db_km(f[None, :], (p - e)[:, None], rho[:, None], T[:, None])
     assert table.shape == (4, 3)
     for i in range(4):
         for j in range(3):
@@ -110,9 +104,7 @@ def test_liquid_water_kl_matches_itur_p840():
     f = np.arange(10.0, 351.0, 5.0)
     for t_c in (-10.0, 0.0, 15.0, 30.0):
         ref = _q(itu840.specific_attenuation_coefficients(f, t_c))  # itur takes T in deg C
-        np.testing.assert_allclose(
-            itu.liquid_water_kl(f * GHZ, t_c + 273.15), ref, rtol=SAME_EQUATIONS_RTOL
-        )
+        np.testing.assert_allclose(itu.liquid_water_kl(f * GHZ, t_c + 273.15), ref, rtol=SAME_EQUATIONS_RTOL)
 
 
 def test_water_permittivity_sign_convention():
@@ -170,13 +162,8 @@ def test_rain_matches_itur_p838():
         for tau in (0.0, 45.0, 90.0):
             for R in (1.0, 10.0, 50.0):
                 # itur's P.838 takes one frequency at a time
-                ref = [
-                    float(_q(itur.models.itu838.rain_specific_attenuation(R, fi, el, tau)))
-                    for fi in f
-                ]
-                ours = itu.rain_specific_attenuation_db_km(
-                    R, f * GHZ, np.radians(el), np.radians(tau)
-                )
+                ref = [float(_q(itur.models.itu838.rain_specific_attenuation(R, fi, el, tau))) for fi in f]
+                ours = itu.rain_specific_attenuation_db_km(R, f * GHZ, np.radians(el), np.radians(tau))
                 np.testing.assert_allclose(ours, ref, rtol=SAME_EQUATIONS_RTOL)
 
 
@@ -206,13 +193,9 @@ def test_rain_albedo_matches_physics_md():
     # PHYSICS.md: single-scattering albedo 0.37 at 35 GHz and 0.50 at 95 GHz (10 mm/h, 2 digits)
     omega = itu.rain_single_scattering_albedo(np.array([35e9, 95e9]), 10.0)
     np.testing.assert_allclose(omega, [0.37, 0.50], atol=0.005)
-    np.testing.assert_allclose(
-        itu.rain_absorption_fraction(np.array([35e9, 95e9]), 10.0), 1.0 - omega
-    )
+    np.testing.assert_allclose(itu.rain_absorption_fraction(np.array([35e9, 95e9]), 10.0), 1.0 - omega)
     # more rain = bigger drops = more scattering; clamped outside the table
-    assert np.all(
-        np.diff(itu.rain_single_scattering_albedo(35e9, np.array([1.0, 5.0, 20.0, 100.0]))) > 0
-    )
+    assert np.all(np.diff(itu.rain_single_scattering_albedo(35e9, np.array([1.0, 5.0, 20.0, 100.0]))) > 0)
     assert itu.rain_single_scattering_albedo(2e12, 500.0) == pytest.approx(
         itu.rain_single_scattering_albedo(1e12, 200.0)
     )
@@ -243,16 +226,12 @@ _ITUR_PROFILES = {
 }
 
 
-@pytest.mark.filterwarnings(
-    "ignore:overflow encountered in exp:RuntimeWarning"
-)  # inside itur, aloft
+@pytest.mark.filterwarnings("ignore:overflow encountered in exp:RuntimeWarning")  # inside itur, aloft
 def test_p835_profiles_match_itur():
     _itur()
     from itur.models import itu835
 
-    h_km = np.array(
-        [0.0, 0.5, 1.0, 2.0, 5.0, 8.0, 10.0, 12.0, 15.0, 20.0, 30.0, 50.0, 70.0, 80.0, 90.0, 99.0]
-    )
+    h_km = np.array([0.0, 0.5, 1.0, 2.0, 5.0, 8.0, 10.0, 12.0, 15.0, 20.0, 30.0, 50.0, 70.0, 80.0, 90.0, 99.0])
     for name, (lat, season) in _ITUR_PROFILES.items():
         T, p, rho = itu.reference_atmosphere(name, h_km * 1e3)
         np.testing.assert_allclose(T, _q(itu835.temperature(lat, h_km, season)), rtol=1e-12)
@@ -269,9 +248,7 @@ def test_p835_profiles_match_itur():
     low = h_km <= 12.0
     np.testing.assert_allclose(rho[low] * 1e3, exponential[low], rtol=1e-12)
     floor = itu.MIXING_RATIO_FLOOR * (p / 100.0) * 216.7 / T * 1e-3  # [kg/m^3]
-    np.testing.assert_allclose(
-        rho[~low], np.maximum(exponential[~low] * 1e-3, floor[~low]), rtol=1e-12
-    )
+    np.testing.assert_allclose(rho[~low], np.maximum(exponential[~low] * 1e-3, floor[~low]), rtol=1e-12)
 
 
 def test_p835_standard_mixing_ratio_floor():

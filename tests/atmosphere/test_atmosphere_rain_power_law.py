@@ -24,8 +24,7 @@ REPO = Path(__file__).resolve().parents[2]
 SAR = REPO / "configs/sar_cessna_95ghz.yaml"
 # Murakowski 2014 Table 3.5: (a, b) and the printed attenuation at 10 mm/h [dB/km]
 TABLE_3_5 = {35: (0.235, 1.009, 2.4), 95: (1.06, 0.745, 5.9)}
-POWER_LAW = ("attenuation: {model: power_law, coefficients: {35 GHz: {a: 0.235, b: 1.009}, "
-             "95 GHz: {a: 1.06, b: 0.745}}}")
+POWER_LAW = "attenuation: {model: power_law, coefficients: {35 GHz: {a: 0.235, b: 1.009}, 95 GHz: {a: 1.06, b: 0.745}}}"
 # Floating point: the same arithmetic in another order (exp/log of a power, Np <-> dB, cumulative
 # sums over a few hundred cells) differs by a few ulp; 1e-12 relative is far below any physics.
 REL = 1e-12
@@ -35,9 +34,11 @@ def _rain(rate, power_law=None, f_ghz=95):
     """Extinction, scattering and scattering x asymmetry [Np/m] of the cells below 1500 m of a model
     with 0-1500 m of rain, less those of the same cells with the layer at 0 mm/h (the same gas and
     everything else): the rain alone, shape (K,) each."""
+
     def model(r):
         layer = AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=r, power_law=power_law)
         return AtmosphereModel(Atmosphere(layers=(layer,)), f_ghz * GHZ)
+
     wet = model(rate)
     edges = wet.edges[wet.edges <= 1500.0]
     # the cells of the wet model (split where the rain scatters) for both
@@ -75,7 +76,9 @@ def test_p838_is_unchanged_without_a_power_law():
     extinction, scattering, _ = _rain(10.0, None)
     p838 = float(itu.rain_specific_attenuation_db_km(10.0, 95 * GHZ))
     assert extinction / NP_M_PER_DB_KM == pytest.approx(np.full(extinction.size, p838), rel=REL)
-    assert scattering == pytest.approx(extinction * np.asarray(itu.rain_single_scattering_albedo(95 * GHZ, 10.0)).item(), rel=REL)
+    assert scattering == pytest.approx(
+        extinction * np.asarray(itu.rain_single_scattering_albedo(95 * GHZ, 10.0)).item(), rel=REL
+    )
 
 
 def _sar(layers, *extra):
@@ -100,8 +103,10 @@ def test_scenario_rain_path_loss_through_1500_m_is_table_3_5(f_ghz):
 def test_a_frequency_without_coefficients_is_refused_naming_the_key():
     """A scenario frequency the power law does not list is one error naming the file and the key,
     not a silent fallback to P.838."""
-    layers = ("[{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h, "
-              "attenuation: {model: power_law, coefficients: {95 GHz: {a: 1.06, b: 0.745}}}}]")
+    layers = (
+        "[{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h, "
+        "attenuation: {model: power_law, coefficients: {95 GHz: {a: 1.06, b: 0.745}}}}]"
+    )
     load_scenario(SAR, [f"atmosphere.layers={layers}"])  # 95 GHz: listed
     with pytest.raises(UserError) as e:
         load_scenario(SAR, [f"atmosphere.layers={layers}", "frequency=[35 GHz, 95 GHz]"])
@@ -109,18 +114,33 @@ def test_a_frequency_without_coefficients_is_refused_naming_the_key():
     assert str(SAR) in str(e.value) and "35 GHz" in e.value.message and "\n" not in str(e.value)
 
 
-@pytest.mark.parametrize("attenuation, key, words", [
-    ("{model: power_law}", "atmosphere.layers[0].attenuation", "needs coefficients"),
-    ("{model: p838, coefficients: {95 GHz: {a: 1, b: 1}}}", "atmosphere.layers[0].attenuation", "power_law"),
-    ("{model: power_law, coefficients: {95 GHz: {a: 0, b: 0.7}}}",
-     "atmosphere.layers[0].attenuation.coefficients.95 GHz.a", "> 0"),
-    ("{model: power_law, coefficients: {95 GHz: {a: 1.06, b: 2.5}}}",
-     "atmosphere.layers[0].attenuation.coefficients.95 GHz.b", "0 < b <= 2"),
-    ("{model: power_law, coefficients: {95: {a: 1.06, b: 0.745}}}",
-     "atmosphere.layers[0].attenuation.coefficients", "unit"),
-    ("{model: power_law, coefficients: {95 GHz: {a: 1.06, b: 0.745}, 95000 MHz: {a: 1, b: 1}}}",
-     "atmosphere.layers[0].attenuation.coefficients", "same frequency"),
-])
+@pytest.mark.parametrize(
+    "attenuation, key, words",
+    [
+        ("{model: power_law}", "atmosphere.layers[0].attenuation", "needs coefficients"),
+        ("{model: p838, coefficients: {95 GHz: {a: 1, b: 1}}}", "atmosphere.layers[0].attenuation", "power_law"),
+        (
+            "{model: power_law, coefficients: {95 GHz: {a: 0, b: 0.7}}}",
+            "atmosphere.layers[0].attenuation.coefficients.95 GHz.a",
+            "> 0",
+        ),
+        (
+            "{model: power_law, coefficients: {95 GHz: {a: 1.06, b: 2.5}}}",
+            "atmosphere.layers[0].attenuation.coefficients.95 GHz.b",
+            "0 < b <= 2",
+        ),
+        (
+            "{model: power_law, coefficients: {95: {a: 1.06, b: 0.745}}}",
+            "atmosphere.layers[0].attenuation.coefficients",
+            "unit",
+        ),
+        (
+            "{model: power_law, coefficients: {95 GHz: {a: 1.06, b: 0.745}, 95000 MHz: {a: 1, b: 1}}}",
+            "atmosphere.layers[0].attenuation.coefficients",
+            "same frequency",
+        ),
+    ],
+)
 def test_bad_power_laws_name_the_key(attenuation, key, words):
     layers = f"[{{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h, attenuation: {attenuation}}}]"
     with pytest.raises(UserError) as e:
@@ -153,8 +173,10 @@ def test_display_keeps_the_power_law_and_omits_the_default():
     back to it; a P.838 layer's display is what it was (no new key: earlier renders keep their hash)."""
     pl = _sar(f"[{{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h, {POWER_LAW}}}]")
     shown = scenario_to_display(pl)["atmosphere"]["layers"][0]
-    assert shown["attenuation"] == {"model": "power_law", "coefficients": {
-        "35 GHz": {"a": 0.235, "b": 1.009}, "95 GHz": {"a": 1.06, "b": 0.745}}}
+    assert shown["attenuation"] == {
+        "model": "power_law",
+        "coefficients": {"35 GHz": {"a": 0.235, "b": 1.009}, "95 GHz": {"a": 1.06, "b": 0.745}},
+    }
     p838 = _sar("[{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h}]")
     assert set(scenario_to_display(p838)["atmosphere"]["layers"][0]) == {"kind", "base", "top", "rain_rate"}
 
@@ -164,8 +186,13 @@ def test_pmmw_sky_takes_the_power_law_and_refuses_an_unlisted_frequency():
     10 mm/h makes the sky warmer than without rain, and an unlisted frequency is one error."""
     import pmmw
 
-    rain = {"kind": "rain", "base": "0 m", "top": "1500 m", "rain_rate": "10 mm/h",
-            "attenuation": {"model": "power_law", "coefficients": {"95 GHz": {"a": 1.06, "b": 0.745}}}}
+    rain = {
+        "kind": "rain",
+        "base": "0 m",
+        "top": "1500 m",
+        "rain_rate": "10 mm/h",
+        "attenuation": {"model": "power_law", "coefficients": {"95 GHz": {"a": 1.06, "b": 0.745}}},
+    }
     wet = float(pmmw.sky("95 GHz", {"layers": [rain]}, [90])["Tv"][0])
     dry = float(pmmw.sky("95 GHz", {"layers": [dict(rain, rain_rate="0 mm/h")]}, [90])["Tv"][0])
     assert wet > dry + 50.0  # 8.8 dB of rain at ~280 K over a ~50 K clear zenith
@@ -187,7 +214,9 @@ def test_rain_without_scattering_absorbs_all_its_extinction():
     np.testing.assert_allclose(b.alpha_absorption, b.alpha, rtol=0)
     # the same extinction through the layer; the grids' piecewise-constant gas differ by 1.3e-6 of
     # the total (29.388 dB): 1e-5 allows that and would catch a lost or doubled share (0.3-0.5)
-    assert float(a.path_loss_db(1500.0, 0.0, 1500.0)) == pytest.approx(float(b.path_loss_db(1500.0, 0.0, 1500.0)), rel=1e-5)
+    assert float(a.path_loss_db(1500.0, 0.0, 1500.0)) == pytest.approx(
+        float(b.path_loss_db(1500.0, 0.0, 1500.0)), rel=1e-5
+    )
     # control: scattering drops, seen from the ground, are colder than absorbing ones (they mirror some sky)
     assert float(a.sky_temperature(np.pi / 2)) < float(b.sky_temperature(np.pi / 2)) - 1.0
 

@@ -35,9 +35,7 @@ def _pyrtlib_sky(z_km, p_hpa, t_k, rho_g_m3):
     rh = (rho_g_m3 * t_k / 216.7) / es  # so that pyrtlib recovers exactly rho
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rte = TbCloudRTE(
-            z_km, p_hpa, t_k, rh, np.array([35.0, 95.0]), ELEVATIONS_DEG, ray_tracing=True
-        )
+        rte = TbCloudRTE(z_km, p_hpa, t_k, rh, np.array([35.0, 95.0]), ELEVATIONS_DEG, ray_tracing=True)
         rte.init_absmdl("R20")
         rte.satellite = False  # looking up from the ground
         df = rte.execute()
@@ -46,18 +44,14 @@ def _pyrtlib_sky(z_km, p_hpa, t_k, rho_g_m3):
 
 @pytest.fixture(scope="module")
 def p835_reference():
-    z_km = np.concatenate(
-        [np.arange(0.0, 2.0, 0.1), np.arange(2.0, 20.0, 0.5), np.arange(20.0, 100.1, 2.0)]
-    )
+    z_km = np.concatenate([np.arange(0.0, 2.0, 0.1), np.arange(2.0, 20.0, 0.5), np.arange(20.0, 100.1, 2.0)])
     T, p, rho = atmosphere_profile(Atmosphere(), z_km * 1e3)
     return _pyrtlib_sky(z_km, p / 100.0, T, rho * 1e3)
 
 
 def test_clear_sky_matches_pyrtlib_on_p835_standard(p835_reference):
     for i, f_ghz in enumerate((35, 95)):
-        ours = AtmosphereModel(Atmosphere(), f_ghz * GHZ).sky_temperature(
-            np.radians(ELEVATIONS_DEG)
-        )
+        ours = AtmosphereModel(Atmosphere(), f_ghz * GHZ).sky_temperature(np.radians(ELEVATIONS_DEG))
         ref = p835_reference[i]
         print(f"P.835 {f_ghz} GHz: ours {np.round(ours, 2)} K, pyrtlib {np.round(ref, 2)} K")
         np.testing.assert_allclose(ours, p835_reference[i], atol=SKY_TOL[f_ghz])
@@ -86,9 +80,7 @@ def test_clear_sky_us_standard_matches_physics_md():
     physics = {35: [18.5, 81.0], 95: [46.0, 174.0]}
     reference = _pyrtlib_sky(z_km, p_hpa, t_k, rho_g_m3)
     for i, f_ghz in enumerate((35, 95)):
-        alpha = itu.gas_specific_attenuation_db_km(
-            f_ghz * GHZ, p - itu.water_vapour_pressure(rho, T), rho, T
-        )
+        alpha = itu.gas_specific_attenuation_db_km(f_ghz * GHZ, p - itu.water_vapour_pressure(rho, T), rho, T)
         ours = layered_sky_temperature(
             edges, alpha * itu.NP_M_PER_DB_KM, T, np.radians(ELEVATIONS_DEG), refractive_index=n
         )
@@ -109,8 +101,7 @@ def test_earth_curvature_changes_5_deg_by_2_to_5_K():
         assert 2.0 <= flat - curved <= 5.0
         # at the horizon a flat earth sees an infinitely long path: the air's temperature
         assert (
-            m.sky_temperature(0.0)
-            < layered_sky_temperature(m.edges, m.alpha, m.source, [0.0], earth_radius=np.inf)[0]
+            m.sky_temperature(0.0) < layered_sky_temperature(m.edges, m.alpha, m.source, [0.0], earth_radius=np.inf)[0]
         )
 
 
@@ -124,13 +115,9 @@ def test_sky_table_interpolation():
     # the table is a speed-up only: 0.02 K is well below any imager's noise
     m = AtmosphereModel(Atmosphere(), 95 * GHZ)
     el = np.random.default_rng(1).uniform(0.0, np.pi / 2, 2000)
-    exact = layered_sky_temperature(
-        m.edges, m.alpha, m.source, el, refractive_index=m.refractive_index
-    )
+    exact = layered_sky_temperature(m.edges, m.alpha, m.source, el, refractive_index=m.refractive_index)
     np.testing.assert_allclose(m.sky_temperature(el), exact, atol=0.02)
-    np.testing.assert_allclose(
-        m.sky_temperature(el.reshape(40, 50)), exact.reshape(40, 50), atol=0.02
-    )
+    np.testing.assert_allclose(m.sky_temperature(el.reshape(40, 50)), exact.reshape(40, 50), atol=0.02)
     table_el, table_T = m.sky_table()
     assert np.all(np.diff(table_T) < 0.0)  # coldest at zenith, warmest at the horizon
     assert T_CMB < table_T[-1] and table_T[0] < m.temperature[0]
@@ -183,9 +170,7 @@ def test_horizontal_path_in_uniform_layer():
     t, emission = m.path(np.full(4, 50.0), np.full(4, 50.0), L)
     np.testing.assert_allclose(t, np.exp(-alpha * L), rtol=1e-12)
     np.testing.assert_allclose(emission, T * (1.0 - np.exp(-alpha * L)), rtol=1e-12)
-    np.testing.assert_allclose(
-        m.path_loss_db(50.0, 50.0, L), 10 * np.log10(np.e) * alpha * L, rtol=1e-12
-    )
+    np.testing.assert_allclose(m.path_loss_db(50.0, 50.0, L), 10 * np.log10(np.e) * alpha * L, rtol=1e-12)
 
 
 def test_isothermal_invariant():
@@ -238,9 +223,7 @@ def test_sloped_paths_match_a_plain_loop_in_order():
         assert t[i] == pytest.approx(t_ref, rel=1e-12)
         assert emission[i] == pytest.approx(e_ref, rel=1e-12)
     # same transmittance both ways; emission is seen from the observer's end (warmer fog below)
-    assert t[0] == pytest.approx(t[1], rel=1e-12) and emission[0] != pytest.approx(
-        emission[1], rel=1e-3
-    )
+    assert t[0] == pytest.approx(t[1], rel=1e-12) and emission[0] != pytest.approx(emission[1], rel=1e-3)
     np.testing.assert_allclose(m.path_loss_db(z0, z1, L), -10 * np.log10(t), rtol=1e-9)
 
 
@@ -251,9 +234,7 @@ def test_vertical_loss_matches_quadrature_of_itu_profile():
         m = AtmosphereModel(Atmosphere(), f_ghz * GHZ)
         z = np.arange(0.0, 5000.0 + 0.5, 1.0)
         T, p, rho = atmosphere_profile(Atmosphere(), z)
-        gamma = itu.gas_specific_attenuation_db_km(
-            f_ghz * GHZ, p - itu.water_vapour_pressure(rho, T), rho, T
-        )
+        gamma = itu.gas_specific_attenuation_db_km(f_ghz * GHZ, p - itu.water_vapour_pressure(rho, T), rho, T)
         ref_db = np.trapezoid(gamma, z) / 1e3
         assert float(m.path_loss_db(0.0, 5000.0, 5000.0)) == pytest.approx(ref_db, rel=2e-3)
         # a slant path at 30 deg crosses the same air over twice the length
@@ -273,9 +254,7 @@ def test_fog_vertical_loss_matches_seed():
         fog = AtmosphereModel(
             Atmosphere(layers=(AtmosphereLayer("fog", 0.0, 600.0, liquid_water=lwc_g_m3 * 1e-3),)), 95 * GHZ
         )
-        fog_alone = float(
-            fog.path_loss_db(0.0, 600.0, 600.0) - clear.path_loss_db(0.0, 600.0, 600.0)
-        )
+        fog_alone = float(fog.path_loss_db(0.0, 600.0, 600.0) - clear.path_loss_db(0.0, 600.0, 600.0))
         print(f"fog {lwc_g_m3} g/m3, vertical 600 m at 95 GHz: {fog_alone:.3f} dB (fog alone)")
         assert lo <= fog_alone <= hi
 

@@ -33,7 +33,11 @@ def _isothermal(m: AtmosphereModel, T: float, top: float = T_CMB) -> AtmosphereM
     m.temperature = np.full_like(m.temperature, T)
     m.ground_temperature = T
     m.source, m.source_mu = scattering_source(
-        np.diff(m.depth), m.omega, m.asymmetry, m.temperature, ground_temperature=T,
+        np.diff(m.depth),
+        m.omega,
+        m.asymmetry,
+        m.temperature,
+        ground_temperature=T,
         top_temperature=top,
     )
     m._sky_tables.clear()
@@ -61,9 +65,7 @@ def test_rain_asymmetry_table_matches_mie():
         ref = np.trapezoid(w * g, D) / np.trapezoid(w, D)
         assert itu.rain_asymmetry_parameter(f_ghz * GHZ, R) == pytest.approx(ref, abs=1e-3)
     # clamped outside the table like the albedo
-    assert itu.rain_asymmetry_parameter(2e12, 500.0) == pytest.approx(
-        itu.rain_asymmetry_parameter(1e12, 200.0)
-    )
+    assert itu.rain_asymmetry_parameter(2e12, 500.0) == pytest.approx(itu.rain_asymmetry_parameter(1e12, 200.0))
 
 
 @pytest.mark.parametrize("f_ghz", [35, 95])
@@ -77,8 +79,14 @@ def test_closed_isothermal_atmosphere_reads_its_temperature_exactly(f_ghz):
     np.testing.assert_allclose(m.source_mu, 0.0, atol=1e-9)
     for h in (0.0, 700.0, 3000.0):
         sky = layered_sky_temperature(
-            m.edges, m.alpha, m.source, ELEVATIONS, observer_height=h, background=280.0,
-            refractive_index=m.refractive_index, source_mu=m.source_mu,
+            m.edges,
+            m.alpha,
+            m.source,
+            ELEVATIONS,
+            observer_height=h,
+            background=280.0,
+            refractive_index=m.refractive_index,
+            source_mu=m.source_mu,
         )
         np.testing.assert_allclose(sky, 280.0, atol=1e-9)
     rng = np.random.default_rng(5)
@@ -100,8 +108,10 @@ def test_thick_isothermal_rain_under_the_cosmic_background_reads_its_temperature
     atm = Atmosphere(layers=(AtmosphereLayer("rain", 0.0, 8000.0, rain_rate=50.0),))
     m = _isothermal(AtmosphereModel(atm, f_ghz * GHZ), 285.0)
     j = np.searchsorted(m.edges, 2500.0) - 1
-    print(f"{f_ghz} GHz: rain tau {m.depth[np.searchsorted(m.edges, 8000.0)]:.1f}, "
-          f"omega {m.omega[j]:.3f}, g {m.asymmetry[j]:.3f}")
+    print(
+        f"{f_ghz} GHz: rain tau {m.depth[np.searchsorted(m.edges, 8000.0)]:.1f}, "
+        f"omega {m.omega[j]:.3f}, g {m.asymmetry[j]:.3f}"
+    )
     sky = m.sky_temperature(ELEVATIONS)
     print(f"{f_ghz} GHz sky at {np.degrees(ELEVATIONS)} deg: {np.round(sky - 285.0, 7)} K - 285 K")
     np.testing.assert_allclose(sky, 285.0, atol=1e-4)
@@ -154,12 +164,19 @@ def test_semi_infinite_isotropic_scatterer_matches_chandrasekhar(omega):
         np.diff(edges), omega * ones, 0.0 * ones, ones, ground_temperature=0.0, top_temperature=1.0
     )
     ours = layered_sky_temperature(
-        edges, ones, source, np.arcsin(mu), earth_radius=np.inf, background=1.0,
+        edges,
+        ones,
+        source,
+        np.arcsin(mu),
+        earth_radius=np.inf,
+        background=1.0,
         source_mu=source_mu,
     )
     rel = ours / exact - 1.0
-    print(f"omega {omega}: mu {mu}, exact {np.round(exact, 4)}, ours {np.round(ours, 4)}, "
-          f"error {np.round(100 * rel, 2)} %")
+    print(
+        f"omega {omega}: mu {mu}, exact {np.round(exact, 4)}, ours {np.round(ours, 4)}, "
+        f"error {np.round(100 * rel, 2)} %"
+    )
     assert np.abs(rel).max() <= EMISSIVITY_RTOL[omega]
 
 
@@ -209,17 +226,15 @@ def test_rain_like_slab_matches_discrete_ordinates(omega, g, tol):
     mu, ref = _discrete_ordinates_sky(tau, omega, g, T, T, T_CMB)
     n = 80
     edges, ones = np.linspace(0.0, tau, n + 1), np.ones(n)  # alpha = 1: heights are depths
-    source, source_mu = scattering_source(
-        np.diff(edges), omega * ones, g * ones, T * ones, ground_temperature=T
-    )
+    source, source_mu = scattering_source(np.diff(edges), omega * ones, g * ones, T * ones, ground_temperature=T)
     el = np.arcsin(mu)
-    ours = layered_sky_temperature(
-        edges, ones, source, el, earth_radius=np.inf, source_mu=source_mu
-    )
+    ours = layered_sky_temperature(edges, ones, source, el, earth_radius=np.inf, source_mu=source_mu)
     no_mu = layered_sky_temperature(edges, ones, source, el, earth_radius=np.inf)
-    print(f"omega {omega}, g {g}: elevation {np.round(np.degrees(el[::3]), 1)} deg, "
-          f"DO {np.round(ref[::3], 2)} K, ours - DO {np.round((ours - ref)[::3], 2)} K, "
-          f"without the mu term {np.round((no_mu - ref)[::3], 2)} K")
+    print(
+        f"omega {omega}, g {g}: elevation {np.round(np.degrees(el[::3]), 1)} deg, "
+        f"DO {np.round(ref[::3], 2)} K, ours - DO {np.round((ours - ref)[::3], 2)} K, "
+        f"without the mu term {np.round((no_mu - ref)[::3], 2)} K"
+    )
     assert np.abs(ours - ref).max() <= tol
     if g > 0.1:
         assert np.abs(ours - ref).max() < 0.5 * np.abs(no_mu - ref).max()
@@ -244,9 +259,11 @@ def test_murakowski_rain_scene_contrast_is_about_2_K():
     new = AtmosphereModel(atm, 95 * GHZ)
     c_new = contrast(new)
     c_old = contrast(_absorption_only(AtmosphereModel(atm, 95 * GHZ)))
-    print(f"95 GHz rain scene: loss {float(new.path_loss_db(3000.0, 0.0, 3000.0)):.1f} dB, "
-          f"sky {np.round(new.sky_temperature(el), 1)} K, contrast {np.round(c_new, 2)} K "
-          f"(absorption-only source: {np.round(c_old, 2)} K)")
+    print(
+        f"95 GHz rain scene: loss {float(new.path_loss_db(3000.0, 0.0, 3000.0)):.1f} dB, "
+        f"sky {np.round(new.sky_temperature(el), 1)} K, contrast {np.round(c_new, 2)} K "
+        f"(absorption-only source: {np.round(c_old, 2)} K)"
+    )
     assert np.all((1.0 <= c_new) & (c_new <= 3.0))
     assert np.all(c_old > 5.0)
 
@@ -284,8 +301,10 @@ def test_rain_is_brighter_than_its_absorption_and_directional():
     assert float(t) < 1e-30
     assert float(emission) == pytest.approx(m.source[j], rel=1e-12)
     absorption_only = m.temperature[j] * m.alpha_absorption[j] / m.alpha[j]
-    print(f"T {m.temperature[j]:.2f} K, source {m.source[j]:.2f} +- {m.source_mu[j]:.2f} mu K, "
-          f"absorption only {absorption_only:.2f} K")
+    print(
+        f"T {m.temperature[j]:.2f} K, source {m.source[j]:.2f} +- {m.source_mu[j]:.2f} mu K, "
+        f"absorption only {absorption_only:.2f} K"
+    )
     assert absorption_only < 0.6 * m.temperature[j]
     assert m.temperature[j] - 3.0 < m.source[j] < m.temperature[j]
     assert m.asymmetry[j] > 0.2 and m.source_mu[j] > 0.0
@@ -306,8 +325,7 @@ def test_isothermal_box_full_of_rain_renders_its_temperature():
     walls = material(eps=3 + 0.5j, temperature=285.0)
     room = (hollow_box([-100, -100, 1], [100, 100, 201], 1.0), walls)
     cam = Camera.look_at([0, -80, 20], [30, 100, 150], [0, 0, 1], np.radians(70), (8, 8))
-    settings = RenderSettings(spp=1, max_depth=4, threshold=1e-9, termination="temperature",
-                              atmosphere_tolerance=0.0)
+    settings = RenderSettings(spp=1, max_depth=4, threshold=1e-9, termination="temperature", atmosphere_tolerance=0.0)
     images = {}
     for name, prepare in (("scattering", lambda m: m), ("absorption only", _absorption_only)):
         model = prepare(_isothermal(AtmosphereModel(atm, 95 * GHZ), 285.0))
@@ -317,5 +335,4 @@ def test_isothermal_box_full_of_rain_renders_its_temperature():
         np.testing.assert_allclose(images["scattering"][c], 285.0, atol=1e-4)
         assert images["absorption only"][c].max() < 285.0 - 10.0
     new, old = images["scattering"]["Ex2"], images["absorption only"]["Ex2"]
-    print(f"box: {new.min():.6f}-{new.max():.6f} K; "
-          f"absorption only {old.min():.1f}-{old.max():.1f} K")
+    print(f"box: {new.min():.6f}-{new.max():.6f} K; absorption only {old.min():.1f}-{old.max():.1f} K")

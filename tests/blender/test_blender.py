@@ -31,24 +31,46 @@ from pmmw.blender.pmmw_blender.mapping import ExportError
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLE = REPO / "scenes" / "blender" / "example.blend"
 BPY_PYTHON = os.environ.get("PMMW_BLENDER_PYTHON") or (sys.executable if importlib.util.find_spec("bpy") else None)
-needs_bpy = pytest.mark.skipif(BPY_PYTHON is None, reason="needs Blender's bpy package: pip install 'pmmw[blender]' "
-                               "(Python 3.11), or PMMW_BLENDER_PYTHON set to a Python that has it")
+needs_bpy = pytest.mark.skipif(
+    BPY_PYTHON is None,
+    reason="needs Blender's bpy package: pip install 'pmmw[blender]' "
+    "(Python 3.11), or PMMW_BLENDER_PYTHON set to a Python that has it",
+)
 
 
 def _camera(**kw) -> dict:
-    cam = {"name": "Camera", "matrix_world": np.eye(4).tolist(), "type": "PERSP", "lens": 35.0, "sensor_width": 36.0,
-           "sensor_height": 24.0, "sensor_fit": "AUTO", "shift_x": 0.0, "shift_y": 0.0, "resolution": [40, 30],
-           "percentage": 100, "pixel_aspect": [1.0, 1.0], "focus_distance": None, "props": {}}
+    cam = {
+        "name": "Camera",
+        "matrix_world": np.eye(4).tolist(),
+        "type": "PERSP",
+        "lens": 35.0,
+        "sensor_width": 36.0,
+        "sensor_height": 24.0,
+        "sensor_fit": "AUTO",
+        "shift_x": 0.0,
+        "shift_y": 0.0,
+        "resolution": [40, 30],
+        "percentage": 100,
+        "pixel_aspect": [1.0, 1.0],
+        "focus_distance": None,
+        "props": {},
+    }
     return {**cam, **kw}
 
 
 def _object(name, *slots, **props) -> dict:
-    return {"name": name, "mesh": f"m/{name}.glb", "props": props,
-            "slots": [{"name": s[0], "props": s[1] if len(s) > 1 else {}, "used": s[2] if len(s) > 2 else True}
-                      for s in slots]}
+    return {
+        "name": name,
+        "mesh": f"m/{name}.glb",
+        "props": props,
+        "slots": [
+            {"name": s[0], "props": s[1] if len(s) > 1 else {}, "used": s[2] if len(s) > 2 else True} for s in slots
+        ],
+    }
 
 
 # -- the mapping, without Blender -----------------------------------------------------------------
+
 
 def test_horizontal_fov_per_sensor_fit():
     # closed forms of Blender's sensor fit (its manual, Camera > Sensor Fit); double arithmetic: 1e-12
@@ -73,8 +95,10 @@ def test_imager_pose_resolution_and_unit_scale():
     assert im["fov"] == f"{math.degrees(2 * math.atan(18 / 35)):.7g} deg"
 
 
-@pytest.mark.parametrize("kw, words", [({"type": "ORTHO"}, "Perspective"), ({"shift_x": 0.1}, "Shift"),
-                                       ({"pixel_aspect": [2.0, 1.0]}, "pixel aspect")])
+@pytest.mark.parametrize(
+    "kw, words",
+    [({"type": "ORTHO"}, "Perspective"), ({"shift_x": 0.1}, "Shift"), ({"pixel_aspect": [2.0, 1.0]}, "pixel aspect")],
+)
 def test_cameras_pmmw_cannot_take_are_refused(kw, words):
     with pytest.raises(ExportError, match=words):
         mapping.imager(_camera(**kw))
@@ -82,31 +106,55 @@ def test_cameras_pmmw_cannot_take_are_refused(kw, words):
 
 
 def test_materials_from_names_and_custom_properties():
-    data = mapping.scenario({"camera": _camera(), "objects": [
-        _object("Ground", ("concrete",)),
-        _object("Box", ("Steel", {"pmmw_material": "metal", "pmmw_roughness": 0.1})),
-        _object("Tank", ("Warm water", {"pmmw_material": "water", "pmmw_temperature": 310.0}),
-                pmmw_coating="denim 0.8 mm 300 K; polyethylene 2 mm"),
-        _object("Two", ("brick",), ("glass",), ("unused name", {}, False)),
-        _object("Whole", ("Material.001",), pmmw_material="wood", pmmw_temperature="27 degC"),
-    ]})
+    data = mapping.scenario(
+        {
+            "camera": _camera(),
+            "objects": [
+                _object("Ground", ("concrete",)),
+                _object("Box", ("Steel", {"pmmw_material": "metal", "pmmw_roughness": 0.1})),
+                _object(
+                    "Tank",
+                    ("Warm water", {"pmmw_material": "water", "pmmw_temperature": 310.0}),
+                    pmmw_coating="denim 0.8 mm 300 K; polyethylene 2 mm",
+                ),
+                _object("Two", ("brick",), ("glass",), ("unused name", {}, False)),
+                _object("Whole", ("Material.001",), pmmw_material="wood", pmmw_temperature="27 degC"),
+            ],
+        }
+    )
     scene = {e["name"]: e for e in data["scene"]}
     assert scene["Ground"] == {"name": "Ground", "mesh": "m/Ground.glb", "material": "concrete"}
-    assert data["materials"][scene["Box"]["material"]] == {"same_as": "metal", "roughness": {"model": "ggx", "alpha": 0.1}}
+    assert data["materials"][scene["Box"]["material"]] == {
+        "same_as": "metal",
+        "roughness": {"model": "ggx", "alpha": 0.1},
+    }
     assert data["materials"][scene["Tank"]["material"]] == {
-        "same_as": "water", "temperature": "310 K",
-        "coating": [{"material": "denim", "thickness": "0.8 mm", "temperature": "300 K"},
-                    {"material": "polyethylene", "thickness": "2 mm"}]}
+        "same_as": "water",
+        "temperature": "310 K",
+        "coating": [
+            {"material": "denim", "thickness": "0.8 mm", "temperature": "300 K"},
+            {"material": "polyethylene", "thickness": "2 mm"},
+        ],
+    }
     assert scene["Two"]["materials"] == {"brick": "brick", "glass": "glass"}  # the unused slot left out
     assert data["materials"][scene["Whole"]["material"]] == {"same_as": "wood", "temperature": "27 degC"}
     assert data["frequency"] == mapping.DEFAULT_FREQUENCY
 
 
 def test_every_problem_of_a_scene_is_named():
-    _, errors = mapping.build({"camera": None, "objects": [
-        _object("A", ("Material.001",)), _object("B"), _object("C", (None,)),
-        _object("D", ("concrete",), pmmw_coating="denim"), _object("E", ("concrete",), pmmw_roughness="rough"),
-        _object("F", ("ok", {"pmmw_material": "Not An Id"}))]})
+    _, errors = mapping.build(
+        {
+            "camera": None,
+            "objects": [
+                _object("A", ("Material.001",)),
+                _object("B"),
+                _object("C", (None,)),
+                _object("D", ("concrete",), pmmw_coating="denim"),
+                _object("E", ("concrete",), pmmw_roughness="rough"),
+                _object("F", ("ok", {"pmmw_material": "Not An Id"})),
+            ],
+        }
+    )
     text = [str(e) for e in errors]
     assert len(text) == 7, text
     assert "no active camera" in text[0]
@@ -119,9 +167,15 @@ def test_every_problem_of_a_scene_is_named():
 
 
 def test_scene_properties_set_scenario_keys_and_regions():
-    data = mapping.scenario({"camera": _camera(), "objects": [_object("G", ("concrete",))], "scale": 0.5,
-                             "props": {"pmmw:render.spp": 4, "pmmw:frequency": "35 GHz", "other": 1},
-                             "regions": [{"name": "tank", "location": [1.0, 2.0, 3.0], "radius": 3}]})
+    data = mapping.scenario(
+        {
+            "camera": _camera(),
+            "objects": [_object("G", ("concrete",))],
+            "scale": 0.5,
+            "props": {"pmmw:render.spp": 4, "pmmw:frequency": "35 GHz", "other": 1},
+            "regions": [{"name": "tank", "location": [1.0, 2.0, 3.0], "radius": 3}],
+        }
+    )
     assert data["render"] == {"spp": 4} and data["frequency"] == "35 GHz" and "other" not in data
     assert data["output"]["regions"] == {"tank": {"center": [0.5, 1.0, 1.5], "radius": 3.0}}
     assert data["scene"][0]["transform"] == {"scale": 0.5}
@@ -130,9 +184,16 @@ def test_scene_properties_set_scenario_keys_and_regions():
 
 
 def test_yaml_writer_round_trips():
-    data = {"frequency": "95 GHz", "yes": "no", "n": [1e-05, 1.5e20, -2.0, 3, True, None, "1e3"],
-            "text": 'a "quoted" \\ Müll: #x', "list": [{"a": 1, "b": [1.0, 2.0]}, {"c": {"d": "e"}}],
-            "empty": {}, "none": [], "nested": {"deep": {"deeper": [[1, 2], [3, 4]]}}}
+    data = {
+        "frequency": "95 GHz",
+        "yes": "no",
+        "n": [1e-05, 1.5e20, -2.0, 3, True, None, "1e3"],
+        "text": 'a "quoted" \\ Müll: #x',
+        "list": [{"a": 1, "b": [1.0, 2.0]}, {"c": {"d": "e"}}],
+        "empty": {},
+        "none": [],
+        "nested": {"deep": {"deeper": [[1, 2], [3, 4]]}},
+    }
     assert yaml.safe_load(mapping.to_yaml(data)) == data
 
 
@@ -144,11 +205,27 @@ def test_exported_mapping_is_a_scenario_pmmw_takes(tmp_path):
     (tmp_path / "m").mkdir()
     for name in ("Ground", "Tank"):
         trimesh.creation.box((1, 1, 1)).export(tmp_path / "m" / f"{name}.glb")
-    data = mapping.scenario({"camera": _camera(), "props": {"pmmw:atmosphere": "none"}, "objects": [
-        _object("Ground", ("concrete",)),
-        _object("Tank", ("Warm water", {"pmmw_material": "water", "pmmw_temperature": 310.0,
-                                        "pmmw_roughness": '{"model": "beckmann", "alpha": 0.2}'}),
-                pmmw_coating="polyethylene 2 mm")]})
+    data = mapping.scenario(
+        {
+            "camera": _camera(),
+            "props": {"pmmw:atmosphere": "none"},
+            "objects": [
+                _object("Ground", ("concrete",)),
+                _object(
+                    "Tank",
+                    (
+                        "Warm water",
+                        {
+                            "pmmw_material": "water",
+                            "pmmw_temperature": 310.0,
+                            "pmmw_roughness": '{"model": "beckmann", "alpha": 0.2}',
+                        },
+                    ),
+                    pmmw_coating="polyethylene 2 mm",
+                ),
+            ],
+        }
+    )
     path = tmp_path / "s.yaml"
     path.write_text(mapping.to_yaml(data))
     media = validate(path)["media"]["95 GHz"]
@@ -159,6 +236,7 @@ def test_exported_mapping_is_a_scenario_pmmw_takes(tmp_path):
 
 # -- the EXR reader, against OpenImageIO ----------------------------------------------------------
 
+
 @pytest.mark.parametrize("compression", ["zip", "zips", "none"])
 def test_exr_reader_matches_openimageio(tmp_path, compression):
     import OpenImageIO as oiio
@@ -166,8 +244,11 @@ def test_exr_reader_matches_openimageio(tmp_path, compression):
     rng = np.random.default_rng(3)
     # 37 rows: ZIP's chunks of 16 rows and a short last one; random values do not compress (stored
     # as they are), the smooth ramp does
-    chans = {"I": rng.uniform(50, 300, (37, 21)), "ideal.I": np.tile(np.linspace(0, 1, 21), (37, 1)),
-             "Ex2": np.full((37, 21), 150.0)}
+    chans = {
+        "I": rng.uniform(50, 300, (37, 21)),
+        "ideal.I": np.tile(np.linspace(0, 1, 21), (37, 1)),
+        "Ex2": np.full((37, 21), 150.0),
+    }
     spec = oiio.ImageSpec(21, 37, 3, oiio.FLOAT)
     spec.channelnames = tuple(chans)
     spec.attribute("compression", compression)
@@ -189,6 +270,7 @@ def test_exr_reader_matches_openimageio(tmp_path, compression):
 
 # -- the add-on's zip -----------------------------------------------------------------------------
 
+
 def test_addon_zip_installs_as_an_addon_and_an_extension(tmp_path):
     import ast
 
@@ -198,8 +280,9 @@ def test_addon_zip_installs_as_an_addon_and_an_extension(tmp_path):
     assert "pmmw_blender/__init__.py" in names and "pmmw_blender/blender_manifest.toml" in names
     assert {n.split("/")[0] for n in names} == {"pmmw_blender"}
     init = ast.parse(z.read("pmmw_blender/__init__.py"))
-    bl_info = next(ast.literal_eval(n.value) for n in init.body
-                   if isinstance(n, ast.Assign) and n.targets[0].id == "bl_info")
+    bl_info = next(
+        ast.literal_eval(n.value) for n in init.body if isinstance(n, ast.Assign) and n.targets[0].id == "bl_info"
+    )
     manifest = tomllib.loads(z.read("pmmw_blender/blender_manifest.toml").decode())
     assert manifest["id"] == "pmmw_blender" and manifest["type"] == "add-on"
     assert manifest["version"] == ".".join(map(str, bl_info["version"]))
@@ -209,17 +292,24 @@ def test_addon_zip_installs_as_an_addon_and_an_extension(tmp_path):
 
 # -- without bpy ----------------------------------------------------------------------------------
 
+
 def _cli(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "pmmw_cli", *args], capture_output=True, text=True, cwd=REPO,
-                          env={**os.environ, **(env or {})})
+    return subprocess.run(
+        [sys.executable, "-m", "pmmw_cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        env={**os.environ, **(env or {})},
+    )
 
 
 @pytest.mark.skipif(importlib.util.find_spec("bpy") is not None, reason="this Python has bpy")
 def test_a_blend_without_bpy_names_the_extra(tmp_path):
     # TMPDIR: no export of the example made by another test (an export once made needs no Blender)
     env = {**{k: v for k, v in os.environ.items() if k != "PMMW_BLENDER_PYTHON"}, "TMPDIR": str(tmp_path)}
-    run = subprocess.run([sys.executable, "-m", "pmmw_cli", "validate", str(EXAMPLE)], capture_output=True,
-                         text=True, cwd=REPO, env=env)
+    run = subprocess.run(
+        [sys.executable, "-m", "pmmw_cli", "validate", str(EXAMPLE)], capture_output=True, text=True, cwd=REPO, env=env
+    )
     assert run.returncode == 1, run.stderr
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and "pmmw[blender]" in lines[0] and "Traceback" not in run.stderr, run.stderr
@@ -229,14 +319,23 @@ def test_a_blend_without_bpy_names_the_extra(tmp_path):
 
 # -- with bpy -------------------------------------------------------------------------------------
 
+
 def _bpy(code: str, tmp_path, env=None) -> dict:
     """Run ``code`` in Blender's Python (the add-on importable as ``pmmw_blender``, Blender's user
     folders in ``tmp_path``); it leaves its answer in ``result``, returned from JSON."""
     script = tmp_path / "script.py"
-    script.write_text(f"import sys, json\nsys.path.insert(0, {str(ADDON.parent)!r})\nresult = None\n{code}\n"
-                      "print('RESULT ' + json.dumps(result))\n")
-    env = {**os.environ, **{f"BLENDER_USER_{k}": str(tmp_path / "blender" / k.lower())
-                            for k in ("RESOURCES", "CONFIG", "SCRIPTS", "EXTENSIONS", "DATAFILES")}, **(env or {})}
+    script.write_text(
+        f"import sys, json\nsys.path.insert(0, {str(ADDON.parent)!r})\nresult = None\n{code}\n"
+        "print('RESULT ' + json.dumps(result))\n"
+    )
+    env = {
+        **os.environ,
+        **{
+            f"BLENDER_USER_{k}": str(tmp_path / "blender" / k.lower())
+            for k in ("RESOURCES", "CONFIG", "SCRIPTS", "EXTENSIONS", "DATAFILES")
+        },
+        **(env or {}),
+    }
     run = subprocess.run([BPY_PYTHON, str(script)], capture_output=True, text=True, cwd=tmp_path, env=env)
     assert run.returncode == 0, run.stderr[-3000:]
     return json.loads(next(line[7:] for line in run.stdout.splitlines() if line.startswith("RESULT ")))
@@ -244,7 +343,8 @@ def _bpy(code: str, tmp_path, env=None) -> dict:
 
 @needs_bpy
 def test_fov_matches_blenders_own_projection(tmp_path):
-    got = _bpy("""
+    got = _bpy(
+        """
 import bpy, math
 from pmmw_blender import exporter, mapping
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -262,7 +362,9 @@ for fit, lens, sw, sh, rx, ry, pct in [("AUTO", 35, 36, 24, 40, 30, 100), ("AUTO
     p = cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=w, y=h)
     im = mapping.imager(exporter._camera(scene))
     result.append([2 * math.degrees(math.atan(1 / p[0][0])), float(im["fov"].split()[0]), im["resolution"], [w, h]])
-""", tmp_path)
+""",
+        tmp_path,
+    )
     for ref, fov, res, wh in got:
         # Blender's projection matrix is float32 (7 digits) and the exported fov has 7: 1e-5 deg
         assert fov == pytest.approx(ref, abs=1e-5), got
@@ -275,7 +377,8 @@ def test_meshes_land_where_blender_has_them(tmp_path):
     Y-up turned to Z-up on load) are Blender's world vertices, and a mirrored box stays outward."""
     from pmmw.scene.geometry import load_entry_mesh
 
-    blender = _bpy(f"""
+    blender = _bpy(
+        f"""
 import bpy, math
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
@@ -294,11 +397,13 @@ bpy.ops.object.camera_add(location=(0, -10, 2), rotation=(math.radians(90), 0, 0
 scene.camera = bpy.context.object
 bpy.context.view_layer.update()
 from pmmw_blender import exporter
-exporter.export(bpy.context, {str(tmp_path / 'out' / 's.yaml')!r})
+exporter.export(bpy.context, {str(tmp_path / "out" / "s.yaml")!r})
 result = {{o.name: [list(o.matrix_world @ v.co) for v in o.data.vertices] for o in (child, cone)}}
-""", tmp_path)
+""",
+        tmp_path,
+    )
     for name, verts in blender.items():
-        (_, mesh), = load_entry_mesh(tmp_path / "out" / "s_meshes" / f"{name}.glb")
+        ((_, mesh),) = load_entry_mesh(tmp_path / "out" / "s_meshes" / f"{name}.glb")
         ref = np.unique(np.round(np.array(verts), 5), axis=0)
         got = np.unique(np.round(np.asarray(mesh.vertices), 5), axis=0)
         # float32 coordinates of a few metres (~5e-7 m), rounded to 1e-5 m on both sides
@@ -310,8 +415,9 @@ result = {{o.name: [list(o.matrix_world @ v.co) for v in o.data.vertices] for o 
 @needs_bpy
 def test_example_blend_is_what_its_script_makes(tmp_path, monkeypatch):
     made = tmp_path / "example.blend"
-    run = subprocess.run([BPY_PYTHON, str(REPO / "scenes" / "blender" / "make_example.py"), str(made)],
-                         capture_output=True, text=True)
+    run = subprocess.run(
+        [BPY_PYTHON, str(REPO / "scenes" / "blender" / "make_example.py"), str(made)], capture_output=True, text=True
+    )
     assert run.returncode == 0, run.stderr[-2000:]
 
     def body(blend):
@@ -331,8 +437,10 @@ def test_example_blend_renders_as_its_exported_scenario(tmp_path, monkeypatch):
 
     monkeypatch.setenv("PMMW_BLENDER_PYTHON", BPY_PYTHON)
     exported = scenario_of_blend(EXAMPLE)
-    assert pmmw.validate(pmmw.Scenario.load(EXAMPLE))["scenario"]["materials"]["blender_tank_warm_water"][
-        "temperature"] == "310 K"
+    assert (
+        pmmw.validate(pmmw.Scenario.load(EXAMPLE))["scenario"]["materials"]["blender_tank_warm_water"]["temperature"]
+        == "310 K"
+    )
     a = pmmw.render(pmmw.Scenario.load(EXAMPLE), spp=2, workers=1, seed=3)
     b = pmmw.render(pmmw.Scenario.load(exported), spp=2, workers=1, seed=3)
     assert a["I"].shape[-2:] == (30, 40)
@@ -351,34 +459,47 @@ def test_cli_reads_a_blend_and_names_its_problems(tmp_path):
     bad.write_text("not a blend")
     run = _cli("validate", str(bad), env=env)
     assert run.returncode == 2 and "Blender cannot open it" in run.stderr and "Traceback" not in run.stderr, run.stderr
-    _bpy(f"""
+    _bpy(
+        f"""
 import bpy
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.mesh.primitive_cube_add()
 bpy.context.object.data.materials.append(bpy.data.materials.new("Material.001"))
-bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / 'nocam.blend')!r})
-""", tmp_path)
+bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / "nocam.blend")!r})
+""",
+        tmp_path,
+    )
     run = _cli("validate", str(tmp_path / "nocam.blend"), env=env)
     assert run.returncode == 2 and "no active camera" in run.stderr and "'Material.001'" in run.stderr, run.stderr
     assert "nocam.blend" in run.stderr
     # what is left out is said: a text object (the example, control, has none)
-    _bpy(f"""
+    _bpy(
+        f"""
 import bpy
 bpy.ops.wm.open_mainfile(filepath={str(EXAMPLE)!r})
 bpy.ops.object.text_add()
-bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / 'text.blend')!r})
-""", tmp_path)
+bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / "text.blend")!r})
+""",
+        tmp_path,
+    )
     run = _cli("validate", str(tmp_path / "text.blend"), env=env)
-    assert run.returncode == 0 and "warning: text.blend: object 'Text' (font) is not a mesh: left out" in run.stderr, \
+    assert run.returncode == 0 and "warning: text.blend: object 'Text' (font) is not a mesh: left out" in run.stderr, (
         run.stderr
+    )
     assert "left out" not in _cli("validate", str(EXAMPLE), env=env).stderr
 
 
 # Blender's two ways to install from a zip: a legacy add-on (bl_info) and, in 4.2+, an extension (the manifest)
-INSTALLS = {"addon": ('bpy.ops.preferences.addon_install(filepath=ZIP)\n'
-                      'addon_utils.enable("pmmw_blender", default_set=True)', "pmmw_blender"),
-            "extension": ('bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default", '
-                          'enable_on_install=True)', "bl_ext.user_default.pmmw_blender")}
+INSTALLS = {
+    "addon": (
+        'bpy.ops.preferences.addon_install(filepath=ZIP)\naddon_utils.enable("pmmw_blender", default_set=True)',
+        "pmmw_blender",
+    ),
+    "extension": (
+        'bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default", enable_on_install=True)',
+        "bl_ext.user_default.pmmw_blender",
+    ),
+}
 
 
 @needs_bpy
@@ -391,19 +512,22 @@ def test_addon_installs_from_its_zip_exports_and_loads_an_exr(tmp_path, monkeypa
     channels = {n: rng.uniform(50, 300, (5, 7)) for n in ("I", "Q", "U", "V", "Ex2", "Ey2", "ideal.I")}
     (tmp_path / "out").mkdir()
     write_exr(tmp_path / "out" / "r.exr", channels)
-    got = _bpy(f"""
+    got = _bpy(
+        f"""
 import bpy, addon_utils, sys, numpy as np
 sys.path.remove({str(ADDON.parent)!r})  # the add-on as Blender installs it, not from the source tree
 ZIP = {str(zip_path)!r}
 {INSTALLS[how][0]}
 bpy.ops.wm.open_mainfile(filepath={str(EXAMPLE)!r})
-done = bpy.ops.export_scene.pmmw(filepath={str(tmp_path / 'op' / 'example.yaml')!r})
+done = bpy.ops.export_scene.pmmw(filepath={str(tmp_path / "op" / "example.yaml")!r})
 operators = sys.modules[{INSTALLS[how][1] + ".operators"!r}]
-images = operators.load_result(bpy.context, __import__("pathlib").Path({str(tmp_path / 'out' / 'r.exr')!r}))
+images = operators.load_result(bpy.context, __import__("pathlib").Path({str(tmp_path / "out" / "r.exr")!r}))
 result = {{"done": list(done), "where": sys.modules[{INSTALLS[how][1]!r}].__file__,
           "images": {{im.name: np.array(im.pixels[:]).reshape(im.size[1], im.size[0], 4)[::-1, :, 0].tolist()
                      for im in images}}}}
-""", tmp_path)
+""",
+        tmp_path,
+    )
     assert got["done"] == ["FINISHED"] and str(tmp_path) in got["where"]
     exported = (tmp_path / "op" / "example.yaml").read_text().split("\n", 1)[1]
     monkeypatch.setenv("PMMW_BLENDER_PYTHON", BPY_PYTHON)
@@ -418,7 +542,8 @@ def test_render_with_pmmw_from_blender(tmp_path):
     """The add-on's Render with pmmw, as a script runs it (no window: it waits for pmmw): the
     scene exported beside the saved .blend, rendered by this pmmw, its channels loaded in kelvin."""
     zip_path = addon_zip(tmp_path / "pmmw_blender.zip")
-    got = _bpy(f"""
+    got = _bpy(
+        f"""
 import bpy, addon_utils, sys, numpy as np
 sys.path.remove({str(ADDON.parent)!r})
 bpy.ops.preferences.addon_install(filepath={str(zip_path)!r})
@@ -426,11 +551,14 @@ addon_utils.enable("pmmw_blender", default_set=True)
 prefs = bpy.context.preferences.addons["pmmw_blender"].preferences
 prefs.command, prefs.extra = {f"{sys.executable} -m pmmw_cli"!r}, "--spp 1 --workers 1 --seed 5"
 bpy.ops.wm.open_mainfile(filepath={str(EXAMPLE)!r})
-bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / 'example.blend')!r})
+bpy.ops.wm.save_as_mainfile(filepath={str(tmp_path / "example.blend")!r})
 done = bpy.ops.render.pmmw()
 im = bpy.data.images["example I [K]"]
 result = {{"done": list(done), "I": np.array(im.pixels[:]).reshape(im.size[1], im.size[0], 4)[::-1, :, 0].tolist()}}
-""", tmp_path, env={"PYTHONPATH": str(REPO)})
+""",
+        tmp_path,
+        env={"PYTHONPATH": str(REPO)},
+    )
     assert got["done"] == ["FINISHED"]
     out = tmp_path / "example_pmmw"
     assert (out / "example.yaml").is_file() and (out / "example_meshes" / "Box.glb").is_file()
@@ -443,14 +571,17 @@ result = {{"done": list(done), "I": np.array(im.pixels[:]).reshape(im.size[1], i
 def test_every_process_reads_a_blend_as_the_same_scenario(tmp_path):
     """Shards and --resume compare the scenario hash across processes: two processes that export
     the .blend each (Blender run twice, the exports' folder emptied between) hash alike."""
-    code = ("from pmmw.blender import scenario_of_blend; from pmmw.config import load_scenario; "
-            "from pmmw.pipeline import scenario_hash; import sys; p = sys.argv[1]; "
-            "print(scenario_of_blend(p), scenario_hash(load_scenario(p)))")
+    code = (
+        "from pmmw.blender import scenario_of_blend; from pmmw.config import load_scenario; "
+        "from pmmw.pipeline import scenario_hash; import sys; p = sys.argv[1]; "
+        "print(scenario_of_blend(p), scenario_hash(load_scenario(p)))"
+    )
     env = {**os.environ, "PMMW_BLENDER_PYTHON": BPY_PYTHON, "TMPDIR": str(tmp_path)}
     got = []
     for _ in range(2):
-        run = subprocess.run([sys.executable, "-c", code, str(EXAMPLE)], capture_output=True, text=True, cwd=REPO,
-                             env=env)
+        run = subprocess.run(
+            [sys.executable, "-c", code, str(EXAMPLE)], capture_output=True, text=True, cwd=REPO, env=env
+        )
         assert run.returncode == 0, run.stderr[-2000:]
         got.append(run.stdout.split())
         folder = Path(got[-1][0]).parent

@@ -96,10 +96,17 @@ def test_materials_list_and_show():
         ("", ["--set", "frequency=95 m"], "frequency"),
         ("materials: {concrete: {eps: {35 GHz: [5.5, -0.5]}}}", [], "materials.concrete"),
         ("materials: {concrete: {roughness: {model: ggx, alpha: -1}}}", [], "materials.concrete.roughness.alpha"),
-        ("materials: {concrete: {bump: {model: gaussian, rms: 1 cm, size: 1 m}}}", [],
-         "materials.concrete.bump.correlation"),
-        ("materials: {concrete: {kind: thin, thickness: 1 mm, coating: [{material: denim, thickness: 1 mm, "
-         "roughness: {model: ggx, alpha: 0.2}}]}}", [], "materials.concrete.coating[0].roughness"),
+        (
+            "materials: {concrete: {bump: {model: gaussian, rms: 1 cm, size: 1 m}}}",
+            [],
+            "materials.concrete.bump.correlation",
+        ),
+        (
+            "materials: {concrete: {kind: thin, thickness: 1 mm, coating: [{material: denim, thickness: 1 mm, "
+            "roughness: {model: ggx, alpha: 0.2}}]}}",
+            [],
+            "materials.concrete.coating[0].roughness",
+        ),
     ],
 )
 def test_user_errors_name_file_and_key_without_traceback(tmp_path, extra, override, key):
@@ -226,8 +233,21 @@ def test_sky_command_table_csv_map_and_plot(tmp_path):
     assert lines[0] == "elevation_deg,Tv_K,Th_K" and len(lines) == 4
     t = {float(r.split(",")[0]): float(r.split(",")[1]) for r in lines[1:]}
     assert t[90.0] < t[30.0] < t[5.0] < 300.0
-    fog = _run("sky", "-f", "95 GHz", "--format", "csv", "--elevations", "90", "--layer", "fog,0 m,600 m,1 g/m3",
-               "--exr", tmp_path / "sky.exr", "--plot", tmp_path / "sky.png")
+    fog = _run(
+        "sky",
+        "-f",
+        "95 GHz",
+        "--format",
+        "csv",
+        "--elevations",
+        "90",
+        "--layer",
+        "fog,0 m,600 m,1 g/m3",
+        "--exr",
+        tmp_path / "sky.exr",
+        "--plot",
+        tmp_path / "sky.png",
+    )
     assert fog.exit_code == 0, fog.output
     t_fog = float(fog.output.strip().splitlines()[1].split(",")[1])
     assert t_fog > t[90.0] + 5.0
@@ -300,9 +320,13 @@ def test_the_readme_lists_exactly_the_required_keys():
     want = set(required(schema.ScenarioConfig, "")) | {"scene[i]." + k for k in required(schema.SceneEntry, "")}
     want |= {"atmosphere.layers[i]." + k for k in required(schema.WeatherLayer, "")}
     text = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "scenario.md").read_text()  # the scenario guide
-    para = text[text.index("Required keys"):text.index("```yaml", text.index("Required keys"))]
-    listed = set(re.findall(r"`([a-z_.\[\]]+)`", para.replace("`.base`", "`atmosphere.layers[i].base`")
-                            .replace("`.top`", "`atmosphere.layers[i].top`")))
+    para = text[text.index("Required keys") : text.index("```yaml", text.index("Required keys"))]
+    listed = set(
+        re.findall(
+            r"`([a-z_.\[\]]+)`",
+            para.replace("`.base`", "`atmosphere.layers[i].base`").replace("`.top`", "`atmosphere.layers[i].top`"),
+        )
+    )
     listed -= {"scene[i].material", "scene[i].materials", "# required"}
     assert listed == want
 

@@ -40,8 +40,10 @@ render: {spp: 64, min_spp: 4, target_error: 100 K, max_depth: 2, tile: 8, worker
     line = next(ln for ln in res.stdout.splitlines() if ln.startswith("tiny:"))
     assert "48 px x 4 spp averaged (adaptive, up to 64)" in line, line
     # the control: without a target error the summary gives render.spp
-    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "o2"), "-q", "--set",
-                              "render.target_error=null", "--spp", "2"])
+    res = runner.invoke(
+        app,
+        ["render", str(scn), "--out", str(tmp_path / "o2"), "-q", "--set", "render.target_error=null", "--spp", "2"],
+    )
     assert res.exit_code == 0, res.output
     assert "48 px x 2 spp," in res.stdout
 
@@ -54,12 +56,22 @@ def test_bench_leaves_the_committed_page_alone_by_default(tmp_path, monkeypatch)
     monkeypatch.setattr(pmmw_cli.bench, "bench", lambda *a, **k: seen.append(k["out_md"]))
     monkeypatch.setattr(pmmw_cli.bench_po, "run", lambda out, **k: seen.append(out))
     monkeypatch.chdir(tmp_path)
-    for args in (["bench"], ["bench", "--po"], ["bench", "--write-docs"], ["bench", "--po", "--write-docs"],
-                 ["bench", "--out", "b/x.md"]):
+    for args in (
+        ["bench"],
+        ["bench", "--po"],
+        ["bench", "--write-docs"],
+        ["bench", "--po", "--write-docs"],
+        ["bench", "--out", "b/x.md"],
+    ):
         res = runner.invoke(app, args)
         assert res.exit_code == 0, res.output
-    assert seen == [Path("out/bench/benchmarks.md"), Path("out/bench/benchmarks_po.md"), Path("docs/benchmarks.md"),
-                    Path("docs/benchmarks_po.md"), Path("b/x.md")]
+    assert seen == [
+        Path("out/bench/benchmarks.md"),
+        Path("out/bench/benchmarks_po.md"),
+        Path("docs/benchmarks.md"),
+        Path("docs/benchmarks_po.md"),
+        Path("b/x.md"),
+    ]
     res = runner.invoke(app, ["bench", "--out", "b/x.md", "--write-docs"])
     assert res.exit_code == 2 and "--write-docs" in res.output
 
@@ -67,8 +79,19 @@ def test_bench_leaves_the_committed_page_alone_by_default(tmp_path, monkeypatch)
 def test_po_table_shows_a_zero_cross_polarized_rcs_as_minus_infinity():
     """A flat plate lit at normal incidence with theta-polarized waves returns no phi-polarized
     field in its plane of incidence: exactly zero, which the table printed as -300.000 dBsm."""
-    res = runner.invoke(app, ["po", str(ROOT / "scenes/po/beacon_plate.ply"), "--material", "metal",
-                              "--frequency", "35 GHz", "--theta", "0:10:5"])
+    res = runner.invoke(
+        app,
+        [
+            "po",
+            str(ROOT / "scenes/po/beacon_plate.ply"),
+            "--material",
+            "metal",
+            "--frequency",
+            "35 GHz",
+            "--theta",
+            "0:10:5",
+        ],
+    )
     assert res.exit_code == 0, res.output
     rows = [ln.split() for ln in res.stdout.splitlines()[-3:]]
     assert [r[3] for r in rows] == ["-inf"] * 3, rows

@@ -49,13 +49,24 @@ def _commands(text: str) -> list[list[str]]:
 
 
 def _inputs(tokens: list[str]) -> list[str]:
-    return [t for i, t in enumerate(tokens) if t.endswith(INPUTS) and "=" not in t
-            and not (i and tokens[i - 1] in OUTPUT_OPTIONS) and not t.startswith(("out/", "/"))]
+    return [
+        t
+        for i, t in enumerate(tokens)
+        if t.endswith(INPUTS)
+        and "=" not in t
+        and not (i and tokens[i - 1] in OUTPUT_OPTIONS)
+        and not t.startswith(("out/", "/"))
+    ]
 
 
 def test_every_input_a_documented_command_names_is_shipped():
-    missing = [(doc.name, t) for doc in DOCS for cmd in _commands(doc.read_text()) for t in _inputs(cmd)
-               if not (ROOT / t).exists()]
+    missing = [
+        (doc.name, t)
+        for doc in DOCS
+        for cmd in _commands(doc.read_text())
+        for t in _inputs(cmd)
+        if not (ROOT / t).exists()
+    ]
     assert missing == []
 
 
@@ -118,8 +129,13 @@ def _unknown_options(cmd_tokens: list[str], root) -> list[str]:
 
 def test_every_documented_command_and_option_exists():
     root = _cli()
-    bad = [(doc.relative_to(ROOT).as_posix(), " ".join(cmd), why) for doc in SITE
-           for cmd in _commands(doc.read_text()) if cmd[0] == "pmmw" for why in _unknown_options(cmd, root)]
+    bad = [
+        (doc.relative_to(ROOT).as_posix(), " ".join(cmd), why)
+        for doc in SITE
+        for cmd in _commands(doc.read_text())
+        if cmd[0] == "pmmw"
+        for why in _unknown_options(cmd, root)
+    ]
     assert bad == []
 
 
@@ -127,7 +143,8 @@ def test_the_option_check_sees_a_renamed_option_and_a_missing_command():
     """Control: an option or a command the app lacks is caught; real ones and values are not."""
     root = _cli()
     assert _unknown_options(["pmmw", "render", "configs/x.yaml", "--sppp", "4"], root) == [
-        "option '--sppp' of pmmw render"]
+        "option '--sppp' of pmmw render"
+    ]
     assert _unknown_options(["pmmw", "rendr", "configs/x.yaml"], root) == ["command 'rendr'"]
     assert _unknown_options(["pmmw", "materials", "show", "water", "--frequency", "95 GHz"], root) == []
     assert _unknown_options(["pmmw", "render", "x.yaml", "--set", "imager.resolution=[64,64]", "--spp=2"], root) == []
@@ -149,8 +166,11 @@ def test_every_python_block_compiles_and_names_real_api():
             except SyntaxError as e:
                 bad.append((where, f"syntax: {e.msg}: {block.splitlines()[e.lineno - 1] if e.lineno else ''}"))
                 continue
-            bad += [(where, f"pmmw.{n}") for n in re.findall(r"\bpmmw\.([A-Za-z_]\w*)", block)
-                    if not hasattr(pmmw, n) and not (ROOT / "pmmw" / n).exists()]
+            bad += [
+                (where, f"pmmw.{n}")
+                for n in re.findall(r"\bpmmw\.([A-Za-z_]\w*)", block)
+                if not hasattr(pmmw, n) and not (ROOT / "pmmw" / n).exists()
+            ]
     assert bad == []
 
 
@@ -199,10 +219,18 @@ def test_the_cheap_documented_commands_run(tmp_path):
         cmds = [(w, c) for w, c in cmds if c not in blends]
     failed = []
     for i, (where, cmd) in enumerate(cmds):
-        args = [str(tmp_path / f"{i}_{Path(a).name}") if j and cmd[j - 1] in OUTPUT_VALUE_OPTIONS else a
-                for j, a in enumerate(cmd)]
-        run = subprocess.run([sys.executable, "-m", "pmmw_cli", *args[1:]], cwd=ROOT, capture_output=True,
-                             text=True, timeout=300, env=dict(os.environ, MPLBACKEND="Agg"))
+        args = [
+            str(tmp_path / f"{i}_{Path(a).name}") if j and cmd[j - 1] in OUTPUT_VALUE_OPTIONS else a
+            for j, a in enumerate(cmd)
+        ]
+        run = subprocess.run(
+            [sys.executable, "-m", "pmmw_cli", *args[1:]],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env=dict(os.environ, MPLBACKEND="Agg"),
+        )
         if run.returncode != 0:
             failed.append((where, " ".join(cmd), run.stderr.strip().splitlines()[-1:]))
     assert failed == []
@@ -222,4 +250,5 @@ def test_the_readme_links_resolve():
     assert _broken_links((ROOT / "README.md").read_text(), ROOT) == []
     # control: a link to a page that does not exist is caught, one that exists is not
     assert _broken_links("[a](docs/guide/nope.md) [b](docs/guide/scenario.md#x) [c](https://x.org)", ROOT) == [
-        "docs/guide/nope.md"]
+        "docs/guide/nope.md"
+    ]

@@ -54,8 +54,13 @@ def test_scenario_keys_with_their_units_and_defaults(gen):
     assert "required" in _row(page, "imager.fov") and "a bare number in deg" in _row(page, "imager.fov")
     assert "give the unit" in _row(page, "frequency")
     assert "`5`" in _row(page, "imager.band_samples")
-    for key in ("imager.focus_distance", "sky.zenith_opacity", "output.regions.NAME.box",
-                "atmosphere.layers[i].attenuation.model", "atmosphere.layers[i].scattering"):
+    for key in (
+        "imager.focus_distance",
+        "sky.zenith_opacity",
+        "output.regions.NAME.box",
+        "atmosphere.layers[i].attenuation.model",
+        "atmosphere.layers[i].scattering",
+    ):
         _row(page, key)
     # control: a key the schema lacks has no row
     with pytest.raises(AssertionError):

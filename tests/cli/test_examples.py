@@ -11,8 +11,13 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _run(script: str, out: Path) -> str:
-    p = subprocess.run([sys.executable, str(ROOT / "examples" / script), str(out)], capture_output=True, text=True,
-                       timeout=300, cwd=out)
+    p = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / script), str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=out,
+    )
     assert p.returncode == 0, p.stderr[-2000:]
     return p.stdout
 
@@ -42,8 +47,11 @@ def test_landing_study(tmp_path):
         assert rows[key][4] == "yes" and rows[key][2] >= 5.0, (key, rows[key])
         assert rows[key][1] < 0.0, (key, rows[key])  # the beacon mirrors the cold sky: darker than the runway
     # the verdict lines are the reports' words for the same criterion
-    verdicts = {tuple(line.split(":")[0].split()[::2]): line for line in out.splitlines()
-                if line.startswith("  ") and " GHz: beacon - runway: " in line}
+    verdicts = {
+        tuple(line.split(":")[0].split()[::2]): line
+        for line in out.splitlines()
+        if line.startswith("  ") and " GHz: beacon - runway: " in line
+    }
     assert len(verdicts) == 4, out
     for (rng, f), (_, _, _, _, det) in rows.items():
         words = verdicts[(rng, f)].split("beacon - runway: ", 1)[1]
@@ -76,8 +84,11 @@ def test_cwd_study(tmp_path):
         assert snr[("8 m", f)][2] < snr[("4 m", f)][2], (f, snr)
     # the viewing angle, not the blur alone, takes the 95 GHz grip below the criterion from 8 m
     assert snr[("8 m", 95.0)][2] < snr[("8 m high", 95.0)][2] < snr[("4 m", 95.0)][2], snr
-    verdicts = {tuple(x.split(" GHz: ")[0].rsplit(", ", 1)): x.split(f"{PAIR_CWD}: ", 1)[1]
-                for x in out.splitlines() if f"; {PAIR_CWD}: " in x}
+    verdicts = {
+        tuple(x.split(" GHz: ")[0].rsplit(", ", 1)): x.split(f"{PAIR_CWD}: ", 1)[1]
+        for x in out.splitlines()
+        if f"; {PAIR_CWD}: " in x
+    }
     assert len(verdicts) == 6, out
     for (view, f), words in verdicts.items():  # the reports' words say what the csv says
         listed = words.split("; not in ")[0] if words.startswith("detectable in ") else ""

@@ -43,8 +43,9 @@ def test_every_shipped_config_validates_as_its_kind(path):
     sweep and physical-optics files were rejected with a list of missing scenario keys)."""
     res = runner.invoke(app, ["validate", str(path)])
     assert res.exit_code == 0, res.output
-    assert res.stdout.startswith(f"kind: {_expected_kind(path)}\n") or \
-        res.stdout.startswith(f"{{kind: {_expected_kind(path)},"), res.stdout[:200]
+    assert res.stdout.startswith(f"kind: {_expected_kind(path)}\n") or res.stdout.startswith(
+        f"{{kind: {_expected_kind(path)},"
+    ), res.stdout[:200]
 
 
 def test_kind_detection_by_keys():
@@ -94,12 +95,25 @@ def test_a_typo_in_a_sweeps_grid_key_is_one_line_and_renders_nothing(tmp_path, m
 
 def test_a_sweeps_wrong_value_is_named_with_its_value(tmp_path):
     scn = _tiny(tmp_path)
-    res = runner.invoke(app, ["sweep", str(scn), "--grid", "frequency=[35 GHz, 5000 GHz]", "--grid",
-                              "render.spp=[1, 2]", "--out", str(tmp_path / "out"), "-q"])
+    res = runner.invoke(
+        app,
+        [
+            "sweep",
+            str(scn),
+            "--grid",
+            "frequency=[35 GHz, 5000 GHz]",
+            "--grid",
+            "render.spp=[1, 2]",
+            "--out",
+            str(tmp_path / "out"),
+            "-q",
+        ],
+    )
     assert res.exit_code == 2, res.output
     assert res.stderr.strip().splitlines() == [
         "error: --grid: frequency: value 5000 GHz: 5000 GHz is outside the 1-1000 GHz that pmmw's atmosphere and "
-        "material models cover"]
+        "material models cover"
+    ]
     assert not (tmp_path / "out").exists()
 
 

@@ -15,8 +15,13 @@ LATER = ("matplotlib", "xarray", "dask", "jinja2", "scipy.signal", "scipy.stats"
 
 
 def _loaded(code: str) -> set:
-    out = subprocess.run([sys.executable, "-c", "import sys\n" + code + "\nprint(' '.join(sorted(sys.modules)))"],
-                         capture_output=True, text=True, check=True, cwd=ROOT).stdout.split()
+    out = subprocess.run(
+        [sys.executable, "-c", "import sys\n" + code + "\nprint(' '.join(sorted(sys.modules)))"],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
+    ).stdout.split()
     return {m for m in LATER if m in out}
 
 
@@ -30,14 +35,16 @@ def test_the_command_line_and_the_pipeline_import_none_of_them():
 def test_control_each_comes_when_used():
     # the imager model (scipy.fft only, not scipy.signal), a figure (matplotlib), a rain table
     # (scipy.interpolate), the report's detection probability (scipy.special, not scipy.stats)
-    loaded = _loaded("import numpy as np\n"
-                     "from pmmw.io.preview import write_figure\n"
-                     "import tempfile, os\n"
-                     "write_figure(os.path.join(tempfile.mkdtemp(), 'p.png'), [(None, np.eye(4))], title='t')\n"
-                     "from pmmw.atmosphere import itu\n"
-                     "itu.rain_single_scattering_albedo(95e9, 10.0)\n"
-                     "from pmmw.imaging.detection import probability_of_detection\n"
-                     "probability_of_detection(5.0, 1e-3)\n")
+    loaded = _loaded(
+        "import numpy as np\n"
+        "from pmmw.io.preview import write_figure\n"
+        "import tempfile, os\n"
+        "write_figure(os.path.join(tempfile.mkdtemp(), 'p.png'), [(None, np.eye(4))], title='t')\n"
+        "from pmmw.atmosphere import itu\n"
+        "itu.rain_single_scattering_albedo(95e9, 10.0)\n"
+        "from pmmw.imaging.detection import probability_of_detection\n"
+        "probability_of_detection(5.0, 1e-3)\n"
+    )
     assert loaded == {"matplotlib", "scipy.interpolate"}
 
 
@@ -51,10 +58,17 @@ def test_render_timings_prints_the_steps_and_phases(tmp_path):
     res = subprocess.run([*run, str(tmp_path / "a"), "--timings"], capture_output=True, text=True, cwd=ROOT)
     assert res.returncode == 0, res.stderr
     lines = res.stderr.split("timings:\n", 1)[1].splitlines()
-    moments = [(line.split(" at ")[0].strip(), float(line.split(" at ")[1].split()[0])) for line in lines
-               if " at " in line]
-    assert [m for m, _ in moments] == ["command started", "pipeline imported", "outputs checked", "kernels loaded",
-                                       "first tile sent", "done"]
+    moments = [
+        (line.split(" at ")[0].strip(), float(line.split(" at ")[1].split()[0])) for line in lines if " at " in line
+    ]
+    assert [m for m, _ in moments] == [
+        "command started",
+        "pipeline imported",
+        "outputs checked",
+        "kernels loaded",
+        "first tile sent",
+        "done",
+    ]
     times = [t for _, t in moments]
     assert times == sorted(times) and 0.0 < times[0]
     phases = {line.rsplit(None, 2)[0].strip() for line in lines if " at " not in line}
@@ -67,8 +81,9 @@ def test_seconds_since_the_process_started():
     # a process that slept 0.3 s has been running at least that long (a clock tick of 10 ms is
     # the resolution: margin 0.02 s), and not minutes (the control that the start is its own)
     code = "import time\ntime.sleep(0.3)\nfrom pmmw import timings\nprint(timings._since_start())\n"
-    ago = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                               cwd=ROOT).stdout)
+    ago = float(
+        subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT).stdout
+    )
     assert 0.28 <= ago < 30.0
 
 

@@ -143,7 +143,9 @@ def test_atmosphere_defaults(tmp_path):
 
 
 def test_layered_atmosphere_with_weather(tmp_path):
-    text = BASE + """atmosphere:
+    text = (
+        BASE
+        + """atmosphere:
   profile: mid_latitude_winter
   ground_temperature: 280 K
   humidity: 5 g/m3
@@ -152,14 +154,13 @@ def test_layered_atmosphere_with_weather(tmp_path):
     - {kind: rain, base: 0 m, top: 2 km, rain_rate: 10 mm/h}
 sky: {model: atmosphere}
 """
+    )
     s = load_scenario(write(tmp_path, text))
     a = s.atmosphere
     assert a.profile == "mid_latitude_winter" and a.ground_temperature == 280.0
     assert math.isclose(a.humidity, 5e-3) and math.isclose(a.layers[0].liquid_water, 3e-4)
     assert math.isclose(a.layers[1].rain_rate, 10.0) and a.layers[1].top == 2000.0
-    for bad, key, words in (
-        ("liquid_water: 0.3 g/m3}", "atmosphere.layers[0]", "top must be above base"),
-    ):
+    for bad, key, words in (("liquid_water: 0.3 g/m3}", "atmosphere.layers[0]", "top must be above base"),):
         path = write(tmp_path, text.replace("top: 600 m, " + bad, "top: 0 m, " + bad))
         with pytest.raises(UserError, match=words) as e:
             load_scenario(path)
@@ -167,7 +168,9 @@ sky: {model: atmosphere}
     with pytest.raises(UserError, match="needs a layered atmosphere"):
         load_scenario(write(tmp_path, BASE + "atmosphere: none\nsky: {model: atmosphere}\n"))
     with pytest.raises(UserError, match="takes rain_rate"):
-        load_scenario(write(tmp_path, BASE + "atmosphere: {layers: [{kind: rain, base: 0, top: 9, liquid_water: 1 g/m3}]}\n"))
+        load_scenario(
+            write(tmp_path, BASE + "atmosphere: {layers: [{kind: rain, base: 0, top: 9, liquid_water: 1 g/m3}]}\n")
+        )
 
 
 def test_sky_forms(tmp_path):
@@ -196,8 +199,17 @@ def test_frequency_list_and_imager_alias(tmp_path):
 
 def test_overrides(tmp_path):
     raw = {"render": {"spp": 4}, "scene": [{"material": "a"}, {"material": "b"}]}
-    out = apply_overrides(raw, ["render.spp=64", "scene[1].material=metal", "scene.0.material=x",
-                                "sky.model=uniform", "imager.resolution=[100, 80]", "name=a b"])
+    out = apply_overrides(
+        raw,
+        [
+            "render.spp=64",
+            "scene[1].material=metal",
+            "scene.0.material=x",
+            "sky.model=uniform",
+            "imager.resolution=[100, 80]",
+            "name=a b",
+        ],
+    )
     assert out["render"]["spp"] == 64 and out["scene"][1]["material"] == "metal"
     assert out["scene"][0]["material"] == "x" and out["sky"] == {"model": "uniform"}
     assert out["imager"]["resolution"] == [100, 80] and out["name"] == "a b"
@@ -210,17 +222,30 @@ def test_overrides(tmp_path):
 
 def test_override_values_and_errors():
     raw = {"sky": None, "materials": {"7": {"temperature": "1 K"}}, "scene": [{"transform": {"scale": 1}}]}
-    out = apply_overrides(raw, ["sky.temperature=290 K", "render.threshold=1e-3", "render.previews=true",
-                                "name=[not yaml", "scene[0].transform.scale=[1, 2, 3]", "materials.7.temperature=2 K",
-                                "output.dir="])
+    out = apply_overrides(
+        raw,
+        [
+            "sky.temperature=290 K",
+            "render.threshold=1e-3",
+            "render.previews=true",
+            "name=[not yaml",
+            "scene[0].transform.scale=[1, 2, 3]",
+            "materials.7.temperature=2 K",
+            "output.dir=",
+        ],
+    )
     assert out["sky"] == {"temperature": "290 K"}  # a null mapping is replaced, as a missing one is created
     # YAML 1.1 reads 1e-3 (no dot) as a string; the schema accepts numeric strings
     assert out["render"] == {"threshold": "1e-3", "previews": True}
     assert out["name"] == "[not yaml" and out["scene"][0]["transform"]["scale"] == [1, 2, 3]
     assert out["materials"]["7"]["temperature"] == "2 K" and out["output"]["dir"] == ""
-    for item, key in [("render.spp", "render.spp"), ("scene[3].material=x", "scene[3].material"),
-                      ("scene.a=x", "scene.a"), ("render..spp=1", "render..spp"), ("scene[0].transform.scale.x=1",
-                                                                                      "scene[0].transform.scale.x")]:
+    for item, key in [
+        ("render.spp", "render.spp"),
+        ("scene[3].material=x", "scene[3].material"),
+        ("scene.a=x", "scene.a"),
+        ("render..spp=1", "render..spp"),
+        ("scene[0].transform.scale.x=1", "scene[0].transform.scale.x"),
+    ]:
         with pytest.raises(UserError) as e:
             apply_overrides({"scene": [{"transform": {"scale": 1}}]}, [item])
         assert e.value.file == "--set" and e.value.key == key and str(e.value).startswith(f"--set: {key}: ")
@@ -267,7 +292,11 @@ def test_cli_values_apply_after_overrides(tmp_path):
         (("name: t", "name: t\noutput: {dir: 5}"), "output.dir", "folder path"),
         (("name: t", "name: t\noutput: {channels: [I, I]}"), "output.channels", "twice"),
         (("name: t", "name: t\noutput: {aux: [normals]}"), "output.aux", "unknown auxiliary channel"),
-        (("name: t", "name: t\natmosphere: {loss: 0.9 dB/s}"), "atmosphere.loss", "not an attenuation; expected e.g. '0.9 dB/km'"),
+        (
+            ("name: t", "name: t\natmosphere: {loss: 0.9 dB/s}"),
+            "atmosphere.loss",
+            "not an attenuation; expected e.g. '0.9 dB/km'",
+        ),
         (("name: t", "name: t\natmosphere: {temprature: 3 K}"), "atmosphere.temprature", "allowed: model, profile"),
         (("name: t", "name: t\nmaterials: [asphalt]"), "materials", "mapping"),
         (("name: t", "name: t\nfrequencies: 95 GHz"), "frequencies", "did you mean 'frequency'"),
@@ -283,8 +312,11 @@ def test_cli_values_apply_after_overrides(tmp_path):
         (("m.obj, material: concrete", "m.obj"), "scene[0]", "exactly one"),
         (("m.obj", "s.yaml"), "scene[0].mesh", "unsupported mesh format"),
         (("material: concrete", "material: concrete, transform: {scale: -1}"), "scene[0].transform.scale", "> 0"),
-        (("material: concrete", "material: concrete, transform: {rotate: [0, 0, 1]}"), "scene[0].transform.rotate",
-         "allowed: translate, rotate_deg, scale"),
+        (
+            ("material: concrete", "material: concrete, transform: {rotate: [0, 0, 1]}"),
+            "scene[0].transform.rotate",
+            "allowed: translate, rotate_deg, scale",
+        ),
         (("material: concrete", "material: concrete, up_axis: x"), "scene[0].up_axis", "'y' or 'z'"),
         (("material: concrete", "material: concrete, key: mine"), "scene[0].key", "unknown key"),
         (("material: concrete", "materials: {a: [b]}"), "scene[0].materials.a", "string"),

@@ -49,8 +49,13 @@ def _camera(scn):
 def test_a_radius_in_metres_and_as_an_angle_by_the_pinhole_closed_form(tmp_path):
     """A pinhole of horizontal field F over W pixels has a focal length of (W / 2) / tan(F / 2)
     pixels: a radius r [m] at distance d spans f r / d pixels, an angle a spans f tan(a)."""
-    scn = load_scenario(_scenario(tmp_path, "{m: {center: [0, 5, 1.5], radius: 0.25 m}, "
-                                            "a: {center: [0, 5, 1.5], radius: 0.5 deg}, p: {center: [0, 5, 1.5]}}"))
+    scn = load_scenario(
+        _scenario(
+            tmp_path,
+            "{m: {center: [0, 5, 1.5], radius: 0.25 m}, "
+            "a: {center: [0, 5, 1.5], radius: 0.5 deg}, p: {center: [0, 5, 1.5]}}",
+        )
+    )
     shapes = region_shapes(scn.output.regions, _camera(scn))
     f = 20 / math.tan(math.radians(10.0))
     assert shapes["m"][0] == "circle" and shapes["m"][1:3] == pytest.approx((20.0, 15.0), abs=PX)
@@ -70,11 +75,14 @@ def test_a_world_box_is_the_rectangle_of_its_projected_corners(tmp_path):
     assert (y0, y1) == (math.floor(15 - half_h), math.ceil(15 + half_h))
 
 
-@pytest.mark.parametrize("regions, words", [
-    ("{a: {center: [0, 5, 1.5], radius: 3 apples}}", "radius is pixels"),
-    ("{a: {bounds: [[1, 5, 1], [0, 6, 2]]}}", "lower corner"),
-    ("{a: {center: [0, 5, 1.5], box: [0, 0, 2, 2]}}", "exactly one of"),
-])
+@pytest.mark.parametrize(
+    "regions, words",
+    [
+        ("{a: {center: [0, 5, 1.5], radius: 3 apples}}", "radius is pixels"),
+        ("{a: {bounds: [[1, 5, 1], [0, 6, 2]]}}", "lower corner"),
+        ("{a: {center: [0, 5, 1.5], box: [0, 0, 2, 2]}}", "exactly one of"),
+    ],
+)
 def test_bad_regions_are_named(tmp_path, regions, words):
     with pytest.raises(UserError) as info:
         load_scenario(_scenario(tmp_path, regions))
@@ -95,20 +103,26 @@ def test_pixel_regions_scale_with_the_image(tmp_path):
     same = load_scenario(ROOT / "configs/landing_95ghz.yaml")
     assert same.output.regions["beacons"].box == (218, 247, 282, 254) and same.output.regions["runway"].radius == 3
     # scene-unit regions do not scale
-    scn = load_scenario(_scenario(tmp_path, "{m: {center: [0, 5, 1.5], radius: 0.25 m}}"), ["imager.resolution=[20, 15]"])
+    scn = load_scenario(
+        _scenario(tmp_path, "{m: {center: [0, 5, 1.5], radius: 0.25 m}}"), ["imager.resolution=[20, 15]"]
+    )
     assert scn.output.regions["m"].radius == 0.25
 
 
 def test_validate_checks_regions_in_view(tmp_path):
-    path = _scenario(tmp_path, "{in: {center: [0, 5, 1.5], radius: 0.1 m}, out: {center: [40, 5, 1.5]}, "
-                               "behind: {center: [0, -5, 1.5]}}")
+    path = _scenario(
+        tmp_path,
+        "{in: {center: [0, 5, 1.5], radius: 0.1 m}, out: {center: [40, 5, 1.5]}, behind: {center: [0, -5, 1.5]}}",
+    )
     res = runner.invoke(app, ["validate", str(path)])
     assert res.exit_code == 2
     assert f"{path}: output.regions.out: falls outside the 40 x 30 image" in res.output
     assert f"{path}: output.regions.behind: lies behind the imager" in res.output
     assert "output.regions.in" not in res.output
     # the control: the region in view alone validates, with its pixels printed
-    res = runner.invoke(app, ["validate", str(path), "--set", "output.regions={in: {center: [0, 5, 1.5], radius: 0.1 m}}"])
+    res = runner.invoke(
+        app, ["validate", str(path), "--set", "output.regions={in: {center: [0, 5, 1.5], radius: 0.1 m}}"]
+    )
     assert res.exit_code == 0, res.output
     assert "circle_px: [20.0, 15.0," in res.output
     # partly outside: a warning
@@ -120,13 +134,14 @@ def test_region_masks_of_a_box_in_metres(tmp_path):
     scn = load_scenario(_scenario(tmp_path, "{b: {bounds: [[-0.5, 4.9, 1.2], [0.5, 5.1, 1.8]]}}"))
     m = region_masks(scn.output.regions, _camera(scn))["b"]
     _, x0, y0, x1, y1 = region_shapes(scn.output.regions, _camera(scn))["b"]
-    assert m.sum() == (x1 - x0) * (y1 - y0) and np.all(m[int(y0):int(y1), int(x0):int(x1)])
+    assert m.sum() == (x1 - x0) * (y1 - y0) and np.all(m[int(y0) : int(y1), int(x0) : int(x1)])
 
 
 def test_pixel_regions_set_alongside_the_resolution_are_the_rendered_images():
     """A region given with --set next to a new resolution is meant for that image: not scaled."""
-    scn = load_scenario(ROOT / "configs/landing_95ghz.yaml",
-                        ["imager.resolution=[100, 100]", "output.regions.runway.radius=2"])
+    scn = load_scenario(
+        ROOT / "configs/landing_95ghz.yaml", ["imager.resolution=[100, 100]", "output.regions.runway.radius=2"]
+    )
     assert scn.output.regions["runway"].radius == 2 and scn.output.regions["beacons"].box == (218, 247, 282, 254)
 
 
@@ -149,8 +164,9 @@ def test_validate_preview_draws_the_view_and_the_regions(tmp_path):
     res = runner.invoke(app, ["validate", str(path), "--preview", str(tmp_path / "view.png")])
     assert res.exit_code == 0, res.output
     assert _colour_pixels(tmp_path / "view.png", to_rgb(REGION_COLOURS[0])) > 20
-    res = runner.invoke(app, ["validate", str(path), "--set", "output.regions={}", "--preview",
-                              str(tmp_path / "none.png")])
+    res = runner.invoke(
+        app, ["validate", str(path), "--set", "output.regions={}", "--preview", str(tmp_path / "none.png")]
+    )
     assert res.exit_code == 0, res.output
     assert _colour_pixels(tmp_path / "none.png", to_rgb(REGION_COLOURS[0])) == 0
     res = runner.invoke(app, ["validate", str(ROOT / "configs/po_sphere.yaml"), "--preview", str(tmp_path / "x.png")])

@@ -50,11 +50,18 @@ atmosphere:
     - {kind: rain, base: 0 m, top: 3 km, rain_rate: 10 mm/h}
 output: {regions: {r: {center: [0, 0, 0]}}}
 """
-RECEIVER = BASE.replace("noise: 1 K}", "receiver: {noise_temperature: 600 K, bandwidth: 2 GHz, integration_time: 1 ms, "
-                        "mode: dicke, reference_temperature: 300 K},\n         antenna: {spillover: 0.05}}")
+RECEIVER = BASE.replace(
+    "noise: 1 K}",
+    "receiver: {noise_temperature: 600 K, bandwidth: 2 GHz, integration_time: 1 ms, "
+    "mode: dicke, reference_temperature: 300 K},\n         antenna: {spillover: 0.05}}",
+)
 SCANNED = BASE.replace("noise: 1 K}", "receiver: {noise_figure: 5 dB, bandwidth: 2 GHz, frame_rate: 10 Hz}}")
-UNIFORM = (BASE.split("atmosphere:")[0] + "atmosphere: {loss: 0.9 dB/km, temperature: 288 K}\n"
-           + "output:" + BASE.split("output:")[1])
+UNIFORM = (
+    BASE.split("atmosphere:")[0]
+    + "atmosphere: {loss: 0.9 dB/km, temperature: 288 K}\n"
+    + "output:"
+    + BASE.split("output:")[1]
+)
 
 
 def write(tmp_path: Path, text: str) -> Path:
@@ -70,22 +77,43 @@ def write(tmp_path: Path, text: str) -> Path:
 # ------------------------------------------------------------------------------------------------
 
 LENGTHS = ["1.5 km", "250 mm", "3 ft", "2 in", "0.1 mi", "0.01 nmi", "40 cm", "5e5 um", "2 yd", 7]
-ANGLES = ["0.5 rad", "600 mrad", "10 deg", "600 arcmin", "3600 arcsec", "0.1 turn", "50 grad", "20 gon",
-          "2 mil", 10]
+ANGLES = ["0.5 rad", "600 mrad", "10 deg", "600 arcmin", "3600 arcsec", "0.1 turn", "50 grad", "20 gon", "2 mil", 10]
 TEMPERATURES = ["300 K", "20 degC", "20 °C", "68 degF", "527 degR", "-5 degC", "290000 mK", "20 celsius", 288]
 DIFFERENCES = ["2 K", "1 delta_degC", "1.8 delta_degF", "500 mK", 3]
 FREQUENCIES = ["95 GHz", "0.095 THz", "95000 MHz", "9.5e10 Hz", "3.5e7 kHz"]
 BANDWIDTHS = ["1 GHz", "500 MHz", "0.002 THz", "2e9 Hz", 0]
-DENSITIES = [("7.5 g/m3", "7.5 g/m**3"), ("0.3 g/m^3", "0.3 g/m**3"), "0.0075 kg/m**3", "7.5 mg/L", "3e-4 kg/m**3",
-             "0.5 g/L", 0.3]
+DENSITIES = [
+    ("7.5 g/m3", "7.5 g/m**3"),
+    ("0.3 g/m^3", "0.3 g/m**3"),
+    "0.0075 kg/m**3",
+    "7.5 mg/L",
+    "3e-4 kg/m**3",
+    "0.5 g/L",
+    0.3,
+]
 RATES = ["10 mm/h", "10 mm/hr", "0.5 in/h", "1e-6 m/s", "25 mm/hour", "2.4 cm/day", 10]
 TIMES = ["1 ms", "20 us", "0.5 s", "2e-3 s", "1 minute", 0.01]
 ATTENUATIONS = ["0.9 dB/km", "0.0009 dB/m", "0.2 Np/km", "2e-4 Np/m", "1 dB/mi", "0.9 dB/kilometer", 0.9]
 
-BARE = {"time": "s", "length": "m", "angle": "deg", "temperature": "K", "temperature_difference": "K",
-        "density": "g/m**3", "rate": "mm/h"}
-SI = {"time": "s", "frequency": "Hz", "length": "m", "angle": "rad", "temperature": "K", "temperature_difference": "K",
-      "density": "kg/m**3", "rate": "m/s"}
+BARE = {
+    "time": "s",
+    "length": "m",
+    "angle": "deg",
+    "temperature": "K",
+    "temperature_difference": "K",
+    "density": "g/m**3",
+    "rate": "mm/h",
+}
+SI = {
+    "time": "s",
+    "frequency": "Hz",
+    "length": "m",
+    "angle": "rad",
+    "temperature": "K",
+    "temperature_difference": "K",
+    "density": "kg/m**3",
+    "rate": "m/s",
+}
 
 
 def expected(case, kind: str, unit: str | None = None) -> float:
@@ -127,58 +155,98 @@ TABLE = {
     "imager.look_at": Row("length", "imager.look_at[0]", lambda s: s.imager.look_at[0], LENGTHS),
     "imager.up": Row("length", "imager.up[0]", lambda s: s.imager.up[0], LENGTHS),
     "imager.fov": Row("angle", "imager.fov", lambda s: s.imager.fov, ANGLES, wrong="3 m"),
-    "imager.aperture_diameter": Row("length", "imager.aperture_diameter", lambda s: s.imager.aperture_diameter,
-                                    LENGTHS),
+    "imager.aperture_diameter": Row(
+        "length", "imager.aperture_diameter", lambda s: s.imager.aperture_diameter, LENGTHS
+    ),
     "imager.noise": Row("temperature_difference", "imager.noise", lambda s: s.imager.noise, DIFFERENCES),
     "imager.focus_distance": Row("length", "imager.focus_distance", lambda s: s.imager.focus_distance, LENGTHS),
     "imager.bandwidth": Row("frequency", "imager.bandwidth", lambda s: s.imager.bandwidth, BANDWIDTHS),
-    "imager.receiver.noise_temperature": Row("temperature", "imager.receiver.noise_temperature",
-                                             lambda s: s.imager.receiver.noise_temperature, TEMPERATURES, RECEIVER),
-    "imager.receiver.bandwidth": Row("frequency", "imager.receiver.bandwidth", lambda s: s.imager.receiver.bandwidth,
-                                     FREQUENCIES, RECEIVER),
-    "imager.receiver.integration_time": Row("time", "imager.receiver.integration_time",
-                                            lambda s: s.imager.receiver.integration_time, TIMES, RECEIVER),
-    "imager.receiver.frame_rate": Row("frequency", "imager.receiver.frame_rate", lambda s: s.imager.receiver.frame_rate,
-                                      ["30 Hz", "0.03 kHz", "1e-5 GHz"], SCANNED),
-    "imager.receiver.reference_temperature": Row("temperature", "imager.receiver.reference_temperature",
-                                                 lambda s: s.imager.receiver.reference_temperature, TEMPERATURES,
-                                                 RECEIVER),
-    "imager.antenna.spillover_temperature": Row("temperature", "imager.antenna.spillover_temperature",
-                                                lambda s: s.imager.antenna.spillover_temperature, TEMPERATURES,
-                                                RECEIVER),
-    "scene[].transform.translate": Row("length", "scene[0].transform.translate",
-                                       lambda s: s.scene[0].transform.translate[2], LENGTHS),
-    "scene[].transform.rotate_deg": Row("angle", "scene[0].transform.rotate_deg",
-                                        lambda s: s.scene[0].transform.rotate_deg[2], ANGLES + ["-0.25 turn"],
-                                        unit="deg"),
-    "atmosphere.ground_temperature": Row("temperature", "atmosphere.ground_temperature",
-                                         lambda s: s.atmosphere.ground_temperature, TEMPERATURES),
+    "imager.receiver.noise_temperature": Row(
+        "temperature",
+        "imager.receiver.noise_temperature",
+        lambda s: s.imager.receiver.noise_temperature,
+        TEMPERATURES,
+        RECEIVER,
+    ),
+    "imager.receiver.bandwidth": Row(
+        "frequency", "imager.receiver.bandwidth", lambda s: s.imager.receiver.bandwidth, FREQUENCIES, RECEIVER
+    ),
+    "imager.receiver.integration_time": Row(
+        "time", "imager.receiver.integration_time", lambda s: s.imager.receiver.integration_time, TIMES, RECEIVER
+    ),
+    "imager.receiver.frame_rate": Row(
+        "frequency",
+        "imager.receiver.frame_rate",
+        lambda s: s.imager.receiver.frame_rate,
+        ["30 Hz", "0.03 kHz", "1e-5 GHz"],
+        SCANNED,
+    ),
+    "imager.receiver.reference_temperature": Row(
+        "temperature",
+        "imager.receiver.reference_temperature",
+        lambda s: s.imager.receiver.reference_temperature,
+        TEMPERATURES,
+        RECEIVER,
+    ),
+    "imager.antenna.spillover_temperature": Row(
+        "temperature",
+        "imager.antenna.spillover_temperature",
+        lambda s: s.imager.antenna.spillover_temperature,
+        TEMPERATURES,
+        RECEIVER,
+    ),
+    "scene[].transform.translate": Row(
+        "length", "scene[0].transform.translate", lambda s: s.scene[0].transform.translate[2], LENGTHS
+    ),
+    "scene[].transform.rotate_deg": Row(
+        "angle",
+        "scene[0].transform.rotate_deg",
+        lambda s: s.scene[0].transform.rotate_deg[2],
+        ANGLES + ["-0.25 turn"],
+        unit="deg",
+    ),
+    "atmosphere.ground_temperature": Row(
+        "temperature", "atmosphere.ground_temperature", lambda s: s.atmosphere.ground_temperature, TEMPERATURES
+    ),
     "atmosphere.humidity": Row("density", "atmosphere.humidity", lambda s: s.atmosphere.humidity, DENSITIES),
-    "atmosphere.ground_altitude": Row("length", "atmosphere.ground_altitude", lambda s: s.atmosphere.ground_altitude,
-                                      LENGTHS),
-    "atmosphere.loss": Row("attenuation", "atmosphere.loss", lambda s: s.atmosphere.loss, ATTENUATIONS,
-                           base=UNIFORM, wrong="0.9 dB/s"),
-    "atmosphere.temperature": Row("temperature", "atmosphere.temperature", lambda s: s.atmosphere.temperature,
-                                  TEMPERATURES, base=UNIFORM),
-    "atmosphere.layers[].base": Row("length", "atmosphere.layers[0].base", lambda s: s.atmosphere.layers[0].base,
-                                    [c for c in LENGTHS if c != "1.5 km"]),  # below the fog's top (600 m)
-    "atmosphere.layers[].top": Row("length", "atmosphere.layers[0].top", lambda s: s.atmosphere.layers[0].top,
-                                   LENGTHS),
-    "atmosphere.layers[].liquid_water": Row("density", "atmosphere.layers[0].liquid_water",
-                                            lambda s: s.atmosphere.layers[0].liquid_water, DENSITIES),
-    "atmosphere.layers[].rain_rate": Row("rate", "atmosphere.layers[1].rain_rate",
-                                         lambda s: s.atmosphere.layers[1].rain_rate, RATES, unit="mm/h"),
+    "atmosphere.ground_altitude": Row(
+        "length", "atmosphere.ground_altitude", lambda s: s.atmosphere.ground_altitude, LENGTHS
+    ),
+    "atmosphere.loss": Row(
+        "attenuation", "atmosphere.loss", lambda s: s.atmosphere.loss, ATTENUATIONS, base=UNIFORM, wrong="0.9 dB/s"
+    ),
+    "atmosphere.temperature": Row(
+        "temperature", "atmosphere.temperature", lambda s: s.atmosphere.temperature, TEMPERATURES, base=UNIFORM
+    ),
+    "atmosphere.layers[].base": Row(
+        "length",
+        "atmosphere.layers[0].base",
+        lambda s: s.atmosphere.layers[0].base,
+        [c for c in LENGTHS if c != "1.5 km"],
+    ),  # below the fog's top (600 m)
+    "atmosphere.layers[].top": Row("length", "atmosphere.layers[0].top", lambda s: s.atmosphere.layers[0].top, LENGTHS),
+    "atmosphere.layers[].liquid_water": Row(
+        "density", "atmosphere.layers[0].liquid_water", lambda s: s.atmosphere.layers[0].liquid_water, DENSITIES
+    ),
+    "atmosphere.layers[].rain_rate": Row(
+        "rate", "atmosphere.layers[1].rain_rate", lambda s: s.atmosphere.layers[1].rain_rate, RATES, unit="mm/h"
+    ),
     "sky.temperature": Row("temperature", "sky.temperature", lambda s: s.sky.temperature, TEMPERATURES),
-    "sky.ground_temperature": Row("temperature", "sky.ground_temperature", lambda s: s.sky.ground_temperature,
-                                  TEMPERATURES),
-    "render.target_error": Row("temperature_difference", "render.target_error", lambda s: s.render.target_error,
-                               DIFFERENCES),
-    "render.default_temperature": Row("temperature", "render.default_temperature",
-                                      lambda s: s.render.default_temperature, TEMPERATURES),
-    "render.atmosphere_tolerance": Row("temperature_difference", "render.atmosphere_tolerance",
-                                       lambda s: s.render.atmosphere_tolerance, DIFFERENCES),
-    "output.regions{}.center": Row("length", "output.regions.r.center", lambda s: s.output.regions["r"].center[1],
-                                   LENGTHS),
+    "sky.ground_temperature": Row(
+        "temperature", "sky.ground_temperature", lambda s: s.sky.ground_temperature, TEMPERATURES
+    ),
+    "render.target_error": Row(
+        "temperature_difference", "render.target_error", lambda s: s.render.target_error, DIFFERENCES
+    ),
+    "render.default_temperature": Row(
+        "temperature", "render.default_temperature", lambda s: s.render.default_temperature, TEMPERATURES
+    ),
+    "render.atmosphere_tolerance": Row(
+        "temperature_difference", "render.atmosphere_tolerance", lambda s: s.render.atmosphere_tolerance, DIFFERENCES
+    ),
+    "output.regions{}.center": Row(
+        "length", "output.regions.r.center", lambda s: s.output.regions["r"].center[1], LENGTHS
+    ),
 }
 
 
@@ -288,8 +356,15 @@ def test_refused_with_the_key(tmp_path, key, value, words):
     assert e.value.key == key and words in e.value.message, str(e.value)
 
 
-@pytest.mark.parametrize("value, words", [("0.9 /km", "dB or Np"), ("0.9 dB", "is not an attenuation"),
-                                          ("-1 dB/km", ">= 0"), ("0.9 dB/K", "is not an attenuation")])
+@pytest.mark.parametrize(
+    "value, words",
+    [
+        ("0.9 /km", "dB or Np"),
+        ("0.9 dB", "is not an attenuation"),
+        ("-1 dB/km", ">= 0"),
+        ("0.9 dB/K", "is not an attenuation"),
+    ],
+)
 def test_attenuation_refused(tmp_path, value, words):
     with pytest.raises(UserError) as e:
         load_scenario(write(tmp_path, UNIFORM), [f"atmosphere.loss={value}"])
@@ -320,15 +395,32 @@ def test_bare_numbers_keep_their_documented_unit():
 DISPLAY_RTOL = 1e-11  # scenario_to_display writes 12 significant digits
 
 
-@pytest.mark.parametrize("base, overrides", [
-    (BASE, ["imager.fov=0.5 rad", "imager.noise=1 delta_degC", "imager.position[2]=200 ft",
-            "imager.focus_distance=1 mi", "imager.bandwidth=0.002 THz", "atmosphere.humidity=7.5 mg/L", "atmosphere.ground_temperature=20 degC",
-            "atmosphere.layers[1].rain_rate=0.5 in/h", "atmosphere.layers[0].top=2000 ft",
-            "render.target_error=900 mK", "render.atmosphere_tolerance=0.018 delta_degF",
-            "render.default_temperature=68 degF", "sky.ground_temperature=-5 degC",
-            "scene[0].transform.rotate_deg=[0, 0, 0.25 turn]", "output.regions.r.center=[1 km, 2 ft, 3 in]"]),
-    (UNIFORM, ["atmosphere.loss=0.2 Np/km", "atmosphere.temperature=15 degC", "frequency=[0.035 THz, 95 GHz]"]),
-])
+@pytest.mark.parametrize(
+    "base, overrides",
+    [
+        (
+            BASE,
+            [
+                "imager.fov=0.5 rad",
+                "imager.noise=1 delta_degC",
+                "imager.position[2]=200 ft",
+                "imager.focus_distance=1 mi",
+                "imager.bandwidth=0.002 THz",
+                "atmosphere.humidity=7.5 mg/L",
+                "atmosphere.ground_temperature=20 degC",
+                "atmosphere.layers[1].rain_rate=0.5 in/h",
+                "atmosphere.layers[0].top=2000 ft",
+                "render.target_error=900 mK",
+                "render.atmosphere_tolerance=0.018 delta_degF",
+                "render.default_temperature=68 degF",
+                "sky.ground_temperature=-5 degC",
+                "scene[0].transform.rotate_deg=[0, 0, 0.25 turn]",
+                "output.regions.r.center=[1 km, 2 ft, 3 in]",
+            ],
+        ),
+        (UNIFORM, ["atmosphere.loss=0.2 Np/km", "atmosphere.temperature=15 degC", "frequency=[0.035 THz, 95 GHz]"]),
+    ],
+)
 def test_display_round_trips_any_units(tmp_path, base, overrides):
     """`scenario_to_display` writes SI values back as unit strings that load to the same values."""
     import yaml
@@ -376,11 +468,16 @@ MATERIAL_CASES = {
     "temperature": ("temperature", lambda v: {"eps": [3.0, 0.1], "temperature": v}, lambda m: m.temperature),
     "thickness": ("length", lambda v: {"kind": "thin", "eps": [3.0, 0.1], "thickness": v}, lambda m: m.thickness),
     "eps": ("frequency", lambda v: {"eps": {v: [3.0, 0.1]}}, lambda m: m.freqs[0]),
-    "coating[].thickness": ("length", lambda v: {"eps": [3.0, 0.1], "coating": [{"material": "concrete",
-                                                                                   "thickness": v}]},
-                            lambda m: m.coating[0].thickness),
-    "coating[].temperature": ("temperature", lambda v: {"eps": [3.0, 0.1], "coating": [
-        {"material": "concrete", "thickness": "1 mm", "temperature": v}]}, lambda m: m.coating[0].temperature),
+    "coating[].thickness": (
+        "length",
+        lambda v: {"eps": [3.0, 0.1], "coating": [{"material": "concrete", "thickness": v}]},
+        lambda m: m.coating[0].thickness,
+    ),
+    "coating[].temperature": (
+        "temperature",
+        lambda v: {"eps": [3.0, 0.1], "coating": [{"material": "concrete", "thickness": "1 mm", "temperature": v}]},
+        lambda m: m.coating[0].temperature,
+    ),
 }
 UNITS_OF = {"temperature": TEMPERATURES, "length": LENGTHS, "frequency": FREQUENCIES}
 
@@ -414,6 +511,7 @@ def test_bump_lengths(monkeypatch, case):
     def fake_surface(rms, correlation, size, seed=0):
         seen.update(rms=rms, correlation=correlation, size=size)
         import numpy as np
+
         return np.zeros((16, 16))
 
     monkeypatch.setattr(bump_mod, "gaussian_surface", fake_surface)
@@ -427,8 +525,11 @@ def test_bump_lengths(monkeypatch, case):
 
 def test_bump_wrong_dimension_names_the_key():
     with pytest.raises(UserError) as e:
-        bump_mod.make_bump({"model": "gaussian", "rms": "3 K", "correlation": "3 cm", "size": "1 m"},
-                           file="s.yaml", key="materials.x.bump")
+        bump_mod.make_bump(
+            {"model": "gaussian", "rms": "3 K", "correlation": "3 cm", "size": "1 m"},
+            file="s.yaml",
+            key="materials.x.bump",
+        )
     assert "materials.x.bump.rms" in str(e.value) and "is not a length" in str(e.value)
 
 
@@ -482,8 +583,10 @@ def test_units_import_without_dask_and_dask_still_imports_after():
     import subprocess
     import sys
 
-    code = ("import sys\nimport pmmw.units as u\n"
-            "print('dask' in sys.modules, 'jinja2' in sys.modules, u.parse_quantity('95 GHz', 'frequency'))\n"
-            "import dask.array\nprint('dask' in sys.modules)\n")
+    code = (
+        "import sys\nimport pmmw.units as u\n"
+        "print('dask' in sys.modules, 'jinja2' in sys.modules, u.parse_quantity('95 GHz', 'frequency'))\n"
+        "import dask.array\nprint('dask' in sys.modules)\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "False", "95000000000.0", "True"]

@@ -33,7 +33,7 @@ def test_uniform_aperture_is_the_airy_pattern():
 def test_parabolic_taper_matches_its_closed_form_and_silver_table():
     # f = 1 - rho^2 (no pedestal): F(u) = 2 J2(u) / u^2, normalized 8 J2(u) / u^2
     ap = Aperture("parabolic", edge_taper_db=400.0)
-    assert ap.power(U) == pytest.approx((8 * jv(2, U) / U ** 2) ** 2, abs=1e-9)
+    assert ap.power(U) == pytest.approx((8 * jv(2, U) / U**2) ** 2, abs=1e-9)
     s = ap.beam_shape()
     # Silver 1949, Table 6.2, (1 - r^2)^1: HPBW 72.8 lambda/D deg, first sidelobe 24.6 dB down, gain
     # factor 0.75; printed to 0.1 deg and 0.1 dB. The closed form above gives 72.75 deg: the table's
@@ -47,7 +47,7 @@ def test_parabolic_on_pedestal_is_the_sum_of_its_parts():
     # f = C + (1 - C)(1 - rho^2): F = C J1(u)/u + (1 - C) 2 J2(u)/u^2 (linearity of the transform)
     te = 10.0
     c = 10 ** (-te / 20)
-    f = c * j1(U) / U + (1 - c) * 2 * jv(2, U) / U ** 2
+    f = c * j1(U) / U + (1 - c) * 2 * jv(2, U) / U**2
     f0 = c / 2 + (1 - c) / 4
     ap = Aperture("parabolic", edge_taper_db=te)
     assert ap.power(U) == pytest.approx((f / f0) ** 2, abs=1e-9)
@@ -60,7 +60,7 @@ def test_parabolic_on_pedestal_is_the_sum_of_its_parts():
 def test_blockage_raises_the_first_sidelobe_as_the_annulus_closed_form():
     # annulus b < rho < 1: F(u) = J1(u)/u - b^2 J1(b u)/(b u); F(0) = (1 - b^2) / 2
     b = 0.2
-    f = j1(U) / U - b ** 2 * j1(b * U) / (b * U)
+    f = j1(U) / U - b**2 * j1(b * U) / (b * U)
     ap = Aperture(blockage=b)
     assert ap.power(U) == pytest.approx((f / ((1 - b * b) / 2)) ** 2, abs=1e-9)
     closed = 10 * np.log10(np.max(((f / ((1 - b * b) / 2)) ** 2)[(U > 4.0) & (U < 7.0)]))
@@ -76,7 +76,7 @@ def test_gaussian_feed_spillover_is_the_power_outside_the_rim():
     te = 12.0
     w = np.sqrt(2.0 / (te / 10 * np.log(10)))  # a = 1: exp(-2/w^2) = 10^(-Te/10)
     r = np.linspace(0, 12, 240001)  # the rim r = 1 on the grid
-    p = np.exp(-2 * r ** 2 / w ** 2) * r
+    p = np.exp(-2 * r**2 / w**2) * r
     outside = np.trapezoid(p[r >= 1.0], r[r >= 1.0]) / np.trapezoid(p, r)
     assert gaussian_feed_spillover(te) == pytest.approx(outside, rel=1e-6)
     g = Aperture("gaussian", edge_taper_db=te).beam_shape()

@@ -27,14 +27,26 @@ runner = CliRunner()
 # of noise; regions: the metal block mirroring the 40 K sky, and two ground boxes mirror images of
 # each other across the view's vertical mid-line (the same material at the same angles)
 SCENE = {
-    "name": "tiny", "frequency": "35 GHz",
-    "imager": {"position": [0, 0, 1.5], "look_at": [0, 4, 0.1], "fov": "20 deg", "resolution": [24, 16],
-               "noise": "1 K", "aperture_diameter": "0.3 m"},
+    "name": "tiny",
+    "frequency": "35 GHz",
+    "imager": {
+        "position": [0, 0, 1.5],
+        "look_at": [0, 4, 0.1],
+        "fov": "20 deg",
+        "resolution": [24, 16],
+        "noise": "1 K",
+        "aperture_diameter": "0.3 m",
+    },
     "scene": [{"mesh": "ground.obj", "material": "concrete"}, {"mesh": "block.obj", "material": "metal"}],
     "sky": {"model": "uniform", "temperature": "40 K"},
     "render": {"spp": 4, "max_depth": 4, "tile": 8, "workers": 1},
-    "output": {"regions": {"block": {"center": [0, 4, 0.1], "radius": 2}, "ground": {"box": [0, 12, 6, 16]},
-                           "mirror": {"box": [18, 12, 24, 16]}}},
+    "output": {
+        "regions": {
+            "block": {"center": [0, 4, 0.1], "radius": 2},
+            "ground": {"box": [0, 12, 6, 16]},
+            "mirror": {"box": [18, 12, 24, 16]},
+        }
+    },
 }
 
 
@@ -52,7 +64,7 @@ def _render(folder, out, *args):
 
 
 def _gaussian(s: float, radius: int) -> np.ndarray:
-    y, x = np.mgrid[-radius:radius + 1, -radius:radius + 1]
+    y, x = np.mgrid[-radius : radius + 1, -radius : radius + 1]
     k = np.exp(-(x * x + y * y) / (2.0 * s * s))
     return k / k.sum()
 
@@ -70,10 +82,12 @@ def test_an_unblurred_region_has_snr_contrast_times_sqrt_n_over_sigma():
         mask = np.zeros((30, 40), bool)
         mask.ravel()[rng.choice(mask.size, n_pixels, replace=False)] = True
         for dT, sigma in ((2.5, 1.0), (-0.3, 4.0)):
-            assert detection.region_snr(dT, mask, None, sigma) == pytest.approx(abs(dT) * np.sqrt(n_pixels) / sigma,
-                                                                                 rel=1e-12)
+            assert detection.region_snr(dT, mask, None, sigma) == pytest.approx(
+                abs(dT) * np.sqrt(n_pixels) / sigma, rel=1e-12
+            )
     assert detection.channel_sigma(2.0, "Ey2") == 2.0 and detection.channel_sigma(2.0, "I") == pytest.approx(
-        2.0 * np.sqrt(2.0), rel=1e-15)
+        2.0 * np.sqrt(2.0), rel=1e-15
+    )
     assert detection.region_snr(3.0, mask, None, 0.0) is None and detection.detectable(None) is None
     assert detection.detectable(5.0) is True and detection.detectable(4.999) is False
 
@@ -96,8 +110,7 @@ def test_a_region_far_smaller_than_the_psf_tends_to_n_times_the_psf_norm():
     n = int(mask.sum())
     autocorr = fftconvolve(psf, psf[::-1, ::-1], mode="full")  # R(d) at offset d + 2 radius
     pts = np.argwhere(mask)
-    exact = np.sqrt(sum(autocorr[2 * radius + dy, 2 * radius + dx] for dy, dx in
-                        (p - q for p in pts for q in pts)))
+    exact = np.sqrt(sum(autocorr[2 * radius + dy, 2 * radius + dx] for dy, dx in (p - q for p in pts for q in pts)))
     norm = detection.footprint_norm(mask, psf)
     assert norm == pytest.approx(exact, rel=1e-9)
     limit = n * np.sqrt(np.sum(psf**2))
@@ -119,7 +132,8 @@ def test_a_region_far_smaller_than_the_psf_tends_to_n_times_the_psf_norm():
         assert detection.footprint_norm(disk, airy) <= np.sqrt(disk.sum()) * (1 + 1e-9)
     # the matched filter of a uniform target's signal is the region's SNR (same d')
     assert detection.matched_filter_snr(1.5 * detection.footprint(mask, psf), 2.0) == pytest.approx(
-        detection.region_snr(1.5, mask, psf, 2.0), rel=1e-12)
+        detection.region_snr(1.5, mask, psf, 2.0), rel=1e-12
+    )
 
 
 def test_the_verdict_names_the_best_channel_first_and_the_threshold_cases():
@@ -173,8 +187,15 @@ def test_the_report_gives_snr_and_detectable_with_controls(folder, tmp_path):
     assert regions["criterion"] == detection.CRITERION and regions["channel"] == "Ey2"
     for pair in ("block - ground", "block - mirror", "ground - mirror"):
         for c in ("Ex2", "Ey2", "I"):
-            assert set(regions["contrasts"][pair][c]) >= {"K", "sigma", "stderr_K", "truncation_bound_K", "snr",
-                                                          "snr_stderr", "detectable"}
+            assert set(regions["contrasts"][pair][c]) >= {
+                "K",
+                "sigma",
+                "stderr_K",
+                "truncation_bound_K",
+                "snr",
+                "snr_stderr",
+                "detectable",
+            }
     block = regions["contrasts"]["block - ground"]
     assert all(block[c]["detectable"] is True for c in ("Ex2", "Ey2", "I"))
     assert regions["verdicts"]["block - ground"].startswith("block - ground: detectable in ")
@@ -239,7 +260,7 @@ def test_the_regions_preview_outlines_and_names_each_region(folder, tmp_path):
     path = tmp_path / "a" / "previews" / "tiny_regions.png"
     px = _png(path)[..., :3].astype(int)
     for colour in REGION_COLOURS[:3]:
-        rgb = np.array([int(colour[i:i + 2], 16) for i in (1, 3, 5)])
+        rgb = np.array([int(colour[i : i + 2], 16) for i in (1, 3, 5)])
         assert (np.abs(px - rgb).max(axis=-1) <= 40).sum() >= 50, colour
     rep = json.loads((tmp_path / "a" / "report.json").read_text())
     assert rep["regions_preview"] == "previews/tiny_regions.png"
@@ -279,8 +300,9 @@ def test_the_sweep_table_and_report_give_snr_and_detectable(folder, tmp_path):
     it leads with; the report states the criterion, where the block is detectable, and plots
     the SNR with the threshold."""
     out = tmp_path / "sw"
-    res = runner.invoke(app, ["sweep", str(folder / "tiny.yaml"), "--grid", "imager.noise=[1 K, 200 K]",
-                              "--out", str(out), "-q"])
+    res = runner.invoke(
+        app, ["sweep", str(folder / "tiny.yaml"), "--grid", "imager.noise=[1 K, 200 K]", "--out", str(out), "-q"]
+    )
     assert res.exit_code == 0, res.output
     with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))

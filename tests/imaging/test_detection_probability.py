@@ -16,8 +16,8 @@ def _binomial_tolerance(p, n, z=5.0):
 def _trials(signal, sigma_map, n, rng):
     """The matched filter's statistic sum(s x / sigma^2) / sqrt(sum(s^2 / sigma^2)) over n noise
     images, with and without the signal: standard normal without it."""
-    w = signal / sigma_map ** 2
-    scale = np.sqrt(np.sum(signal ** 2 / sigma_map ** 2))
+    w = signal / sigma_map**2
+    scale = np.sqrt(np.sum(signal**2 / sigma_map**2))
     noise = rng.standard_normal((n,) + signal.shape) * sigma_map
     t0 = np.einsum("nij,ij->n", noise, w) / scale
     t1 = np.einsum("nij,ij->n", noise + signal, w) / scale

@@ -76,10 +76,12 @@ def _edge_scene(focus, aperture_radius, z_obj=10.0):
 
     hot = (box([-20, z_obj, -20], [0, z_obj + 1, 20]), material(kind="blackbody", temperature=300.0))
     cold = (box([0, z_obj, -20], [20, z_obj + 1, 20]), material(kind="blackbody", temperature=100.0))
-    cam = Camera.look_at([0, 0, 0], [0, 1, 0], [0, 0, 1], np.radians(4.0), (64, 4),
-                         aperture_radius=aperture_radius, focus_distance=focus)
-    return make_job([hot, cold], cam, UniformSky(0.0, 0.0), 35e9,
-                    RenderSettings(spp=256, max_depth=2, threshold=1e-6, tile=64))
+    cam = Camera.look_at(
+        [0, 0, 0], [0, 1, 0], [0, 0, 1], np.radians(4.0), (64, 4), aperture_radius=aperture_radius, focus_distance=focus
+    )
+    return make_job(
+        [hot, cold], cam, UniformSky(0.0, 0.0), 35e9, RenderSettings(spp=256, max_depth=2, threshold=1e-6, tile=64)
+    )
 
 
 def _transition_width(row, lo=100.0, hi=300.0):
@@ -147,8 +149,9 @@ def test_primary_rays_and_their_basis_follow_the_pinhole_and_thin_lens():
     assert (s @ pin.x > 0).all()
     np.testing.assert_allclose(p, np.cross(-d, s), atol=1e-12)
 
-    lens = Camera.look_at([1.0, 2.0, 3.0], [0.0, 50.0, 0.0], [0.0, 0.0, 1.0], fov, (w, h),
-                          aperture_radius=0.3, focus_distance=20.0)
+    lens = Camera.look_at(
+        [1.0, 2.0, 3.0], [0.0, 50.0, 0.0], [0.0, 0.0, 1.0], fov, (w, h), aperture_radius=0.3, focus_distance=20.0
+    )
     n = 200
     uu, vv = np.full(n, 10.3), np.full(n, 40.7)
     o2, d2, s2, _ = lens.rays(uu, vv, np.arange(n), seed=7)

@@ -25,19 +25,24 @@ def _load(tmp_path, *sets):
     return load_scenario(p, list(sets))
 
 
-@pytest.mark.parametrize("sets, words", [
-    (["imager.noise=2 K", "imager.receiver={noise_temperature: 500 K, integration_time: 1 ms}"], "not both"),
-    (["imager.receiver={integration_time: 1 ms}"], "one of noise_temperature"),
-    (["imager.receiver={noise_figure: 5 dB, noise_temperature: 500 K, integration_time: 1 ms}"],
-     "one of noise_temperature"),
-    (["imager.receiver={noise_figure: 5 dB}"], "one of integration_time"),
-    (["imager.receiver={noise_figure: 5 dB, integration_time: 1 ms, receivers: 4}"], "go with frame_rate"),
-    (["imager.bandwidth=0", "imager.receiver={noise_figure: 5 dB, integration_time: 1 ms}"], "needs a bandwidth"),
-    (["imager.aperture_diameter=0", "imager.antenna={blockage: 0.1}"], "aperture_diameter > 0"),
-    (["imager.antenna={edge_taper: 10 dB}"], "needs illumination"),
-    (["imager.antenna={illumination: gaussian}"], "needs an edge_taper"),
-    (["imager.antenna={blockage: 0.95}"], "less than 0.9"),
-])
+@pytest.mark.parametrize(
+    "sets, words",
+    [
+        (["imager.noise=2 K", "imager.receiver={noise_temperature: 500 K, integration_time: 1 ms}"], "not both"),
+        (["imager.receiver={integration_time: 1 ms}"], "one of noise_temperature"),
+        (
+            ["imager.receiver={noise_figure: 5 dB, noise_temperature: 500 K, integration_time: 1 ms}"],
+            "one of noise_temperature",
+        ),
+        (["imager.receiver={noise_figure: 5 dB}"], "one of integration_time"),
+        (["imager.receiver={noise_figure: 5 dB, integration_time: 1 ms, receivers: 4}"], "go with frame_rate"),
+        (["imager.bandwidth=0", "imager.receiver={noise_figure: 5 dB, integration_time: 1 ms}"], "needs a bandwidth"),
+        (["imager.aperture_diameter=0", "imager.antenna={blockage: 0.1}"], "aperture_diameter > 0"),
+        (["imager.antenna={edge_taper: 10 dB}"], "needs illumination"),
+        (["imager.antenna={illumination: gaussian}"], "needs an edge_taper"),
+        (["imager.antenna={blockage: 0.95}"], "less than 0.9"),
+    ],
+)
 def test_refused_with_the_key(tmp_path, sets, words):
     with pytest.raises(UserError) as e:
         _load(tmp_path, *sets)
@@ -54,9 +59,12 @@ def test_scanned_receiver_dwell_and_noise_figure(tmp_path):
 
 
 def test_display_loads_back_to_the_same_hardware(tmp_path):
-    s = _load(tmp_path, "imager.receiver={noise_figure: 5 dB, bandwidth: 2 GHz, frame_rate: 15 Hz, receivers: 8, "
-                        "mode: dicke, gain_fluctuation: 0.001}",
-              "imager.antenna={illumination: parabolic, edge_taper: 12 dB, blockage: 0.1, spillover: 0.04}")
+    s = _load(
+        tmp_path,
+        "imager.receiver={noise_figure: 5 dB, bandwidth: 2 GHz, frame_rate: 15 Hz, receivers: 8, "
+        "mode: dicke, gain_fluctuation: 0.001}",
+        "imager.antenna={illumination: parabolic, edge_taper: 12 dB, blockage: 0.1, spillover: 0.04}",
+    )
     shown = scenario_to_display(s)
     shown.pop("source_file")
     (tmp_path / "back.yaml").write_text(yaml.safe_dump(shown))
@@ -78,10 +86,21 @@ def test_report_states_netd_beam_and_pd():
     rx = Receiver(t_rec=865.0, bandwidth=1e10, tau=1e-3)
     beam = beam_report(Aperture(), 2 * np.pi / 3.2e-3, 0.5, 4e-3)  # 4 mrad > lambda / 2D = 3.2 mrad
     contrast = {"K": -5.0, "snr": 6.0, "snr_stderr": 0.5, "detectable": True, "pd": 0.994}
-    text = render_markdown({"name": "t", "imager": {"receiver": rx.summary(), "beam": beam},
-                            "regions": {"criterion": "c", "channel": "Ey2", "noise_K": 0.37, "false_alarm": 1e-3,
-                                        "verdicts": {"gun - torso": "gun - torso: detectable"},
-                                        "contrasts": {"gun - torso": {"Ey2": contrast}}}}, {})
+    text = render_markdown(
+        {
+            "name": "t",
+            "imager": {"receiver": rx.summary(), "beam": beam},
+            "regions": {
+                "criterion": "c",
+                "channel": "Ey2",
+                "noise_K": 0.37,
+                "false_alarm": 1e-3,
+                "verdicts": {"gun - torso": "gun - torso: detectable"},
+                "contrasts": {"gun - torso": {"Ey2": contrast}},
+            },
+        },
+        {},
+    )
     # NETD = (300 + 865) / sqrt(1e7) = 0.368 K
     assert "NETD: 0.368 K at a 300 K scene" in text
     assert "under-sampled" in text and "energy budget: main beam 0.838" in text

@@ -11,8 +11,17 @@ from scipy import signal
 from pmmw.imaging.imager import blur, fftconvolve
 
 
-@pytest.mark.parametrize("image_shape,kernel_shape", [((40, 37), (7, 7)), ((9, 9), (1, 1)), ((5, 31), (11, 11)),
-                                                      ((1, 20), (3, 3)), ((16, 16), (16, 16)), ((3, 4), (9, 9))])
+@pytest.mark.parametrize(
+    "image_shape,kernel_shape",
+    [
+        ((40, 37), (7, 7)),
+        ((9, 9), (1, 1)),
+        ((5, 31), (11, 11)),
+        ((1, 20), (3, 3)),
+        ((16, 16), (16, 16)),
+        ((3, 4), (9, 9)),
+    ],
+)
 def test_same_numbers_as_scipy_signal(image_shape, kernel_shape):
     # tolerance: none (array_equal): the same FFT lengths and operations in the same order give the
     # same floating-point numbers, which is what keeps a render's image unchanged to the bit
@@ -33,11 +42,13 @@ def test_blur_of_a_point_is_the_kernel():
 
 
 def test_the_imager_model_does_not_import_scipy_signal():
-    code = ("import sys, numpy as np\n"
-            "from pmmw.imaging.imager import apply_imager\n"
-            "ideal = {c: np.full((20, 20), 280.0) for c in ('Ex2', 'Ey2', 'U', 'V')}\n"
-            "apply_imager(ideal, pixel_angle=1e-3, k0=2e3, aperture_diameter=0.6, noise=1.0, seed=1)\n"
-            "print('scipy.signal' in sys.modules, 'scipy.fft' in sys.modules)\n")
+    code = (
+        "import sys, numpy as np\n"
+        "from pmmw.imaging.imager import apply_imager\n"
+        "ideal = {c: np.full((20, 20), 280.0) for c in ('Ex2', 'Ey2', 'U', 'V')}\n"
+        "apply_imager(ideal, pixel_angle=1e-3, k0=2e3, aperture_diameter=0.6, noise=1.0, seed=1)\n"
+        "print('scipy.signal' in sys.modules, 'scipy.fft' in sys.modules)\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "True"]  # scipy.fft loaded: the model did convolve (the control)
 

@@ -19,8 +19,9 @@ def test_dicke_balanced_is_twice_total_power_and_ignores_gain():
     # balanced Dicke: 2 T_sys / sqrt(B tau), whatever dG/G (the reference cancels it)
     tp = radiometer_sigma(300.0, 500.0, 1e10, 1e-3)
     assert radiometer_sigma(300.0, 500.0, 1e10, 1e-3, mode="dicke") == pytest.approx(2.0 * tp, rel=1e-12)
-    assert radiometer_sigma(300.0, 500.0, 1e10, 1e-3, mode="dicke", gain_fluctuation=1e-2) == \
-        pytest.approx(2.0 * tp, rel=1e-12)
+    assert radiometer_sigma(300.0, 500.0, 1e10, 1e-3, mode="dicke", gain_fluctuation=1e-2) == pytest.approx(
+        2.0 * tp, rel=1e-12
+    )
 
 
 def test_unbalanced_dicke_keeps_a_gain_term_in_the_imbalance():
@@ -54,8 +55,9 @@ def test_pixel_noise_of_a_constant_image_is_the_radiometer_sigma():
     shape = (200, 200)
     ideal = {"Ex2": np.full(shape, 300.0), "Ey2": np.full(shape, 300.0), "U": np.zeros(shape), "V": np.zeros(shape)}
     maps = {}
-    out = apply_imager(ideal, pixel_angle=1e-3, k0=1.0, aperture_diameter=0.0, noise=0.0, seed=3, receiver=rx,
-                       noise_maps=maps)
+    out = apply_imager(
+        ideal, pixel_angle=1e-3, k0=1.0, aperture_diameter=0.0, noise=0.0, seed=3, receiver=rx, noise_maps=maps
+    )
     want = 800.0 / np.sqrt(2e9 * 1e-4)  # 1.7889 K
     lo, hi = _sample_std_bounds(out["Ex2"].size, want)
     assert lo < np.std(out["Ex2"] - 300.0, ddof=1) < hi

@@ -279,14 +279,17 @@ def test_write_png_rejects_colour_arrays(tmp_path):
 
 def test_report_json_and_markdown(tmp_path):
     report = {
-        "name": "runway_demo", "version": "0.1.0", "frequency_hz": np.float64(94e9),
+        "name": "runway_demo",
+        "version": "0.1.0",
+        "frequency_hz": np.float64(94e9),
         "output_exr": str(tmp_path / "runway_demo.exr"),
         "channels": {
             "I": {"min": 80.0, "mean": 200.0, "max": 300.0, "display_low": 90.0, "display_high": 290.0},
             "Q": {"min": -5.0, "mean": float("nan"), "max": 5.0},
         },
         "timing": {"resolve_s": 0.12, "trace_s": 3.5, "total_s": 4.0},
-        "rays": 1234567, "warnings": ["slab sky: extrapolating"],
+        "rays": 1234567,
+        "warnings": ["slab sky: extrapolating"],
         "scenario": {"name": "runway_demo", "frequencies": [94e9], "imager": {"fov": 0.35}},
         "extra": tmp_path,
     }

@@ -69,15 +69,29 @@ render: {spp: 1, max_depth: 4, tile: 8, workers: 1}
     spec, _ = _png(tmp_path / "a" / "previews" / "s_I.png")
     assert spec.width >= MIN_DISPLAY_WIDTH
     # with output.previews: quick, I alone; by default (true, as "all") every channel and the ideal|sensor pairs
-    res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "b"), "-q", "--set", "imager.noise=2 K",
-                              "--set", "output.previews=quick"])
+    res = runner.invoke(
+        app,
+        [
+            "render",
+            str(scn),
+            "--out",
+            str(tmp_path / "b"),
+            "-q",
+            "--set",
+            "imager.noise=2 K",
+            "--set",
+            "output.previews=quick",
+        ],
+    )
     assert res.exit_code == 0, res.output
     assert sorted(p.name for p in (tmp_path / "b" / "previews").iterdir()) == ["s_I.png"]
     res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "c"), "-q", "--set", "imager.noise=2 K"])
     assert res.exit_code == 0, res.output
     drawn = sorted(p.name for p in (tmp_path / "c" / "previews").iterdir())
-    assert drawn == sorted([f"s_{c}.png" for c in ("I", "Q", "U", "V", "Ex2", "Ey2")]
-                           + ["s_Ex2_ideal_sensor.png", "s_Ey2_ideal_sensor.png"])
+    assert drawn == sorted(
+        [f"s_{c}.png" for c in ("I", "Q", "U", "V", "Ex2", "Ey2")]
+        + ["s_Ex2_ideal_sensor.png", "s_Ey2_ideal_sensor.png"]
+    )
     report = json.loads((tmp_path / "c" / "report.json").read_text())
     assert len(report["previews"]) == 6 and len(report["side_by_side"]) == 2
     assert all("display_low" in report["channels"][c] for c in report["channels"])
@@ -103,8 +117,11 @@ def test_the_default_previews_are_every_channel_and_quick_is_i_or_the_first():
 
 def test_view_writes_any_channel(tmp_path):
     exr = tmp_path / "x.exr"
-    write_exr(exr, {"I": np.full((6, 9), 300.0, np.float32), "aux.depth": np.full((6, 9), 12.0, np.float32)},
-              {"pmmw:frequency_hz": 95e9})
+    write_exr(
+        exr,
+        {"I": np.full((6, 9), 300.0, np.float32), "aux.depth": np.full((6, 9), 12.0, np.float32)},
+        {"pmmw:frequency_hz": 95e9},
+    )
     res = runner.invoke(app, ["view", str(exr), "--channel", "aux.depth"])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "x_aux_depth.png").is_file() and "m)" in res.output
@@ -121,8 +138,10 @@ def test_a_z_up_gltf_is_warned_about_and_validate_prints_bounds(tmp_path):
 
     trimesh.creation.box(extents=[40, 40, 1]).export(tmp_path / "ground.glb")
     scn = tmp_path / "z.yaml"
-    scn.write_text("name: z\nfrequency: 35 GHz\nimager: {position: [0, -10, 5], look_at: [0, 0, 0], fov: 20 deg, "
-                   "resolution: [8, 8]}\nscene: [{mesh: ground.glb, material: concrete}]\n")
+    scn.write_text(
+        "name: z\nfrequency: 35 GHz\nimager: {position: [0, -10, 5], look_at: [0, 0, 0], fov: 20 deg, "
+        "resolution: [8, 8]}\nscene: [{mesh: ground.glb, material: concrete}]\n"
+    )
     res = runner.invoke(app, ["validate", str(scn)])
     assert res.exit_code == 0 and "up_axis: z" in res.output and "on its edge" in res.output, res.output
     res = runner.invoke(app, ["validate", str(scn), "--set", "scene[0].up_axis=z"])

@@ -141,8 +141,9 @@ def _dot(u, v):
     return np.sum(u * v, axis=-1)
 
 
-def sphere_bistatic_rcs(radius, wavelength, eps, theta_obs_deg, phi_obs_deg, incidence=(0.0, 0.0),
-                        polarization="theta"):
+def sphere_bistatic_rcs(
+    radius, wavelength, eps, theta_obs_deg, phi_obs_deg, incidence=(0.0, 0.0), polarization="theta"
+):
     """Exact (Mie) bistatic RCS of a sphere centred at the origin.
 
     Parameters
@@ -172,8 +173,9 @@ def sphere_bistatic_rcs(radius, wavelength, eps, theta_obs_deg, phi_obs_deg, inc
     k_hat = -r_i
     e_i = theta_hat_i if polarization == "theta" else phi_hat_i
 
-    theta_obs, phi_obs = np.broadcast_arrays(np.asarray(theta_obs_deg, dtype=np.float64),
-                                             np.asarray(phi_obs_deg, dtype=np.float64))
+    theta_obs, phi_obs = np.broadcast_arrays(
+        np.asarray(theta_obs_deg, dtype=np.float64), np.asarray(phi_obs_deg, dtype=np.float64)
+    )
     r_s, theta_hat_s, phi_hat_s = _frame(theta_obs, phi_obs)
 
     # Scattering plane spanned by k_hat and r_s (Bohren & Huffman 1983 ch. 3):
@@ -184,15 +186,13 @@ def sphere_bistatic_rcs(radius, wavelength, eps, theta_obs_deg, phi_obs_deg, inc
     sin_scat = np.linalg.norm(v, axis=-1)
     # exactly forward/back S1 = +-S2, so any plane gives the same field; take the one containing E_i
     degenerate = sin_scat < _SIN_PLANE_EPS
-    e_par_i = np.where(degenerate[..., None], e_i,
-                       v / np.where(degenerate, 1.0, sin_scat)[..., None])
+    e_par_i = np.where(degenerate[..., None], e_i, v / np.where(degenerate, 1.0, sin_scat)[..., None])
     e_perp_i = np.cross(e_par_i, k_hat)
     e_par_s = mu[..., None] * e_par_i - sin_scat[..., None] * k_hat
     e_perp_s = e_perp_i
 
     s1, s2 = sphere_amplitudes(k * radius, eps, mu)
-    e_s = ((s2 * _dot(e_par_i, e_i))[..., None] * e_par_s
-           + (s1 * _dot(e_perp_i, e_i))[..., None] * e_perp_s)
+    e_s = (s2 * _dot(e_par_i, e_i))[..., None] * e_par_s + (s1 * _dot(e_perp_i, e_i))[..., None] * e_perp_s
     # |E_s|^2 r^2 / |E_i|^2 = |S|^2 / k^2  (Bohren & Huffman 1983 eq. 3.12)
     rcs_theta = 4.0 * np.pi / k**2 * np.abs(_dot(e_s, theta_hat_s)) ** 2
     rcs_phi = 4.0 * np.pi / k**2 * np.abs(_dot(e_s, phi_hat_s)) ** 2

@@ -65,7 +65,7 @@ def test_plate_nulls_and_first_sidelobe(plate):
     assert s_t[1] < 1e-20 * s_t[0] and s_t[2] < 1e-20 * s_t[0]
     theta = np.arcsin(np.linspace(1.0, 1.9, 2001) * LAM / (2 * a))  # between the first and second null
     s_t, _, _ = solver.monostatic(target, K0, "theta", theta, np.zeros_like(theta))
-    peak = (4 * np.pi * (target.area.sum()) ** 2 / LAM**2)
+    peak = 4 * np.pi * (target.area.sum()) ** 2 / LAM**2
     side = 10 * np.log10(s_t.max() / peak)
     assert side == pytest.approx(-13.26, abs=0.01)
 
@@ -82,10 +82,17 @@ def test_lossy_half_space_plate_reflects_by_fresnel(plate):
     assert s_t[0] == pytest.approx(abs(r) ** 2 * 4 * np.pi * (a * b) ** 2 / LAM**2, rel=1e-12)
 
 
-@pytest.mark.parametrize("q", [
-    np.array([0.0, 0.0, 0.0]), np.array([1e-9, 0.0, 0.0]), np.array([3.0, -2.0, 0.5]),
-    np.array([40.0, 10.0, 0.0]), np.array([1e-6, 1e-6, 1e-6]), np.array([0.0, 25.0, 0.0]),
-])
+@pytest.mark.parametrize(
+    "q",
+    [
+        np.array([0.0, 0.0, 0.0]),
+        np.array([1e-9, 0.0, 0.0]),
+        np.array([3.0, -2.0, 0.5]),
+        np.array([40.0, 10.0, 0.0]),
+        np.array([1e-6, 1e-6, 1e-6]),
+        np.array([0.0, 25.0, 0.0]),
+    ],
+)
 def test_triangle_phase_integral_against_quadrature(q):
     """The closed form against adaptive quadrature of cos and sin over the triangle (scipy
     dblquad, tolerance 1e-11), including q = 0, tiny q and a q along an edge (equal phases at
@@ -96,8 +103,9 @@ def test_triangle_phase_integral_against_quadrature(q):
     p0, e1, e2 = tri[0, 0], tri[0, 1] - tri[0, 0], tri[0, 2] - tri[0, 0]
 
     def part(fn):
-        val, _ = integrate.dblquad(lambda v, u: fn(q @ (p0 + u * e1 + v * e2)), 0, 1, 0, lambda u: 1 - u,
-                                   epsabs=1e-13, epsrel=1e-11)
+        val, _ = integrate.dblquad(
+            lambda v, u: fn(q @ (p0 + u * e1 + v * e2)), 0, 1, 0, lambda u: 1 - u, epsabs=1e-13, epsrel=1e-11
+        )
         return val * 2 * area[0]
 
     ref = part(np.cos) + 1j * part(np.sin)
@@ -128,7 +136,9 @@ def test_bistatic_plate_peaks_in_the_specular_direction(plate, theta_i):
     total = s_t + s_p
     # within a tenth of the lobe's width (lambda / a = 1.8 deg): the far-field obliquity tilts it
     assert np.degrees(theta[np.argmax(total)]) == pytest.approx(theta_i, abs=0.1)
-    assert total[np.argmin(np.abs(theta - th))] == pytest.approx(4 * np.pi * (a * b) ** 2 * math.cos(th) ** 2 / LAM**2, rel=1e-9)
+    assert total[np.argmin(np.abs(theta - th))] == pytest.approx(
+        4 * np.pi * (a * b) ** 2 * math.cos(th) ** 2 / LAM**2, rel=1e-9
+    )
 
 
 def test_a_closed_body_is_lit_only_on_the_side_facing_the_wave(tmp_path):
@@ -141,9 +151,29 @@ def test_a_closed_body_is_lit_only_on_the_side_facing_the_wave(tmp_path):
 
 def test_the_po_command_csv_json_and_plot(plate, tmp_path):
     path, a, b = plate
-    res = runner.invoke(app, ["po", str(path), "--material", "metal", "--frequency", "95 GHz", "--incidence",
-                              "0,0", "--theta", "0:2:1", "--phi", "0,90", "--format", "csv", "--out",
-                              str(tmp_path / "o"), "--plot", str(tmp_path / "p.png")])
+    res = runner.invoke(
+        app,
+        [
+            "po",
+            str(path),
+            "--material",
+            "metal",
+            "--frequency",
+            "95 GHz",
+            "--incidence",
+            "0,0",
+            "--theta",
+            "0:2:1",
+            "--phi",
+            "0,90",
+            "--format",
+            "csv",
+            "--out",
+            str(tmp_path / "o"),
+            "--plot",
+            str(tmp_path / "p.png"),
+        ],
+    )
     assert res.exit_code == 0, res.output
     lines = res.stdout.strip().splitlines()  # "wrote ..." lines go to stderr
     assert lines[0] == CSV_HEADER and len(lines) == 1 + 6
@@ -161,18 +191,21 @@ def test_the_po_command_csv_json_and_plot(plate, tmp_path):
     assert f"{10 * np.log10(first[2]):.2f}" in report and "![po](po.png)" in report
 
 
-@pytest.mark.parametrize("args, option", [
-    (["--incidence", "90,0"], "--incidence"),  # edge-on: no facet lit
-    (["--theta", "0:10:0"], "--theta"),
-    (["--theta", "10:0:1"], "--theta"),
-    (["--frequency", "95"], "--frequency"),
-    (["--incidence", "30"], "--incidence"),
-    (["--polarization", "x"], "--polarization"),
-    (["--bounces", "0"], "--bounces"),
-    (["--bounces", "2", "--tube", "1 um"], "--tube"),
-    (["--eps", "5-1j"], "--eps"),
-    (["--material", "no_such_material"], "--material"),
-])
+@pytest.mark.parametrize(
+    "args, option",
+    [
+        (["--incidence", "90,0"], "--incidence"),  # edge-on: no facet lit
+        (["--theta", "0:10:0"], "--theta"),
+        (["--theta", "10:0:1"], "--theta"),
+        (["--frequency", "95"], "--frequency"),
+        (["--incidence", "30"], "--incidence"),
+        (["--polarization", "x"], "--polarization"),
+        (["--bounces", "0"], "--bounces"),
+        (["--bounces", "2", "--tube", "1 um"], "--tube"),
+        (["--eps", "5-1j"], "--eps"),
+        (["--material", "no_such_material"], "--material"),
+    ],
+)
 def test_bad_po_options_are_one_line_naming_the_option(plate, args, option):
     path, _, _ = plate
     base = {"--frequency": "95 GHz", "--incidence": "0,0"}
@@ -210,8 +243,12 @@ def test_sphere_backscatter_against_mie(tmp_path, ka, sub, eps):
     from tests.physical_optics.po_refs import sphere_backscatter_rcs
 
     radius = ka / K0
-    target = load_target(_sphere(tmp_path, radius, sub), "metal" if eps is None else None,
-                         None if eps is None else f"{eps.real}+{eps.imag}j", F)
+    target = load_target(
+        _sphere(tmp_path, radius, sub),
+        "metal" if eps is None else None,
+        None if eps is None else f"{eps.real}+{eps.imag}j",
+        F,
+    )
     s_t, s_p, _ = solver.bistatic(target, K0, 0.0, 0.0, "theta", np.array([0.0]), np.array([0.0]))
     ours = 10 * np.log10(s_t[0] + s_p[0])
     mie = 10 * np.log10(sphere_backscatter_rcs(radius, LAM, eps))
@@ -268,8 +305,9 @@ def test_trihedral_peak_needs_three_bounces(tmp_path):
     from tests.physical_optics.po_refs import trihedral_peak_rcs
 
     a = 0.10
-    target = _corner(tmp_path, "trihedral", [[0, 0, 0], [a, 0, 0], [0, a, 0], [0, 0, a]],
-                     [[0, 1, 2], [0, 3, 1], [0, 2, 3]])
+    target = _corner(
+        tmp_path, "trihedral", [[0, 0, 0], [a, 0, 0], [0, a, 0], [0, 0, a]], [[0, 1, 2], [0, 3, 1], [0, 2, 3]]
+    )
     th, ph = math.acos(1 / math.sqrt(3)), math.pi / 4
     ref = 10 * np.log10(trihedral_peak_rcs(a, LAM))
     two = solver.bistatic(target, K0, th, ph, "theta", np.array([th]), np.array([ph]), bounces=2)
@@ -295,9 +333,25 @@ def test_octree_and_direct_agree_through_the_command(tmp_path):
     path = _sphere(tmp_path, 20 / K0, 3)  # ka 20
     got = {}
     for method in ("direct", "octree"):
-        res = runner.invoke(app, ["po", str(path), "--material", "metal", "--frequency", "95 GHz", "--theta",
-                                  "0:180:6", "--phi", "0,45,90,135,180,225,270,315", "--method", method,
-                                  "--format", "json"])
+        res = runner.invoke(
+            app,
+            [
+                "po",
+                str(path),
+                "--material",
+                "metal",
+                "--frequency",
+                "95 GHz",
+                "--theta",
+                "0:180:6",
+                "--phi",
+                "0,45,90,135,180,225,270,315",
+                "--method",
+                method,
+                "--format",
+                "json",
+            ],
+        )
         assert res.exit_code == 0, res.output
         rows = json.loads(res.output)["rows"]
         got[method] = np.array([[r["rcs_theta_m2"], r["rcs_phi_m2"]] for r in rows])

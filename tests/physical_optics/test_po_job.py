@@ -22,16 +22,20 @@ def job(tmp_path):
 
     def write(body: str):
         path = tmp_path / "job.yaml"
-        path.write_text("name: plate\ntargets:\n  - {mesh: plate.ply, material: metal, "
-                        "transform: {translate: [0, 0, 1 m]}}\n" + body)
+        path.write_text(
+            "name: plate\ntargets:\n  - {mesh: plate.ply, material: metal, "
+            "transform: {translate: [0, 0, 1 m]}}\n" + body
+        )
         return path
 
     return write
 
 
 def test_a_job_writes_every_run_a_report_and_a_full_sphere_map(job, tmp_path):
-    path = job("frequency: [35 GHz, 95 GHz]\npolarization: [theta, phi]\nincidence: [0 deg, 0 deg]\n"
-               "observation: {theta: '0:180:30', phi: '0:300:60'}\n")
+    path = job(
+        "frequency: [35 GHz, 95 GHz]\npolarization: [theta, phi]\nincidence: [0 deg, 0 deg]\n"
+        "observation: {theta: '0:180:30', phi: '0:300:60'}\n"
+    )
     res = runner.invoke(app, ["po", str(path), "--out", str(tmp_path / "o")])
     assert res.exit_code == 0, res.output
     out = tmp_path / "o"
@@ -52,8 +56,10 @@ def test_a_job_writes_every_run_a_report_and_a_full_sphere_map(job, tmp_path):
 
 
 def test_monostatic_job_azimuth_cut(job, tmp_path):
-    path = job("frequency: 95 GHz\nmonostatic: true\nobservation: {theta: 30, phi: '0:350:10'}\n"
-               f"output: {{dir: '{tmp_path / 'm'}', plot: false}}\n")
+    path = job(
+        "frequency: 95 GHz\nmonostatic: true\nobservation: {theta: 30, phi: '0:350:10'}\n"
+        f"output: {{dir: '{tmp_path / 'm'}', plot: false}}\n"
+    )
     res = runner.invoke(app, ["po", str(path)])
     assert res.exit_code == 0, res.output
     rows = (tmp_path / "m" / "plate_95GHz_theta.csv").read_text().splitlines()[1:]
@@ -61,15 +67,18 @@ def test_monostatic_job_azimuth_cut(job, tmp_path):
     assert not list((tmp_path / "m").glob("*.png")) and not list((tmp_path / "m").glob("*.exr"))
 
 
-@pytest.mark.parametrize("body, key", [
-    ("frequency: 95 GHz\n", "incidence"),  # neither monostatic nor incidence
-    ("frequency: 95 GHz\nmonostatic: true\nincidence: [0, 0]\n", "incidence"),
-    ("frequency: 2000 GHz\nmonostatic: true\n", "frequency"),
-    ("frequency: 95 GHz\nmonostatic: true\nbounces: 0\n", "bounces"),
-    ("frequency: 95 GHz\nmonostatic: true\npolarisation: theta\n", "polarisation"),
-    ("frequency: 95 GHz\nmonostatic: true\nobservation: {theta: '0:90:0'}\n", "observation.theta"),
-    ("frequency: 95 GHz\nmonostatic: true\nmaterials: {metal: {kind: plasma}}\n", "materials.metal"),
-])
+@pytest.mark.parametrize(
+    "body, key",
+    [
+        ("frequency: 95 GHz\n", "incidence"),  # neither monostatic nor incidence
+        ("frequency: 95 GHz\nmonostatic: true\nincidence: [0, 0]\n", "incidence"),
+        ("frequency: 2000 GHz\nmonostatic: true\n", "frequency"),
+        ("frequency: 95 GHz\nmonostatic: true\nbounces: 0\n", "bounces"),
+        ("frequency: 95 GHz\nmonostatic: true\npolarisation: theta\n", "polarisation"),
+        ("frequency: 95 GHz\nmonostatic: true\nobservation: {theta: '0:90:0'}\n", "observation.theta"),
+        ("frequency: 95 GHz\nmonostatic: true\nmaterials: {metal: {kind: plasma}}\n", "materials.metal"),
+    ],
+)
 def test_job_errors_name_the_file_and_key(job, body, key):
     res = runner.invoke(app, ["po", str(job(body))])
     assert res.exit_code == 2, res.output
@@ -101,10 +110,12 @@ def test_a_coated_plate_reflects_as_its_multilayer(job, tmp_path, theta_deg):
 
     f = 95e9
     lam = C0 / f
-    body = (f"frequency: 95 GHz\nincidence: [{theta_deg} deg, 0 deg]\npolarization: [theta, phi]\n"
-            f"observation: {{theta: {theta_deg}, phi: 180}}\n"
-            "materials:\n  film: {eps: [3.0, 0.4]}\n"
-            "  coated: {eps: [5.9, 9.4], coating: [{material: film, thickness: 0.8 mm}]}\n")
+    body = (
+        f"frequency: 95 GHz\nincidence: [{theta_deg} deg, 0 deg]\npolarization: [theta, phi]\n"
+        f"observation: {{theta: {theta_deg}, phi: 180}}\n"
+        "materials:\n  film: {eps: [3.0, 0.4]}\n"
+        "  coated: {eps: [5.9, 9.4], coating: [{material: film, thickness: 0.8 mm}]}\n"
+    )
     path = job(body)
     path.write_text(path.read_text().replace("material: metal", "material: coated"))
     res = runner.invoke(app, ["po", str(path), "--out", str(tmp_path / "c")])

@@ -34,8 +34,9 @@ def _compare(target, theta_i, phi_i, pol, theta, phi):
 
 
 def _full_grid(n_theta, n_phi):
-    return np.meshgrid(np.linspace(0.0, np.pi, n_theta),
-                       np.linspace(0.0, 2 * np.pi, n_phi, endpoint=False), indexing="ij")
+    return np.meshgrid(
+        np.linspace(0.0, np.pi, n_theta), np.linspace(0.0, 2 * np.pi, n_phi, endpoint=False), indexing="ij"
+    )
 
 
 @pytest.mark.parametrize("pol", ["theta", "phi"])
@@ -52,8 +53,7 @@ def test_box_and_sphere_at_random_directions(tmp_path):
     box = trimesh.creation.box(extents=[12 * LAM, 7 * LAM, 4 * LAM])
     ball = trimesh.creation.icosphere(subdivisions=3, radius=4 * LAM)
     ball.apply_translation([9 * LAM, 3 * LAM, 2 * LAM])
-    ring = trimesh.creation.torus(major_radius=5 * LAM, minor_radius=1.5 * LAM,
-                                  major_sections=48, minor_sections=16)
+    ring = trimesh.creation.torus(major_radius=5 * LAM, minor_radius=1.5 * LAM, major_sections=48, minor_sections=16)
     ring.apply_translation([-3 * LAM, -6 * LAM, 3 * LAM])
     mesh = trimesh.util.concatenate([box, ball, ring])
     rng = np.random.default_rng(7)
@@ -76,8 +76,7 @@ def test_nothing_lit_radiates_nothing(tmp_path):
     F_ = len(sphere.area)
     lit = np.zeros(F_, bool)
     J = M = np.zeros((F_, 3), complex)
-    ft, fp = far_field_octree(sphere, lit, J, M, np.array([0.0, 0.0, -1.0]), K0,
-                              np.zeros((2, 3)), np.zeros((2, 3)))
+    ft, fp = far_field_octree(sphere, lit, J, M, np.array([0.0, 0.0, -1.0]), K0, np.zeros((2, 3)), np.zeros((2, 3)))
     assert ft.shape == fp.shape == (2, 3) and not ft.any() and not fp.any()
 
 

@@ -39,6 +39,7 @@ def _wavelength(ka, radius=1.0):
 
 # --- Mie coefficients and conventions ---------------------------------------------------------
 
+
 @pytest.mark.parametrize("x", [0.3, 1.0, 30.0, 200.0])
 def test_pec_coefficients_match_miepython_conductor(x):
     # miepython's Re m = 0 branch is its perfect conductor, built by downward recurrence;
@@ -90,6 +91,7 @@ def test_amplitudes_match_miepython(eps):
 
 
 # --- Backscatter: limits and the resonance peak -----------------------------------------------
+
 
 def test_pec_rayleigh_limit():
     # sigma / (pi a^2) = 9 (ka)^4 (Ruck 1970 ch. 3); next term is relative O((ka)^2) ~ 1e-4 at ka = 0.01
@@ -149,14 +151,14 @@ def test_lossy_dielectric_not_yet_optical_at_small_ka():
 
 # --- Bistatic geometry ------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("eps", [None, EPS_LOSSY])
 @pytest.mark.parametrize("incidence", [(0.0, 0.0), (180.0, 0.0), (35.0, 20.0), (90.0, -120.0)])
 @pytest.mark.parametrize("polarization", ["theta", "phi"])
 def test_bistatic_at_incidence_is_backscatter(eps, incidence, polarization):
     # a sphere does not depolarize in backscatter: co-pol equals the monostatic series, cross-pol 0
     radius, wavelength = 0.1, 0.1 / 3.0
-    rt, rp = sphere_bistatic_rcs(radius, wavelength, eps, incidence[0], incidence[1], incidence,
-                                 polarization)
+    rt, rp = sphere_bistatic_rcs(radius, wavelength, eps, incidence[0], incidence[1], incidence, polarization)
     co, cross = (rt, rp) if polarization == "theta" else (rp, rt)
     sigma = sphere_backscatter_rcs(radius, wavelength, eps)
     assert co == pytest.approx(sigma, rel=RTOL_SAME_SERIES)
@@ -253,6 +255,7 @@ def test_bistatic_rcs_integrates_to_scattering_cross_section(eps, x, incidence, 
 
 # --- Flat plate --------------------------------------------------------------------------------
 
+
 def test_plate_matches_numerical_po_integral():
     # PO monostatic for a PEC plate (Knott 2004 ch. 5):
     #   sigma = (4 pi / lambda^2) |cos(theta) \int\int exp(2 i k x sin(theta)) dx dy|^2,
@@ -287,6 +290,7 @@ def test_plate_first_null_and_sidelobe():
 
 
 # --- Corner reflectors: geometric-optics aperture by ray counting ------------------------------
+
 
 def _count_returning(points, direction, faces, bounces):
     """Fraction of rays that hit `bounces` faces and leave reversed; faces on planes x_i = 0."""

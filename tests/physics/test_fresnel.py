@@ -48,13 +48,15 @@ def one(eps1, eps2, theta):
 # normal_component: branch
 # ---------------------------------------------------------------------------------------------
 
+
 def test_normal_component_branch():
     """Exact cases: propagating real, evanescent +i, -0.0 imaginary parts, lossy and flipped.
 
     Exact equality where the answer is an exactly representable root; 1e-15 otherwise (rounding).
     """
-    q = normal_component(np.array([4.0, 4.0, complex(4.0, -0.0), complex(-1.0, -0.0), 2.25]),
-                         np.array([0.0, 5.0, 0.0, 0.0, 2.25]))
+    q = normal_component(
+        np.array([4.0, 4.0, complex(4.0, -0.0), complex(-1.0, -0.0), 2.25]), np.array([0.0, 5.0, 0.0, 0.0, 2.25])
+    )
     np.testing.assert_array_equal(q, [2.0, 1j, 2.0, 1j, 0.0])
     assert not np.any(np.signbit(q.imag)) and not np.any(np.signbit(q.real))
     # lossy: principal root (first quadrant)
@@ -128,8 +130,13 @@ def test_against_textbook_from_glass(theta):
 
 def test_concrete_95ghz_numbers():
     """PHYSICS.md's independently computed concrete (5.5+0.5j) Rs/Rp, quoted to 4 decimals: 1e-4."""
-    table = {0: (0.1629, 0.1629), 30: (0.2051, 0.1238), 60: (0.3945, 0.0139),
-             80: (0.7221, 0.1448), 89: (0.9678, 0.8343)}
+    table = {
+        0: (0.1629, 0.1629),
+        30: (0.2051, 0.1238),
+        60: (0.3945, 0.0139),
+        80: (0.7221, 0.1448),
+        89: (0.9678, 0.8343),
+    }
     th = np.array(sorted(table)) * DEG
     f = interface(np.ones(th.size), np.full(th.size, 5.5 + 0.5j), np.cos(th))
     want = np.array([table[k] for k in sorted(table)])
@@ -263,8 +270,15 @@ def test_lossy_incident_medium_bookkeeping():
         q2 = np.sqrt(eps2 - eps1 * np.sin(th) ** 2 + 0j)
         for r, t, y1, y2, R, T, A in (
             ((q1 - q2) / (q1 + q2), 2 * q1 / (q1 + q2), q1, q2, f.Rs, f.Ts, f.As),
-            ((eps2 * q1 - eps1 * q2) / (eps2 * q1 + eps1 * q2), 2 * eps2 * q1 / (eps2 * q1 + eps1 * q2),
-             q1 / eps1, q2 / eps2, f.Rp, f.Tp, f.Ap),
+            (
+                (eps2 * q1 - eps1 * q2) / (eps2 * q1 + eps1 * q2),
+                2 * eps2 * q1 / (eps2 * q1 + eps1 * q2),
+                q1 / eps1,
+                q2 / eps2,
+                f.Rp,
+                f.Tp,
+                f.Ap,
+            ),
         ):
             ok = c > 0
             raw_R = np.where(ok, np.abs(r) ** 2, 1.0)
@@ -316,14 +330,27 @@ def test_compiled_square_root_is_the_principal_root():
     for x, y in zip(*z):
         got, want = _sqrt1(complex(x, y)), cmath.sqrt(complex(x, y))
         assert abs(got - want) <= 1e-15 * abs(want), (x, y, got, want)
-    special = [complex(-4.0, 0.0), complex(-4.0, -0.0), complex(4.0, -0.0), complex(0.0, 0.0), complex(-0.0, -0.0),
-               complex(-1e-300, 0.0), complex(1e300, -1e300), complex(np.inf, 1.0), complex(-np.inf, 1.0),
-               complex(np.nan, 0.0), complex(3.0, -1e-170)]
+    special = [
+        complex(-4.0, 0.0),
+        complex(-4.0, -0.0),
+        complex(4.0, -0.0),
+        complex(0.0, 0.0),
+        complex(-0.0, -0.0),
+        complex(-1e-300, 0.0),
+        complex(1e300, -1e300),
+        complex(np.inf, 1.0),
+        complex(-np.inf, 1.0),
+        complex(np.nan, 0.0),
+        complex(3.0, -1e-170),
+    ]
     for v in special:
         got, want = _sqrt1(v), cmath.sqrt(v)
         for a, b in ((got.real, want.real), (got.imag, want.imag)):
-            assert (np.isnan(a) and np.isnan(b)) or (a == b and np.copysign(1, a) == np.copysign(1, b)) \
-                or abs(a - b) <= 1e-15 * abs(want), (v, got, want)
+            assert (
+                (np.isnan(a) and np.isnan(b))
+                or (a == b and np.copysign(1, a) == np.copysign(1, b))
+                or abs(a - b) <= 1e-15 * abs(want)
+            ), (v, got, want)
 
 
 def test_compiled_reciprocal_is_safe_over_the_whole_range():

@@ -72,9 +72,11 @@ def test_random_three_layer_stacks(seed):
     """
     rng = np.random.default_rng(seed)
     eps0 = 1.0 if seed % 2 == 0 else 2.25
+
     def medium():
         loss = 0.0 if rng.random() < 0.3 else 10 ** rng.uniform(-3, 1)
         return rng.uniform(1, 20) + 1j * loss
+
     eps = [eps0, medium(), medium(), medium(), medium()]
     d = rng.uniform(0, 5e-3, 3)
     f = rng.uniform(30e9, 300e9)

@@ -23,10 +23,8 @@ loss = st.one_of(st.just(0.0), st.just(1e7), st.floats(-6.0, 7.0).map(lambda e: 
 lossy_eps = st.builds(complex, real_part, loss)
 lossless_eps = st.builds(complex, real_part, st.just(0.0))
 # exact 0 and 1, uniform, and log-spaced down to 1e-300 (near-grazing, subnormal squares)
-cosines = st.one_of(st.just(0.0), st.just(1.0), st.floats(0.0, 1.0),
-                    st.floats(-300, -1).map(lambda e: 10.0**e))
-thicknesses = st.one_of(st.just(0.0), st.just(1.0), st.floats(0.0, 1.0),
-                        st.floats(-9, 0).map(lambda e: 10.0**e))
+cosines = st.one_of(st.just(0.0), st.just(1.0), st.floats(0.0, 1.0), st.floats(-300, -1).map(lambda e: 10.0**e))
+thicknesses = st.one_of(st.just(0.0), st.just(1.0), st.floats(0.0, 1.0), st.floats(-9, 0).map(lambda e: 10.0**e))
 freqs = st.floats(30e9, 300e9)
 
 
@@ -60,8 +58,7 @@ def rays_and_stack(draw):
 
 
 @SETTINGS
-@given(st.lists(st.tuples(st.one_of(lossy_eps, lossless_eps), lossy_eps, cosines),
-                min_size=1, max_size=8))
+@given(st.lists(st.tuples(st.one_of(lossy_eps, lossless_eps), lossy_eps, cosines), min_size=1, max_size=8))
 def test_interface_is_bounded(rays):
     """fresnel.interface over the whole range, lossy or lossless incident medium."""
     eps1, eps2, c = (np.array(x) for x in zip(*rays))

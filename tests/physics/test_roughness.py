@@ -43,7 +43,7 @@ def _sphere_quadrature(n_theta=400, n_phi=256, theta_max=math.pi / 2, power=1.0)
     theta nodes toward the pole (for narrow lobes)."""
     x, w = np.polynomial.legendre.leggauss(n_theta)
     s = 0.5 * (x + 1.0)
-    th = theta_max * s ** power
+    th = theta_max * s**power
     dth = theta_max * power * s ** (power - 1.0) * 0.5 * w
     ph = (np.arange(n_phi) + 0.5) * 2.0 * np.pi / n_phi
     T, P = np.meshgrid(th, ph, indexing="ij")
@@ -71,8 +71,9 @@ def test_distribution_is_normalized_over_projected_area(name):
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))
-@pytest.mark.parametrize("theta, phi", [(0.0, 0.0), (30.0, 40.0), (60.0, 115.0), (80.0, 0.0), (89.0, 40.0),
-                                        (100.0, 115.0), (135.0, 40.0)])
+@pytest.mark.parametrize(
+    "theta, phi", [(0.0, 0.0), (30.0, 40.0), (60.0, 115.0), (80.0, 0.0), (89.0, 40.0), (100.0, 115.0), (135.0, 40.0)]
+)
 def test_projected_area_matches_quadrature(name, theta, phi):
     """A(w) = int (w.m)+ D(m) dw_m: closed forms (and the anisotropic Ashikhmin-Shirley table)
     against brute-force quadrature, on both sides of the horizon."""
@@ -238,10 +239,23 @@ def _binned_chi2(model, wo, n=100_000, nb_t=10, nb_p=12, seed=0):
     return chi2, int(keep.sum()), counts.sum(), expected.sum()
 
 
-@pytest.mark.parametrize("name, theta", [("as_iso", 0.0), ("as_iso", 100.0), ("as_aniso", 75.0), ("as_aniso", 100.0),
-                                         ("phong_0", 75.0), ("phong_0", 100.0), ("ggx", 75.0), ("ggx", 100.0),
-                                         ("ggx_aniso", 0.0), ("ggx_aniso", 100.0), ("beckmann", 75.0),
-                                         ("beckmann", 100.0)])
+@pytest.mark.parametrize(
+    "name, theta",
+    [
+        ("as_iso", 0.0),
+        ("as_iso", 100.0),
+        ("as_aniso", 75.0),
+        ("as_aniso", 100.0),
+        ("phong_0", 75.0),
+        ("phong_0", 100.0),
+        ("ggx", 75.0),
+        ("ggx", 100.0),
+        ("ggx_aniso", 0.0),
+        ("ggx_aniso", 100.0),
+        ("beckmann", 75.0),
+        ("beckmann", 100.0),
+    ],
+)
 def test_sampled_normals_follow_the_visible_normal_distribution(name, theta):
     """Histogram of sample_normals against the analytic D_wo (including wo below the horizon,
     as for a masked ray re-hitting the surface). Chi-square threshold: dof + 6 sqrt(2 dof)."""
@@ -297,7 +311,7 @@ def test_blender_gloss_follows_the_seed_recipe():
     m, w = smooth.sample_normals(Z, X, np.tile(_direction(50, 0), (n, 1)), rng.random(n), rng.random(n))
     assert np.allclose(m, Z) and np.all(w == 1.0)
     model = R.BlenderGloss(0.3)
-    L = 0.7 ** 3
+    L = 0.7**3
     wo = np.tile(_direction(10, 0), (n, 1))  # no facet faces away at 10 degrees (tilts < 45)
     m, _ = model.sample_normals(Z, X, wo, rng.random(n), rng.random(n))
     r = np.hypot(m[:, 0], m[:, 1]) / m[:, 2]
@@ -311,12 +325,16 @@ def test_blender_gloss_follows_the_seed_recipe():
 
 
 unit_vectors = hst.tuples(*[hst.floats(-1.0, 1.0, allow_nan=False)] * 3).filter(
-    lambda v: 1e-3 < math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2))
+    lambda v: 1e-3 < math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2)
+)
 model_specs = hst.one_of(
     # exponents from a few values: each anisotropic pair tabulates its masking once (0.2 s)
-    hst.builds(lambda ex, ey, o: {"model": "ashikhmin_shirley", "ex": ex, "ey": ey, "orientation_deg": o},
-               hst.sampled_from([0.0, 0.5, 15.0, 1e3, 1e6]), hst.sampled_from([0.0, 2.0, 15.0, 1e4]),
-               hst.floats(-360, 360)),
+    hst.builds(
+        lambda ex, ey, o: {"model": "ashikhmin_shirley", "ex": ex, "ey": ey, "orientation_deg": o},
+        hst.sampled_from([0.0, 0.5, 15.0, 1e3, 1e6]),
+        hst.sampled_from([0.0, 2.0, 15.0, 1e4]),
+        hst.floats(-360, 360),
+    ),
     hst.builds(lambda m: {"model": "blinn_phong", "m": m}, hst.floats(0, 1e6)),
     hst.builds(lambda a, b: {"model": "ggx", "alpha_x": a, "alpha_y": b}, hst.floats(1e-4, 5), hst.floats(1e-4, 5)),
     hst.builds(lambda a: {"model": "beckmann", "alpha": a}, hst.floats(1e-4, 5)),
@@ -325,9 +343,15 @@ model_specs = hst.one_of(
 
 
 @settings(max_examples=60, deadline=None)
-@given(spec=model_specs, n=unit_vectors, t=unit_vectors, wos=hst.lists(unit_vectors, min_size=1, max_size=8),
-       us=hst.lists(hst.tuples(hst.floats(0, 1, exclude_max=True), hst.floats(0, 1, exclude_max=True)),
-                    min_size=8, max_size=8))
+@given(
+    spec=model_specs,
+    n=unit_vectors,
+    t=unit_vectors,
+    wos=hst.lists(unit_vectors, min_size=1, max_size=8),
+    us=hst.lists(
+        hst.tuples(hst.floats(0, 1, exclude_max=True), hst.floats(0, 1, exclude_max=True)), min_size=8, max_size=8
+    ),
+)
 def test_sample_normals_never_nan_always_unit_weights_finite(spec, n, t, wos, us):
     model = R.make_model(spec)
     nv = np.array(n) / np.linalg.norm(n)
@@ -356,13 +380,16 @@ def test_registry_holds_the_issue_models():
         assert callable(ctor)
 
 
-@pytest.mark.parametrize("spec, cls", [
-    ({"model": "ashikhmin_shirley", "ex": 15, "ey": 15, "orientation_deg": 0}, R.AshikhminShirley),
-    ({"model": "blinn_phong", "m": 1e3}, R.BlinnPhong),
-    ({"model": "ggx", "alpha": 0.3}, R.GGX),
-    ({"model": "beckmann", "alpha_x": 0.2, "alpha_y": 0.4}, R.Beckmann),
-    ({"model": "blender_gloss", "gloss": 0.8}, R.BlenderGloss),
-])
+@pytest.mark.parametrize(
+    "spec, cls",
+    [
+        ({"model": "ashikhmin_shirley", "ex": 15, "ey": 15, "orientation_deg": 0}, R.AshikhminShirley),
+        ({"model": "blinn_phong", "m": 1e3}, R.BlinnPhong),
+        ({"model": "ggx", "alpha": 0.3}, R.GGX),
+        ({"model": "beckmann", "alpha_x": 0.2, "alpha_y": 0.4}, R.Beckmann),
+        ({"model": "blender_gloss", "gloss": 0.8}, R.BlenderGloss),
+    ],
+)
 def test_make_model_builds_each_model(spec, cls):
     model = R.make_model(spec, file="scene.yaml", key="materials.sand.roughness")
     assert type(model) is cls and model.name == spec["model"]
@@ -378,19 +405,22 @@ def test_unknown_model_lists_the_known_ones():
         assert name in msg
 
 
-@pytest.mark.parametrize("spec, key, words", [
-    ({"model": "ashikhmin_shirley", "ex": 15}, "r.ey", "missing ey"),
-    ({"model": "ashikhmin_shirley", "ex": -1, "ey": 2}, "r.ex", ">= 0"),
-    ({"model": "ashikhmin_shirley", "ex": "15", "ey": 2}, "r.ex", "expected a number"),
-    ({"model": "ashikhmin_shirley", "ex": True, "ey": 2}, "r.ex", "expected a number"),
-    ({"model": "blinn_phong", "m": float("nan")}, "r.m", "must be"),
-    ({"model": "blinn_phong", "m": 3, "alpha": 1}, "r.alpha", "unknown parameter 'alpha'"),
-    ({"model": "ggx", "alpha": 0}, "r.alpha", "> 0"),
-    ({"model": "ggx"}, "r.alpha", "missing alpha"),
-    ({"model": "ggx", "alpha": 0.1, "alpha_x": 0.2, "alpha_y": 0.3}, "r.alpha_x", "not both"),
-    ({"model": "blender_gloss", "gloss": 1.5}, "r.gloss", "<= 1"),
-    ({"ex": 3}, "r.model", "missing `model:`"),
-])
+@pytest.mark.parametrize(
+    "spec, key, words",
+    [
+        ({"model": "ashikhmin_shirley", "ex": 15}, "r.ey", "missing ey"),
+        ({"model": "ashikhmin_shirley", "ex": -1, "ey": 2}, "r.ex", ">= 0"),
+        ({"model": "ashikhmin_shirley", "ex": "15", "ey": 2}, "r.ex", "expected a number"),
+        ({"model": "ashikhmin_shirley", "ex": True, "ey": 2}, "r.ex", "expected a number"),
+        ({"model": "blinn_phong", "m": float("nan")}, "r.m", "must be"),
+        ({"model": "blinn_phong", "m": 3, "alpha": 1}, "r.alpha", "unknown parameter 'alpha'"),
+        ({"model": "ggx", "alpha": 0}, "r.alpha", "> 0"),
+        ({"model": "ggx"}, "r.alpha", "missing alpha"),
+        ({"model": "ggx", "alpha": 0.1, "alpha_x": 0.2, "alpha_y": 0.3}, "r.alpha_x", "not both"),
+        ({"model": "blender_gloss", "gloss": 1.5}, "r.gloss", "<= 1"),
+        ({"ex": 3}, "r.model", "missing `model:`"),
+    ],
+)
 def test_bad_parameters_name_their_key(spec, key, words):
     with pytest.raises(UserError) as ex:
         R.make_model(spec, file="f.yaml", key="r")
@@ -408,9 +438,16 @@ def test_a_roughness_entry_must_be_a_mapping():
         R.make_model("ggx", file="f.yaml", key="materials.a.roughness")
 
 
-@pytest.mark.parametrize("model", [R.GGX(alpha=0.15), R.GGX(alpha_x=0.1, alpha_y=0.6, orientation_deg=30.0),
-                                   R.Beckmann(alpha=0.3), R.Beckmann(alpha_x=0.2, alpha_y=0.5, orientation_deg=-20.0)],
-                         ids=repr)
+@pytest.mark.parametrize(
+    "model",
+    [
+        R.GGX(alpha=0.15),
+        R.GGX(alpha_x=0.1, alpha_y=0.6, orientation_deg=30.0),
+        R.Beckmann(alpha=0.3),
+        R.Beckmann(alpha_x=0.2, alpha_y=0.5, orientation_deg=-20.0),
+    ],
+    ids=repr,
+)
 def test_compiled_draw_and_masking_equal_the_array_code(model):
     """The renderer's per-ray GGX draw and GGX/Beckmann masking are compiled (`smith_g1`,
     `_ggx_sample_rows`); the base class's array code (`local_frame`, `_ggx_vndf_local`, the
@@ -428,8 +465,9 @@ def test_compiled_draw_and_masking_equal_the_array_code(model):
     w /= np.linalg.norm(w, axis=1, keepdims=True)
     u1, u2 = rng.random(k), rng.random(k)
     np.testing.assert_allclose(model.masking(n, t, w), R._Microfacet.masking(model, n, t, w), rtol=0, atol=1e-13)
-    np.testing.assert_allclose(model.masking(n[0], t[0], w), R._Microfacet.masking(model, n[0], t[0], w),
-                               rtol=0, atol=1e-13)
+    np.testing.assert_allclose(
+        model.masking(n[0], t[0], w), R._Microfacet.masking(model, n[0], t[0], w), rtol=0, atol=1e-13
+    )
     m, weight = model.sample_normals(n, t, w, u1, u2)
     m_ref, weight_ref = R._Microfacet.sample_normals(model, n, t, w, u1, u2)
     np.testing.assert_allclose(m, m_ref, rtol=0, atol=1e-11)

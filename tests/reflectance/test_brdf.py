@@ -21,7 +21,7 @@ Q_RECIP = np.diag([1.0, 1.0, -1.0, 1.0])  # Mueller reciprocity: M(wo->wi) = Q M
 
 
 def _copper(model=None):
-    return B.Stack(layers=(B.StackLayer(eps=COPPER_N ** 2, roughness=model),))
+    return B.Stack(layers=(B.StackLayer(eps=COPPER_N**2, roughness=model),))
 
 
 def _mc(stack, theta_i, samples, seed=0, phi_i=0.0):
@@ -56,11 +56,13 @@ def test_rough_lossless_dielectric_reflects_plus_transmits_one(model, theta_i):
 
 
 def test_rough_lossless_multilayer_reflects_plus_transmits_one():
-    stack = B.Stack(layers=(
-        B.StackLayer(eps=1.69 + 0j, roughness=R.AshikhminShirley(30, 30)),
-        B.StackLayer(eps=1.96 + 0j, roughness=R.AshikhminShirley(10, 40, orientation_deg=30)),
-        B.StackLayer(eps=2.25 + 0j, roughness=R.GGX(0.3)),
-    ))
+    stack = B.Stack(
+        layers=(
+            B.StackLayer(eps=1.69 + 0j, roughness=R.AshikhminShirley(30, 30)),
+            B.StackLayer(eps=1.96 + 0j, roughness=R.AshikhminShirley(10, 40, orientation_deg=30)),
+            B.StackLayer(eps=2.25 + 0j, roughness=R.GGX(0.3)),
+        )
+    )
     s, _ = _mc(stack, 40.0, 20_000)
     assert s["total_reflectance"] + s["total_transmittance"] == pytest.approx(1.0, abs=1e-12)
 
@@ -75,8 +77,13 @@ def test_rough_perfect_conductor_reflects_everything():
 def test_lossy_stack_balances_reflection_absorption():
     """Copper under a lossy, thick, rough dielectric layer: R + A = 1 within the Monte Carlo error
     of R (Russian roulette below the threshold is unbiased but noisy)."""
-    stack = B.Stack(layers=(B.StackLayer(eps=2.5 + 0.05j, thickness=2e-3, roughness=R.AshikhminShirley(10, 10)),
-                            B.StackLayer(eps=COPPER_N ** 2, roughness=R.AshikhminShirley(20, 20))), frequency=95e9)
+    stack = B.Stack(
+        layers=(
+            B.StackLayer(eps=2.5 + 0.05j, thickness=2e-3, roughness=R.AshikhminShirley(10, 10)),
+            B.StackLayer(eps=COPPER_N**2, roughness=R.AshikhminShirley(20, 20)),
+        ),
+        frequency=95e9,
+    )
     s, _ = _mc(stack, 30.0, 20_000)
     total = s["total_reflectance"] + s["absorptance"] + s["lost"]
     assert total == pytest.approx(1.0, abs=5 * s["total_reflectance_stderr"] + 1e-3)
@@ -93,19 +100,28 @@ def test_rough_copper_never_beats_flat_copper(e):
 
 
 def test_smooth_multilayer_matches_the_incoherent_closed_form():
-    stack = B.Stack(layers=(B.StackLayer(eps=2.25 + 0j, thickness=0.01), B.StackLayer(eps=4 + 0.5j, thickness=0.003),
-                            B.StackLayer(eps=COPPER_N ** 2)), frequency=95e9)
+    stack = B.Stack(
+        layers=(
+            B.StackLayer(eps=2.25 + 0j, thickness=0.01),
+            B.StackLayer(eps=4 + 0.5j, thickness=0.003),
+            B.StackLayer(eps=COPPER_N**2),
+        ),
+        frequency=95e9,
+    )
     s, res = _mc(stack, 35.0, 100_000)
-    assert s["total_reflectance"] == pytest.approx(res.summary["flat_reflectance"],
-                                                   abs=5 * s["total_reflectance_stderr"] + 2e-3)
+    assert s["total_reflectance"] == pytest.approx(
+        res.summary["flat_reflectance"], abs=5 * s["total_reflectance_stderr"] + 2e-3
+    )
 
 
 def test_coating_on_the_facets_uses_the_multilayer_stack():
     """A quarter-wave film on glass (n = 1.5 on 2.25) at normal incidence: a nearly smooth
     surface reflects the coated-stack value, here 0 (perfect antireflection)."""
     lam = 299_792_458.0 / 95e9
-    coated = B.Stack(layers=(B.StackLayer(eps=2.25 ** 2 + 0j, roughness=R.BlinnPhong(1e6),
-                                     coating=((1.5 ** 2 + 0j, lam / 4 / 1.5),)),), frequency=95e9)
+    coated = B.Stack(
+        layers=(B.StackLayer(eps=2.25**2 + 0j, roughness=R.BlinnPhong(1e6), coating=((1.5**2 + 0j, lam / 4 / 1.5),)),),
+        frequency=95e9,
+    )
     s, _ = _mc(coated, 0.0, 5_000)
     assert s["total_reflectance"] < 1e-9
     assert B.flat_reflectance(coated, 0.0) < 1e-12
@@ -116,8 +132,9 @@ def test_coating_on_the_facets_uses_the_multilayer_stack():
 # ---------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("model", [R.AshikhminShirley(15, 8, orientation_deg=20), R.GGX(alpha_x=0.2, alpha_y=0.5),
-                                   R.BlinnPhong(40)])
+@pytest.mark.parametrize(
+    "model", [R.AshikhminShirley(15, 8, orientation_deg=20), R.GGX(alpha_x=0.2, alpha_y=0.5), R.BlinnPhong(40)]
+)
 def test_analytic_model_is_reciprocal(model):
     """Single and double terms: M(wo -> wi) = Q M(wi -> wo)^T Q, Q = diag(1, 1, -1, 1), to
     rounding (the double term's two sampling strategies swap under wi <-> wo)."""
@@ -170,8 +187,9 @@ def test_monte_carlo_maps_match_the_analytic_maps():
     for r0, c0 in ((5, 0), (20, 90), (30, 180), (50, 180), (60, 270), (70, 0)):
         rows, cols = np.arange(r0, r0 + 10), np.arange(c0 - 15, c0 + 15) % 360
         box = np.ix_(rows, cols)
-        s1, d2 = B.analytic_mueller(st, B._direction(40, 0), w[box].reshape(-1, 3), phi_o=ph[box].reshape(-1),
-                                    double_samples=128)
+        s1, d2 = B.analytic_mueller(
+            st, B._direction(40, 0), w[box].reshape(-1, 3), phi_o=ph[box].reshape(-1), double_samples=128
+        )
         for order, an_map in ((0, s1), (1, d2)):
             an = np.sum(an_map[:, 0, 0] * proj[box].reshape(-1))
             mc = np.sum(by_order[order][box][..., 0, 0] * proj[box])
@@ -228,7 +246,7 @@ def _seed_literal(samples, shadowing, rng):
     below tau = 0.05 (`shadowing="none"`), or, with Torrance-Sparrow shadowing, facets are
     weighted by their projected area and rays below the horizon are discarded."""
     e, th = 15.0, math.radians(40.0)
-    n2 = COPPER_N ** 2
+    n2 = COPPER_N**2
 
     def fres(c):
         c = np.clip(np.abs(c), 0.0, 1.0)
@@ -272,8 +290,9 @@ def test_seed_001_copper_literal_variants_reproduce_0926_and_0873():
     assert _seed_literal(400_000, "none", rng) == pytest.approx(0.925, abs=2e-3)
     assert _seed_literal(400_000, "torrance_sparrow", rng) == pytest.approx(0.873, abs=2e-3)
     # the same 0.873 from the analytic model with SCATMECH's shadow function (no Monte Carlo)
-    t1, _ = B.analytic_totals(_copper(R.AshikhminShirley(15, 15)), B._direction(40, 0),
-                              shadowing="torrance_sparrow", double=False)
+    t1, _ = B.analytic_totals(
+        _copper(R.AshikhminShirley(15, 15)), B._direction(40, 0), shadowing="torrance_sparrow", double=False
+    )
     assert t1[0, 0] == pytest.approx(0.8728, abs=3e-4)
 
 
@@ -309,8 +328,13 @@ def _scatmech_models(e=15.0):
     # SCATMECH's facet model takes the slope density P(s) = D(theta) cos^4(theta), here
     # (e+2)/(2 pi) (1 + s^2)^-(e+4)/2 for our D = (e+2)/(2 pi) cos^e (Table_Slope_Distribution)
     table = f"@x:({e + 2.0!r}/(2*3.141592653589793))*(1+x^2)^({-(e + 4.0) / 2.0!r})"
-    params = {"lambda": 0.635, "substrate": f"({COPPER_N.real},{COPPER_N.imag})", "type": 0,
-              "sdf": "Table_Slope_Distribution_Function", "sdf.T": table}
+    params = {
+        "lambda": 0.635,
+        "substrate": f"({COPPER_N.real},{COPPER_N.imag})",
+        "type": 0,
+        "sdf": "Table_Slope_Distribution_Function",
+        "sdf.T": table,
+    }
     facet = brdf.BRDF_Model("Facet_BRDF_Model", params)
     shadowed = brdf.BRDF_Model("Shadowed_Facet_BRDF_Model", dict(params, shadow="Torrance_Sparrow_Shadow_Function"))
     return facet, shadowed
@@ -332,10 +356,11 @@ def test_scatmech_in_plane_and_off_plane_mueller_brdf():
     for ths, phs in [(40, 0), (0, 0), (20, 0), (60, 0), (80, 0), (30, 180), (70, 180), (50, 40), (70, 130)]:
         wo = B._direction(ths, phs)[None, :]
         ours_none, _ = B.analytic_mueller(st, wi, wo, phi_o=np.radians([phs]), shadowing="none", double=False)
-        ours_ts, _ = B.analytic_mueller(st, wi, wo, phi_o=np.radians([phs]), shadowing="torrance_sparrow",
-                                        double=False)
+        ours_ts, _ = B.analytic_mueller(st, wi, wo, phi_o=np.radians([phs]), shadowing="torrance_sparrow", double=False)
         for ours, model in ((ours_none[0], facet), (ours_ts[0], shadowed)):
-            theirs = _V_FLIP @ np.array(model.MuellerBRDF(math.radians(40), math.radians(ths), math.radians(phs))) @ _V_FLIP
+            theirs = (
+                _V_FLIP @ np.array(model.MuellerBRDF(math.radians(40), math.radians(ths), math.radians(phs))) @ _V_FLIP
+            )
             assert np.allclose(ours, theirs, rtol=1e-9, atol=1e-12 * abs(theirs[0, 0]))
 
 
@@ -391,7 +416,7 @@ def test_minimal_call_writes_exr_png_and_json(tmp_path):
 
 def test_eps_is_an_alternative_to_n_and_results_are_deterministic():
     a = B.run_brdf(n="0.23+3.46j", incidence=40, ex=15, ey=15, samples=5_000, seed=3)
-    b = B.run_brdf(eps=str(COPPER_N ** 2), incidence=40, ex=15, ey=15, samples=5_000, seed=3)
+    b = B.run_brdf(eps=str(COPPER_N**2), incidence=40, ex=15, ey=15, samples=5_000, seed=3)
     assert np.allclose(a.methods["mc"].mueller, b.methods["mc"].mueller, rtol=1e-12, atol=0)
 
 
@@ -411,24 +436,28 @@ def test_stack_file(tmp_path):
         "  - {n: 1.5, thickness: 1 mm, roughness: {model: ashikhmin_shirley, ex: 10, ey: 10}}\n"
         "  - n: 0.23+3.46j\n"
         "    roughness: {model: ggx, alpha: 0.2}\n"
-        "    coating: [{eps: [2.5, 0.01], thickness: 0.05 mm}]\n")
+        "    coating: [{eps: [2.5, 0.01], thickness: 0.05 mm}]\n"
+    )
     st = B.load_stack(f)
     assert len(st.layers) == 2 and st.layers[1].coating and st.frequency == pytest.approx(95e9)
     s = B.run_brdf(stack=f, incidence=30, samples=5_000).summary["methods"]["mc"]
     assert 0.0 < s["total_reflectance"] < 1.0
 
 
-@pytest.mark.parametrize("text, key", [
-    ("layers: []\n", "layers"),
-    ("layers:\n  - {n: 1.5, colour: red}\n", "layers[0].colour"),
-    ("layers:\n  - {n: 1.5, eps: 2}\n", "layers[0]"),
-    ("layers:\n  - {n: 1.5-0.1j}\n", "layers[0].n"),
-    ("layers:\n  - {n: 1.5, roughness: {model: phong, m: 3}}\n", "layers[0].roughness.model"),
-    ("layers:\n  - {kind: metal}\n  - {n: 2}\n", "layers[0]"),
-    ("layers:\n  - {n: 1.5, coating: [{n: 2, thickness: 1 mm}]}\n", "layers[0].coating"),
-    ("layers:\n  - {material: concrete}\n", "layers[0].material"),
-    ("frequency: 95 GHz\nlayers:\n  - {material: no_such_thing}\n", "layers[0].material"),
-])
+@pytest.mark.parametrize(
+    "text, key",
+    [
+        ("layers: []\n", "layers"),
+        ("layers:\n  - {n: 1.5, colour: red}\n", "layers[0].colour"),
+        ("layers:\n  - {n: 1.5, eps: 2}\n", "layers[0]"),
+        ("layers:\n  - {n: 1.5-0.1j}\n", "layers[0].n"),
+        ("layers:\n  - {n: 1.5, roughness: {model: phong, m: 3}}\n", "layers[0].roughness.model"),
+        ("layers:\n  - {kind: metal}\n  - {n: 2}\n", "layers[0]"),
+        ("layers:\n  - {n: 1.5, coating: [{n: 2, thickness: 1 mm}]}\n", "layers[0].coating"),
+        ("layers:\n  - {material: concrete}\n", "layers[0].material"),
+        ("frequency: 95 GHz\nlayers:\n  - {material: no_such_thing}\n", "layers[0].material"),
+    ],
+)
 def test_stack_file_errors_name_file_and_key(tmp_path, text, key):
     f = tmp_path / "s.yaml"
     f.write_text(text)
@@ -437,18 +466,21 @@ def test_stack_file_errors_name_file_and_key(tmp_path, text, key):
     assert str(f) in str(ex.value) and key in str(ex.value)
 
 
-@pytest.mark.parametrize("kwargs, where", [
-    ({"n": "0.2+3j", "eps": "2"}, "--eps"),
-    ({"n": "abc"}, "--n"),
-    ({"n": "1.5", "incidence": 90}, "--incidence"),
-    ({"n": "1.5", "stokes": (1, 2, 0, 0)}, "--stokes"),
-    ({"n": "1.5", "method": "exact"}, "--method"),
-    ({"n": "1.5", "shadowing": "v_groove"}, "--shadowing"),
-    ({"n": "1.5", "ex": -3}, "--ex"),  # run_brdf names the option, not the stack-file key
-    ({"n": "1.5", "model": "ggx", "ex": 3}, "--ex"),
-    ({"n": "1.5", "gloss": 0.5, "method": "analytic"}, "--method"),
-    ({"n": "1.5", "samples": 0}, "--samples"),
-])
+@pytest.mark.parametrize(
+    "kwargs, where",
+    [
+        ({"n": "0.2+3j", "eps": "2"}, "--eps"),
+        ({"n": "abc"}, "--n"),
+        ({"n": "1.5", "incidence": 90}, "--incidence"),
+        ({"n": "1.5", "stokes": (1, 2, 0, 0)}, "--stokes"),
+        ({"n": "1.5", "method": "exact"}, "--method"),
+        ({"n": "1.5", "shadowing": "v_groove"}, "--shadowing"),
+        ({"n": "1.5", "ex": -3}, "--ex"),  # run_brdf names the option, not the stack-file key
+        ({"n": "1.5", "model": "ggx", "ex": 3}, "--ex"),
+        ({"n": "1.5", "gloss": 0.5, "method": "analytic"}, "--method"),
+        ({"n": "1.5", "samples": 0}, "--samples"),
+    ],
+)
 def test_option_errors(kwargs, where):
     with pytest.raises(UserError) as ex:
         B.run_brdf(**kwargs)
@@ -471,8 +503,15 @@ def test_grid_and_mueller_helpers():
     e = rng.normal(size=(50, 2)) + 1j * rng.normal(size=(50, 2))
 
     def stokes(f):
-        return np.stack([np.abs(f[:, 0]) ** 2 + np.abs(f[:, 1]) ** 2, np.abs(f[:, 0]) ** 2 - np.abs(f[:, 1]) ** 2,
-                         2 * (f[:, 0] * np.conj(f[:, 1])).real, 2 * (f[:, 0] * np.conj(f[:, 1])).imag], 1)
+        return np.stack(
+            [
+                np.abs(f[:, 0]) ** 2 + np.abs(f[:, 1]) ** 2,
+                np.abs(f[:, 0]) ** 2 - np.abs(f[:, 1]) ** 2,
+                2 * (f[:, 0] * np.conj(f[:, 1])).real,
+                2 * (f[:, 0] * np.conj(f[:, 1])).imag,
+            ],
+            1,
+        )
 
     out = np.einsum("nij,nj->ni", j, e)
     assert np.allclose(np.einsum("nij,nj->ni", B.mueller_from_jones(j), stokes(e)), stokes(out))
@@ -497,8 +536,9 @@ def test_material_option_uses_the_coating_and_roughness_of_the_database_entry():
     r = [tmm.coh_tmm(pol, n_list, d_list, th, lam)["R"] for pol in ("s", "p")]
     assert res.summary["flat_reflectance"] == pytest.approx(sum(r) / 2, abs=1e-9)
     assert res.summary["total_reflectance"] == pytest.approx(sum(r) / 2, abs=1e-9)  # smooth entry
-    rough = B.run_brdf(material="clothed_skin", frequency="95 GHz", incidence=30.0, samples=2000, alpha=0.3,
-                       plots=False)
+    rough = B.run_brdf(
+        material="clothed_skin", frequency="95 GHz", incidence=30.0, samples=2000, alpha=0.3, plots=False
+    )
     assert rough.summary["total_reflectance"] != pytest.approx(sum(r) / 2, abs=1e-3)
 
 
@@ -514,8 +554,11 @@ def test_a_stack_becomes_one_medium_of_the_renderers_tables():
     f = 94e9
     top = B.StackLayer(eps=2.25 + 0.05j, roughness=R.GGX(0.3), thickness=2e-3, coating=((3.0 + 0.1j, 1e-4),))
     mid = B.StackLayer(eps=2.0 + 0.01j, roughness=R.Beckmann(0.2))
-    for bottom, kind in ((B.StackLayer(eps=6.0 + 2.0j, roughness=R.GGX(0.1)), OPAQUE),
-                         (B.StackLayer(eps=0j, metal=True), METAL), (B.StackLayer(eps=4.0 + 0j), DIELECTRIC)):
+    for bottom, kind in (
+        (B.StackLayer(eps=6.0 + 2.0j, roughness=R.GGX(0.1)), OPAQUE),
+        (B.StackLayer(eps=0j, metal=True), METAL),
+        (B.StackLayer(eps=4.0 + 0j), DIELECTRIC),
+    ):
         media = stack_media(B.Stack(layers=(top, mid, bottom), frequency=f))
         assert list(media.kind) == [DIELECTRIC, kind]
         assert media.rough(1) is bottom.roughness

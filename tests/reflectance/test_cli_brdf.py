@@ -77,7 +77,7 @@ def test_eps_is_n_squared_including_a_leading_minus_sign(tmp_path):
     """eps = n^2 = -11.9187 + 1.5916i for copper: the same surface, so with the same seed the
     same paths and the same numbers. A value with a leading '-' is taken as the option's value,
     with or without '='."""
-    eps = COPPER_N ** 2
+    eps = COPPER_N**2
     eps_text = f"{eps.real!r}+{eps.imag!r}j"
     assert eps_text.startswith("-")
     rest = ["--incidence", 40, "--ex", 15, "--samples", 5_000, "--seed", 7, "--no-plots"]
@@ -144,8 +144,19 @@ def test_polarized_input_over_a_flat_dielectric(tmp_path):
     branch by unpolarized power, so the polarized totals are noisy: 5 standard errors."""
     rs, rp = _flat_fresnel(1.5, 60.0)
     for stokes, expected in (("1,1,0,0", rs), ("1,-1,0,0", rp)):
-        s = _json("--n", "1.5", "--incidence", 60, "--stokes", stokes, "--samples", 20_000, "--no-plots",
-                  "--out", tmp_path / stokes)
+        s = _json(
+            "--n",
+            "1.5",
+            "--incidence",
+            60,
+            "--stokes",
+            stokes,
+            "--samples",
+            20_000,
+            "--no-plots",
+            "--out",
+            tmp_path / stokes,
+        )
         mc = s["methods"]["mc"]
         assert s["stokes_in"] == [float(v) for v in stokes.split(",")]
         assert mc["total_reflectance"] == pytest.approx(expected, abs=5 * mc["total_reflectance_stderr"])
@@ -154,39 +165,57 @@ def test_polarized_input_over_a_flat_dielectric(tmp_path):
 
 def test_database_material_and_stack_file(tmp_path):
     # `metal` is a perfect conductor: a rough one returns every path (white furnace, rounding)
-    s = _json("--material", "metal", "--frequency", "95 GHz", "--incidence", 60, "--ex", 5, "--samples", 5_000,
-              "--no-plots", "--out", tmp_path / "metal")
+    s = _json(
+        "--material",
+        "metal",
+        "--frequency",
+        "95 GHz",
+        "--incidence",
+        60,
+        "--ex",
+        5,
+        "--samples",
+        5_000,
+        "--no-plots",
+        "--out",
+        tmp_path / "metal",
+    )
     assert s["stack"]["layers"][0]["metal"] is True
     assert s["total_reflectance"] == pytest.approx(1.0, abs=1e-12)
     stack = tmp_path / "glass_on_copper.yaml"
-    stack.write_text("wavelength: 635 nm\n"
-                     "layers:\n"
-                     "  - {n: 1.5, roughness: {model: ashikhmin_shirley, ex: 15, ey: 15}}\n"
-                     "  - {n: 0.23+3.46j, roughness: {model: ashikhmin_shirley, ex: 15, ey: 15}}\n")
+    stack.write_text(
+        "wavelength: 635 nm\n"
+        "layers:\n"
+        "  - {n: 1.5, roughness: {model: ashikhmin_shirley, ex: 15, ey: 15}}\n"
+        "  - {n: 0.23+3.46j, roughness: {model: ashikhmin_shirley, ex: 15, ey: 15}}\n"
+    )
     s = _json("--stack", stack, "--incidence", 40, "--samples", 5_000, "--no-plots", "--out", tmp_path / "stack")
     assert len(s["stack"]["layers"]) == 2
     assert 0.0 < s["total_reflectance"] < 1.0
 
 
-@pytest.mark.parametrize("args, option", [
-    (["--n", "abc"], "--n"),
-    (["--n", "1.5", "--incidence", "95"], "--incidence"),
-    (["--n", "0.23+3.46j", "--eps", "2"], "--eps"),
-    (["--n", "1.5", "--model", "phong", "--m", "3"], "--model"),
-    (["--n", "1.5", "--model", "ggx", "--ex", "3"], "--ex"),
-    (["--n", "1.5", "--alpha", "-0.1"], "--alpha"),
-    (["--eps", "5.5-0.3j"], "--eps"),  # eps'' < 0 is gain in pmmw's exp(-i w t) convention
-    (["--n", "1.5", "--stokes", "1,0,0"], "--stokes"),
-    (["--n", "1.5", "--stokes", "1,2,0,0"], "--stokes"),
-    (["--n", "1.5", "--samples", "1.5"], "--samples"),
-    (["--n", "1.5", "--method", "exact"], "--method"),
-    (["--n", "1.5", "--shadowing", "v_groove"], "--shadowing"),
-    (["--material", "concrete"], "--material"),
-    (["--material", "unobtainium", "--frequency", "95 GHz"], "--material"),
-    (["--n", "1.5", "--frequency", "95"], "--frequency"),
-    (["--n", "1.5", "--stack", "stack.yaml"], "--stack"),
-    (["--stack", "no_such_stack.yaml"], "no_such_stack.yaml"),
-])
+@pytest.mark.parametrize(
+    "args, option",
+    [
+        (["--n", "abc"], "--n"),
+        (["--n", "1.5", "--incidence", "95"], "--incidence"),
+        (["--n", "0.23+3.46j", "--eps", "2"], "--eps"),
+        (["--n", "1.5", "--model", "phong", "--m", "3"], "--model"),
+        (["--n", "1.5", "--model", "ggx", "--ex", "3"], "--ex"),
+        (["--n", "1.5", "--alpha", "-0.1"], "--alpha"),
+        (["--eps", "5.5-0.3j"], "--eps"),  # eps'' < 0 is gain in pmmw's exp(-i w t) convention
+        (["--n", "1.5", "--stokes", "1,0,0"], "--stokes"),
+        (["--n", "1.5", "--stokes", "1,2,0,0"], "--stokes"),
+        (["--n", "1.5", "--samples", "1.5"], "--samples"),
+        (["--n", "1.5", "--method", "exact"], "--method"),
+        (["--n", "1.5", "--shadowing", "v_groove"], "--shadowing"),
+        (["--material", "concrete"], "--material"),
+        (["--material", "unobtainium", "--frequency", "95 GHz"], "--material"),
+        (["--n", "1.5", "--frequency", "95"], "--frequency"),
+        (["--n", "1.5", "--stack", "stack.yaml"], "--stack"),
+        (["--stack", "no_such_stack.yaml"], "no_such_stack.yaml"),
+    ],
+)
 def test_user_errors_name_the_option_without_traceback(tmp_path, args, option):
     fast = [] if "--samples" in args else ["--samples", 100]
     res = _run(*args, *fast, "--out", tmp_path / "o")

@@ -79,45 +79,125 @@ BASE = {
 
 # the keys a user edits, with values that are valid, borderline or nonsense
 PATHS = [
-    ("frequency",), ("imager", "fov"), ("imager", "resolution"), ("imager", "position"), ("imager", "noise"),
-    ("imager", "aperture_diameter"), ("imager", "bandwidth"), ("sky", "temperature"), ("sky", "model"),
-    ("sky", "ground_temperature"), ("render", "spp"), ("render", "max_depth"), ("render", "seed"),
-    ("render", "threshold"), ("render", "tile"), ("render", "default_temperature"), ("render", "target_error"),
-    ("atmosphere",), ("materials",), ("name",), ("scene", 0, "material"), ("scene", 1, "transform"),
-    ("output", "regions"), ("output", "channels"),
+    ("frequency",),
+    ("imager", "fov"),
+    ("imager", "resolution"),
+    ("imager", "position"),
+    ("imager", "noise"),
+    ("imager", "aperture_diameter"),
+    ("imager", "bandwidth"),
+    ("sky", "temperature"),
+    ("sky", "model"),
+    ("sky", "ground_temperature"),
+    ("render", "spp"),
+    ("render", "max_depth"),
+    ("render", "seed"),
+    ("render", "threshold"),
+    ("render", "tile"),
+    ("render", "default_temperature"),
+    ("render", "target_error"),
+    ("atmosphere",),
+    ("materials",),
+    ("name",),
+    ("scene", 0, "material"),
+    ("scene", 1, "transform"),
+    ("output", "regions"),
+    ("output", "channels"),
 ]
 numbers = st.one_of(
-    st.integers(-(2**70), 2**70), st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(2**70), 2**70),
+    st.floats(allow_nan=True, allow_infinity=True),
     st.sampled_from([0, -1, 1, 1e-300, 1e300, 2**63, 2**64]),
 )
 unit_strings = st.builds(
-    lambda x, u: f"{x} {u}", numbers,
-    st.sampled_from(["GHz", "MHz", "Hz", "K", "degC", "deg", "rad", "m", "mm", "km", "dB/km", "g/m3", "mm/h", "", "furlong"]),
+    lambda x, u: f"{x} {u}",
+    numbers,
+    st.sampled_from(
+        ["GHz", "MHz", "Hz", "K", "degC", "deg", "rad", "m", "mm", "km", "dB/km", "g/m3", "mm/h", "", "furlong"]
+    ),
 )
 leaves = st.one_of(numbers, unit_strings, st.text(max_size=30), st.none(), st.booleans())
-plausible = st.sampled_from([
-    "95 GHz", "35 GHz", "140 GHz", "300 K", "20 degC", "0 K", "2 K", 45, "30 deg", [0, 0, 3], [1, -2, 1.5], [24, 16],
-    [1, 1], 1, 4, 64, 0.5, "0.1 m", "1 mm", "none", "uniform", "slab", "atmosphere", {"profile": "standard"},
-    {"model": "uniform", "loss": "1 dB/km", "temperature": "290 K"}, {"scale": 2}, {"rotate_deg": [0, 0, 90]},
-    "concrete", "metal", "human_skin", ["I", "Ex2"], {"a": {"center": [0, 4, 0.2], "radius": 2}},
-    {"a": {"box": [0, 0, 4, 4]}, "b": {"box": [4, 4, 8, 8]}},
-])
+plausible = st.sampled_from(
+    [
+        "95 GHz",
+        "35 GHz",
+        "140 GHz",
+        "300 K",
+        "20 degC",
+        "0 K",
+        "2 K",
+        45,
+        "30 deg",
+        [0, 0, 3],
+        [1, -2, 1.5],
+        [24, 16],
+        [1, 1],
+        1,
+        4,
+        64,
+        0.5,
+        "0.1 m",
+        "1 mm",
+        "none",
+        "uniform",
+        "slab",
+        "atmosphere",
+        {"profile": "standard"},
+        {"model": "uniform", "loss": "1 dB/km", "temperature": "290 K"},
+        {"scale": 2},
+        {"rotate_deg": [0, 0, 90]},
+        "concrete",
+        "metal",
+        "human_skin",
+        ["I", "Ex2"],
+        {"a": {"center": [0, 4, 0.2], "radius": 2}},
+        {"a": {"box": [0, 0, 4, 4]}, "b": {"box": [4, 4, 8, 8]}},
+    ]
+)
 values = st.recursive(
     leaves,
-    lambda inner: st.one_of(st.lists(inner, max_size=4), st.dictionaries(
-        st.sampled_from(["model", "temperature", "loss", "profile", "layers", "kind", "eps", "center", "radius", "box",
-                         "translate", "scale", "rotate_deg", "x", "base", "top", "liquid_water", "rain_rate"]),
-        inner, max_size=4)),
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=4),
+        st.dictionaries(
+            st.sampled_from(
+                [
+                    "model",
+                    "temperature",
+                    "loss",
+                    "profile",
+                    "layers",
+                    "kind",
+                    "eps",
+                    "center",
+                    "radius",
+                    "box",
+                    "translate",
+                    "scale",
+                    "rotate_deg",
+                    "x",
+                    "base",
+                    "top",
+                    "liquid_water",
+                    "rain_rate",
+                ]
+            ),
+            inner,
+            max_size=4,
+        ),
+    ),
     max_leaves=8,
 )
 materials = st.dictionaries(
     st.sampled_from(["metal", "concrete", "hot", "odd"]),
-    st.fixed_dictionaries({}, optional={
-        "kind": st.sampled_from(["dielectric", "metal", "blackbody", "opaque", "thin", "plasma"]),
-        "eps": st.one_of(st.just([4, 0.2]), st.lists(numbers, min_size=2, max_size=2), numbers, unit_strings),
-        "temperature": st.one_of(st.just("310 K"), st.just("5000 K"), numbers, unit_strings),
-        "thickness": st.one_of(numbers, unit_strings),
-    }),
+    st.fixed_dictionaries(
+        {},
+        optional={
+            "kind": st.sampled_from(["dielectric", "metal", "blackbody", "opaque", "thin", "plasma"]),
+            "eps": st.one_of(st.just([4, 0.2]), st.lists(numbers, min_size=2, max_size=2), numbers, unit_strings),
+            "temperature": st.one_of(st.just("310 K"), st.just("5000 K"), numbers, unit_strings),
+            "thickness": st.one_of(numbers, unit_strings),
+        },
+    ),
     max_size=2,
 )
 
@@ -149,10 +229,17 @@ def _temperatures(obj):
 _FULL = os.environ.get("PMMW_TEST_FULL") == "1"
 
 
-@settings(max_examples=100 if _FULL else 50, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(edits=st.lists(st.tuples(st.sampled_from(PATHS), st.one_of(plausible, plausible, values)), max_size=3),
-       mats=st.one_of(st.just({}), materials))
+@settings(
+    max_examples=100 if _FULL else 50,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    edits=st.lists(st.tuples(st.sampled_from(PATHS), st.one_of(plausible, plausible, values)), max_size=3),
+    mats=st.one_of(st.just({}), materials),
+)
 def test_any_scenario_is_refused_in_one_line_or_renders_within_its_temperatures(meshes, edits, mats):
     raw = yaml.safe_load(yaml.safe_dump(BASE))
     for path, value in edits:
@@ -161,9 +248,22 @@ def test_any_scenario_is_refused_in_one_line_or_renders_within_its_temperatures(
         raw["materials"] = mats
     scn = Path(meshes) / "fuzz.yaml"
     scn.write_text(yaml.safe_dump(raw))
-    shrink = ["--set", "imager.resolution=[12, 8]", "--set", "render.spp=2", "--set", "render.max_depth=4",
-              "--set", "imager.noise=0", "--set", "imager.aperture_diameter=0", "--set", "imager.bandwidth=0",
-              "--set", "render.workers=1"]
+    shrink = [
+        "--set",
+        "imager.resolution=[12, 8]",
+        "--set",
+        "render.spp=2",
+        "--set",
+        "render.max_depth=4",
+        "--set",
+        "imager.noise=0",
+        "--set",
+        "imager.aperture_diameter=0",
+        "--set",
+        "imager.bandwidth=0",
+        "--set",
+        "render.workers=1",
+    ]
     with alarm(CASE_SECONDS):
         res = runner.invoke(app, ["validate", str(scn), *shrink])
         _check_refusal_or_success(res)
@@ -192,10 +292,19 @@ def mesh_samples():
     return {fmt: data.encode() if isinstance(data, str) else data for fmt, data in out.items()}
 
 
-@settings(max_examples=150 if _FULL else 75, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(fmt=st.sampled_from(["stl", "obj", "ply", "glb"]), cut=st.floats(0, 1), flips=st.lists(
-    st.tuples(st.floats(0, 1, exclude_max=True), st.integers(0, 255)), max_size=6), junk=st.binary(max_size=64))
+@settings(
+    max_examples=150 if _FULL else 75,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    fmt=st.sampled_from(["stl", "obj", "ply", "glb"]),
+    cut=st.floats(0, 1),
+    flips=st.lists(st.tuples(st.floats(0, 1, exclude_max=True), st.integers(0, 255)), max_size=6),
+    junk=st.binary(max_size=64),
+)
 def test_any_mesh_bytes_are_loaded_or_refused_in_one_line(meshes, mesh_samples, fmt, cut, flips, junk):
     data = bytearray(mesh_samples[fmt])
     data = data[: int(len(data) * 2 * cut)] if cut < 0.5 else data
@@ -220,8 +329,15 @@ def test_any_mesh_bytes_are_loaded_or_refused_in_one_line(meshes, mesh_samples, 
 # -- output folders as a careless or hostile user leaves them ---------------------------------------
 
 OBSTACLES = ("none", "folder", "user file", "link to a file outside", "link to a folder outside")
-OUTPUT_NAMES = ("fuzz.exr", "report.json", "report.md", "previews/fuzz_I.png", "previews", ".pmmw-tiles",
-                ".pmmw-tiles/fuzz-0123456789abcdef")
+OUTPUT_NAMES = (
+    "fuzz.exr",
+    "report.json",
+    "report.md",
+    "previews/fuzz_I.png",
+    "previews",
+    ".pmmw-tiles",
+    ".pmmw-tiles/fuzz-0123456789abcdef",
+)
 LOCKS = ("none", "live here", "dead here", "another host, fresh", "another host, silent", "garbage", "a folder")
 
 
@@ -234,8 +350,7 @@ def _lock(path: Path, kind: str) -> None:
     from pmmw.io.lock import REMOTE_STALE_S, process_start
 
     here, parent = socket.gethostname(), os.getppid()  # the test runner's parent: a live process
-    rec = {"kind": "pmmw lock", "mode": "write", "command": "pmmw render x.yaml", "since": "then",
-           "token": "00" * 8}
+    rec = {"kind": "pmmw lock", "mode": "write", "command": "pmmw render x.yaml", "since": "then", "token": "00" * 8}
     if kind == "live here":
         rec.update(host=here, pid=parent, start=process_start(parent))
     elif kind == "dead here":
@@ -251,12 +366,22 @@ def _lock(path: Path, kind: str) -> None:
         os.utime(path, (t, t))
 
 
-@settings(max_examples=25, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(obstacles=st.dictionaries(st.sampled_from(OUTPUT_NAMES), st.sampled_from(OBSTACLES), max_size=3),
-       lock=st.sampled_from(LOCKS), long_out=st.sampled_from([0, 0, 0, 300, 5000]), keep=st.booleans())
+@settings(
+    max_examples=25,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    obstacles=st.dictionaries(st.sampled_from(OUTPUT_NAMES), st.sampled_from(OBSTACLES), max_size=3),
+    lock=st.sampled_from(LOCKS),
+    long_out=st.sampled_from([0, 0, 0, 300, 5000]),
+    keep=st.booleans(),
+)
 def test_any_output_folder_is_rendered_into_or_refused_and_nothing_else_is_touched(
-        meshes, tmp_path_factory, obstacles, lock, long_out, keep):
+    meshes, tmp_path_factory, obstacles, lock, long_out, keep
+):
     """Whatever a user (or another user of a shared folder) left in the output folder: the render
     exits 0 with a consistent EXR and report, or 1/2 with one line; files and folders outside it,
     and files in it that pmmw did not make, keep every byte; nothing hangs."""
@@ -270,8 +395,11 @@ def test_any_output_folder_is_rendered_into_or_refused_and_nothing_else_is_touch
     (outside / "fuzz-0123456789abcdef").mkdir(parents=True)
     (outside / "fuzz-0123456789abcdef" / "tile_000000.npz").write_bytes(b"the user's")
     (outside / "notes.txt").write_text("the user's")
-    out = root / ("o" * long_out if long_out <= 255 else "/".join(["o" * 250] * (long_out // 250))) / "out" \
-        if long_out else root / "out"
+    out = (
+        root / ("o" * long_out if long_out <= 255 else "/".join(["o" * 250] * (long_out // 250))) / "out"
+        if long_out
+        else root / "out"
+    )
     users = {}
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -326,8 +454,13 @@ def test_any_output_folder_is_rendered_into_or_refused_and_nothing_else_is_touch
 SIDES = st.sampled_from([1, 2, 64, 1000, 32768, 32769, 100000, 2**31 - 1])
 
 
-@settings(max_examples=20, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=20,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 @given(width=SIDES, height=SIDES, command=st.sampled_from(["validate", "view"]))
 def test_any_image_size_a_header_declares_is_refused_in_one_line_or_read(meshes, monkeypatch, width, height, command):
     """An EXR whose header declares any size (a few hundred bytes on disk: no pixel data), as a sky
@@ -354,8 +487,11 @@ def test_any_image_size_a_header_declares_is_refused_in_one_line_or_read(meshes,
     raw["sky"] = {"model": "texture", "file": "sky.exr"}
     scn = Path(meshes) / "sized.yaml"
     scn.write_text(yaml.safe_dump(raw))
-    args = ["validate", str(scn)] if command == "validate" else ["view", str(path), "-c", "Tv",
-                                                                  "--out", str(Path(meshes) / "v.png")]
+    args = (
+        ["validate", str(scn)]
+        if command == "validate"
+        else ["view", str(path), "-c", "Tv", "--out", str(Path(meshes) / "v.png")]
+    )
     with alarm(CASE_SECONDS):
         res = runner.invoke(app, args)
     _check_refusal_or_success(res)
@@ -372,15 +508,24 @@ def _closed_port() -> int:
         return s.getsockname()[1]
 
 
-@settings(max_examples=25, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(address=st.one_of(
-    st.text(max_size=40),
-    st.builds(lambda scheme, host, port: f"{scheme}{host}:{port}",
-              st.sampled_from(["tcp://", "", "http://", "tls://", "ws://", "inproc://", "ucx://", "tcp:/"]),
-              st.sampled_from(["127.0.0.1", "localhost", "256.1.1.1", "no-such-host.invalid", "[::1]", "", "::"]),
-              st.one_of(st.sampled_from(["0", "1", "65535", "70000", "-1", "abc", ""]),
-                        st.just("CLOSED")))))
+@settings(
+    max_examples=25,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    address=st.one_of(
+        st.text(max_size=40),
+        st.builds(
+            lambda scheme, host, port: f"{scheme}{host}:{port}",
+            st.sampled_from(["tcp://", "", "http://", "tls://", "ws://", "inproc://", "ucx://", "tcp:/"]),
+            st.sampled_from(["127.0.0.1", "localhost", "256.1.1.1", "no-such-host.invalid", "[::1]", "", "::"]),
+            st.one_of(st.sampled_from(["0", "1", "65535", "70000", "-1", "abc", ""]), st.just("CLOSED")),
+        ),
+    )
+)
 def test_any_scheduler_address_is_refused_in_one_line_within_a_deadline(meshes, address):
     """Whatever is given as `--scheduler`, with nothing listening there: one `error:` line naming
     the address, exit 2, well within the connection deadlines (an HTTP server's address hung a

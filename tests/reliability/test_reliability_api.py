@@ -26,8 +26,13 @@ from tests.scenes import ground_and_block
 SCENE = {  # the tiny scenario of tests/api/test_api.py
     "name": "tiny",
     "frequency": "35 GHz",
-    "imager": {"position": [0, 0, 1.5], "look_at": [0, 4, 0.1], "fov": "20 deg", "resolution": [24, 16],
-               "noise": "1 K"},
+    "imager": {
+        "position": [0, 0, 1.5],
+        "look_at": [0, 4, 0.1],
+        "fov": "20 deg",
+        "resolution": [24, 16],
+        "noise": "1 K",
+    },
     "scene": [{"mesh": "ground.obj", "material": "concrete"}, {"mesh": "block.obj", "material": "metal"}],
     "sky": {"model": "uniform", "temperature": "40 K"},
     "render": {"spp": 2, "max_depth": 4, "tile": 8, "workers": 1},
@@ -44,8 +49,9 @@ def f(tmp_path_factory):
     d = tmp_path_factory.mktemp("api")
     ground_and_block(d)
     (d / "tiny.yaml").write_text(yaml.safe_dump(SCENE))
-    plate = trimesh.Trimesh([[-0.05, -0.05, 0], [0.05, -0.05, 0], [0.05, 0.05, 0], [-0.05, 0.05, 0]],
-                            [[0, 1, 2], [0, 2, 3]])
+    plate = trimesh.Trimesh(
+        [[-0.05, -0.05, 0], [0.05, -0.05, 0], [0.05, 0.05, 0], [-0.05, 0.05, 0]], [[0, 1, 2], [0, 2, 3]]
+    )
     plate.export(d / "plate.ply")
 
     class F:
@@ -54,6 +60,7 @@ def f(tmp_path_factory):
         plate = d / "plate.ply"
         scn = pmmw.Scenario.load(d / "tiny.yaml")
         out = d / "never"  # no misuse may create it
+
     return F
 
 
@@ -63,8 +70,17 @@ def _po(f, **kw):
 
 
 def _brdf(**kw):
-    return pmmw.brdf(**{"method": "analytic", "eps": "1+1e4j", "frequency": "95 GHz", "model": "beckmann",
-                        "alpha": 0.2, "double": False, **kw})
+    return pmmw.brdf(
+        **{
+            "method": "analytic",
+            "eps": "1+1e4j",
+            "frequency": "95 GHz",
+            "model": "beckmann",
+            "alpha": 0.2,
+            "double": False,
+            **kw,
+        }
+    )
 
 
 def _sweep(f, **kw):
@@ -155,10 +171,8 @@ MISUSES = [
     ("brdf-int-method", lambda f: _brdf(method=1), "method"),
     ("brdf-str-incidence", lambda f: _brdf(incidence="thirty"), "incidence"),
     ("brdf-none-incidence", lambda f: _brdf(incidence=None), "incidence"),
-    ("brdf-str-samples", lambda f: pmmw.brdf(eps="4+0.1j", frequency="95 GHz", alpha=0.2, samples="many"),
-     "samples"),
-    ("brdf-float-samples", lambda f: pmmw.brdf(eps="4+0.1j", frequency="95 GHz", alpha=0.2, samples=1.5),
-     "samples"),
+    ("brdf-str-samples", lambda f: pmmw.brdf(eps="4+0.1j", frequency="95 GHz", alpha=0.2, samples="many"), "samples"),
+    ("brdf-float-samples", lambda f: pmmw.brdf(eps="4+0.1j", frequency="95 GHz", alpha=0.2, samples=1.5), "samples"),
     ("brdf-str-seed", lambda f: pmmw.brdf(eps="4+0.1j", frequency="95 GHz", alpha=0.2, seed="x"), "seed"),
     ("brdf-scalar-stokes", lambda f: _brdf(stokes=5), "stokes"),
     ("brdf-unknown-option", lambda f: _brdf(roughness=0.2), "roughness"),
@@ -264,13 +278,21 @@ def test_numpy_arguments_of_the_functions(f):
     assert ds.attrs["spp"] == 1 and ds.attrs["seed"] == 3
     sky = pmmw.sky(np.float64(95e9), {"profile": "standard"}, elevations_deg=np.array([10, 90]))
     assert sky["Tv"].sel(elevation=90).item() == pytest.approx(pmmw.sky("95 GHz", elevations_deg=[90])["Tv"].item())
-    a = pmmw.po(f.plate, frequency=np.float32(95e9), material="metal", theta=np.float64(0.0), phi=np.array([0, 90]),
-                bounces=np.int64(1), monostatic=np.bool_(False))
+    a = pmmw.po(
+        f.plate,
+        frequency=np.float32(95e9),
+        material="metal",
+        theta=np.float64(0.0),
+        phi=np.array([0, 90]),
+        bounces=np.int64(1),
+        monostatic=np.bool_(False),
+    )
     b = pmmw.po(f.plate, frequency=float(np.float32(95e9)), material="metal", theta="0", phi="0,90")
     np.testing.assert_array_equal(a["rcs_theta"].values, b["rcs_theta"].values)
 
 
 # -- one rule each: the empty folder, the sky's elevations, temperatures -------------------------
+
 
 def test_an_empty_output_folder_is_refused_by_the_api_and_in_a_scenario(f, tmp_path, monkeypatch):
     """``out=""`` and ``output.dir: ""`` are refused alike, each naming its argument or key;
@@ -328,9 +350,18 @@ def _with(value, t):
     return value.format(t=t) if isinstance(value, str) else value
 
 
-@pytest.mark.parametrize("top, value", TEMPERATURE_KEYS,
-                         ids=["sky.temperature", "sky.ground_temperature", "atmosphere.temperature",
-                              "atmosphere.ground_temperature", "render.default_temperature", "materials.temperature"])
+@pytest.mark.parametrize(
+    "top, value",
+    TEMPERATURE_KEYS,
+    ids=[
+        "sky.temperature",
+        "sky.ground_temperature",
+        "atmosphere.temperature",
+        "atmosphere.ground_temperature",
+        "render.default_temperature",
+        "materials.temperature",
+    ],
+)
 def test_every_temperature_key_has_one_bound(f, top, value):
     """0 K is refused by every temperature key (a uniform sky too, which took it) and the
     smallest physical one, the cosmic background's 2.7 K, is taken by each."""
@@ -340,6 +371,7 @@ def test_every_temperature_key_has_one_bound(f, top, value):
 
 
 # -- symbolic links: the format from the name given ----------------------------------------------
+
 
 @pytest.fixture
 def store(f, tmp_path):
@@ -390,6 +422,7 @@ def test_a_file_without_extension_anywhere_is_named_with_the_known_formats(store
 
 # -- paths too long for the file system -----------------------------------------------------------
 
+
 def _cli(*args):
     from typer.testing import CliRunner
 
@@ -439,13 +472,23 @@ def test_sigint_stops_po_soon_with_its_own_line(tmp_path):
     written``, no file in --out."""
     sphere = trimesh.creation.icosphere(subdivisions=5, radius=0.3)
     sphere.export(tmp_path / "sphere.ply")
-    job = {"name": "big", "targets": [{"mesh": "sphere.ply", "material": "metal"}], "frequency": "95 GHz",
-           "incidence": ["0 deg", "0 deg"], "observation": {"theta": "0:180:0.25", "phi": "0:359:2"},
-           "method": "direct"}
+    job = {
+        "name": "big",
+        "targets": [{"mesh": "sphere.ply", "material": "metal"}],
+        "frequency": "95 GHz",
+        "incidence": ["0 deg", "0 deg"],
+        "observation": {"theta": "0:180:0.25", "phi": "0:359:2"},
+        "method": "direct",
+    }
     (tmp_path / "big.yaml").write_text(yaml.safe_dump(job))
     out = tmp_path / "out"
-    proc = subprocess.Popen([PYTHON, "-c", "from pmmw_cli.__main__ import main; main()", "po", tmp_path / "big.yaml",
-                             "--out", out], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    proc = subprocess.Popen(
+        [PYTHON, "-c", "from pmmw_cli.__main__ import main; main()", "po", tmp_path / "big.yaml", "--out", out],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
     time.sleep(6.0)  # past the imports, the mesh and the currents: in the far-field sum
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGINT)

@@ -60,12 +60,19 @@ DEADLINE = 120  # [s] a refusal is at once; generous against a hang on a loaded 
 
 def _bounded(*args, cwd=ROOT) -> subprocess.CompletedProcess:
     """``pmmw ARGS`` in a subprocess of the tested package, under `ADDRESS_LIMIT`."""
+
     def limit():
         resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_LIMIT, ADDRESS_LIMIT))
 
-    return subprocess.run([sys.executable, "-c", "from pmmw_cli.__main__ import main; main()", *map(str, args)],
-                          cwd=cwd, preexec_fn=limit, capture_output=True, text=True, timeout=DEADLINE,
-                          check=False)
+    return subprocess.run(
+        [sys.executable, "-c", "from pmmw_cli.__main__ import main; main()", *map(str, args)],
+        cwd=cwd,
+        preexec_fn=limit,
+        capture_output=True,
+        text=True,
+        timeout=DEADLINE,
+        check=False,
+    )
 
 
 def _header_only_exr(path: Path, width: int, height: int, channels=("Th", "Tv")) -> Path:
@@ -109,6 +116,7 @@ def _machine_with(monkeypatch, nbytes: float) -> None:
 
 
 # -- images: the size from the header, before a pixel is read ------------------------------------
+
 
 def test_view_refuses_an_image_beyond_the_size_limit_from_its_header(tmp_path):
     """A 20000 x 10000 EXR of 837 kB took 21.5 GB and 55 s in `pmmw view`; the limit is 32768 a
@@ -174,6 +182,7 @@ def test_the_render_estimate_counts_the_sky_texture(tmp_path):
 
 # -- meshes and their material libraries ---------------------------------------------------------
 
+
 def test_an_obj_naming_a_huge_material_library_is_refused_before_it_is_read(tmp_path):
     """An OBJ whose `mtllib` named a 3 GB file read it whole (6.4 GB); an MTL is a small text
     file: at most 8 MiB. The file here is sparse: it takes no disk."""
@@ -210,6 +219,7 @@ def test_a_mesh_that_memory_cannot_read_is_refused_before_reading_and_render_for
 
 # -- physical optics -----------------------------------------------------------------------------
 
+
 def _plate(path: Path, side: float = 10.0) -> Path:
     v = np.array([[0, 0, 0], [side, 0, 0], [side, side, 0], [0, side, 0]], float)
     trimesh.Trimesh(v, [[0, 1, 2], [0, 2, 3]], process=False).export(path)
@@ -226,8 +236,10 @@ def test_po_refuses_a_solve_beyond_the_memory_unless_forced(tmp_path, monkeypatc
     _one_error_line(res.output, "plate.obj", "physical optics of 2 facets", "memory", "--force")
     assert _run(*args, "--force").exit_code == 0
     job = tmp_path / "job.yaml"
-    job.write_text(f"targets: [{{mesh: plate.obj, material: metal}}]\nfrequency: 10 GHz\nincidence: [20 deg, 0 deg]\n"
-                   f"output: {{dir: '{tmp_path / 'out'}', plot: false}}\n")
+    job.write_text(
+        f"targets: [{{mesh: plate.obj, material: metal}}]\nfrequency: 10 GHz\nincidence: [20 deg, 0 deg]\n"
+        f"output: {{dir: '{tmp_path / 'out'}', plot: false}}\n"
+    )
     res = _run("po", job)
     assert res.exit_code == 2
     _one_error_line(res.output, "job.yaml", "memory", "--force")
@@ -240,8 +252,24 @@ def test_po_sizes_the_octree_from_the_frequency_before_solving(tmp_path):
     300 GHz (33,000 wavelengths) toward the whole sphere needs terabytes. Refused at once, naming
     the way out, however few its facets."""
     plate = _plate(tmp_path / "plate.obj")
-    res = _bounded("po", plate, "--material", "metal", "--frequency", "300 GHz", "--incidence", "20,0",
-                   "--theta", "0:180:1", "--phi", "0:359:1", "--method", "octree", "--format", "csv")
+    res = _bounded(
+        "po",
+        plate,
+        "--material",
+        "metal",
+        "--frequency",
+        "300 GHz",
+        "--incidence",
+        "20,0",
+        "--theta",
+        "0:180:1",
+        "--phi",
+        "0:359:1",
+        "--method",
+        "octree",
+        "--format",
+        "csv",
+    )
     assert res.returncode == 2, res.stderr[-2000:]
     _one_error_line(res.stdout + res.stderr, "plate.obj", "300 GHz", "lower frequency", "--force")
     from pmmw.physical_optics import command
@@ -256,6 +284,7 @@ def test_po_sizes_the_octree_from_the_frequency_before_solving(tmp_path):
 
 
 # -- sweeps: the grid sized from its axes ---------------------------------------------------------
+
 
 def test_a_linspace_beyond_the_variant_limit_is_refused_before_a_value_is_made(tmp_path):
     """`linspace(0 K, 1 K, 1e12 points)` reached 8 GB before the 10,000-variant limit applied."""
@@ -273,15 +302,24 @@ def test_a_linspace_beyond_the_variant_limit_is_refused_before_a_value_is_made(t
 def test_a_grid_whose_product_exceeds_the_limit_is_refused_before_it_is_expanded(tmp_path):
     """Three keys of 1000 values each (10^9 variants) reached 8 GB before the limit applied."""
     scn = _scene(tmp_path)
-    res = _bounded("sweep", scn, "--grid", "imager.noise=linspace(0 K, 1 K, 1000)",
-                   "--grid", "render.seed=linspace(1, 1000, 1000)", "--grid", "imager.fov=linspace(10 deg, 20 deg, 1000)",
-                   "--out", tmp_path / "sw")
+    res = _bounded(
+        "sweep",
+        scn,
+        "--grid",
+        "imager.noise=linspace(0 K, 1 K, 1000)",
+        "--grid",
+        "render.seed=linspace(1, 1000, 1000)",
+        "--grid",
+        "imager.fov=linspace(10 deg, 20 deg, 1000)",
+        "--out",
+        tmp_path / "sw",
+    )
     assert res.returncode == 2, res.stderr[-2000:]
-    _one_error_line(res.stdout + res.stderr, "--grid", "1,000,000,000 variants", "1000 x 1000 x 1000",
-                    "at most 10,000")
+    _one_error_line(res.stdout + res.stderr, "--grid", "1,000,000,000 variants", "1000 x 1000 x 1000", "at most 10,000")
 
 
 # -- the render's estimate against a measured peak -----------------------------------------------
+
 
 def _tree(root: int) -> list[int]:
     """``root`` and every process descended from it (from /proc)."""
@@ -293,7 +331,7 @@ def _tree(root: int) -> list[int]:
                     stat = f.read()
             except OSError:
                 continue
-            parent[int(entry)] = int(stat[stat.rindex(")") + 2:].split()[1])
+            parent[int(entry)] = int(stat[stat.rindex(")") + 2 :].split()[1])
     tree, frontier = [root], [root]
     while frontier:
         frontier = [p for p, pp in parent.items() if pp in frontier]
@@ -373,8 +411,9 @@ render: {{spp: 1, max_depth: 2, tile: 8, workers: 2}}
 output: {{dir: '{tmp_path / "out"}', previews: false}}
 """)
     estimate = estimate_resources(load_scenario(scn), triangles, 2)["memory_bytes"]
-    peak, res = _peak_memory([sys.executable, "-c", "from pmmw_cli.__main__ import main; main()",
-                              "render", str(scn), "--quiet"], ROOT)
+    peak, res = _peak_memory(
+        [sys.executable, "-c", "from pmmw_cli.__main__ import main; main()", "render", str(scn), "--quiet"], ROOT
+    )
     assert res.returncode == 0, res.stderr[-2000:]
     assert (tmp_path / "out" / "sheet.exr").exists()
     print(f"estimate {estimate / 1e9:.3f} GB, measured peak {peak / 1e9:.3f} GB")

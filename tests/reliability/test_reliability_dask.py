@@ -114,8 +114,10 @@ def _side_by_side(runs: dict, limit: float) -> dict:
     """Run ``pmmw ARGS`` for each of ``runs`` (name -> ARGS) together; name -> (exit status,
     stderr, seconds it ran). One still running after ``limit`` [s] is killed (status None)."""
     t0 = time.monotonic()
-    procs = {k: subprocess.Popen([*PMMW, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for k, args in runs.items()}
+    procs = {
+        k: subprocess.Popen([*PMMW, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for k, args in runs.items()
+    }
     out = {}
     for k, p in procs.items():
         try:
@@ -143,16 +145,33 @@ def test_wrong_scheduler_addresses_are_one_line_within_a_deadline(tmp_path):
     _serve(silent, None)
     closed_port = closed.getsockname()[1]
     closed.close()
-    port = {"http": httpd.server_address[1], "garbage": garbage.getsockname()[1],
-            "silent": silent.getsockname()[1], "closed": closed_port}
-    cause = {"http": "is not a Dask scheduler (it answered like an HTTP server",
-             "garbage": "is not a Dask scheduler (it sent 'SSH-2.0-'",
-             "silent": "did not answer within 10 s",
-             "closed": "refused the connection"}
-    runs = {k: ["render", str(scn), "--scheduler", f"tcp://127.0.0.1:{p}", "--out", str(tmp_path / k), "-q"]
-            for k, p in port.items()}
-    runs["sweep garbage"] = ["sweep", str(scn), "--grid", "render.seed=[1, 2]", "--scheduler",
-                             f"tcp://127.0.0.1:{port['garbage']}", "--out", str(tmp_path / "sweep"), "-q"]
+    port = {
+        "http": httpd.server_address[1],
+        "garbage": garbage.getsockname()[1],
+        "silent": silent.getsockname()[1],
+        "closed": closed_port,
+    }
+    cause = {
+        "http": "is not a Dask scheduler (it answered like an HTTP server",
+        "garbage": "is not a Dask scheduler (it sent 'SSH-2.0-'",
+        "silent": "did not answer within 10 s",
+        "closed": "refused the connection",
+    }
+    runs = {
+        k: ["render", str(scn), "--scheduler", f"tcp://127.0.0.1:{p}", "--out", str(tmp_path / k), "-q"]
+        for k, p in port.items()
+    }
+    runs["sweep garbage"] = [
+        "sweep",
+        str(scn),
+        "--grid",
+        "render.seed=[1, 2]",
+        "--scheduler",
+        f"tcp://127.0.0.1:{port['garbage']}",
+        "--out",
+        str(tmp_path / "sweep"),
+        "-q",
+    ]
     cause["sweep garbage"], port["sweep garbage"] = cause["garbage"], port["garbage"]
     want = {k: (2, f"error: --scheduler: tcp://127.0.0.1:{port[k]} {cause[k]}") for k in runs}
     runs["no worker"] = ["render", str(scn), "--scheduler", lone_address, "--out", str(tmp_path / "lone"), "-q"]
@@ -164,8 +183,12 @@ def test_wrong_scheduler_addresses_are_one_line_within_a_deadline(tmp_path):
         for batch in (("http", "silent"), ("garbage", "closed", "sweep garbage", "no worker")):
             for k, (status, err, took) in _side_by_side({k: runs[k] for k in batch}, WRONG_ADDRESS_S).items():
                 lines = err.strip().splitlines()
-                if (status != want[k][0] or len(lines) != 1 or not lines[0].startswith(want[k][1])
-                        or took > WRONG_ADDRESS_S):
+                if (
+                    status != want[k][0]
+                    or len(lines) != 1
+                    or not lines[0].startswith(want[k][1])
+                    or took > WRONG_ADDRESS_S
+                ):
                     problems.append(f"{k}: status {status} after {took:.1f} s, {len(lines)} lines: {err[-600:]!r}")
         assert not problems, "\n".join(problems)
     finally:
@@ -179,9 +202,24 @@ def _start_scheduler(tmp_path: Path, env: dict):
     """A Dask scheduler on 127.0.0.1 in a subprocess (its log in ``tmp_path``); (process, address)."""
     file = tmp_path / "scheduler.json"
     with open(tmp_path / "scheduler.log", "w") as log:
-        scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                                      "--port", "0", "--no-dashboard", "--scheduler-file", str(file)],
-                                     env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        scheduler = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(file),
+            ],
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
     deadline = time.monotonic() + 60
     while not file.exists() and time.monotonic() < deadline and scheduler.poll() is None:
         time.sleep(0.1)
@@ -199,10 +237,22 @@ def _start_cluster(tmp_path: Path):
     env = dict(os.environ, DASK_TEMPORARY_DIRECTORY=str(tmp_path / "scratch"), PMMW_TEST_MARKS=str(marks))
     scheduler, address = _start_scheduler(tmp_path, env)
     with open(tmp_path / "worker.log", "w") as log:
-        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
-                                   "--no-nanny", "--no-dashboard"],
-                                  env=dict(env, DASK_DISTRIBUTED__WORKER__PRELOAD=json.dumps([str(preload)])),
-                                  stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        worker = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "distributed.cli.dask_worker",
+                address,
+                "--nthreads",
+                "1",
+                "--no-nanny",
+                "--no-dashboard",
+            ],
+            env=dict(env, DASK_DISTRIBUTED__WORKER__PRELOAD=json.dumps([str(preload)])),
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
     return scheduler, worker, address, marks
 
 
@@ -232,8 +282,9 @@ def _kill_scheduler_mid_run(tmp_path: Path, args: list[str]) -> dict:
     ``marks_at_exit``, and the ``worker``, left running: the caller kills it."""
     scheduler, worker, address, marks = _start_cluster(tmp_path)
     try:
-        proc = subprocess.Popen([*PMMW, *args, "--scheduler", address, "-q"], stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True)
+        proc = subprocess.Popen(
+            [*PMMW, *args, "--scheduler", address, "-q"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
         deadline = time.monotonic() + 300  # the worker may compile the kernels first (a stale numba cache)
         while len(list(marks.iterdir())) < 2 and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.1)
@@ -245,8 +296,15 @@ def _kill_scheduler_mid_run(tmp_path: Path, args: list[str]) -> dict:
         except subprocess.TimeoutExpired:
             proc.kill()
             _, err = proc.communicate()
-        return {"status": proc.returncode, "stderr": err, "waited": time.monotonic() - t_kill, "address": address,
-                "marks": marks, "marks_at_exit": len(list(marks.iterdir())), "worker": worker}
+        return {
+            "status": proc.returncode,
+            "stderr": err,
+            "waited": time.monotonic() - t_kill,
+            "address": address,
+            "marks": marks,
+            "marks_at_exit": len(list(marks.iterdir())),
+            "worker": worker,
+        }
     except BaseException:
         _stop(scheduler, worker)
         raise
@@ -278,8 +336,11 @@ def test_scheduler_killed_mid_render_is_one_line_and_keeps_the_tiles(tmp_path):
         _assert_nothing_written_after_exit(out, run, orphan=False)  # first: the watch starts at pmmw's exit
         lines = run["stderr"].strip().splitlines()
         assert run["status"] == 1 and len(lines) == 1, run["stderr"][-3000:]
-        m = re.fullmatch(rf"error: the Dask scheduler at {re.escape(run['address'])} went away during the render "
-                         r"\((\d+) of 24 tiles done; rerun with --resume to keep them\)", lines[0])
+        m = re.fullmatch(
+            rf"error: the Dask scheduler at {re.escape(run['address'])} went away during the render "
+            r"\((\d+) of 24 tiles done; rerun with --resume to keep them\)",
+            lines[0],
+        )
         assert m, lines[0]
         assert run["waited"] < LOST_SCHEDULER_S
         assert int(m.group(1)) == len(list(out.glob(".pmmw-tiles/*/tile_*.npz")))
@@ -300,8 +361,10 @@ def test_scheduler_killed_mid_sweep_and_no_task_writes_after_exit(tmp_path):
         _assert_nothing_written_after_exit(out, run, orphan=True)  # first: the watch starts at pmmw's exit
         lines = run["stderr"].strip().splitlines()
         assert run["status"] == 1 and len(lines) == 1, run["stderr"][-3000:]
-        assert lines[0] == (f"error: the Dask scheduler at {run['address']} went away during the sweep (0 of 3 "
-                            "variants done; rerun with --resume to keep them)"), lines[0]
+        assert lines[0] == (
+            f"error: the Dask scheduler at {run['address']} went away during the sweep (0 of 3 "
+            "variants done; rerun with --resume to keep them)"
+        ), lines[0]
         assert run["waited"] < LOST_SCHEDULER_S
         rows = (out / "sweep.csv").read_text().splitlines()
         assert len(rows) == 4 and not any(",done," in r for r in rows), rows

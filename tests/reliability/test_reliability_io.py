@@ -33,8 +33,11 @@ def _run(*args):
 def _one_error_line(result, *words):
     """The CLI's contract for a refused input: one `error:` line naming what is wrong."""
     # progress lines (`name: tiles 1/6 ...`, printed as plain lines when stderr is not a terminal) aside
-    lines = [line for line in result.output.splitlines() if line.strip() and not line.startswith("warning:")
-             and not re.match(r"^\S+: tiles \d+/\d+ ", line)]
+    lines = [
+        line
+        for line in result.output.splitlines()
+        if line.strip() and not line.startswith("warning:") and not re.match(r"^\S+: tiles \d+/\d+ ", line)
+    ]
     assert len(lines) == 1 and lines[0].startswith("error:"), result.output
     assert "Traceback" not in result.output
     for w in words:
@@ -125,19 +128,23 @@ def test_a_huge_value_in_an_error_message_is_cut():
 
 # -- limits and physical ranges ------------------------------------------------------------------
 
-@pytest.mark.parametrize("override, key, words", [
-    ("imager.resolution=[100000, 100000]", "imager.resolution", "at most 16384"),
-    ("imager.resolution=[16384, 16384]", "imager.resolution", "64 Mpx"),
-    ("render.spp=100000000000", "render.spp", "less than or equal to 1048576"),
-    ("render.seed=18446744073709551616", "render.seed", "less than or equal to"),
-    ("name=" + "n" * 230, "name", "at most 100"),
-    ("frequency=2000 GHz", "frequency", "outside the 1-1000 GHz"),
-    ("frequency=500 MHz", "frequency", "outside the 1-1000 GHz"),
-    ("imager.bandwidth=80 GHz", "imager", "reaches outside"),
-    ("sky.ground_temperature=-50 K", "sky.ground_temperature", "below absolute zero"),
-    ("render.default_temperature=-1 degC", None, None),  # 272.15 K: fine
-    ("materials={metal: {kind: blackbody, temperature: 1e300 K}}", "materials.metal.temperature", "hotter"),
-])
+
+@pytest.mark.parametrize(
+    "override, key, words",
+    [
+        ("imager.resolution=[100000, 100000]", "imager.resolution", "at most 16384"),
+        ("imager.resolution=[16384, 16384]", "imager.resolution", "64 Mpx"),
+        ("render.spp=100000000000", "render.spp", "less than or equal to 1048576"),
+        ("render.seed=18446744073709551616", "render.seed", "less than or equal to"),
+        ("name=" + "n" * 230, "name", "at most 100"),
+        ("frequency=2000 GHz", "frequency", "outside the 1-1000 GHz"),
+        ("frequency=500 MHz", "frequency", "outside the 1-1000 GHz"),
+        ("imager.bandwidth=80 GHz", "imager", "reaches outside"),
+        ("sky.ground_temperature=-50 K", "sky.ground_temperature", "below absolute zero"),
+        ("render.default_temperature=-1 degC", None, None),  # 272.15 K: fine
+        ("materials={metal: {kind: blackbody, temperature: 1e300 K}}", "materials.metal.temperature", "hotter"),
+    ],
+)
 def test_limits_and_physical_ranges_are_checked_by_validate(tmp_path, override, key, words):
     """Each was accepted by validate and failed later (a traceback after a long render), or gave
     a silent wrong image (negative or infinite pixels)."""
@@ -149,12 +156,15 @@ def test_limits_and_physical_ranges_are_checked_by_validate(tmp_path, override, 
     _one_error_line(res, f"tiny.yaml: {key}", words)
 
 
-@pytest.mark.parametrize("args, words", [
-    (["sky", "--frequency", "1e30 Hz"], "outside the 1-1000 GHz"),
-    (["sky", "--frequency", "2000 GHz"], "outside the 1-1000 GHz"),
-    (["materials", "list", "--frequency", "0 GHz"], "outside the 1-1000 GHz"),
-    (["materials", "show", "concrete", "--frequency", "1 MHz"], "outside the 1-1000 GHz"),
-])
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["sky", "--frequency", "1e30 Hz"], "outside the 1-1000 GHz"),
+        (["sky", "--frequency", "2000 GHz"], "outside the 1-1000 GHz"),
+        (["materials", "list", "--frequency", "0 GHz"], "outside the 1-1000 GHz"),
+        (["materials", "show", "concrete", "--frequency", "1 MHz"], "outside the 1-1000 GHz"),
+    ],
+)
 def test_frequency_options_are_range_checked(args, words):
     res = _run(*args)
     assert res.exit_code == 2
@@ -195,10 +205,12 @@ def test_render_refuses_what_memory_cannot_hold_unless_forced(tmp_path, monkeypa
 
 # -- outputs: never over an input, names that fit, written together ---------------------------------
 
+
 def test_a_render_never_overwrites_its_own_input(tmp_path):
     """`output.dir: .` with `name: sky` replaced sky.exr, the sky texture the render read."""
-    write_exr(tmp_path / "sky.exr", {"Tv": np.full((8, 16), 50.0, np.float32),
-                                     "Th": np.full((8, 16), 50.0, np.float32)}, {})
+    write_exr(
+        tmp_path / "sky.exr", {"Tv": np.full((8, 16), 50.0, np.float32), "Th": np.full((8, 16), 50.0, np.float32)}, {}
+    )
     before = (tmp_path / "sky.exr").read_bytes()
     scn = _scene(tmp_path, extra=f"sky: {{texture: sky.exr}}\noutput: {{dir: '{tmp_path}'}}", name="sky")
     res = _run("render", scn)
@@ -206,7 +218,9 @@ def test_a_render_never_overwrites_its_own_input(tmp_path):
     _one_error_line(res, "overwrite its own input", "sky.exr")
     assert (tmp_path / "sky.exr").read_bytes() == before
     # the scenario file itself, named like a report (JSON is YAML)
-    (tmp_path / "report.json").write_text(scn.read_text().replace("sky: {texture: sky.exr}", "").replace("name: sky", "name: x"))
+    (tmp_path / "report.json").write_text(
+        scn.read_text().replace("sky: {texture: sky.exr}", "").replace("name: sky", "name: x")
+    )
     res = _run("render", tmp_path / "report.json")
     assert res.exit_code == 2
     _one_error_line(res, "overwrite its own input", "report.json")
@@ -311,6 +325,7 @@ def test_stale_tile_folders_are_removed(tmp_path):
 
 # -- memory flat in spp ---------------------------------------------------------------------------
 
+
 def test_a_tile_is_traced_in_waves_of_bounded_size(monkeypatch):
     """spp 4096 on one 32x32 tile took 4.8 GB: a pass is now split so no wave exceeds MAX_WAVE
     camera rays, and the estimate is unchanged (same pixels, same sample numbers)."""
@@ -323,8 +338,13 @@ def test_a_tile_is_traced_in_waves_of_bounded_size(monkeypatch):
     from tests.scenes import box, make_job, material
 
     cam = Camera.look_at((0, -3, 0.5), (0, 0, 0.5), (0, 0, 1), np.radians(30), (8, 8))
-    job = make_job([(box((-1, -0.1, 0), (1, 0.1, 1)), material("dielectric", 4 + 0.2j, 310.0))], cam,
-                   UniformSky(40.0, 290.0), 35e9, settings=RenderSettings(spp=64, max_depth=8, tile=8, seed=3))
+    job = make_job(
+        [(box((-1, -0.1, 0), (1, 0.1, 1)), material("dielectric", 4 + 0.2j, 310.0))],
+        cam,
+        UniformSky(40.0, 290.0),
+        35e9,
+        settings=RenderSettings(spp=64, max_depth=8, tile=8, seed=3),
+    )
     tile = job.tiles()[0]
     sizes = []
 
@@ -349,12 +369,17 @@ def test_a_tile_is_traced_in_waves_of_bounded_size(monkeypatch):
 
 # -- the console script ---------------------------------------------------------------------------
 
+
 def test_no_traceback_from_the_console_script_for_an_unwritable_output(tmp_path):
     scn = _scene(tmp_path)
     (tmp_path / "file").write_text("x")
     exe = Path(sys.executable).with_name("pmmw")
-    p = subprocess.run([str(exe), "render", str(scn), "--out", str(tmp_path / "file" / "sub")],
-                       capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        [str(exe), "render", str(scn), "--out", str(tmp_path / "file" / "sub")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert p.returncode in (1, 2) and "Traceback" not in p.stderr
     assert p.stderr.strip().count("\n") == 0 and p.stderr.startswith("error:"), p.stderr
     assert os.path.exists(tmp_path / "file")

@@ -79,6 +79,7 @@ def _half(data: bytes) -> bytes:
 
 # -- each case writes a broken mesh into the folder and returns its file name -----------------
 
+
 def _stl_garbage(d):
     (d / "m.stl").write_bytes(garbage())
     return "m.stl"
@@ -260,6 +261,7 @@ def test_console_script_prints_one_line_and_no_warning(tmp_path, case):
 
 # -- asset_files --------------------------------------------------------------------------------
 
+
 def test_asset_files_gltf_lists_buffers_and_images(tmp_path):
     path, bins = write_gltf(tmp_path)
     spaced = tmp_path / "my box.bin"
@@ -299,5 +301,9 @@ def test_asset_files_obj_lists_mtllib_and_its_textures(tmp_path):
     obj.write_text("mtllib mats.mtl extra.mtl missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl brick\nf 1 2 3\n")
 
     assert asset_files(obj) == [
-        obj, tmp_path / "mats.mtl", tmp_path / "tex" / "brick.png", tmp_path / "bump.png", tmp_path / "extra.mtl",
+        obj,
+        tmp_path / "mats.mtl",
+        tmp_path / "tex" / "brick.png",
+        tmp_path / "bump.png",
+        tmp_path / "extra.mtl",
     ]

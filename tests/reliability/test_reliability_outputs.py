@@ -29,8 +29,14 @@ def _run(*args):
     return runner.invoke(app, [str(a) for a in args])
 
 
-def _scene(tmp_path: Path, name: str = "tiny", frequency: str = "35 GHz", spp: int = 2, file: str = "tiny.yaml",
-           resolution: str = "[24, 16]") -> Path:
+def _scene(
+    tmp_path: Path,
+    name: str = "tiny",
+    frequency: str = "35 GHz",
+    spp: int = 2,
+    file: str = "tiny.yaml",
+    resolution: str = "[24, 16]",
+) -> Path:
     ground_and_block(tmp_path)
     path = tmp_path / file
     path.write_text(f"""
@@ -47,8 +53,11 @@ render: {{spp: {spp}, max_depth: 4, tile: 8, workers: 1}}
 
 
 def _one_error_line(res, *words):
-    lines = [ln for ln in res.output.splitlines() if ln.strip() and not ln.startswith("warning:")
-             and not re.match(r"^\S+: tiles \d+/\d+ ", ln)]
+    lines = [
+        ln
+        for ln in res.output.splitlines()
+        if ln.strip() and not ln.startswith("warning:") and not re.match(r"^\S+: tiles \d+/\d+ ", ln)
+    ]
     assert len(lines) == 1 and lines[0].startswith("error:"), res.output
     assert "Traceback" not in res.output
     for w in words:
@@ -72,6 +81,7 @@ def _victim(root: Path, name: str = "tiny-0123456789abcdef") -> Path:
 
 
 # -- 1. nothing removed or overwritten that pmmw did not make ---------------------------------------
+
 
 def test_a_tile_root_linked_out_of_the_output_folder_never_leads_to_deletion(tmp_path):
     """The probe: `ln -s $PWD/V O/.pmmw-tiles` and a render of `tiny` deleted
@@ -247,6 +257,7 @@ def test_another_scenarios_report_is_not_replaced(tmp_path):
 
 # -- 2. one writer per output folder ------------------------------------------------------------
 
+
 @pytest.fixture
 def live_process():
     p = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)"])
@@ -258,9 +269,16 @@ def live_process():
 def _lock_file(folder: Path, pid: int, host=None, start="own", age_s: float = 0.0, name=lockmod.LOCK_NAME):
     import socket
 
-    rec = {"kind": "pmmw lock", "mode": "write", "host": host or socket.gethostname(), "pid": pid,
-           "start": lockmod.process_start(pid) if start == "own" else start, "command": "pmmw render other.yaml",
-           "since": "earlier", "token": "0123456789abcdef"}
+    rec = {
+        "kind": "pmmw lock",
+        "mode": "write",
+        "host": host or socket.gethostname(),
+        "pid": pid,
+        "start": lockmod.process_start(pid) if start == "own" else start,
+        "command": "pmmw render other.yaml",
+        "since": "earlier",
+        "token": "0123456789abcdef",
+    }
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / name
     path.write_text(json.dumps(rec))
@@ -287,8 +305,11 @@ def test_a_lock_of_a_dead_run_is_taken_over(tmp_path):
     scn = _scene(tmp_path)
     p = subprocess.Popen([sys.executable, "-c", "pass"])
     p.wait()
-    for out, kwargs in ((tmp_path / "dead_pid", {}), (tmp_path / "reused_pid", {"pid": os.getpid(), "start": 1}),
-                        (tmp_path / "silent_host", {"host": "node-17", "age_s": 2 * lockmod.REMOTE_STALE_S})):
+    for out, kwargs in (
+        (tmp_path / "dead_pid", {}),
+        (tmp_path / "reused_pid", {"pid": os.getpid(), "start": 1}),
+        (tmp_path / "silent_host", {"host": "node-17", "age_s": 2 * lockmod.REMOTE_STALE_S}),
+    ):
         _lock_file(out, **{"pid": p.pid, **kwargs})
         res = _run("render", scn, "--out", out)
         assert res.exit_code == 0, (out.name, res.output)
@@ -304,8 +325,12 @@ def test_two_renders_into_one_folder_one_is_refused_and_the_other_finishes(tmp_p
     the first one's results silently replaced)."""
     scn = _scene(tmp_path, spp=64, resolution="[96, 64]")
     out = tmp_path / "O"
-    first = subprocess.Popen([str(Path(sys.executable).parent / "pmmw"), "render", str(scn), "--out", str(out)],
-                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    first = subprocess.Popen(
+        [str(Path(sys.executable).parent / "pmmw"), "render", str(scn), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     deadline = time.time() + 120
     while not (out / lockmod.LOCK_NAME).exists() and first.poll() is None and time.time() < deadline:
         time.sleep(0.05)
@@ -363,6 +388,7 @@ def test_a_run_that_lost_its_lock_commits_nothing(tmp_path):
 
 
 # -- 4. outputs written together or not at all --------------------------------------------------
+
 
 def test_an_output_path_that_is_a_folder_is_refused_before_tracing(tmp_path):
     """`tiny.exr/` as a folder: the new EXR failed after tracing, and with `report.json` as a

@@ -26,8 +26,17 @@ PMMW = Path(sys.executable).parent / "pmmw"
 CONFIG = ROOT / "configs" / "landing_95ghz.yaml"
 #: 160 x 120 pixels in 80 tiles of 16 x 16 on 2 workers: about 3 s from start to exit, so that a
 #: signal within 3 s lands in every phase (import, resolve, worker start-up, tracing, writing).
-SMALL = ["--workers", "2", "-q", "--set", "imager.resolution=[160,120]", "--set", "render.tile=16",
-         "--set", "output.regions={}"]
+SMALL = [
+    "--workers",
+    "2",
+    "-q",
+    "--set",
+    "imager.resolution=[160,120]",
+    "--set",
+    "render.tile=16",
+    "--set",
+    "output.regions={}",
+]
 #: Longer than any of these renders takes, even on a loaded machine: past it the run hangs.
 HANG_S = 90
 #: From the signal to the exit of pmmw and every worker [s] ("within a few seconds").
@@ -85,8 +94,14 @@ def _no_leftovers(pgid: int, within: float = EXIT_S) -> list[str]:
 
 
 def _start(args: list) -> subprocess.Popen:
-    return subprocess.Popen([str(a) for a in args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, cwd=ROOT)
+    return subprocess.Popen(
+        [str(a) for a in args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        cwd=ROOT,
+    )
 
 
 def _finish(proc: subprocess.Popen, timeout: float = HANG_S) -> tuple[int, str]:
@@ -133,8 +148,9 @@ def _killer(tmp_path: Path, tile: int, mode: str, out: Path) -> tuple[int, str, 
     """Render SMALL to ``out`` with tile ``tile`` killing its worker; (status, stderr, kills)."""
     script, marks = tmp_path / "killer.py", tmp_path / "kills.txt"
     script.write_text(_KILLER)
-    rc, err = _finish(_start([sys.executable, script, tile, marks, mode,
-                              "render", CONFIG, *SMALL, "--out", out, "--keep-tiles"]))
+    rc, err = _finish(
+        _start([sys.executable, script, tile, marks, mode, "render", CONFIG, *SMALL, "--out", out, "--keep-tiles"])
+    )
     kills = len(marks.read_text().splitlines()) if marks.exists() else 0
     return rc, err, kills
 
@@ -192,8 +208,9 @@ def _signal_once(sig: int, delay: float, out: Path) -> int:
         return rc
     word = "interrupted" if sig == signal.SIGINT else "terminated"
     assert rc == 128 + sig, f"status {rc} after {delay:.2f} s:\n{err}"
-    assert err.strip().splitlines() == [f"{word}: finished tiles are kept; run again with --resume to continue"], \
+    assert err.strip().splitlines() == [f"{word}: finished tiles are kept; run again with --resume to continue"], (
         f"after {delay:.2f} s:\n{err}"
+    )
     assert took < EXIT_S, f"exit took {took:.1f} s after a signal at {delay:.2f} s"
     return rc
 
@@ -263,9 +280,19 @@ def test_a_saved_tile_is_loaded_only_when_every_array_is_plausible(tmp_path):
 
     tile = (4, 8, 16, 16, 20)  # index, x0, y0, x1, y1: 8 x 4 pixels
     h, w = 4, 8
-    good = TileResult(4, tile[1:], np.full((h, w, 4), 250.0), np.zeros((h, w, 4)), np.full((h, w), np.inf),
-                      np.full((h, w), -1.0), 64, np.full((h, w), 2, np.int32), 0.01, np.zeros((h, w, 2)),
-                      np.zeros((h, w, 4)))
+    good = TileResult(
+        4,
+        tile[1:],
+        np.full((h, w, 4), 250.0),
+        np.zeros((h, w, 4)),
+        np.full((h, w), np.inf),
+        np.full((h, w), -1.0),
+        64,
+        np.full((h, w), 2, np.int32),
+        0.01,
+        np.zeros((h, w, 2)),
+        np.zeros((h, w, 4)),
+    )
     _save_tile(tmp_path, good)
     path = tmp_path / "tile_000004.npz"
     loaded = _load_tile(path, tile)

@@ -36,9 +36,13 @@ def _pixel(model, position, direction):
     atmosphere and its sky, as `pipeline.make_job` sets them up; and the job."""
     position, direction = np.asarray(position, float), np.asarray(direction, float)
     cam = Camera.look_at(position, position + 1e3 * direction, [1.0, 0.0, 0.0], np.radians(1e-3), (1, 1))
-    job = make_job([(GROUND, material(kind="blackbody", temperature=T_GROUND))], cam,
-                   AtmosphereSky(model, T_GROUND), model.frequency,
-                   RenderSettings(spp=1, max_depth=4, threshold=1e-9, termination="temperature"))
+    job = make_job(
+        [(GROUND, material(kind="blackbody", temperature=T_GROUND))],
+        cam,
+        AtmosphereSky(model, T_GROUND),
+        model.frequency,
+        RenderSettings(spp=1, max_depth=4, threshold=1e-9, termination="temperature"),
+    )
     job = dataclasses.replace(job, atmosphere=model)
     img = render(job)
     return float(img["Ex2"][0, 0]), float(img["Ey2"][0, 0]), job

@@ -13,8 +13,13 @@ F95 = 95e9
 
 
 def _job(objects, cam, atm_model):
-    job = make_job(objects, cam, AtmosphereSky(atm_model, 290.0), F95,
-                   RenderSettings(spp=1, max_depth=4, threshold=1e-9, termination="temperature"))
+    job = make_job(
+        objects,
+        cam,
+        AtmosphereSky(atm_model, 290.0),
+        F95,
+        RenderSettings(spp=1, max_depth=4, threshold=1e-9, termination="temperature"),
+    )
     import dataclasses
 
     return dataclasses.replace(job, atmosphere=atm_model)
@@ -91,11 +96,18 @@ def test_short_segments_skip_the_atmosphere_within_the_stated_bound():
     objects = [(room, material(eps=3 + 0.5j, temperature=250.0)), (block, material(eps=5 + 2j, temperature=320.0))]
     import dataclasses
 
-    base = make_job(objects, cam, UniformSky(290.0, 290.0), F95,
-                    RenderSettings(spp=2, max_depth=4, threshold=1e-4, termination="temperature"))
+    base = make_job(
+        objects,
+        cam,
+        UniformSky(290.0, 290.0),
+        F95,
+        RenderSettings(spp=2, max_depth=4, threshold=1e-4, termination="temperature"),
+    )
     base = dataclasses.replace(base, atmosphere=model)
     diagonal = np.sqrt(3) * 0.4
-    unit = atmosphere_skip_length(dataclasses.replace(base, settings=dataclasses.replace(base.settings, atmosphere_tolerance=1.0)))
+    unit = atmosphere_skip_length(
+        dataclasses.replace(base, settings=dataclasses.replace(base.settings, atmosphere_tolerance=1.0))
+    )
     tol = 1.1 * diagonal / unit
     count = _count_segments(model)
     images = {}
@@ -167,8 +179,9 @@ def test_sky_lookup_reads_the_tables_as_numpy_interp_at_every_height_and_elevati
     sky = AtmosphereSky(model, 281.5)
     rng = np.random.default_rng(7)
     n = 20000
-    el = np.concatenate([rng.uniform(-0.3, np.pi / 2, n), rng.uniform(0.0, 0.02, n),
-                         [0.0, np.pi / 2, SKY_ELEVATIONS[300], -1e-9]])
+    el = np.concatenate(
+        [rng.uniform(-0.3, np.pi / 2, n), rng.uniform(0.0, 0.02, n), [0.0, np.pi / 2, SKY_ELEVATIONS[300], -1e-9]]
+    )
     az = rng.uniform(0.0, 2.0 * np.pi, el.size)
     d = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
     heights = rng.uniform(-5.0, 1000.0, el.size)
@@ -200,8 +213,10 @@ def test_a_tabulated_column_gives_the_cell_walk_of_every_segment():
     rounding (1e-14 relative: closed form). In fog the column needs a finer grid, and still
     holds."""
     rng = np.random.default_rng(5)
-    for atm in (Atmosphere(humidity=0.004), Atmosphere(layers=[AtmosphereLayer(kind="fog", base=0.0, top=600.0,
-                                                                      liquid_water=1e-3)])):
+    for atm in (
+        Atmosphere(humidity=0.004),
+        Atmosphere(layers=[AtmosphereLayer(kind="fog", base=0.0, top=600.0, liquid_water=1e-3)]),
+    ):
         model = AtmosphereModel(atm, F95)
         col = model.column(3000.0, 10.0, 1.0, 1.008)
         assert col is not None
@@ -234,8 +249,9 @@ def test_an_imager_high_above_the_scene_reads_the_same_image_with_the_tabulated_
     from pmmw.trace.intersect import make_intersector
 
     configs = Path(__file__).resolve().parents[2] / "configs"
-    res = pipeline.resolve(configs / "sar_cessna_95ghz.yaml",
-                           ["imager.resolution=[24, 24]", "render.spp=4", "render.target_error=null"])
+    res = pipeline.resolve(
+        configs / "sar_cessna_95ghz.yaml", ["imager.resolution=[24, 24]", "render.spp=4", "render.target_error=null"]
+    )
     job = pipeline.make_job(res, res.scenario.frequencies[0])
     isect = make_intersector(job.vertices, job.faces)
     fast = Integrator(job, isect)

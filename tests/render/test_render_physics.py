@@ -124,8 +124,9 @@ def test_isothermal_enclosure_with_branch_choice_keeps_each_paths_power(strategy
     statistically (5 standard errors of the pixel mean). Drawn by the unpolarized R and T
     alone (the rule before), 42 % of the pixels missed T, by up to 243 K at 2 spp."""
     t = 300.0
-    settings = RenderSettings(spp=2, max_depth=6, threshold=1e-3, termination="temperature", tile=16,
-                              strategy=strategy, split_depth=1)
+    settings = RenderSettings(
+        spp=2, max_depth=6, threshold=1e-3, termination="temperature", tile=16, strategy=strategy, split_depth=1
+    )
     img = render(make_job(_room(t), _room_camera(), UniformSky(0.0, 0.0), F95, settings))
     np.testing.assert_allclose(0.5 * (img["Ex2"] + img["Ey2"]), t, rtol=0, atol=1e-6)
     for c in ("Ex2", "Ey2"):
@@ -167,8 +168,10 @@ def test_coated_half_space_matches_tmm(theta):
     eps_denim, eps_skin = 1.61 + 0.121j, 5.9 + 9.4j
     t_denim, t_skin, t_sky = 300.0, 310.0, 40.0
     lam = C0 / F95
-    body = (box([-500, -500, -20], [500, 500, 0]),
-            material(eps=eps_skin, temperature=t_skin, coating=[(eps_denim, 0.8e-3, t_denim)]))
+    body = (
+        box([-500, -500, -20], [500, 500, 0]),
+        material(eps=eps_skin, temperature=t_skin, coating=[(eps_denim, 0.8e-3, t_denim)]),
+    )
     img = render(make_job([body], looking_down_at(theta), UniformSky(t_sky, 290.0), F95))
     th = np.radians(theta)
     for pol, chan in (("s", "Ex2"), ("p", "Ey2")):
@@ -186,8 +189,10 @@ def test_thick_water_coating_equals_water_half_space():
     """
     eps_water = 6.65 + 9.4j
     t, t_sky = 300.0, 40.0
-    body = (box([-500, -500, -20], [500, 500, 0]),
-            material(eps=5.5 + 0.5j, temperature=t, coating=[(eps_water, 50e-3, t)]))
+    body = (
+        box([-500, -500, -20], [500, 500, 0]),
+        material(eps=5.5 + 0.5j, temperature=t, coating=[(eps_water, 50e-3, t)]),
+    )
     img = render(make_job([body], looking_down_at(30), UniformSky(t_sky, 290.0), F95))
     rs, rp = fresnel_closed_form(eps_water, np.radians(30))
     np.testing.assert_allclose(img["Ex2"], (1 - rs) * t + rs * t_sky, atol=1e-3)
@@ -208,7 +213,6 @@ def test_metal_mirror_at_45_degrees_sees_the_sky_overhead():
     zenith = sky.zenith_angle_temperature(np.pi / 2)
     np.testing.assert_allclose(img["Ex2"], zenith, atol=0.05)
     np.testing.assert_allclose(img["Ey2"], zenith, atol=0.05)
-
 
 
 def test_interpenetrating_objects_of_equal_permittivity_act_as_one_medium():
@@ -288,8 +292,9 @@ def test_branch_choice_strategies_are_unbiased(strategy):
     theta = 50.0
     base = looking_down_at(theta)
     cam = Camera(base.position, base.x, base.y, base.k, np.radians(0.01), 8, 8)
-    settings = RenderSettings(spp=64, max_depth=8, threshold=1e-9, termination="temperature",
-                              strategy=strategy, split_depth=1, tile=8)
+    settings = RenderSettings(
+        spp=64, max_depth=8, threshold=1e-9, termination="temperature", strategy=strategy, split_depth=1, tile=8
+    )
     job = make_job([lossless, absorber], cam, UniformSky(t_sky, 290.0), F35, settings)
     from pmmw.trace.integrator import Integrator
     from pmmw.trace.intersect import make_intersector
@@ -308,8 +313,9 @@ def test_adaptive_sampling_reaches_the_target_error():
     """render.target_error: pixels stop at min_spp where they converge (smooth ground) and get
     more samples only where needed; every pixel that stopped early meets the target."""
 
-    settings = RenderSettings(spp=64, max_depth=6, threshold=0.05, termination="roulette",
-                              target_error=0.5, min_spp=4, tile=16)
+    settings = RenderSettings(
+        spp=64, max_depth=6, threshold=0.05, termination="roulette", target_error=0.5, min_spp=4, tile=16
+    )
     job = make_job(_room(300.0), _room_camera(), UniformSky(0.0, 0.0), F95, settings)
     from pmmw.trace.integrator import Integrator
     from pmmw.trace.intersect import make_intersector
@@ -372,15 +378,25 @@ def test_adaptive_sampling_per_psf_footprint_meets_the_target_after_the_blur():
 
     half = np.tan(cam.fov / 2)
     corners = [(c * x - s * z, s * x + c * z) for x, z in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-    poly = [((xa * side / 2 / dist / half + 1) * n / 2, (n - za * side / 2 / dist * n / half) / 2) for xa, za in corners]
+    poly = [
+        ((xa * side / 2 / dist / half + 1) * n / 2, (n - za * side / 2 / dist * n / half) / 2) for xa, za in corners
+    ]
     cover = np.array([[_clip_area(poly, i, j, i + 1, j + 1) for i in range(n)] for j in range(n)])
     truth = blur(280.0 + 20.0 * cover, kern)
 
     target = 0.4
     samples, errors = {}, {}
     for rule, f in (("pixel", 1.0), ("footprint", footprint)):
-        st = RenderSettings(spp=64, max_depth=2, threshold=1e-3, termination="temperature", target_error=target,
-                            min_spp=4, tile=16, error_footprint=f)
+        st = RenderSettings(
+            spp=64,
+            max_depth=2,
+            threshold=1e-3,
+            termination="temperature",
+            target_error=target,
+            min_spp=4,
+            tile=16,
+            error_footprint=f,
+        )
         job = make_job([(plate, material(kind="blackbody", temperature=300.0))], cam, UniformSky(280.0, 280.0), F95, st)
         integ = Integrator(job, make_intersector(job.vertices, job.faces))
         img = assemble(job, [integ.render_tile(t) for t in job.tiles()])

@@ -39,11 +39,15 @@ def _room(t, model, bump=None):
     return [
         (hollow_box([-5, -5, -3], [5, 5, 3], 0.3), material(eps=5.5 + 0.5j, temperature=t, roughness=model, bump=bump)),
         (sphere([1.0, 2.0, 0.0], 0.8), material(kind="metal", temperature=t, roughness=model)),
-        (sphere([-1.2, 2.5, 0.3], 0.7),
-         material(eps=5.9 + 9.4j, temperature=t, coating=[(1.61 + 0.121j, 0.8e-3, t)], roughness=model)),
+        (
+            sphere([-1.2, 2.5, 0.3], 0.7),
+            material(eps=5.9 + 9.4j, temperature=t, coating=[(1.61 + 0.121j, 0.8e-3, t)], roughness=model),
+        ),
         (box([-0.6, 1.0, -1.5], [0.6, 1.8, -0.5]), material(eps=2.26 + 0.0013j, temperature=t, roughness=model)),
-        (box([1.5, 0.5, -2.0], [2.5, 1.5, -1.0]), material(kind="opaque", eps=3.0 + 0.2j, temperature=t,
-                                                           roughness=model)),
+        (
+            box([1.5, 0.5, -2.0], [2.5, 1.5, -1.0]),
+            material(kind="opaque", eps=3.0 + 0.2j, temperature=t, roughness=model),
+        ),
     ]
 
 
@@ -79,8 +83,13 @@ def test_isothermal_room_with_bumps_reads_its_temperature():
 def _plane(theta_deg, mat, spp, seed=1, sky=1.0):
     """One pixel looking at a wide flat top face at incidence theta; sky at `sky` K."""
     settings = RenderSettings(spp=spp, max_depth=30, threshold=1e-4, termination="roulette", seed=seed, tile=1)
-    job = make_job([(box([-500, -500, -50], [500, 500, 0]), mat)], looking_down_at(theta_deg, height=2.0),
-                   UniformSky(sky, sky), F95, settings)
+    job = make_job(
+        [(box([-500, -500, -50], [500, 500, 0]), mat)],
+        looking_down_at(theta_deg, height=2.0),
+        UniformSky(sky, sky),
+        F95,
+        settings,
+    )
     return render(job)
 
 
@@ -123,16 +132,20 @@ def test_rough_lossless_dielectric_reflects_plus_transmits_one(theta):
         slab = (box([-500, -500, -5], [500, 500, 0]), material(eps=eps, temperature=0.0, roughness=model))
         floor = (box([-499, -499, -6], [499, 499, -4]), material(kind="blackbody", temperature=t_floor))
         settings = RenderSettings(spp=4000, max_depth=40, threshold=1e-4, seed=3, tile=1)
-        return render(make_job([slab, floor], looking_down_at(theta, height=2.0), UniformSky(1.0, 1.0), F95,
-                               settings))
+        return render(make_job([slab, floor], looking_down_at(theta, height=2.0), UniformSky(1.0, 1.0), F95, settings))
 
     both = scene(1.0)
     # Russian roulette below the 1e-4 weight threshold is unbiased, not exact path by path: the
     # residue is ~ threshold x (fraction of paths reaching it) / sqrt(spp) << 1e-5
     assert abs(float(both["I"][0, 0]) - 2.0) < 1e-5  # I = Ex2 + Ey2
     refl = float(scene(0.0)["I"][0, 0]) / 2
-    s = B.run_brdf(stack=B.Stack(layers=(B.StackLayer(eps=eps, roughness=model),)), incidence=theta, samples=100_000,
-                   seed=2, plots=False).summary["methods"]["mc"]
+    s = B.run_brdf(
+        stack=B.Stack(layers=(B.StackLayer(eps=eps, roughness=model),)),
+        incidence=theta,
+        samples=100_000,
+        seed=2,
+        plots=False,
+    ).summary["methods"]["mc"]
     assert refl == pytest.approx(s["total_reflectance"], abs=0.012)
 
 
@@ -193,14 +206,24 @@ def _layered_room(t):
     layer over smooth walls."""
     paint = (1.61 + 0.121j, 0.8e-3, t, R.GGX(0.3))
     return [
-        (hollow_box([-5, -5, -3], [5, 5, 3], 0.3),
-         material(eps=5.5 + 0.5j, temperature=t, coating=[(2.0 + 0.05j, 2e-3, t, R.BlinnPhong(20))])),
+        (
+            hollow_box([-5, -5, -3], [5, 5, 3], 0.3),
+            material(eps=5.5 + 0.5j, temperature=t, coating=[(2.0 + 0.05j, 2e-3, t, R.BlinnPhong(20))]),
+        ),
         (sphere([1.0, 2.0, 0.0], 0.8), material(kind="metal", temperature=t, coating=[paint], roughness=R.GGX(0.2))),
-        (box([-0.6, 1.0, -1.5], [0.6, 1.8, -0.5]),
-         material(eps=2.26 + 0.0013j, temperature=t, roughness=R.Beckmann(0.3),
-                  coating=[(1.5 + 0.01j, 0.3e-3, t), (3.0 + 0.02j, 4e-3, t, R.GGX(0.5)), (1.8 + 0.0j, 0.5e-3, t)])),
-        (box([1.5, 0.5, -2.0], [2.5, 1.5, -1.0]),
-         material(kind="opaque", eps=3.0 + 0.2j, temperature=t, coating=[(2.5 + 0.1j, 1e-3, t, R.GGX(0.4))])),
+        (
+            box([-0.6, 1.0, -1.5], [0.6, 1.8, -0.5]),
+            material(
+                eps=2.26 + 0.0013j,
+                temperature=t,
+                roughness=R.Beckmann(0.3),
+                coating=[(1.5 + 0.01j, 0.3e-3, t), (3.0 + 0.02j, 4e-3, t, R.GGX(0.5)), (1.8 + 0.0j, 0.5e-3, t)],
+            ),
+        ),
+        (
+            box([1.5, 0.5, -2.0], [2.5, 1.5, -1.0]),
+            material(kind="opaque", eps=3.0 + 0.2j, temperature=t, coating=[(2.5 + 0.1j, 1e-3, t, R.GGX(0.4))]),
+        ),
     ]
 
 
@@ -245,8 +268,11 @@ def test_bump_texture_file_gives_its_slopes(tmp_path):
     n = 32
     ramp = np.tile(np.arange(n, dtype=np.float32) / n, (n, 1))
     write_exr(tmp_path / "ramp.exr", {"Y": ramp}, {})
-    bump = make_bump({"texture": "ramp.exr", "height": "4 mm", "size": "0.5 m"}, file=tmp_path / "scene.yaml",
-                     key="materials.sand.bump")
+    bump = make_bump(
+        {"texture": "ramp.exr", "height": "4 mm", "size": "0.5 m"},
+        file=tmp_path / "scene.yaml",
+        key="materials.sand.bump",
+    )
     slope = 4e-3 * (1.0 / n) / (0.5 / n)  # height x value step per pixel / pixel size = 0.008
     assert np.allclose(bump.gu[:, 2:-2], slope, rtol=1e-6)
     assert np.allclose(bump.gv, 0.0, atol=1e-12)
@@ -298,8 +324,15 @@ def test_nearly_smooth_rough_layer_is_the_incoherent_slab_closed_form():
     eps_l, eps_s, th = 2.25 + 0j, 6.0 + 2.0j, 30.0
     mat = material(eps=eps_s, temperature=0.0, coating=[(eps_l, 2e-3, 0.0, R.BlinnPhong(1e6))])
     settings = RenderSettings(spp=64, max_depth=60, threshold=1e-7, termination="temperature", seed=1, tile=1)
-    img = render(make_job([(box([-500, -500, -50], [500, 500, 0]), mat)], looking_down_at(th, height=2.0),
-                          UniformSky(1.0, 1.0), F95, settings))
+    img = render(
+        make_job(
+            [(box([-500, -500, -50], [500, 500, 0]), mat)],
+            looking_down_at(th, height=2.0),
+            UniformSky(1.0, 1.0),
+            F95,
+            settings,
+        )
+    )
 
     def fresnel(e1, e2, sin1):
         c1 = np.sqrt(1 - sin1**2 + 0j)

@@ -36,8 +36,13 @@ def test_km_scale_scene_with_mm_coating_does_not_self_intersect():
     ground = box([-2000, -2000, -30], [2000, 2000, 0])
     spec = material(eps=eps_s, temperature=310.0, coating=[(eps_c, 0.8e-3, 300.0)])
     sky = UniformSky(40.0, 290.0)
-    far = Camera.look_at([500, -900, 1000 * np.cos(np.radians(70))], [500, -900 + 1000 * np.sin(np.radians(70)), 0],
-                         [0, 0, 1], np.radians(0.001), (1, 1))
+    far = Camera.look_at(
+        [500, -900, 1000 * np.cos(np.radians(70))],
+        [500, -900 + 1000 * np.sin(np.radians(70)), 0],
+        [0, 0, 1],
+        np.radians(0.001),
+        (1, 1),
+    )
     near = looking_down_at(70)
     img_far = render(make_job([(ground, spec)], far, sky, F95))
     img_near = render(make_job([(ground, spec)], near, sky, F95))
@@ -74,7 +79,9 @@ _EPS = st.builds(
 
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
-    eps_a=_EPS, eps_b=_EPS, eps_c=_EPS,
+    eps_a=_EPS,
+    eps_b=_EPS,
+    eps_c=_EPS,
     t=st.lists(st.floats(1.0, 400.0), min_size=4, max_size=4),
     kind=st.sampled_from(["dielectric", "metal", "opaque", "blackbody", "thin"]),
     coat_d=st.one_of(st.just(0.0), st.floats(1e-6, 0.2)),
@@ -83,8 +90,10 @@ _EPS = st.builds(
 def test_random_scenes_render_within_the_range_of_their_temperatures(eps_a, eps_b, eps_c, t, kind, coat_d, theta):
     """Hypothesis: nested and coated objects of random permittivity (|eps| 1..1e4, loss 0..1e4),
     random kinds, coatings 0..0.2 m, any view angle: every pixel finite and within [min T, max T]."""
-    ground = (box([-100, -100, -20], [100, 100, 0]),
-              material(eps=eps_a, temperature=t[0], coating=[(eps_c, coat_d, t[1])] if coat_d > 0 else []))
+    ground = (
+        box([-100, -100, -20], [100, 100, 0]),
+        material(eps=eps_a, temperature=t[0], coating=[(eps_c, coat_d, t[1])] if coat_d > 0 else []),
+    )
     inner = (box([-90, -90, -15], [90, 90, -1]), material(eps=eps_b, temperature=t[2]))
     spec = material(kind=kind, eps=eps_b, temperature=t[3], thickness=1e-3 if kind == "thin" else None)
     ball = (sphere([0, 0.3, 0.3], 0.25, subdivisions=2), spec)
@@ -107,16 +116,21 @@ _ROUGH = st.one_of(
 
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])  # 13-51 s at 60
 @given(
-    eps_a=_EPS, eps_b=_EPS, eps_c=_EPS,
+    eps_a=_EPS,
+    eps_b=_EPS,
+    eps_c=_EPS,
     t=st.lists(st.floats(1.0, 400.0), min_size=4, max_size=4),
     kind=st.sampled_from(["dielectric", "metal", "opaque", "blackbody"]),
-    rough_a=_ROUGH, rough_b=_ROUGH, rough_c=_ROUGH,
+    rough_a=_ROUGH,
+    rough_b=_ROUGH,
+    rough_c=_ROUGH,
     coat_d=st.one_of(st.just(0.0), st.floats(1e-6, 0.2)),
     bump_slope=st.one_of(st.just(0.0), st.floats(0.01, 3.0)),
     theta=st.floats(0.0, 89.9),
 )
 def test_random_rough_scenes_render_within_the_range_of_their_temperatures(
-        eps_a, eps_b, eps_c, t, kind, rough_a, rough_b, rough_c, coat_d, bump_slope, theta):
+    eps_a, eps_b, eps_c, t, kind, rough_a, rough_b, rough_c, coat_d, bump_slope, theta
+):
     """Hypothesis: the same nested scenes with random roughness models and parameters (from
     mirror-like to extreme), rough coating layers, and bump maps up to slope 3 (steeper than
     the view): every pixel finite and within [min T, max T]."""
@@ -126,11 +140,15 @@ def test_random_rough_scenes_render_within_the_range_of_their_temperatures(
     if bump_slope > 0:
         bump = BumpMap(gaussian_surface(bump_slope * 0.05 / np.sqrt(2), 0.05, 1.0, seed=2), 1.0)
     coat = [(eps_c, coat_d, t[1], rough_c)] if coat_d > 0 else []
-    ground = (box([-100, -100, -20], [100, 100, 0]),
-              material(eps=eps_a, temperature=t[0], coating=coat, roughness=rough_a, bump=bump))
+    ground = (
+        box([-100, -100, -20], [100, 100, 0]),
+        material(eps=eps_a, temperature=t[0], coating=coat, roughness=rough_a, bump=bump),
+    )
     inner = (box([-90, -90, -15], [90, 90, -1]), material(eps=eps_b, temperature=t[2], roughness=rough_b))
-    ball = (sphere([0, 0.3, 0.3], 0.25, subdivisions=2), material(kind=kind, eps=eps_b, temperature=t[3],
-                                                                  roughness=rough_a, coating=coat))
+    ball = (
+        sphere([0, 0.3, 0.3], 0.25, subdivisions=2),
+        material(kind=kind, eps=eps_b, temperature=t[3], roughness=rough_a, coating=coat),
+    )
     cam = looking_down_at(theta, width=6, height_px=4, fov_deg=40)
     settings = RenderSettings(spp=2, max_depth=6, threshold=1e-4, termination="temperature", tile=8)
     img = render(make_job([ground, inner, ball], cam, UniformSky(t[1] * 0.5, t[0]), F95, settings))

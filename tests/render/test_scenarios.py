@@ -50,10 +50,20 @@ def test_cinderblock_cavities_are_warm_and_the_tops_cold():
     300 K). Ideal image zoomed on the near stack's top from the config's imager. Margins: cavity
     above 290 K in both polarizations (observed ~299 K), more than 100 K above the top in Ex2
     (observed ~150 K above) and warmer than the top in Ey2 too (observed ~11 K)."""
-    job, img = _render(CINDERBLOCKS, ["imager.look_at=[-0.35, 3.5, 0.573]", "imager.fov=4 deg",
-                                      "imager.resolution=[64, 64]", "imager.aperture_diameter=0 m", "render.spp=2"])
-    regions = {"cavity": {"center": [-0.44, 3.5, 0.573], "radius": 2},   # left well of the near stack
-               "top": {"center": [-0.35, 3.5, 0.573], "radius": 2}}      # the centre web between the wells
+    job, img = _render(
+        CINDERBLOCKS,
+        [
+            "imager.look_at=[-0.35, 3.5, 0.573]",
+            "imager.fov=4 deg",
+            "imager.resolution=[64, 64]",
+            "imager.aperture_diameter=0 m",
+            "render.spp=2",
+        ],
+    )
+    regions = {
+        "cavity": {"center": [-0.44, 3.5, 0.573], "radius": 2},  # left well of the near stack
+        "top": {"center": [-0.35, 3.5, 0.573], "radius": 2},
+    }  # the centre web between the wells
     ex, ey = _means(job, img, regions, "Ex2"), _means(job, img, regions, "Ey2")
     assert ex["cavity"] > 290.0 and ey["cavity"] > 290.0, (ex, ey)
     assert ex["cavity"] - ex["top"] > 100.0, ex
@@ -64,18 +74,28 @@ LANDING = REPO / "configs/landing_95ghz.yaml"
 # Murakowski 2014 sec. 3.1.1: heavy fog is 0.02 g/cm2 of water over 0-600 m (200 g/m2 / 600 m;
 # Table 3.2 rounds it to 0.3 g/m3), extreme fog 0.06 g/cm2 (1 g/m3)
 HEAVY_FOG = "0.3333333 g/m3"
-NEAR = ["imager.position=[0, -399.03, 27.90]", "imager.look_at=[0, -2.36, 0.41]", "imager.fov=1 deg",
-        "imager.resolution=[80, 80]", "render.spp=4"]
-LANDING_REGIONS = {"beacon": {"center": [0, -2.36, 0.41], "radius": 2.5},
-                   "runway": {"center": [0, 40.0, 0.02], "radius": 3}}
+NEAR = [
+    "imager.position=[0, -399.03, 27.90]",
+    "imager.look_at=[0, -2.36, 0.41]",
+    "imager.fov=1 deg",
+    "imager.resolution=[80, 80]",
+    "render.spp=4",
+]
+LANDING_REGIONS = {
+    "beacon": {"center": [0, -2.36, 0.41], "radius": 2.5},
+    "runway": {"center": [0, 40.0, 0.02], "radius": 3},
+}
 
 
 def test_landing_beacons_are_colder_than_the_runway_and_fog_lowers_the_contrast():
     """Sec. 3.1: the 45-degree metal beacons mirror the cold zenith, so in Ey2 at 95 GHz they are
     colder than the runway; fog warms the path and the zenith, lowering the contrast."""
     contrasts = {}
-    for weather, layers in (("clear", "[]"), ("heavy fog", f"[{{kind: fog, base: 0, top: 600, liquid_water: {HEAVY_FOG}}}]"),
-                            ("extreme fog", None)):
+    for weather, layers in (
+        ("clear", "[]"),
+        ("heavy fog", f"[{{kind: fog, base: 0, top: 600, liquid_water: {HEAVY_FOG}}}]"),
+        ("extreme fog", None),
+    ):
         overrides = NEAR + ([f"atmosphere.layers={layers}"] if layers is not None else [])
         job, img = _render(LANDING, overrides)
         m = _means(job, img, LANDING_REGIONS)
@@ -89,8 +109,10 @@ def test_handgun_differs_from_the_torso_by_more_than_the_noise_outdoors():
     differs from the torso by more than the imager's 4 K noise."""
     path = Path(__file__).resolve().parents[2] / "configs/cwd_outdoor_95ghz.yaml"
     job, img = _render(path, ["imager.resolution=[110, 185]", "render.spp=2"])
-    regions = {"gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
-               "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5}}
+    regions = {
+        "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
+        "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
+    }
     for chan in ("Ex2", "Ey2"):
         m = _means(job, img, regions, chan)
         assert abs(m["gun"] - m["torso"]) > 4.0, (chan, m)
@@ -118,8 +140,11 @@ def test_sar_targets_are_the_coldest_objects_and_visible_through_cloud():
     zoom = ["imager.fov=1 deg", "imager.resolution=[60, 60]", "render.spp=2"]
     for target, mesh, r in (("cessna", "sar_cessna.glb", 4), ("blanket", "sar_beacon.glb", 3)):
         target_map = "aircraft: metal" if target == "cessna" else "blanket: metal"
-        base = zoom + [f"scene[0].mesh=../scenes/sar/{mesh}", "scene[0].materials={dry_ground: sar_dry_ground, "
-                       f"wet_ground: sar_wet_ground, rocks: sar_rocks, shrubs: oak_leaves, {target_map}}}"]
+        base = zoom + [
+            f"scene[0].mesh=../scenes/sar/{mesh}",
+            "scene[0].materials={dry_ground: sar_dry_ground, "
+            f"wet_ground: sar_wet_ground, rocks: sar_rocks, shrubs: oak_leaves, {target_map}}}",
+        ]
         job, img = _render(path, base)
         regions = {"target": {"center": [0, 0, 0.5], "radius": r}, "ground": {"center": [20, 20, 0], "radius": 3}}
         m = _means(job, img, regions)
@@ -151,8 +176,11 @@ def test_sar_sweep_weathers_reproduce_the_thesis_path_losses(weather):
     for f_ghz, thesis in zip((35, 95), SAR_PATH_LOSS_DB[weather]):
         loss = float(atmosphere_model(res.scenario, f_ghz * 1e9).path_loss_db(3000.0, 0.0, 3000.0))
         tol = SAR_PATH_LOSS_TOL[weather]
-        assert loss == (pytest.approx(thesis, abs=tol) if weather == "clear" else pytest.approx(thesis, rel=tol)), \
-            (weather, f_ghz, loss)
+        assert loss == (pytest.approx(thesis, abs=tol) if weather == "clear" else pytest.approx(thesis, rel=tol)), (
+            weather,
+            f_ghz,
+            loss,
+        )
 
 
 def test_sar_rain_is_table_3_5_rain():
@@ -168,10 +196,13 @@ def test_sar_rain_is_table_3_5_rain():
     assert _yaml(rain) == _yaml(SAR_WEATHER["rain"])
     wet, dry = resolve(SAR, [f"atmosphere.layers={rain}"]), resolve(SAR, ["atmosphere.layers=[]"])
     for f_ghz, (a, b, printed) in ((35, (0.235, 1.009, 2.4)), (95, (1.06, 0.745, 5.9))):
-        added = (atmosphere_model(wet.scenario, f_ghz * 1e9).specific_attenuation_db_km(0.0)
-                 - atmosphere_model(dry.scenario, f_ghz * 1e9).specific_attenuation_db_km(0.0))
-        assert added == pytest.approx(a * 10.0**b, abs=1e-3) and added == pytest.approx(printed, abs=0.05), \
-            (f_ghz, added)
+        added = atmosphere_model(wet.scenario, f_ghz * 1e9).specific_attenuation_db_km(0.0) - atmosphere_model(
+            dry.scenario, f_ghz * 1e9
+        ).specific_attenuation_db_km(0.0)
+        assert added == pytest.approx(a * 10.0**b, abs=1e-3) and added == pytest.approx(printed, abs=0.05), (
+            f_ghz,
+            added,
+        )
 
 
 def _yaml(text):
@@ -199,15 +230,19 @@ def test_landing_fogs_are_the_thesis_columns():
     dry = atmosphere_model(resolve(LANDING, ["atmosphere.layers=[]"]).scenario, 95e9)
     vertical = float(fog.path_loss_db(600.0, 0.0, 600.0) - dry.path_loss_db(600.0, 0.0, 600.0))
     slant = float(fog.path_loss_db(69.76, 0.0, 1000.0) - dry.path_loss_db(69.76, 0.0, 1000.0))
-    assert vertical == pytest.approx(0.8, abs=0.05) and vertical + slant == pytest.approx(2.2, abs=0.05), \
-        (vertical, slant)
+    assert vertical == pytest.approx(0.8, abs=0.05) and vertical + slant == pytest.approx(2.2, abs=0.05), (
+        vertical,
+        slant,
+    )
 
 
 # Murakowski 2014 Table 3.2: attenuation at the ground [dB/km], (35, 95) GHz, by weather; the
 # landing config's humid air (15 g/m3, 288 K) reproduces the "Cloudy" (no liquid water) row.
-LANDING_ATTENUATION = {"[]": (0.17, 0.92),
-                       f"[{{kind: fog, base: 0 m, top: 600 m, liquid_water: {HEAVY_FOG}}}]": (0.40, 2.29),
-                       "[{kind: fog, base: 0 m, top: 600 m, liquid_water: 1.0 g/m3}]": (0.88, 5.05)}
+LANDING_ATTENUATION = {
+    "[]": (0.17, 0.92),
+    f"[{{kind: fog, base: 0 m, top: 600 m, liquid_water: {HEAVY_FOG}}}]": (0.40, 2.29),
+    "[{kind: fog, base: 0 m, top: 600 m, liquid_water: 1.0 g/m3}]": (0.88, 5.05),
+}
 
 
 @pytest.mark.parametrize("layers", sorted(LANDING_ATTENUATION))

@@ -67,9 +67,18 @@ FULL_ONLY = {"sar_cessna", "sar_blanket", "cwd_indoor"}
 _FULL = os.environ.get("PMMW_TEST_FULL") == "1"
 
 
-@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.skipif(
-    c in FULL_ONLY and not _FULL, reason="longest convergence renders: PMMW_TEST_FULL=1 (make test-full)"))
-    for c in sorted(CASES)])
+@pytest.mark.parametrize(
+    "case",
+    [
+        pytest.param(
+            c,
+            marks=pytest.mark.skipif(
+                c in FULL_ONLY and not _FULL, reason="longest convergence renders: PMMW_TEST_FULL=1 (make test-full)"
+            ),
+        )
+        for c in sorted(CASES)
+    ],
+)
 def test_region_contrasts_agree_across_seeds_and_are_not_truncated(tmp_path, case):
     config, extra = CASES[case]
     limit = region_limit(load_scenario(config, extra).imager.noise)

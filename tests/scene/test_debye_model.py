@@ -33,8 +33,9 @@ def test_single_relaxation_at_its_frequency():
 
 def test_static_limit_and_two_relaxations():
     """Far below both relaxations (omega tau1 = 1e-7) eps' is eps_inf + sum d_eps to (omega tau)^2."""
-    m = _db({"name": "debye", "eps_inf": 3.0, "terms": [[50.0, "10 ps"], [2.0, "200 fs"]],
-             "valid": ["1 kHz", "2 THz"]}).get("fit")
+    m = _db(
+        {"name": "debye", "eps_inf": 3.0, "terms": [[50.0, "10 ps"], [2.0, "200 fs"]], "valid": ["1 kHz", "2 THz"]}
+    ).get("fit")
     f = 1e-7 / (2.0 * math.pi * 10e-12)
     assert m.eps_at(f).real == pytest.approx(55.0, rel=1e-12)
     # far above both (omega tau2 = 1e4) eps' -> eps_inf to 1/(omega tau)^2
@@ -42,8 +43,15 @@ def test_static_limit_and_two_relaxations():
 
 
 def test_conduction_adds_sigma_over_eps0_omega():
-    m = _db({"name": "debye", "eps_inf": 2.0, "terms": [[10.0, "8 ps"]], "conductivity": "0.5 S/m",
-             "valid": ["10 GHz", "1 THz"]}).get("fit")
+    m = _db(
+        {
+            "name": "debye",
+            "eps_inf": 2.0,
+            "terms": [[10.0, "8 ps"]],
+            "conductivity": "0.5 S/m",
+            "valid": ["10 GHz", "1 THz"],
+        }
+    ).get("fit")
     f, tau = 100e9, 8e-12
     x = 2.0 * math.pi * f * tau
     expected = 10.0 * x / (1.0 + x * x) + 0.5 / (epsilon_0 * 2.0 * math.pi * f)
@@ -62,13 +70,20 @@ def test_outside_the_stated_range_warns_once_and_inside_does_not():
     assert m.outside_note(400e9) == "the fit is extrapolated"
 
 
-@pytest.mark.parametrize("model, key, words", [
-    ({"name": "debye", "eps_inf": 2, "terms": [[10, "8 qs"]], "valid": ["10 GHz", "1 THz"]}, "terms.0.1", "'8 ps'"),
-    ({"name": "debye", "eps_inf": 2, "terms": [[10]], "valid": ["10 GHz", "1 THz"]}, "terms.0", "pair"),
-    ({"name": "debye", "eps_inf": 2, "terms": [[10, "8 ps"]], "valid": ["1 THz", "10 GHz"]}, "valid", "lo < hi"),
-    ({"name": "debye", "eps_inf": 2, "terms": [[10, "8 ps"]]}, "", "needs valid"),
-    ({"name": "debye", "eps_inf": 0.5, "terms": [[10, "8 ps"]], "valid": ["10 GHz", "1 THz"]}, "eps_inf", "above 1"),
-])
+@pytest.mark.parametrize(
+    "model, key, words",
+    [
+        ({"name": "debye", "eps_inf": 2, "terms": [[10, "8 qs"]], "valid": ["10 GHz", "1 THz"]}, "terms.0.1", "'8 ps'"),
+        ({"name": "debye", "eps_inf": 2, "terms": [[10]], "valid": ["10 GHz", "1 THz"]}, "terms.0", "pair"),
+        ({"name": "debye", "eps_inf": 2, "terms": [[10, "8 ps"]], "valid": ["1 THz", "10 GHz"]}, "valid", "lo < hi"),
+        ({"name": "debye", "eps_inf": 2, "terms": [[10, "8 ps"]]}, "", "needs valid"),
+        (
+            {"name": "debye", "eps_inf": 0.5, "terms": [[10, "8 ps"]], "valid": ["10 GHz", "1 THz"]},
+            "eps_inf",
+            "above 1",
+        ),
+    ],
+)
 def test_errors_name_the_key(model, key, words):
     with pytest.raises(UserError) as ei:
         _db(model)
@@ -76,8 +91,9 @@ def test_errors_name_the_key(model, key, words):
 
 
 def test_show_gives_the_parameters_and_the_range():
-    m = _db({"name": "debye", "eps_inf": 2.0, "terms": [[10.0, "8 ps"], [1.0, "200 fs"]],
-             "valid": ["10 GHz", "1 THz"]}).get("fit")
+    m = _db(
+        {"name": "debye", "eps_inf": 2.0, "terms": [[10.0, "8 ps"], [1.0, "200 fs"]], "valid": ["10 GHz", "1 THz"]}
+    ).get("fit")
     text = m.model.describe()
     assert "relaxations 10 at tau 8 ps + 1 at tau 0.2 ps" in text and "valid 10-1000 GHz" in text
 
@@ -98,8 +114,14 @@ def test_a_published_double_debye_entered_as_printed_gives_itur(f_ghz):
     eps1, eps2 = 0.0671 * eps0, 3.52
     fp = (20.20 - 146.0 * th + 316.0 * th**2) * 1e9  # [Hz]
     fs = 39.8 * fp
-    m = _db({"name": "debye", "eps_inf": eps2, "valid": ["1 GHz", "1 THz"],
-             "terms": [[eps0 - eps1, 1.0 / (2.0 * math.pi * fp)], [eps1 - eps2, 1.0 / (2.0 * math.pi * fs)]]}).get("fit")
+    m = _db(
+        {
+            "name": "debye",
+            "eps_inf": eps2,
+            "valid": ["1 GHz", "1 THz"],
+            "terms": [[eps0 - eps1, 1.0 / (2.0 * math.pi * fp)], [eps1 - eps2, 1.0 / (2.0 * math.pi * fs)]],
+        }
+    ).get("fit")
     e = m.eps_at(f_ghz * 1e9)
     eta = (2.0 + e.real) / e.imag
     ours = 0.819 * f_ghz / (e.imag * (1.0 + eta**2))

@@ -31,8 +31,13 @@ def _fresh_warnings():
 
 def entry(mesh, key="scene[0]", material=None, materials=None, transform=None, up_axis=None, name=None):
     return SimpleNamespace(
-        mesh=Path(mesh), material=material, materials=materials, transform=transform,
-        up_axis=up_axis, name=name, key=key,
+        mesh=Path(mesh),
+        material=material,
+        materials=materials,
+        transform=transform,
+        up_axis=up_axis,
+        name=name,
+        key=key,
     )
 
 
@@ -66,16 +71,19 @@ def signed_volume(vertices, faces):
 
 # -- frames -------------------------------------------------------------------------------
 
+
 def test_gltf_y_up_becomes_z_up(tmp_path):
     # A triangle in glTF coordinates (Y up), under a node that moves it 5 m along glTF +x.
     tri = trimesh.Trimesh([[1.0, 2.0, 3.0], [2.0, 2.0, 3.0], [1.0, 4.0, 3.0]], [[0, 1, 2]], process=False)
     tri.visual = TextureVisuals(material=PBRMaterial(name="paint"))
     scene = trimesh.Scene()
-    scene.add_geometry(tri, geom_name="t", node_name="t", transform=trimesh.transformations.translation_matrix([5.0, 0.0, 0.0]))
+    scene.add_geometry(
+        tri, geom_name="t", node_name="t", transform=trimesh.transformations.translation_matrix([5.0, 0.0, 0.0])
+    )
     path = tmp_path / "tri.glb"
     scene.export(path)
 
-    (name, mesh), = load_entry_mesh(path)
+    ((name, mesh),) = load_entry_mesh(path)
     assert name == "paint"
     # (x, y, z)_gltf -> (x, -z, y)_world, after the node transform
     expected = np.array([[6.0, -3.0, 2.0], [7.0, -3.0, 2.0], [6.0, -3.0, 4.0]])
@@ -83,17 +91,23 @@ def test_gltf_y_up_becomes_z_up(tmp_path):
     # The up axis of glTF's +y is the world +z, and the winding (normal) turns with it.
     np.testing.assert_allclose(mesh.face_normals[0], [0.0, -1.0, 0.0], atol=1e-12)
 
-    (_, as_is), = load_entry_mesh(path, up_axis="z")
-    np.testing.assert_allclose(as_is.vertices[as_is.faces[0]], [[6.0, 2.0, 3.0], [7.0, 2.0, 3.0], [6.0, 4.0, 3.0]], atol=GLB_ATOL)
+    ((_, as_is),) = load_entry_mesh(path, up_axis="z")
+    np.testing.assert_allclose(
+        as_is.vertices[as_is.faces[0]], [[6.0, 2.0, 3.0], [7.0, 2.0, 3.0], [6.0, 4.0, 3.0]], atol=GLB_ATOL
+    )
 
 
 def test_obj_is_z_up_unless_told(tmp_path):
     path = write_obj(tmp_path / "t.obj", [[0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 1.0]], [[0, 1, 2]])
-    (name, mesh), = load_entry_mesh(path)
+    ((name, mesh),) = load_entry_mesh(path)
     assert name == ""
-    np.testing.assert_allclose(mesh.vertices[mesh.faces[0]], [[0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 1.0]], atol=ATOL)
-    (_, y_up), = load_entry_mesh(path, up_axis="y")
-    np.testing.assert_allclose(y_up.vertices[y_up.faces[0]], [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, -1.0, 1.0]], atol=ATOL)
+    np.testing.assert_allclose(
+        mesh.vertices[mesh.faces[0]], [[0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 1.0]], atol=ATOL
+    )
+    ((_, y_up),) = load_entry_mesh(path, up_axis="y")
+    np.testing.assert_allclose(
+        y_up.vertices[y_up.faces[0]], [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, -1.0, 1.0]], atol=ATOL
+    )
 
 
 # -- materials ----------------------------------------------------------------------------
@@ -136,8 +150,10 @@ def test_missing_mesh_material_name_is_a_user_error(tmp_path):
     good = write_obj(tmp_path / "one.obj", OBJ_V, OBJ_F)
     with pytest.raises(UserError) as info:
         build_geometry(
-            [entry(good, key="scene[0]", material="brick"),
-             entry(path, key="scene[1]", materials={"red": "brick", "green": "metal"})],
+            [
+                entry(good, key="scene[0]", material="brick"),
+                entry(path, key="scene[1]", materials={"red": "brick", "green": "metal"}),
+            ],
             scenario_file="scenario.yaml",
         )
     errors = getattr(info.value, "errors", [info.value])
@@ -163,6 +179,7 @@ def test_material_choice_errors(tmp_path):
 
 
 # -- transforms ---------------------------------------------------------------------------
+
 
 def test_transform_order_scale_rotate_translate(tmp_path):
     path = write_obj(tmp_path / "t.obj", [[0.0, 1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [[0, 1, 2]])
@@ -206,6 +223,7 @@ def test_singular_transform_is_a_user_error(tmp_path):
 
 # -- mesh checks --------------------------------------------------------------------------
 
+
 def test_inside_out_box_is_fixed_with_a_warning(tmp_path):
     m = box_mesh(center=(1.0, 2.0, 3.0))
     m.invert()
@@ -239,7 +257,9 @@ def test_watertight_flags(tmp_path):
     m = box_mesh(center=(5.0, 0.0, 0.0))
     opened = tmp_path / "open.obj"
     write_obj(opened, m.vertices, m.faces[:-1])  # one triangle missing
-    geom = build_geometry([entry(closed, key="scene[0]", material="brick"), entry(opened, key="scene[1]", material="glass")])
+    geom = build_geometry(
+        [entry(closed, key="scene[0]", material="brick"), entry(opened, key="scene[1]", material="glass")]
+    )
     # STL stores every triangle's corners separately: watertightness is judged after merging
     assert geom.object_watertight == [True, False]
     assert geom.objects == ["scene[0]:closed.stl", "scene[1]:open.obj"]
@@ -280,6 +300,7 @@ def test_unreadable_and_empty_meshes_are_user_errors(tmp_path):
 
 # -- the shipped cinderblocks scene -------------------------------------------------------
 
+
 def test_shipped_cinderblocks_scene():
     parts = load_entry_mesh(CINDERBLOCKS)
     assert {name for name, _ in parts} == {"ground", "cinderblock"}
@@ -311,8 +332,11 @@ def test_errors_of_all_entries_are_reported_together(tmp_path):
     path = write_obj(tmp_path / "t.obj", OBJ_V, OBJ_F, ["red", "red", "red"])
     with pytest.raises(UserError) as info:
         build_geometry(
-            [entry(path, key="scene[0]"), entry(path, key="scene[1]", material="brick"),
-             entry(path, key="scene[2]", materials={"blue": "metal"})],
+            [
+                entry(path, key="scene[0]"),
+                entry(path, key="scene[1]", material="brick"),
+                entry(path, key="scene[2]", materials={"blue": "metal"}),
+            ],
             scenario_file="s.yaml",
         )
     assert [e.key for e in info.value.errors] == ["scene[0]", "scene[2].materials"]

@@ -37,20 +37,20 @@ TRANSCRIPTION_TOL = 0.0  # decimal copies of the same printed digits: equal, or 
 # Sionna RT v1.0.0 (NVlabs/sionna-rt, commit d0429340b2ee3848e48ed648db9a014dfba22cc8, 2025-03-18,
 # src/sionna/rt/radio_materials/itu.py; its docs cite P.2040-3 (08/2023)).
 SIONNA_P2040_3 = {
-    "concrete": {(1., 100.): (5.24, 0.0, 0.0462, 0.7822)},
-    "brick": {(1., 40.): (3.91, 0.0, 0.0238, 0.16)},
-    "plasterboard": {(1., 100.): (2.73, 0.0, 0.0085, 0.9395)},
-    "wood": {(0.001, 100.): (1.99, 0.0, 0.0047, 1.0718)},
-    "glass": {(0.1, 100.): (6.31, 0.0, 0.0036, 1.3394), (220., 450.): (5.79, 0.0, 0.0004, 1.658)},
-    "ceiling_board": {(1.0, 100.): (1.48, 0.0, 0.0011, 1.0750), (220., 450.): (1.52, 0.0, 0.0029, 1.029)},
-    "chipboard": {(1.0, 100.): (2.58, 0.0, 0.0217, 0.7800)},
-    "plywood": {(1.0, 40.): (2.71, 0.0, 0.33, 0.0)},
-    "marble": {(1.0, 60.): (7.074, 0.0, 0.0055, 0.9262)},
-    "floorboard": {(50., 100.): (3.66, 0.0, 0.0044, 1.3515)},
-    "metal": {(1.0, 100.): (1.0, 0.0, 1e7, 0.0)},
-    "very_dry_ground": {(1.0, 10.): (3.0, 0.0, 0.00015, 2.52)},
-    "medium_dry_ground": {(1.0, 10.): (15., -0.1, 0.035, 1.63)},
-    "wet_ground": {(1.0, 10.): (30., -0.4, 0.15, 1.30)},
+    "concrete": {(1.0, 100.0): (5.24, 0.0, 0.0462, 0.7822)},
+    "brick": {(1.0, 40.0): (3.91, 0.0, 0.0238, 0.16)},
+    "plasterboard": {(1.0, 100.0): (2.73, 0.0, 0.0085, 0.9395)},
+    "wood": {(0.001, 100.0): (1.99, 0.0, 0.0047, 1.0718)},
+    "glass": {(0.1, 100.0): (6.31, 0.0, 0.0036, 1.3394), (220.0, 450.0): (5.79, 0.0, 0.0004, 1.658)},
+    "ceiling_board": {(1.0, 100.0): (1.48, 0.0, 0.0011, 1.0750), (220.0, 450.0): (1.52, 0.0, 0.0029, 1.029)},
+    "chipboard": {(1.0, 100.0): (2.58, 0.0, 0.0217, 0.7800)},
+    "plywood": {(1.0, 40.0): (2.71, 0.0, 0.33, 0.0)},
+    "marble": {(1.0, 60.0): (7.074, 0.0, 0.0055, 0.9262)},
+    "floorboard": {(50.0, 100.0): (3.66, 0.0, 0.0044, 1.3515)},
+    "metal": {(1.0, 100.0): (1.0, 0.0, 1e7, 0.0)},
+    "very_dry_ground": {(1.0, 10.0): (3.0, 0.0, 0.00015, 2.52)},
+    "medium_dry_ground": {(1.0, 10.0): (15.0, -0.1, 0.035, 1.63)},
+    "wet_ground": {(1.0, 10.0): (30.0, -0.4, 0.15, 1.30)},
 }
 # "wave tracer" (Shlomi Steinberg), src/wt/spectrum/util/spectrum_from_ITU.cpp, map
 # ITU_P2040_2_table3 (P.2040-2, 09/2021): the same rows typed independently.
@@ -74,21 +74,25 @@ WAVE_TRACER_P2040_2 = {
 # aeb346fe9ed1da24ff088a7acaa02252e45779eb of src/sionna/rt/radio_materials/itu.py): the only
 # transcription found of the rows P.2040-4 added.
 SIONNA_P2040_4_ADDED = {
-    "concrete": {(110., 330.): (5.17, 0.0, 0.0145, 1.0900)},
-    "brick": {(110., 330.): (4.15, 0.0, 0.0006, 1.5712)},
-    "plasterboard": {(110., 330.): (2.56, 0.0, 0.0001, 1.7799), (100., 400.): (2.65, 0.0, 0.0002, 1.598)},
-    "wood": {(110., 330.): (1.82, 0.0, 0.0040, 1.0761), (100., 400.): (2.1183, 0.0, 0.0055, 1.1113)},
-    "glass": {(100., 400.): (6.5767, 0.0, 0.0012, 1.4697)},
-    "clear_acrylic": {(110., 330.): (2.58, 0.0, 0.0001, 1.6524)},
-    "ceiling_board": {(100., 400.): (1.2567, 0.0, 0.00013, 1.454)},
-    "chipboard": {(100., 200.): (2.16, 0.0, 0.0023, 1.359)},
-    "plywood": {(110., 330.): (1.94, 0.0, 0.0067, 0.9982), (100., 400.): (2.17, 0.0, 0.0063, 1.045)},
-    "marble": {(110., 330.): (7.94, 0.0, 0.0001, 1.7330), (100., 400.): (8.62, 0.0, 0.0027, 1.15)},
-    "floorboard": {(220., 300.): (5.27, 0.0, 2.22e-17, 7.3413), (300., 400.): (5.27, 0.0, 0.0003, 2.0298),
-                   (400., 450.): (5.27, 0.0, 49.8726, 0.0), (100., 400.): (3.1575, 0.0, 0.001675, 1.32775)},
-    "vinyl_tile": {(1.0, 40.): (3.62, 0.0, 0.0051, 0.8422)},
-    "carpet_tile": {(1.0, 40.): (2.08, 0.0, 0.0009, 0.8200)},
-    "asphalt_concrete": {(1.0, 40.): (4.83, 0.0, 0.0108, 1.3969)},
+    "concrete": {(110.0, 330.0): (5.17, 0.0, 0.0145, 1.0900)},
+    "brick": {(110.0, 330.0): (4.15, 0.0, 0.0006, 1.5712)},
+    "plasterboard": {(110.0, 330.0): (2.56, 0.0, 0.0001, 1.7799), (100.0, 400.0): (2.65, 0.0, 0.0002, 1.598)},
+    "wood": {(110.0, 330.0): (1.82, 0.0, 0.0040, 1.0761), (100.0, 400.0): (2.1183, 0.0, 0.0055, 1.1113)},
+    "glass": {(100.0, 400.0): (6.5767, 0.0, 0.0012, 1.4697)},
+    "clear_acrylic": {(110.0, 330.0): (2.58, 0.0, 0.0001, 1.6524)},
+    "ceiling_board": {(100.0, 400.0): (1.2567, 0.0, 0.00013, 1.454)},
+    "chipboard": {(100.0, 200.0): (2.16, 0.0, 0.0023, 1.359)},
+    "plywood": {(110.0, 330.0): (1.94, 0.0, 0.0067, 0.9982), (100.0, 400.0): (2.17, 0.0, 0.0063, 1.045)},
+    "marble": {(110.0, 330.0): (7.94, 0.0, 0.0001, 1.7330), (100.0, 400.0): (8.62, 0.0, 0.0027, 1.15)},
+    "floorboard": {
+        (220.0, 300.0): (5.27, 0.0, 2.22e-17, 7.3413),
+        (300.0, 400.0): (5.27, 0.0, 0.0003, 2.0298),
+        (400.0, 450.0): (5.27, 0.0, 49.8726, 0.0),
+        (100.0, 400.0): (3.1575, 0.0, 0.001675, 1.32775),
+    },
+    "vinyl_tile": {(1.0, 40.0): (3.62, 0.0, 0.0051, 0.8422)},
+    "carpet_tile": {(1.0, 40.0): (2.08, 0.0, 0.0009, 0.8200)},
+    "asphalt_concrete": {(1.0, 40.0): (4.83, 0.0, 0.0108, 1.3969)},
 }
 
 
@@ -96,7 +100,9 @@ def _ours(material):
     return {(r[4], r[5]): r[:4] for r in P2040_ROWS[material]}
 
 
-@pytest.mark.parametrize("name, table", [("sionna_p2040_3", SIONNA_P2040_3), ("wave_tracer_p2040_2", WAVE_TRACER_P2040_2)])
+@pytest.mark.parametrize(
+    "name, table", [("sionna_p2040_3", SIONNA_P2040_3), ("wave_tracer_p2040_2", WAVE_TRACER_P2040_2)]
+)
 def test_p2040_rows_kept_from_editions_2_and_3_match_two_transcriptions(name, table):
     """Every row P.2040-2/-3 printed is in our P.2040-4 table with the same digits; exact (TRANSCRIPTION_TOL)."""
     for material, rows in table.items():
@@ -143,17 +149,24 @@ def test_p2040_eps_imag_is_17_98_sigma_over_f(material):
 def test_p2040_overlapping_rows_pick_the_narrowest_as_sionna_does():
     """Where rows overlap the narrowest serves; Sionna RT's first-listed row is the same row at these
     frequencies, so both give the same eps' (exact: the same row's a)."""
-    cases = [("plasterboard", 200, "110-330", 2.56), ("plasterboard", 105, "100-400", 2.65),
-             ("floorboard", 250, "220-300", 5.27), ("floorboard", 90, "50-100", 3.66),
-             ("glass", 300, "220-450", 5.79), ("chipboard", 150, "100-200", 2.16)]
+    cases = [
+        ("plasterboard", 200, "110-330", 2.56),
+        ("plasterboard", 105, "100-400", 2.65),
+        ("floorboard", 250, "220-300", 5.27),
+        ("floorboard", 90, "50-100", 3.66),
+        ("glass", 300, "220-450", 5.79),
+        ("chipboard", 150, "100-200", 2.16),
+    ]
     for material, f_ghz, row, a in cases:
         e, status = p2040_permittivity(f_ghz * GHZ, material)
         assert status == f"in row {row} GHz"
         assert e.real == a
 
 
-@pytest.mark.parametrize("material, gap", [("concrete", (100.0, 110.0)), ("brick", (40.0, 110.0)),
-                                           ("plywood", (40.0, 100.0)), ("marble", (60.0, 100.0))])
+@pytest.mark.parametrize(
+    "material, gap",
+    [("concrete", (100.0, 110.0)), ("brick", (40.0, 110.0)), ("plywood", (40.0, 100.0)), ("marble", (60.0, 100.0))],
+)
 def test_p2040_gap_is_interpolated_between_the_two_rows_and_flagged(material, gap):
     """In a gap: flagged, eps' and sigma between the two rows' edge values (inclusive), and continuous
     with each row at its edge (rel 1e-6 over a step of 1e-9 in f: power laws with |exponent| < 8)."""
@@ -177,7 +190,7 @@ def test_p2040_gap_is_interpolated_between_the_two_rows_and_flagged(material, ga
 def test_p2040_outside_all_rows_is_extrapolated_from_the_nearest_and_flagged():
     e, status = p2040_permittivity(300 * GHZ, "asphalt_concrete")
     assert status == "extrapolated from row 1-40 GHz"
-    assert e.imag == pytest.approx(0.0108 * 300 ** 1.3969 / (2 * math.pi * 300 * GHZ * EPS0), rel=1e-12)
+    assert e.imag == pytest.approx(0.0108 * 300**1.3969 / (2 * math.pi * 300 * GHZ * EPS0), rel=1e-12)
     assert p2040_permittivity(0.5 * GHZ, "concrete")[1] == "extrapolated from row 1-100 GHz"
     assert "1-10 GHz only" in p2040_permittivity(35 * GHZ, "wet_ground")[1]
     assert p2040_valid_ranges("glass") == ((0.1e9, 100e9), (220e9, 450e9), (100e9, 400e9))
@@ -200,6 +213,7 @@ def test_p2040_is_finite_lossy_and_piecewise_continuous(material, log_f):
 
 
 # --- P.527-6 sec. 5.3 vegetation -----------------------------------------------------------------
+
 
 def test_vegetation_bound_water_terms_are_their_complex_closed_forms():
     """Sec. 5.3.1's real expansion of 55 / (1 + sqrt(-i f / (0.01 f_1))) (exp(-i w t) sign) and
@@ -252,8 +266,9 @@ def test_vegetation_above_freezing_is_ulaby_el_rayes_with_p527_water(f_ghz, mg):
     ours = p527_vegetation_permittivity(f_ghz * GHZ, T, mg)
     eps_pw = complex(p527_water_permittivity(f_ghz * GHZ, T))
     bound_p527 = 2.9 + 55.0 / (1.0 + cmath.sqrt(-1j * f_ghz / (0.01 * _p527_f1(T))))
-    assert ours - ulaby == pytest.approx(v_fw * (eps_pw + 22.86j / f_ghz - debye) + v_bw * (bound_p527 - bound),
-                                         rel=1e-9, abs=1e-9)
+    assert ours - ulaby == pytest.approx(
+        v_fw * (eps_pw + 22.86j / f_ghz - debye) + v_bw * (bound_p527 - bound), rel=1e-9, abs=1e-9
+    )
     # and the replacement moves eps by under 5 % at 1-20 GHz (the two water models agree to ~3 % there)
     assert abs(ours - ulaby) <= 0.05 * abs(ulaby)
 
@@ -267,15 +282,18 @@ def test_vegetation_above_freezing_finite_lossy_continuous(log_f, t_c, mg):
     e = p527_vegetation_permittivity(f, T, mg)
     assert math.isfinite(e.real) and math.isfinite(e.imag)
     assert e.real >= 1.0 and e.imag >= 0.0
-    for e2 in (p527_vegetation_permittivity(f * (1 + 1e-7), T, mg),
-               p527_vegetation_permittivity(f, T * (1 + 1e-7), mg),
-               p527_vegetation_permittivity(f, T, mg * (1 + 1e-7))):
+    for e2 in (
+        p527_vegetation_permittivity(f * (1 + 1e-7), T, mg),
+        p527_vegetation_permittivity(f, T * (1 + 1e-7), mg),
+        p527_vegetation_permittivity(f, T, mg * (1 + 1e-7)),
+    ):
         assert abs(e2 - e) <= 1e-5 * abs(e)
 
 
 @settings(max_examples=300, deadline=None, derandomize=True)
-@given(log_f=st.floats(math.log(1.0), math.log(450.0)), t_c=st.floats(-20.0, P527_VEGETATION_T_F),
-       mg=st.floats(0.2, 0.7))
+@given(
+    log_f=st.floats(math.log(1.0), math.log(450.0)), t_c=st.floats(-20.0, P527_VEGETATION_T_F), mg=st.floats(0.2, 0.7)
+)
 def test_vegetation_frozen_finite_lossy_continuous(log_f, t_c, mg):
     """-20 C to T_f = -6.5 C, M_g >= 0.2 (the frozen fit's loss turns negative below M_g ~ 0.2):
     finite, eps' >= 1, eps'' >= 0, and a 1e-7 step in f, T or M_g moves eps by under 1e-5 relative."""
@@ -283,7 +301,9 @@ def test_vegetation_frozen_finite_lossy_continuous(log_f, t_c, mg):
     e = p527_vegetation_permittivity(f, T, mg)
     assert math.isfinite(e.real) and math.isfinite(e.imag)
     assert e.real >= 1.0 and e.imag >= 0.0
-    for e2 in (p527_vegetation_permittivity(f * (1 + 1e-7), T, mg),
-               p527_vegetation_permittivity(f, T * (1 + 1e-7), mg),
-               p527_vegetation_permittivity(f, T, mg * (1 + 1e-7))):
+    for e2 in (
+        p527_vegetation_permittivity(f * (1 + 1e-7), T, mg),
+        p527_vegetation_permittivity(f, T * (1 + 1e-7), mg),
+        p527_vegetation_permittivity(f, T, mg * (1 + 1e-7)),
+    ):
         assert abs(e2 - e) <= 1e-5 * abs(e)

@@ -95,10 +95,20 @@ def test_a_model_outside_its_range_warns(db):
 # BioMedical Engineering OnLine 2018 (doi:10.1186/s12938-018-0473-9), Table 3: the Gabriel 1996
 # model's dry and wet skin, (sigma [S/m], eps_r) at 10 kHz-1 MHz, as printed.
 _SKIN_TABLE_3 = {
-    "skin_dry": {10e3: ("0.00020", "1133.6"), 100e3: ("0.00045", "1119.2"), 200e3: ("0.00105", "1104.8"),
-                 400e3: ("0.00305", "1076.3"), 1e6: ("0.0132", "990.76")},
-    "skin_wet": {10e3: ("0.0029", "29010"), 100e3: ("0.0658", "15357"), 200e3: ("0.1135", "8849.2"),
-                 400e3: ("0.1635", "4514.6"), 1e6: ("0.2214", "1832.8")},
+    "skin_dry": {
+        10e3: ("0.00020", "1133.6"),
+        100e3: ("0.00045", "1119.2"),
+        200e3: ("0.00105", "1104.8"),
+        400e3: ("0.00305", "1076.3"),
+        1e6: ("0.0132", "990.76"),
+    },
+    "skin_wet": {
+        10e3: ("0.0029", "29010"),
+        100e3: ("0.0658", "15357"),
+        200e3: ("0.1135", "8849.2"),
+        400e3: ("0.1635", "4514.6"),
+        1e6: ("0.2214", "1832.8"),
+    },
 }
 
 
@@ -137,8 +147,10 @@ def test_skin_models_against_the_thesis_table(db):
     for table in ("murakowski2014.human_skin", "dry_skin"):
         assert db.get(table).eps_at(35e9) == 14 + 16j and db.get(table).eps_at(95e9) == 5.9 + 9.4j
     bounds = {  # (model, f): (bound on eps', bound on eps'') as relative deviations
-        ("skin_dry", 35e9): (0.05, 0.05), ("skin_dry", 95e9): (0.03, 0.22),
-        ("skin_wet", 35e9): (0.13, 0.03), ("skin_wet", 95e9): (0.28, 0.09),
+        ("skin_dry", 35e9): (0.05, 0.05),
+        ("skin_dry", 95e9): (0.03, 0.22),
+        ("skin_wet", 35e9): (0.13, 0.03),
+        ("skin_wet", 95e9): (0.28, 0.09),
     }
     for (mid, f), (b_re, b_im) in bounds.items():
         e = db.get(mid).eps_at(f)
@@ -157,8 +169,7 @@ def test_skin_model_warns_outside_its_range_and_ignores_temperature(db):
     skin.eps_at(35e9, 305.0)
     assert not collected_warnings()
     skin.eps_at(140e9)
-    assert any("skin_dry" in w and "140 GHz" in w and "outside" in w and "100 GHz" in w
-               for w in collected_warnings())
+    assert any("skin_dry" in w and "140 GHz" in w and "outside" in w and "100 GHz" in w for w in collected_warnings())
     clear_warnings()
     assert skin.eps_at(95e9, 280.0) == skin.eps_at(95e9, 310.0)
     assert any("skin_dry" in w and "280 K" in w and "outside" in w for w in collected_warnings())
@@ -194,7 +205,9 @@ def test_p527_sea_water_against_klein_swift():
         for s in (10.0, 35.0):
             ours = complex(p527_water_permittivity(1.4e9, t_k, s))
             theirs = complex(seawater_permittivity_klein76(1.4e9, t_k, s * PSU))
-            assert ours.real == pytest.approx(theirs.real, rel=0.02) and ours.imag == pytest.approx(theirs.imag, rel=0.02)
+            assert ours.real == pytest.approx(theirs.real, rel=0.02) and ours.imag == pytest.approx(
+                theirs.imag, rel=0.02
+            )
         assert p527_water_permittivity(95e9, t_k, 0.0) == p527_water_permittivity(95e9, t_k)
 
 
@@ -236,8 +249,12 @@ def test_dry_soil_is_the_closed_form_mixing_of_its_solids():
         for f in (35e9, 95e9, 300e9):
             dry = _soil_eps(f, sand=sand, clay=clay, moisture=0, bulk_density=rho_b, particle_density=rho_s)
             assert dry.real == pytest.approx(closed, rel=1e-12) and dry.imag == 0.0
-            gaps = [abs(_soil_eps(f, sand=sand, clay=clay, moisture=mv, bulk_density=rho_b, particle_density=rho_s)
-                        - closed) for mv in (1e-3, 1e-6, 1e-9)]
+            gaps = [
+                abs(
+                    _soil_eps(f, sand=sand, clay=clay, moisture=mv, bulk_density=rho_b, particle_density=rho_s) - closed
+                )
+                for mv in (1e-3, 1e-6, 1e-9)
+            ]
             assert gaps[0] > gaps[1] > gaps[2] and gaps[2] < 1e-3 * closed
 
 
@@ -250,7 +267,8 @@ def test_soil_default_bulk_density_is_p527_eq_57():
     rho_b = 1.07256 + 0.078886 * math.log(40) + 0.038753 * math.log(20) + 0.032732 * math.log(40)
     assert p527_bulk_density(40, 20) == pytest.approx(rho_b, rel=1e-12) and rho_b == pytest.approx(1.6004, abs=1e-4)
     assert _soil_eps(95e9, sand=40, clay=20, moisture=0.2) == pytest.approx(
-        _soil_eps(95e9, sand=40, clay=20, moisture=0.2, bulk_density=rho_b), rel=1e-12)
+        _soil_eps(95e9, sand=40, clay=20, moisture=0.2, bulk_density=rho_b), rel=1e-12
+    )
 
 
 def test_soil_models_against_the_thesis_table(db):
@@ -262,8 +280,10 @@ def test_soil_models_against_the_thesis_table(db):
     model puts more of the soil's permittivity in eps' than the table does. eps falls with
     frequency as the table's does."""
     bounds = {  # (model, table, f): (bound on eps', bound on eps'') as relative deviations
-        ("soil_loam_dry", "dry_soil", 35e9): (0.17, 0.23), ("soil_loam_dry", "dry_soil", 95e9): (0.14, 0.47),
-        ("soil_loam_moist", "moist_soil", 35e9): (0.20, 0.05), ("soil_loam_moist", "moist_soil", 95e9): (0.37, 0.20),
+        ("soil_loam_dry", "dry_soil", 35e9): (0.17, 0.23),
+        ("soil_loam_dry", "dry_soil", 95e9): (0.14, 0.47),
+        ("soil_loam_moist", "moist_soil", 35e9): (0.20, 0.05),
+        ("soil_loam_moist", "moist_soil", 95e9): (0.37, 0.20),
     }
     for (mid, table, f), (b_re, b_im) in bounds.items():
         e, ref = db.get(mid).eps_at(f, 293.15), db.get(table).eps_at(f)
@@ -296,10 +316,14 @@ def test_leaf_model_limits_and_the_thesis_table(db):
     for f in (35e9, 95e9):
         ref = db.get("murakowski2014.oak_leaves").eps_at(f)
         # the table's two printed digits: 7.3 is 7.25-7.35, 4.1 is 4.05-4.15 (at 95 GHz md 0.2 gives 4.07)
-        assert leaf(0.6, f).real < ref.real + 0.05 and ref.real - 0.05 < leaf(0.2, f).real, (f, leaf(0.6, f),
-                                                                                           leaf(0.2, f))
+        assert leaf(0.6, f).real < ref.real + 0.05 and ref.real - 0.05 < leaf(0.2, f).real, (
+            f,
+            leaf(0.6, f),
+            leaf(0.2, f),
+        )
     assert make_dielectric({"name": "leaves", "dry_matter": 0.35}).eps(95e9, 293.15) == db.get("leaves_green").eps_at(
-        95e9, 293.15)  # salinity 10 g/kg is the default
+        95e9, 293.15
+    )  # salinity 10 g/kg is the default
 
 
 def test_soil_and_leaf_models_warn_outside_their_ranges(db):
@@ -311,8 +335,10 @@ def test_soil_and_leaf_models_warn_outside_their_ranges(db):
         db.get("soil_loam_moist").eps_at(f, 293.15)
     assert not collected_warnings()
     db.get("soil_loam_moist").eps_at(0.1e9, 293.15)
-    assert any("soil_loam_moist" in w and "0.1 GHz" in w and "outside" in w and "0.3-1000 GHz" in w
-               for w in collected_warnings())
+    assert any(
+        "soil_loam_moist" in w and "0.1 GHz" in w and "outside" in w and "0.3-1000 GHz" in w
+        for w in collected_warnings()
+    )
     clear_warnings()
     db.get("leaves_green").eps_at(95e9, 293.15)
     assert not collected_warnings()
@@ -353,8 +379,15 @@ sky: {model: uniform, temperature: 40 K}
 
 
 @settings(max_examples=300, deadline=None, derandomize=True)
-@given(f_ghz=st.floats(1.0, 300.0), t_k=st.floats(250.0, 320.0), mv=st.floats(0.0, 0.5),
-       sand=st.floats(0.0, 100.0), clay_share=st.floats(0.0, 1.0), md=st.floats(0.0, 0.75), s=st.floats(0.0, 40.0))
+@given(
+    f_ghz=st.floats(1.0, 300.0),
+    t_k=st.floats(250.0, 320.0),
+    mv=st.floats(0.0, 0.5),
+    sand=st.floats(0.0, 100.0),
+    clay_share=st.floats(0.0, 1.0),
+    md=st.floats(0.0, 0.75),
+    s=st.floats(0.0, 40.0),
+)
 def test_soil_and_leaf_models_are_finite_and_lossy_everywhere(f_ghz, t_k, mv, sand, clay_share, md, s):
     """Over 1-300 GHz, 250-320 K, any texture (sand + clay <= 100 %), moisture 0-0.5, dry matter
     0-0.75 and salinity 0-40 g/kg: finite eps, eps' >= 1 for soil, eps'' >= 0 for both (the soil
@@ -381,8 +414,11 @@ def test_model_entry_rules(tmp_path):
         ({"model": {"name": "soil", "sand": 40, "clay": 20}}, "model", "needs moisture"),
         ({"model": {"name": "soil", "sand": 70, "clay": 40, "moisture": 0.1}}, "model", "more than 100 %"),
         ({"model": {"name": "soil", "sand": "lots", "clay": 20, "moisture": 0.1}}, "model.sand", "0 to 100 %"),
-        ({"model": {"name": "soil", "sand": 40, "clay": 20, "moisture": 0.1, "bulk_density": 2.7}}, "model",
-         "particle density"),
+        (
+            {"model": {"name": "soil", "sand": 40, "clay": 20, "moisture": 0.1, "bulk_density": 2.7}},
+            "model",
+            "particle density",
+        ),
         ({"model": {"name": "leaves", "dry_matter": 0.8}}, "model.dry_matter", "0 to 0.75"),
     ]:
         with pytest.raises((UserError, UserErrors)) as ex:
@@ -393,8 +429,9 @@ def test_model_entry_rules(tmp_path):
 
 def test_materials_show_plot(tmp_path):
     out = tmp_path / "w.png"
-    res = runner.invoke(app, ["materials", "show", "water_liebe", "--plot", str(out), "--compare", "water",
-                              "--temperature", "283 K"])
+    res = runner.invoke(
+        app, ["materials", "show", "water_liebe", "--plot", str(out), "--compare", "water", "--temperature", "283 K"]
+    )
     assert res.exit_code == 0, res.output
     assert "model water" in res.output and out.stat().st_size > 20_000
     res = runner.invoke(app, ["materials", "show", "water_liebe", "--plot", str(out), "--compare", "wter"])
@@ -403,7 +440,10 @@ def test_materials_show_plot(tmp_path):
     assert res.exit_code == 0, res.output
     assert "model skin_dry" in res.output and "10 Hz-100 GHz" in res.output and out.stat().st_size > 20_000
     assert "140 GHz  4.864 + 5.19j  (outside the range: the model is extrapolated)" in res.output
-    for mid, table, valid in (("soil_loam_moist", "murakowski2014.moist_soil", "0.3-1000 GHz"), ("leaves_green", "murakowski2014.oak_leaves", "1-100 GHz")):
+    for mid, table, valid in (
+        ("soil_loam_moist", "murakowski2014.moist_soil", "0.3-1000 GHz"),
+        ("leaves_green", "murakowski2014.oak_leaves", "1-100 GHz"),
+    ):
         res = runner.invoke(app, ["materials", "show", mid, "--plot", str(out), "--compare", table])
         assert res.exit_code == 0, res.output
         assert f"model {mid.split('_')[0]}" in res.output and valid in res.output and out.stat().st_size > 20_000
@@ -417,8 +457,9 @@ def test_an_aluminium_plate_emits_what_hagen_rubens_says(db):
 
     f = 95e9
     e = db.get("aluminium").eps_at(f)
-    job = make_job([(box([-5, -5, -1], [5, 5, 0]), material("opaque", e, 300.0))], looking_down_at(0.0),
-                   UniformSky(40.0, 40.0), f)
+    job = make_job(
+        [(box([-5, -5, -1], [5, 5, 0]), material("opaque", e, 300.0))], looking_down_at(0.0), UniformSky(40.0, 40.0), f
+    )
     img = render(job)
     emiss = math.sqrt(8.0 * EPS0 * 2.0 * math.pi * f / 3.77e7)
     excess = emiss * (300.0 - 40.0)

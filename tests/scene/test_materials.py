@@ -205,7 +205,10 @@ def test_partial_override_keeps_the_rest(db):
     assert c.eps == db.get("murakowski2014.concrete").eps and c.freqs == db.get("murakowski2014.concrete").freqs
     assert c.name == "Concrete" and "Table A.1" in c.source and c.origin == SCN
     assert db.get("murakowski2014.concrete").temperature is None  # the original is untouched
-    d3 = db.with_overrides({"murakowski2014.asphalt": {"eps": {"95 GHz": [2.25, 0.18], "35 GHz": [2.5, 0.6]}, "temperature": "288 K"}}, file=SCN)
+    d3 = db.with_overrides(
+        {"murakowski2014.asphalt": {"eps": {"95 GHz": [2.25, 0.18], "35 GHz": [2.5, 0.6]}, "temperature": "288 K"}},
+        file=SCN,
+    )
     a = d3.get("murakowski2014.asphalt")
     assert a.freqs == (35e9, 95e9) and a.eps_at(95 * GHZ) == 2.25 + 0.18j and a.temperature == 288.0
     d4 = db.with_overrides({"murakowski2014.concrete": {"eps": {"60 GHz": [4, 0.3]}}}, file=SCN)
@@ -281,14 +284,26 @@ def test_unknown_coating_material_is_an_error(db):
         ({"x": {"kind": "thin", "eps": [2, 0.1]}}, "materials.x", "thickness"),
         ({"x": {"eps": [2, 0.1], "thickness": "1 mm"}}, "materials.x.thickness", "only for kind thin"),
         ({"x": {"kind": "metal", "eps": [2, 0.1]}}, "materials.x.eps", "no permittivity"),
-        ({"x": {"eps": [2, 0.1], "coating": [{"material": "metal", "thickness": "1 mm"}]}},
-         "materials.x.coating[0].material", "metal"),
-        ({"x": {"eps": [2, 0.1], "coating": [{"material": "clothed_skin", "thickness": "1 mm"}]}},
-         "materials.x.coating[0].material", "nested"),
-        ({"x": {"eps": [2, 0.1], "coating": [{"material": "denim", "thickness": "-1 mm"}]}},
-         "materials.x.coating[0].thickness", ">= 0"),
-        ({"x": {"eps": [2, 0.1], "coating": [{"material": "denim", "thick": "1 mm"}]}},
-         "materials.x.coating[0].thick", "allowed keys"),
+        (
+            {"x": {"eps": [2, 0.1], "coating": [{"material": "metal", "thickness": "1 mm"}]}},
+            "materials.x.coating[0].material",
+            "metal",
+        ),
+        (
+            {"x": {"eps": [2, 0.1], "coating": [{"material": "clothed_skin", "thickness": "1 mm"}]}},
+            "materials.x.coating[0].material",
+            "nested",
+        ),
+        (
+            {"x": {"eps": [2, 0.1], "coating": [{"material": "denim", "thickness": "-1 mm"}]}},
+            "materials.x.coating[0].thickness",
+            ">= 0",
+        ),
+        (
+            {"x": {"eps": [2, 0.1], "coating": [{"material": "denim", "thick": "1 mm"}]}},
+            "materials.x.coating[0].thick",
+            "allowed keys",
+        ),
         ({"x": {"eps": [2, 0.1], "coating": {"material": "denim"}}}, "materials.x.coating", "list"),
         ({"x": 5}, "materials.x", "mapping"),
         ({"Bad-Id": {"eps": [2, 0.1]}}, 'materials."Bad-Id"', "lower_snake_case"),
@@ -392,12 +407,14 @@ def test_format_material_table(db):
     lines = text95.splitlines()
     header = lines[0]
     col = header.index("kind")
-    assert all(line[col - 2: col] == "  " for line in lines[2: 2 + len(db.ids())])  # aligned
+    assert all(line[col - 2 : col] == "  " for line in lines[2 : 2 + len(db.ids())])  # aligned
 
 
 def test_format_material(db):
     text = format_material(db, "murakowski2014.concrete")
-    assert "murakowski2014.concrete" in text and "5.5 + 0.5j" in text and "Table A.1" in text and "appendix_a.yaml" in text
+    assert (
+        "murakowski2014.concrete" in text and "5.5 + 0.5j" in text and "Table A.1" in text and "appendix_a.yaml" in text
+    )
     text = format_material(db, "murakowski2014.concrete", 65 * GHZ)
     assert "65 GHz" in text and "interpolated" in text
     text = format_material(db, "clothed_skin", 95 * GHZ)
@@ -423,11 +440,17 @@ def test_roughness_and_bump_entries(db):
     from pmmw.physics.roughness import GGX, AshikhminShirley
     from pmmw.scene.bump import BumpMap
 
-    new = db.with_overrides({
-        "rough_sand": {"eps": [3.9, 0.56], "roughness": {"model": "ggx", "alpha": 0.3},
-                       "bump": {"model": "gaussian", "rms": "3 mm", "correlation": "3 cm", "size": "2 m"}},
-        "sand": {"roughness": {"model": "ashikhmin_shirley", "ex": 5, "ey": 50, "orientation_deg": 20}},
-    }, file=SCN)
+    new = db.with_overrides(
+        {
+            "rough_sand": {
+                "eps": [3.9, 0.56],
+                "roughness": {"model": "ggx", "alpha": 0.3},
+                "bump": {"model": "gaussian", "rms": "3 mm", "correlation": "3 cm", "size": "2 m"},
+            },
+            "sand": {"roughness": {"model": "ashikhmin_shirley", "ex": 5, "ey": 50, "orientation_deg": 20}},
+        },
+        file=SCN,
+    )
     r = new.get("rough_sand")
     assert isinstance(r.roughness, GGX) and isinstance(r.bump, BumpMap)
     # RMS slope of a Gaussian surface: sqrt(2) rms / correlation = 0.141 per direction; one
@@ -443,29 +466,66 @@ def test_roughness_and_bump_entries(db):
 
 
 def test_coating_layer_roughness_is_parsed(db):
-    new = db.with_overrides({"painted": {"kind": "metal", "coating": [
-        {"material": "polypropylene", "thickness": "0.1 mm", "roughness": {"model": "blinn_phong", "m": 100}}]}}, file=SCN)
+    new = db.with_overrides(
+        {
+            "painted": {
+                "kind": "metal",
+                "coating": [
+                    {
+                        "material": "polypropylene",
+                        "thickness": "0.1 mm",
+                        "roughness": {"model": "blinn_phong", "m": 100},
+                    }
+                ],
+            }
+        },
+        file=SCN,
+    )
     assert new.get("painted").coating[0].roughness is not None
 
 
-@pytest.mark.parametrize("raw, key, words", [
-    ({"roughness": {"model": "fuzzy"}}, "materials.sand.roughness.model", "known"),
-    ({"roughness": {"model": "ggx"}}, "materials.sand.roughness.alpha", "missing"),
-    ({"roughness": {"model": "ggx", "alpha": -1}}, "materials.sand.roughness.alpha", "must be"),
-    ({"roughness": {"model": "ashikhmin_shirley", "ex": 3, "ey": 3, "m": 2}}, "materials.sand.roughness.m",
-     "unknown parameter"),
-    ({"roughness": 0.3}, "materials.sand.roughness", "mapping"),
-    ({"bump": {"model": "gaussian", "rms": "3 mm", "size": "1 m"}}, "materials.sand.bump.correlation", "missing"),
-    ({"bump": {"model": "gaussian", "rms": "3 mm", "correlation": "0.1 mm", "size": "10 m"}},
-     "materials.sand.bump.size", "too large"),
-    ({"bump": {"texture": "nope.png", "height": "1 mm", "size": "1 m"}}, "materials.sand.bump.texture", "not found"),
-    ({"bump": {"model": "perlin"}}, "materials.sand.bump.model", "unknown bump model"),
-    ({"coating": [{"material": "polypropylene", "thickness": "1 mm", "roughness": {"model": "ggx"}}]},
-     "materials.sand.coating[0].roughness.alpha", "missing"),
-    ({"kind": "thin", "thickness": "1 mm",
-      "coating": [{"material": "polypropylene", "thickness": "1 mm", "roughness": {"model": "ggx", "alpha": 0.2}}]},
-     "materials.sand.coating[0].roughness", "thin sheet"),
-])
+@pytest.mark.parametrize(
+    "raw, key, words",
+    [
+        ({"roughness": {"model": "fuzzy"}}, "materials.sand.roughness.model", "known"),
+        ({"roughness": {"model": "ggx"}}, "materials.sand.roughness.alpha", "missing"),
+        ({"roughness": {"model": "ggx", "alpha": -1}}, "materials.sand.roughness.alpha", "must be"),
+        (
+            {"roughness": {"model": "ashikhmin_shirley", "ex": 3, "ey": 3, "m": 2}},
+            "materials.sand.roughness.m",
+            "unknown parameter",
+        ),
+        ({"roughness": 0.3}, "materials.sand.roughness", "mapping"),
+        ({"bump": {"model": "gaussian", "rms": "3 mm", "size": "1 m"}}, "materials.sand.bump.correlation", "missing"),
+        (
+            {"bump": {"model": "gaussian", "rms": "3 mm", "correlation": "0.1 mm", "size": "10 m"}},
+            "materials.sand.bump.size",
+            "too large",
+        ),
+        (
+            {"bump": {"texture": "nope.png", "height": "1 mm", "size": "1 m"}},
+            "materials.sand.bump.texture",
+            "not found",
+        ),
+        ({"bump": {"model": "perlin"}}, "materials.sand.bump.model", "unknown bump model"),
+        (
+            {"coating": [{"material": "polypropylene", "thickness": "1 mm", "roughness": {"model": "ggx"}}]},
+            "materials.sand.coating[0].roughness.alpha",
+            "missing",
+        ),
+        (
+            {
+                "kind": "thin",
+                "thickness": "1 mm",
+                "coating": [
+                    {"material": "polypropylene", "thickness": "1 mm", "roughness": {"model": "ggx", "alpha": 0.2}}
+                ],
+            },
+            "materials.sand.coating[0].roughness",
+            "thin sheet",
+        ),
+    ],
+)
 def test_roughness_and_bump_errors_name_file_and_key(db, raw, key, words):
     with pytest.raises(UserError) as ei:
         db.with_overrides({"sand": raw}, file=SCN)

@@ -25,14 +25,30 @@ BAND = (35e9, 94e9, 140e9, 220e9, 300e9)  # the frequency trade studies' frequen
 # the frequencies [GHz] of BAND where each is outside its stated range: docs/materials.md, "Not
 # found" and "What the tests found". Everything else must be inside at every frequency.
 KNOWN_GAPS = {
-    "brick": {94}, "chipboard": {220, 300}, "plywood": {94}, "marble": {94}, "floorboard": {35},
-    "vinyl_tile": {94, 140, 220, 300}, "carpet_tile": {94, 140, 220, 300}, "asphalt_concrete": {94, 140, 220, 300},
-    "asphalt": {94, 140, 220, 300}, "basalt": {140, 220, 300}, "granite": {94, 140, 220, 300},
+    "brick": {94},
+    "chipboard": {220, 300},
+    "plywood": {94},
+    "marble": {94},
+    "floorboard": {35},
+    "vinyl_tile": {94, 140, 220, 300},
+    "carpet_tile": {94, 140, 220, 300},
+    "asphalt_concrete": {94, 140, 220, 300},
+    "asphalt": {94, 140, 220, 300},
+    "basalt": {140, 220, 300},
+    "granite": {94, 140, 220, 300},
     "fiberglass": {140, 220, 300},
-    "leaves_green": {140, 220, 300}, "oak_leaves": {140, 220, 300},
-    "human_skin": {140, 220, 300}, "skin_dry": {140, 220, 300}, "skin_wet": {140, 220, 300},
-    "denim": {140, 220, 300}, "leather": {140, 220, 300}, "beige_leather": {140, 220, 300},
-    "polyethylene": {35, 300}, "ptfe": {35, 300}, "polypropylene": {300}, "nylon": {220, 300},
+    "leaves_green": {140, 220, 300},
+    "oak_leaves": {140, 220, 300},
+    "human_skin": {140, 220, 300},
+    "skin_dry": {140, 220, 300},
+    "skin_wet": {140, 220, 300},
+    "denim": {140, 220, 300},
+    "leather": {140, 220, 300},
+    "beige_leather": {140, 220, 300},
+    "polyethylene": {35, 300},
+    "ptfe": {35, 300},
+    "polypropylene": {300},
+    "nylon": {220, 300},
 }
 
 
@@ -49,8 +65,11 @@ def _thesis_scene_ids() -> set[str]:
 
 def _plain(db) -> list[str]:
     scene_tables = _thesis_scene_ids()
-    return [m for m in db.ids() if "." not in m and m not in scene_tables
-            and db.get(m).kind not in ("metal", "blackbody") and m != "absent"]
+    return [
+        m
+        for m in db.ids()
+        if "." not in m and m not in scene_tables and db.get(m).kind not in ("metal", "blackbody") and m != "absent"
+    ]
 
 
 def test_plain_ids_are_inside_their_range_except_the_documented_gaps(db):
@@ -65,9 +84,26 @@ def test_plain_ids_are_inside_their_range_except_the_documented_gaps(db):
 def test_the_physical_plain_ids_the_issue_names(db):
     """water and sea_water (P.527-6), ice (Maetzler), soils and sand (P.527-6 sec. 5.2), vegetation
     (sec. 5.3), the P.2040 building materials: models, not the thesis's two-frequency tables."""
-    for mid in ("water", "sea_water", "ice", "dry_soil", "moist_soil", "wet_soil", "sand", "vegetation",
-                "concrete", "brick", "plasterboard", "wood", "glass", "ceiling_board", "chipboard", "plywood",
-                "marble", "floorboard"):
+    for mid in (
+        "water",
+        "sea_water",
+        "ice",
+        "dry_soil",
+        "moist_soil",
+        "wet_soil",
+        "sand",
+        "vegetation",
+        "concrete",
+        "brick",
+        "plasterboard",
+        "wood",
+        "glass",
+        "ceiling_board",
+        "chipboard",
+        "plywood",
+        "marble",
+        "floorboard",
+    ):
         assert db.get(mid).model is not None, mid
     assert db.get("sea_water").model.params == {"salinity": 35.0}
 
@@ -107,15 +143,16 @@ def test_every_plain_id_is_in_the_documentation(db):
 
 
 def test_same_as_takes_the_fields_and_adds_its_own(db, tmp_path):
-    d = db.with_overrides({"pavement": {"same_as": "concrete", "temperature": "296 K"},
-                           "p2": {"same_as": "pavement"}}, file="s.yaml")
+    d = db.with_overrides(
+        {"pavement": {"same_as": "concrete", "temperature": "296 K"}, "p2": {"same_as": "pavement"}}, file="s.yaml"
+    )
     assert d.get("pavement").model == db.get("concrete").model and d.get("pavement").temperature == 296.0
     assert d.get("p2").temperature == 296.0 and "as pavement" in d.get("p2").source
     with pytest.raises(UserError) as ei:
         db.with_overrides({"x": {"same_as": "concret"}}, file="s.yaml")
     assert ei.value.key == "materials.x.same_as" and "'concrete'" in ei.value.message
     files = tmp_path / "m.yaml"
-    files.write_text("a: {same_as: b}\nb: {same_as: a}\nc: {same_as: d}\nd: {eps: [2, 0.1], source: \"pmmw: test\"}\n")
+    files.write_text('a: {same_as: b}\nb: {same_as: a}\nc: {same_as: d}\nd: {eps: [2, 0.1], source: "pmmw: test"}\n')
     with pytest.raises((UserError, UserErrors)) as ei:
         MaterialDB.load([files])
     errors = ei.value.errors if isinstance(ei.value, UserErrors) else [ei.value]
@@ -124,8 +161,11 @@ def test_same_as_takes_the_fields_and_adds_its_own(db, tmp_path):
 
 
 def test_namespaced_ids_in_key_paths():
-    assert _split_key('materials."murakowski2014.water".temperature') == ["materials", "murakowski2014.water",
-                                                                          "temperature"]
+    assert _split_key('materials."murakowski2014.water".temperature') == [
+        "materials",
+        "murakowski2014.water",
+        "temperature",
+    ]
     for bad in ('materials."x', 'a."b"c', 'a.b"c'):
         with pytest.raises(ValueError):
             _split_key(bad)
@@ -159,7 +199,8 @@ def test_sweep_report_lists_each_warning_once_with_its_variants(tmp_path):
         (tmp_path / name).mkdir()
         (tmp_path / name / "report.json").write_text(json.dumps({"warnings": warnings}))
     table = [{"variant": v, "status": "done"} for v in ("v000", "v001", "v002")] + [
-        {"variant": "v003", "status": "failed"}]
+        {"variant": "v003", "status": "failed"}
+    ]
     lines = _warning_lines(tmp_path, table)
     assert "- a (v000, v001)" in lines and "- b (v001)" in lines and len([x for x in lines if x.startswith("- ")]) == 2
     for name in ("v000", "v001"):
@@ -170,9 +211,11 @@ def test_sweep_report_lists_each_warning_once_with_its_variants(tmp_path):
 # The frequency trade studies (configs/*_frequency.yaml): every material of the landing is inside its
 # stated range at every frequency; the concealed-weapon scenes' skin, denim and leather are not above
 # 94 GHz (no measurement found: docs/materials.md), and nothing else warns.
-TRADE_GAPS = {"landing_frequency": set(),
-              "cwd_outdoor_frequency": {"clothed_person", "denim", "holster", "shoes"},
-              "cwd_indoor_frequency": {"clothed_person", "denim", "holster", "shoes"}}
+TRADE_GAPS = {
+    "landing_frequency": set(),
+    "cwd_outdoor_frequency": {"clothed_person", "denim", "holster", "shoes"},
+    "cwd_indoor_frequency": {"clothed_person", "denim", "holster", "shoes"},
+}
 
 
 @pytest.mark.parametrize("stem", sorted(TRADE_GAPS))
@@ -219,8 +262,12 @@ scene:
   - {{mesh: block.obj, material: human_skin}}
 sky: {{model: uniform, temperature: 40 K}}
 """)
-        res = subprocess.run([sys.executable, "-m", "pmmw_cli", "validate", str(tmp_path / "s.yaml")],
-                             capture_output=True, text=True, timeout=120)
+        res = subprocess.run(
+            [sys.executable, "-m", "pmmw_cli", "validate", str(tmp_path / "s.yaml")],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert res.returncode == 0, res.stderr
         out[f] = [line for line in res.stderr.splitlines() if line.startswith("warning: ")]
     assert len(out["220"]) == 1 and "'human_skin': 220 GHz" in out["220"][0] and out["94"] == [], out
@@ -234,10 +281,12 @@ def test_show_says_why_a_value_is_outside_its_range():
     from pmmw_cli.cli import app
 
     runner = CliRunner()
-    for mid, f, words in (("human_skin", "220 GHz", "outside the model's range: the model is extrapolated"),
-                          ("brick", "94 GHz", "interpolated between rows 1-40 GHz and 110-330 GHz"),
-                          ("denim", "140 GHz", "outside the table: nearest tabulated value"),
-                          ("concrete", "140 GHz", "")):
+    for mid, f, words in (
+        ("human_skin", "220 GHz", "outside the model's range: the model is extrapolated"),
+        ("brick", "94 GHz", "interpolated between rows 1-40 GHz and 110-330 GHz"),
+        ("denim", "140 GHz", "outside the table: nearest tabulated value"),
+        ("concrete", "140 GHz", ""),
+    ):
         res = runner.invoke(app, ["materials", "show", mid, "--frequency", f])
         assert res.exit_code == 0, res.output
         line = next(x for x in res.output.splitlines() if x.strip().startswith(f"eps at {f}"))

@@ -129,15 +129,23 @@ WATER_MODEL_EMISSIVITY = 0.01
 # GHz (Rosenkranz adds a far-infrared band Liebe's double Debye lacks). pmmw follows the
 # Recommendation; these cases are expected to fail (strict: one that starts passing is reported).
 _WATER_SPREAD = {(273.15, 220.0, "p527"), (273.15, 300.0, "p527"), (273.15, 300.0, "water")} | {
-    (t, f, m) for t in (303.15, 310.15) for f in (220.0, 300.0) for m in ("p527", "water")}
+    (t, f, m) for t in (303.15, 310.15) for f in (220.0, 300.0) for m in ("p527", "water")
+}
 
 
 def _water_cases():
     for t_k in T_WATER:
         for f_ghz in F_GHZ:
             for model in ("p527", "water"):
-                marks = [pytest.mark.xfail(strict=True, reason="Liebe 1991 against Rosenkranz 2015: model spread "
-                                                                "above 140 GHz")] if (t_k, f_ghz, model) in _WATER_SPREAD else []
+                marks = (
+                    [
+                        pytest.mark.xfail(
+                            strict=True, reason="Liebe 1991 against Rosenkranz 2015: model spread above 140 GHz"
+                        )
+                    ]
+                    if (t_k, f_ghz, model) in _WATER_SPREAD
+                    else []
+                )
                 yield pytest.param(model, f_ghz, t_k, marks=marks, id=f"{t_k}-{f_ghz}-{model}")
 
 
@@ -227,10 +235,25 @@ def _stogryn95(f_ghz, t_k, salinity) -> complex:
 _SEA_SPREAD = {(273.15, f) for f in (94.0, 140.0, 220.0, 300.0)} | {(283.15, 220.0), (283.15, 300.0)}
 
 
-@pytest.mark.parametrize("f_ghz, t_k", [
-    pytest.param(f, t, id=f"{t}-{f}", marks=[pytest.mark.xfail(
-        strict=True, reason="Meissner-Wentz against Stogryn salinity terms, cold water above 90 GHz")]
-        if (t, f) in _SEA_SPREAD else []) for t in (273.15, 283.15, 293.15, 303.15) for f in F_GHZ])
+@pytest.mark.parametrize(
+    "f_ghz, t_k",
+    [
+        pytest.param(
+            f,
+            t,
+            id=f"{t}-{f}",
+            marks=[
+                pytest.mark.xfail(
+                    strict=True, reason="Meissner-Wentz against Stogryn salinity terms, cold water above 90 GHz"
+                )
+            ]
+            if (t, f) in _SEA_SPREAD
+            else [],
+        )
+        for t in (273.15, 283.15, 293.15, 303.15)
+        for f in F_GHZ
+    ],
+)
 def test_p527_sea_water_against_stogryn_1995(f_ghz, t_k):
     """P.527-6 at 35 g/kg against `smrt.permittivity.saline_water.seawater_permittivity_stogryn95`
     (salinity in kg/kg; stated 0-1000 GHz), its conductivity typo undone (`_stogryn95`).
@@ -287,8 +310,9 @@ def _soil(f_ghz, sand, clay, mv, t_k=293.15) -> complex:
     """pmmw's ``soil`` with SMRT's fixed bulk and particle densities (1.3, 2.664 g/cm^3)."""
     from pmmw.scene.dielectric import make_dielectric
 
-    return make_dielectric({"name": "soil", "sand": sand, "clay": clay, "moisture": mv, "bulk_density": 1.3,
-                            "particle_density": 2.664}).eps(f_ghz * 1e9, t_k)
+    return make_dielectric(
+        {"name": "soil", "sand": sand, "clay": clay, "moisture": mv, "bulk_density": 1.3, "particle_density": 2.664}
+    ).eps(f_ghz * 1e9, t_k)
 
 
 # Textures whose Dobson sigma_2 is positive at rho_b 1.3 (for sandy soils it is negative, P.527's

@@ -20,8 +20,15 @@ ATOL = 1e-6
 
 
 def _entry(mesh, **kw):
-    return SimpleNamespace(mesh=Path(mesh), material=kw.get("material"), materials=kw.get("materials"),
-                           transform=None, up_axis=kw.get("up_axis"), name=None, key="scene[0]")
+    return SimpleNamespace(
+        mesh=Path(mesh),
+        material=kw.get("material"),
+        materials=kw.get("materials"),
+        transform=None,
+        up_axis=kw.get("up_axis"),
+        name=None,
+        key="scene[0]",
+    )
 
 
 def _upright_box() -> trimesh.Trimesh:
@@ -77,19 +84,24 @@ def test_validate_prints_each_objects_bounds_and_up_axis(tmp_path):
     path = tmp_path / "box.glb"
     _upright_box().export(path)
     scn = tmp_path / "s.yaml"
-    scn.write_text("name: s\nfrequency: 35 GHz\nimager: {position: [0, 0, 1], look_at: [0, 4, 1], fov: 20 deg, "
-                   "resolution: [8, 6]}\nscene:\n  - {mesh: box.glb, material: metal, up_axis: z}\n"
-                   "sky: {model: uniform, temperature: 40 K}\n")
+    scn.write_text(
+        "name: s\nfrequency: 35 GHz\nimager: {position: [0, 0, 1], look_at: [0, 4, 1], fov: 20 deg, "
+        "resolution: [8, 6]}\nscene:\n  - {mesh: box.glb, material: metal, up_axis: z}\n"
+        "sky: {model: uniform, temperature: 40 K}\n"
+    )
     obj = validate(scn)["geometry"]["objects"]["scene[0]:box.glb"]
     assert obj["file_up_axis"] == "z"
     assert np.allclose(obj["bounds_m"], [[-0.5, 3.5, 0.0], [0.5, 4.5, 2.0]], atol=1e-4)
 
 
-@pytest.mark.parametrize("suffix, words", [
-    (".obj", ["no `usemtl` line", "`material: ID`", "`usemtl NAME`"]),
-    (".stl", ["is STL, which carries no material names", "`material: ID`"]),
-    (".ply", ["is PLY, which carries no material names", "`material: ID`"]),
-])
+@pytest.mark.parametrize(
+    "suffix, words",
+    [
+        (".obj", ["no `usemtl` line", "`material: ID`", "`usemtl NAME`"]),
+        (".stl", ["is STL, which carries no material names", "`material: ID`"]),
+        (".ply", ["is PLY, which carries no material names", "`material: ID`"]),
+    ],
+)
 def test_a_mesh_without_material_names_says_how_to_give_them(tmp_path, suffix, words):
     """Before: "mesh material name(s) '' of box.obj are not in the map; the mesh has ''"."""
     path = tmp_path / f"box{suffix}"

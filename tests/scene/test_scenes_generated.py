@@ -91,6 +91,7 @@ def tilt_deg(mesh: trimesh.Trimesh) -> float:
 
 # -- every shipped asset -------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("rel", sorted(SHIPPED))
 def test_shipped_scene_loads_closed_and_named(rel):
     loaded = parts(rel)
@@ -103,6 +104,7 @@ def test_shipped_scene_loads_closed_and_named(rel):
 
 
 # -- cinderblocks (Murakowski 2014 sec. 2.3.2) ----------------------------------------------------
+
 
 def test_cinderblock_cavities_are_wells_closed_by_the_ground():
     """Every block lies flat on the stack below or on the ground (1 mm gap), its long face towards
@@ -128,6 +130,7 @@ def test_cinderblock_cavities_are_wells_closed_by_the_ground():
 
 # -- truck (Murakowski 2014 sec. 2.3.3) -----------------------------------------------------------
 
+
 def test_truck_body_tires_and_open_cab():
     """A compact pickup (5.0 m, 1.72 m high) standing on its four SA-9 tires 1 mm above the sand,
     its metal 0.19 m or more above it (the under-body cavity is open to the rays), and a cab seen
@@ -150,12 +153,14 @@ def test_truck_body_tires_and_open_cab():
     owner = np.concatenate([np.full(len(m.faces), n) for n, m in parts(rel)])
     window = np.array([0.752, 7.338, 1.33])  # printed by the script: the side window's middle
     origin = np.array([0.0, 0.0, 1.5])
-    _, _, tri = everything.ray.intersects_location([origin], [(window - origin) / np.linalg.norm(window - origin)],
-                                                   multiple_hits=False)
+    _, _, tri = everything.ray.intersects_location(
+        [origin], [(window - origin) / np.linalg.norm(window - origin)], multiple_hits=False
+    )
     assert owner[tri[0]] == "interior"
 
 
 # -- bike racks (Murakowski 2014 sec. 2.3.4) ------------------------------------------------------
+
 
 def test_bikeracks_fence_bicycles_and_tree():
     """Seven capped fence posts with six chains between them, two racks, two bicycles (four tires
@@ -191,6 +196,7 @@ def test_bikeracks_fence_bicycles_and_tree():
 
 
 # -- landing (Murakowski 2014 sec. 3.1) -----------------------------------------------------------------
+
 
 @pytest.mark.parametrize("style", ["plate", "brackets"])
 def test_landing_runway_and_ground(style):
@@ -243,6 +249,7 @@ def test_landing_bracket_beacons():
 
 # -- concealed weapon detection (Murakowski 2014 sec. 3.2) ----------------------------------------------
 
+
 def test_cwd_person():
     rel = "cwd/cwd_outdoor.glb"
     (body,) = of(rel, "skin")
@@ -277,6 +284,7 @@ def test_cwd_room_holds_both_views():
 
 
 # -- search and rescue (Murakowski 2014 sec. 3.3) -------------------------------------------------------
+
 
 def test_sar_terrain_and_clutter():
     """Sec. 3.3.1: small-scale clutter only ("rocks, boulders, shrubs, and trees"; no large-scale
@@ -317,14 +325,18 @@ def test_sar_targets():
 
 # -- regeneration --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("scene", [
-    "cinderblocks",
-    "truck",  # ~2 s
-    "bikeracks",  # ~3 s: 50 nodes, chains of links
-    "landing",
-    pytest.param("cwd", marks=pytest.mark.slow),  # ~8 s: implicit body, clothing, shoes
-    pytest.param("sar", marks=pytest.mark.slow),  # ~4 s: terrain, 700 rocks and shrubs
-])
+
+@pytest.mark.parametrize(
+    "scene",
+    [
+        "cinderblocks",
+        "truck",  # ~2 s
+        "bikeracks",  # ~3 s: 50 nodes, chains of links
+        "landing",
+        pytest.param("cwd", marks=pytest.mark.slow),  # ~8 s: implicit body, clothing, shoes
+        pytest.param("sar", marks=pytest.mark.slow),  # ~4 s: terrain, 700 rocks and shrubs
+    ],
+)
 def test_script_regenerates_shipped_files(scene, tmp_path):
     script = SCENES / scene / "make_scene.py"
     subprocess.run([sys.executable, str(script), "--out-dir", str(tmp_path)], check=True, capture_output=True, cwd=REPO)

@@ -43,7 +43,9 @@ def test_product_zip_and_partial_zip():
     grid = [("a", [1, 2]), ("b", ["x", "y"]), ("c", [10, 20])]
     assert len(variants(SweepSpec(Path("s.yaml"), grid))) == 8
     assert [tuple(v.values()) for v in variants(SweepSpec(Path("s.yaml"), grid, zip=True))] == [
-        (1, "x", 10), (2, "y", 20)]
+        (1, "x", 10),
+        (2, "y", 20),
+    ]
     part = variants(SweepSpec(Path("s.yaml"), grid, zip=["a", "c"]))  # a flight path x b
     assert [(v["a"], v["b"], v["c"]) for v in part] == [(1, "x", 10), (1, "y", 10), (2, "x", 20), (2, "y", 20)]
     with pytest.raises(UserError, match="one length"):
@@ -56,27 +58,46 @@ def test_linspace_with_and_without_units():
     assert linspace("[1, 2]", "g") is None
     with pytest.raises(UserError, match="share a unit"):
         linspace("linspace(1 m, 2 km, 3)", "g")
-    assert parse_grid_options(["imager.noise=linspace(1 K, 4 K, 4)"]) == [("imager.noise", ["1 K", "2 K", "3 K", "4 K"])]
+    assert parse_grid_options(["imager.noise=linspace(1 K, 4 K, 4)"]) == [
+        ("imager.noise", ["1 K", "2 K", "3 K", "4 K"])
+    ]
 
 
 def test_local_sweep_table_report_and_resume(tmp_path, monkeypatch):
     scn = _scene(tmp_path)
     out = tmp_path / "sw"
-    res = runner.invoke(app, ["sweep", str(scn), "--grid", "render.seed=[1, 2]", "--grid",
-                              "imager.noise=[0.5 K, 2 K]", "--out", str(out), "-q"])
+    res = runner.invoke(
+        app,
+        [
+            "sweep",
+            str(scn),
+            "--grid",
+            "render.seed=[1, 2]",
+            "--grid",
+            "imager.noise=[0.5 K, 2 K]",
+            "--out",
+            str(out),
+            "-q",
+        ],
+    )
     assert res.exit_code == 0, res.output
     with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
     assert [r["variant"] for r in rows] == ["v000", "v001", "v002", "v003"]
-    assert [(r["render.seed"], r["imager.noise"]) for r in rows] == [("1", "0.5 K"), ("1", "2 K"), ("2", "0.5 K"),
-                                                                      ("2", "2 K")]
+    assert [(r["render.seed"], r["imager.noise"]) for r in rows] == [
+        ("1", "0.5 K"),
+        ("1", "2 K"),
+        ("2", "0.5 K"),
+        ("2", "2 K"),
+    ]
     assert all(r["status"] == "done" and (out / r["exr"]).is_file() for r in rows)
     # the table carries the variant's report: the contrast in K and in noise sigmas
     rep = json.loads((out / "v001" / "report.json").read_text())["regions"]["contrasts"]["block - ground"]["I"]
     assert float(rows[1]["contrast block - ground I [K]"]) == pytest.approx(rep["K"])
     assert float(rows[1]["contrast block - ground I [sigma]"]) == pytest.approx(rep["sigma"])
     assert float(rows[0]["contrast block - ground I [sigma]"]) == pytest.approx(
-        4 * float(rows[1]["contrast block - ground I [sigma]"]), rel=0.2)  # a quarter of the noise
+        4 * float(rows[1]["contrast block - ground I [sigma]"]), rel=0.2
+    )  # a quarter of the noise
     report = (out / "report.md").read_text()
     assert "| v003 |" in report and (out / "contact_sheet.png").is_file()
     assert any(out.glob("plot_*.png"))
@@ -88,8 +109,21 @@ def test_local_sweep_table_report_and_resume(tmp_path, monkeypatch):
 
     real_render = pipeline.render
     monkeypatch.setattr(pipeline, "render", no_render)
-    res = runner.invoke(app, ["sweep", str(scn), "--grid", "render.seed=[1, 2]", "--grid",
-                              "imager.noise=[0.5 K, 2 K]", "--out", str(out), "-q", "--resume"])
+    res = runner.invoke(
+        app,
+        [
+            "sweep",
+            str(scn),
+            "--grid",
+            "render.seed=[1, 2]",
+            "--grid",
+            "imager.noise=[0.5 K, 2 K]",
+            "--out",
+            str(out),
+            "-q",
+            "--resume",
+        ],
+    )
     assert res.exit_code == 0, res.output
 
     # a sweep killed inside v001 (its folder never got its variant.json): --resume renders v001 only,
@@ -102,8 +136,20 @@ def test_local_sweep_table_report_and_resume(tmp_path, monkeypatch):
         return real_render(*a, **k)
 
     monkeypatch.setattr(pipeline, "render", counting)
-    res = runner.invoke(app, ["sweep", str(scn), "--grid", "render.seed=[1, 2]", "--grid",
-                              "imager.noise=[0.5 K, 2 K]", "--out", str(out), "--resume"])
+    res = runner.invoke(
+        app,
+        [
+            "sweep",
+            str(scn),
+            "--grid",
+            "render.seed=[1, 2]",
+            "--grid",
+            "imager.noise=[0.5 K, 2 K]",
+            "--out",
+            str(out),
+            "--resume",
+        ],
+    )
     assert res.exit_code == 0, res.output
     assert [Path(c).name for c in calls] == ["v001"]
     assert "sweep: 4/4 variants" in res.stderr and "Mrays/s" in res.stderr
@@ -114,8 +160,9 @@ def test_a_failed_variant_is_recorded_and_the_others_go_on(tmp_path):
     out = tmp_path / "sw"
     # a material id the database lacks: the scenario schema takes it, the render refuses it
     # (a value the schema refuses stops the sweep before anything renders: tests/cli/test_filekinds.py)
-    res = runner.invoke(app, ["sweep", str(scn), "--grid", "scene[1].material=[metal, nosuch, metal]", "--out",
-                              str(out), "-q"])
+    res = runner.invoke(
+        app, ["sweep", str(scn), "--grid", "scene[1].material=[metal, nosuch, metal]", "--out", str(out), "-q"]
+    )
     assert res.exit_code == 1
     with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
@@ -134,14 +181,20 @@ grid:
   name: [p0, p1, p2]
   frequency: [35 GHz, 95 GHz]
 zip: [imager.position, name]
-out: {tmp_path / 'trade'}
+out: {tmp_path / "trade"}
 """)
     res = runner.invoke(app, ["sweep", str(sweep), "-q"])
     assert res.exit_code == 0, res.output
     with open(tmp_path / "trade" / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
-    assert [(r["name"], r["frequency"]) for r in rows] == [("p0", "35 GHz"), ("p0", "95 GHz"), ("p1", "35 GHz"),
-                                                          ("p1", "95 GHz"), ("p2", "35 GHz"), ("p2", "95 GHz")]
+    assert [(r["name"], r["frequency"]) for r in rows] == [
+        ("p0", "35 GHz"),
+        ("p0", "95 GHz"),
+        ("p1", "35 GHz"),
+        ("p1", "95 GHz"),
+        ("p2", "35 GHz"),
+        ("p2", "95 GHz"),
+    ]
     assert (tmp_path / "trade" / "v005" / "p2.exr").is_file()
     # the flight path as an animation, one per frequency, a frame per pose in order
     from PIL import Image
@@ -158,24 +211,29 @@ def test_the_slurm_job_script_of_a_cluster_file(tmp_path):
     """No SLURM here: the script dask-jobqueue would submit, from the cluster file."""
     cluster = tmp_path / "slurm.yaml"
     cluster.write_text("kind: slurm\nqueue: normal\ncores: 8\nmemory: 16GB\nwalltime: '02:00:00'\njobs: 4\n")
-    res = runner.invoke(app, ["sweep", str(_scene(tmp_path)), "--grid", "render.seed=[1]", "--cluster",
-                              str(cluster), "--dry-run"])
+    res = runner.invoke(
+        app, ["sweep", str(_scene(tmp_path)), "--grid", "render.seed=[1]", "--cluster", str(cluster), "--dry-run"]
+    )
     assert res.exit_code == 0, res.output
     assert "#SBATCH -p normal" in res.output and "#SBATCH --cpus-per-task=8" in res.output
     assert "#SBATCH -t 02:00:00" in res.output and "--nworkers 8" in res.output and "--nthreads 1" in res.output
     cluster.write_text("kind: condor\ncores: 8\nmemory: 16GB\n")
-    res = runner.invoke(app, ["sweep", str(_scene(tmp_path)), "--grid", "render.seed=[1]", "--cluster",
-                              str(cluster), "--dry-run"])
+    res = runner.invoke(
+        app, ["sweep", str(_scene(tmp_path)), "--grid", "render.seed=[1]", "--cluster", str(cluster), "--dry-run"]
+    )
     assert res.exit_code == 2 and "kind" in res.output
 
 
-@pytest.mark.parametrize("args, words", [
-    (["--grid", "render.seed"], "KEY=LIST"),
-    (["--grid", "render.seed=[]"], "empty list"),
-    (["--grid", "a=[1]", "--grid", "a=[2]"], "swept twice"),
-    (["--executor", "spark", "--grid", "render.seed=[1]"], "--executor"),
-    ([], "--grid"),
-])
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["--grid", "render.seed"], "KEY=LIST"),
+        (["--grid", "render.seed=[]"], "empty list"),
+        (["--grid", "a=[1]", "--grid", "a=[2]"], "swept twice"),
+        (["--executor", "spark", "--grid", "render.seed=[1]"], "--executor"),
+        ([], "--grid"),
+    ],
+)
 def test_bad_sweep_options_are_one_line(tmp_path, args, words):
     res = runner.invoke(app, ["sweep", str(_scene(tmp_path)), *args])
     assert res.exit_code == 2, res.output
@@ -223,10 +281,12 @@ def _pmmw_with_a_worker_killed(tmp_path: Path, what: str, args: list[str]):
     preload = tmp_path / "killer_preload.py"
     preload.write_text(_PRELOAD)
     marks = tmp_path / f"kills-{what}"
-    env = dict(os.environ, DASK_DISTRIBUTED__WORKER__PRELOAD=f'["{preload}"]', PMMW_TEST_MARKS=str(marks),
-               PMMW_TEST_KILL=what)
-    proc = subprocess.run([str(Path(sys.executable).parent / "pmmw"), *args], env=env, capture_output=True, text=True,
-                          timeout=240)
+    env = dict(
+        os.environ, DASK_DISTRIBUTED__WORKER__PRELOAD=f'["{preload}"]', PMMW_TEST_MARKS=str(marks), PMMW_TEST_KILL=what
+    )
+    proc = subprocess.run(
+        [str(Path(sys.executable).parent / "pmmw"), *args], env=env, capture_output=True, text=True, timeout=240
+    )
     return proc, marks.exists()
 
 
@@ -237,9 +297,11 @@ def test_a_dask_worker_killed_mid_sweep_and_the_sweep_completes(tmp_path):
     every image is bit-identical to the local executor's."""
     scn = _scene(tmp_path)
     grid = ["--grid", "render.seed=[1, 7, 9]"]
-    proc, killed = _pmmw_with_a_worker_killed(tmp_path, "sweep", ["sweep", str(scn), *grid, "--out",
-                                                                   str(tmp_path / "dask"), "--executor", "dask",
-                                                                   "--workers", "2", "-q"])
+    proc, killed = _pmmw_with_a_worker_killed(
+        tmp_path,
+        "sweep",
+        ["sweep", str(scn), *grid, "--out", str(tmp_path / "dask"), "--executor", "dask", "--workers", "2", "-q"],
+    )
     assert killed, "the preload never killed a worker"
     assert proc.returncode == 0, proc.stderr[-2000:]
     with open(tmp_path / "dask" / "sweep.csv") as f:
@@ -259,9 +321,11 @@ def test_render_on_dask_is_bit_identical_even_with_a_worker_killed(tmp_path):
     scn = _scene(tmp_path)
     res = runner.invoke(app, ["render", str(scn), "--out", str(tmp_path / "local"), "-q"])
     assert res.exit_code == 0, res.output
-    proc, killed = _pmmw_with_a_worker_killed(tmp_path, "tile", ["render", str(scn), "--out",
-                                                                  str(tmp_path / "dask"), "--executor", "dask",
-                                                                  "--workers", "2", "-q"])
+    proc, killed = _pmmw_with_a_worker_killed(
+        tmp_path,
+        "tile",
+        ["render", str(scn), "--out", str(tmp_path / "dask"), "--executor", "dask", "--workers", "2", "-q"],
+    )
     assert killed and proc.returncode == 0, proc.stderr[-2000:]
     a, _ = read_exr(tmp_path / "local" / "tiny.exr")
     b, _ = read_exr(tmp_path / "dask" / "tiny.exr")

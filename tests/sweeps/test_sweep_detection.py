@@ -8,16 +8,25 @@ from pmmw.sweeps.spec import SweepSpec
 
 
 def _table(ranges, snrs, err=0.2):
-    return [{"variant": f"v{i:03d}", "imager.position[1]": r, "status": "done", "snr gun - torso Ey2": s,
-             "snr_stderr gun - torso Ey2": err, "detectable gun - torso Ey2": s >= 5,
-             "contrast gun - torso Ey2 [K]": -5.0} for i, (r, s) in enumerate(zip(ranges, snrs))]
+    return [
+        {
+            "variant": f"v{i:03d}",
+            "imager.position[1]": r,
+            "status": "done",
+            "snr gun - torso Ey2": s,
+            "snr_stderr gun - torso Ey2": err,
+            "detectable gun - torso Ey2": s >= 5,
+            "contrast gun - torso Ey2 [K]": -5.0,
+        }
+        for i, (r, s) in enumerate(zip(ranges, snrs))
+    ]
 
 
 def test_report_states_the_detection_range_and_draws_it(tmp_path):
     ranges = ["5 m", "10 m", "15 m", "20 m"]
     spec = SweepSpec(scenario=Path("cwd.yaml"), grid=[("imager.position[1]", ranges)])
     # SNR = 150 / r^1.2: 21.9, 9.5, 5.8, 4.1 -> crossed between 15 and 20 m
-    snrs = [150 / x ** 1.2 for x in (5, 10, 15, 20)]
+    snrs = [150 / x**1.2 for x in (5, 10, 15, 20)]
     text = write_report(tmp_path, spec, _table(ranges, snrs)).read_text()
     line = next(ln for ln in text.splitlines() if ln.startswith("- gun - torso"))
     assert "detection limit (largest imager.position[1] [m] detected)" in line

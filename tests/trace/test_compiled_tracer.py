@@ -48,8 +48,14 @@ def _image(results, field):
 def test_compiled_equals_vectorized_without_randomness(name):
     """Every per-pixel output agrees to 1e-9 K: both paths add the same emission terms (a few
     hundred per pixel, each below ~300 K, so reordering the sums moves them by ~1e-13 K)."""
-    job = _job(name, "imager.resolution=[24, 18]", "render.spp=2", "render.strategy=split",
-               "render.termination=temperature", "render.target_error=null")
+    job = _job(
+        name,
+        "imager.resolution=[24, 18]",
+        "render.spp=2",
+        "render.strategy=split",
+        "render.termination=temperature",
+        "render.target_error=null",
+    )
     a, b = _tiles(job, False), _tiles(job, True)
     for field in ("mean", "truncated"):
         np.testing.assert_allclose(_image(b, field), _image(a, field), rtol=0, atol=1e-9, err_msg=field)
@@ -77,9 +83,16 @@ def test_compiled_and_vectorized_estimators_agree(strategy):
     samples as independent, which overstates them, so the test is conservative) and the pooled
     variances within 25 % (their own sampling spread at 1152 x 64 samples is a few percent). The
     same test does reject a 5 % bias: it can fail."""
-    job = _job("cinderblocks_35ghz", "imager.resolution=[24, 24]", "render.spp=64", f"render.strategy={strategy}",
-               "render.split_depth=1", "render.termination=roulette", "render.threshold=0.05",
-               "render.target_error=null")
+    job = _job(
+        "cinderblocks_35ghz",
+        "imager.resolution=[24, 24]",
+        "render.spp=64",
+        f"render.strategy={strategy}",
+        "render.split_depth=1",
+        "render.termination=roulette",
+        "render.threshold=0.05",
+        "render.target_error=null",
+    )
     a, b = _tiles(job, False), _tiles(job, True)
     z, bound, ratio = _z_test(a, b)
     assert z < bound, (z, bound)
@@ -95,8 +108,14 @@ def test_roulette_at_arrival_keeps_the_estimator():
     Both are unbiased: with and without the early roulette the means agree pixel by pixel (1 %
     Bonferroni bound, as above) and the pooled variances within 25 %, at a threshold (0.05) that
     makes roulette frequent. The same test rejects a 5 % bias."""
-    job = _job("cinderblocks_35ghz", "imager.resolution=[24, 24]", "render.spp=64", "render.termination=roulette",
-               "render.threshold=0.05", "render.target_error=null")
+    job = _job(
+        "cinderblocks_35ghz",
+        "imager.resolution=[24, 24]",
+        "render.spp=64",
+        "render.termination=roulette",
+        "render.threshold=0.05",
+        "render.target_error=null",
+    )
     isect = make_intersector(job.vertices, job.faces)
     runs = []
     for early in (False, True):
@@ -121,8 +140,14 @@ def test_roulette_of_a_rough_faces_children_keeps_the_estimator():
     standard error does not see), and the pooled variances within 25 %. A 1 % bias is rejected."""
     runs = []
     for threshold in ("0.05", "1e-9"):
-        job = _job("cinderblocks_rough_35ghz", "imager.resolution=[24, 24]", "render.spp=64",
-                   "render.termination=roulette", f"render.threshold={threshold}", "render.target_error=null")
+        job = _job(
+            "cinderblocks_rough_35ghz",
+            "imager.resolution=[24, 24]",
+            "render.spp=64",
+            "render.termination=roulette",
+            f"render.threshold={threshold}",
+            "render.target_error=null",
+        )
         integ = Integrator(job, make_intersector(job.vertices, job.faces))
         assert not integ.surfaces._rough_other  # the one-pass rough interaction
         runs.append([integ.render_tile(t) for t in job.tiles()])
@@ -155,10 +180,18 @@ def test_rough_kernels_equal_the_models_array_code(monkeypatch):
     `Surfaces._scatter_settle`) the same random numbers give the same image to 1e-9 K (rounding
     only), on the shipped rough scene with its bump map (mirrored wrong-side children): GGX
     isotropic and anisotropic, and Beckmann (its facets drawn by its array code in both)."""
-    for spec in ("{model: ggx, alpha: 0.15}", "{model: ggx, alpha_x: 0.1, alpha_y: 0.5, orientation_deg: 30}",
-                 "{model: beckmann, alpha: 0.2}"):
-        job = _job("cinderblocks_rough_35ghz", "imager.resolution=[16, 12]", "render.spp=2", "render.target_error=null",
-                   f"materials.desert_sand.roughness={spec}")
+    for spec in (
+        "{model: ggx, alpha: 0.15}",
+        "{model: ggx, alpha_x: 0.1, alpha_y: 0.5, orientation_deg: 30}",
+        "{model: beckmann, alpha: 0.2}",
+    ):
+        job = _job(
+            "cinderblocks_rough_35ghz",
+            "imager.resolution=[16, 12]",
+            "render.spp=2",
+            "render.target_error=null",
+            f"materials.desert_sand.roughness={spec}",
+        )
         isect = make_intersector(job.vertices, job.faces)
         fast = Integrator(job, isect)
         codes = fast.surfaces._rough[0]
@@ -194,7 +227,12 @@ def test_kernels_run_as_python_without_jit(tmp_path):
     for jit in ("0", "1"):
         env = dict(os.environ, NUMBA_DISABLE_JIT=jit)
         path = tmp_path / f"jit{jit}.npy"
-        subprocess.run([sys.executable, "-c", script, str(Path(__file__).resolve().parent), str(path)], check=True, env=env, cwd=ROOT)
+        subprocess.run(
+            [sys.executable, "-c", script, str(Path(__file__).resolve().parent), str(path)],
+            check=True,
+            env=env,
+            cwd=ROOT,
+        )
         out[jit] = np.load(path)
     np.testing.assert_allclose(out["1"], out["0"], rtol=0, atol=1e-9)
 
@@ -224,8 +262,9 @@ def _reference_coefficients(job, cur, fm, other, leaving, cos1):
             f_eps, f_d = (films.eps[::-1], films.thickness[::-1]) if lv else (films.eps, films.thickness)
             e2 = films.eps[-1] if kind == BLACKBODY else far
             eps = np.concatenate([[eps1], f_eps, [e2]])
-            coeff = multilayer.stack(eps[None, :], f_d[None, :], cos1[g], job.k0,
-                                     substrate="metal" if kind == METAL else "dielectric")
+            coeff = multilayer.stack(
+                eps[None, :], f_d[None, :], cos1[g], job.k0, substrate="metal" if kind == METAL else "dielectric"
+            )
             t_abs[g] = films.temperature
         elif kind == METAL:
             coeff = fresnel.perfect_conductor(g.size)
@@ -256,10 +295,16 @@ def test_kernel_coefficients_equal_the_vectorized_assembly():
     box = trimesh.creation.box(extents=[1, 1, 1])
     films1 = [(2.5 + 0.3j, 1.2e-3, 305.0)]
     films3 = [(2.0 + 0.01j, 0.4e-3, 300.0), (9.0 + 4.0j, 0.05e-3, 320.0), (3.0 + 0.2j, 2e-3, 290.0)]
-    specs = [material(eps=3 + 0.1j), material(eps=6 + 2j, coating=films1), material(eps=40 + 30j, coating=films3),
-             material(kind="metal", coating=films3), material(kind="blackbody", coating=films1),
-             material(kind="opaque", eps=4 + 1j, coating=films1), material(kind="thin", eps=3 + 0.5j, thickness=1e-3),
-             material(eps=1.5 + 0.4j)]
+    specs = [
+        material(eps=3 + 0.1j),
+        material(eps=6 + 2j, coating=films1),
+        material(eps=40 + 30j, coating=films3),
+        material(kind="metal", coating=films3),
+        material(kind="blackbody", coating=films1),
+        material(kind="opaque", eps=4 + 1j, coating=films1),
+        material(kind="thin", eps=3 + 0.5j, thickness=1e-3),
+        material(eps=1.5 + 0.4j),
+    ]
     job = make_job([(box, s) for s in specs], looking_down_at(30.0), UniformSky(10.0, 290.0), 95e9)
     integ = Integrator(job, make_intersector(job.vertices, job.faces))
     rng = np.random.default_rng(5)
@@ -274,7 +319,9 @@ def test_kernel_coefficients_equal_the_vectorized_assembly():
     cos1[20:40] = 1.0
     ref, t_ref, q2_ref = _reference_coefficients(job, cur, fm, other, leaving, cos1)
     amp, power, q2, t_abs = np.empty((n, 4), complex), np.empty((n, 6)), np.empty(n, complex), np.empty(n)
-    kernels.coefficients(cur, fm, other, leaving, cos1, integ.surfaces._media, integ.surfaces._films, amp, power, q2, t_abs)
+    kernels.coefficients(
+        cur, fm, other, leaving, cos1, integ.surfaces._media, integ.surfaces._films, amp, power, q2, t_abs
+    )
     for a, name in enumerate(("rs", "rp", "ts", "tp")):
         np.testing.assert_allclose(amp[:, a], getattr(ref, name), rtol=1e-12, atol=1e-15, err_msg=name)
     for a, name in enumerate(("Rs", "Rp", "Ts", "Tp", "As", "Ap")):
@@ -317,8 +364,10 @@ def test_tally_equals_the_array_sums():
     ref, s1, s2 = np.zeros((npx, 4)), np.zeros((npx, 4)), np.zeros((npx, 4))
     r1, count, trunc = np.zeros((npx, reps, 4)), np.zeros(npx, np.int64), np.zeros((npx, 2))
     depth, material = np.full(npx, np.inf), np.full(npx, -1.0)
-    want = {k: v.copy() for k, v in dict(ref=ref, s1=s1, s2=s2, r1=r1, count=count, trunc=trunc, depth=depth,
-                                          material=material).items()}
+    want = {
+        k: v.copy()
+        for k, v in dict(ref=ref, s1=s1, s2=s2, r1=r1, count=count, trunc=trunc, depth=depth, material=material).items()
+    }
     done = 0
     for active, nb in ((np.arange(npx), 3), (np.array([1, 4, 6]), 2)):
         n = active.size * nb
@@ -339,7 +388,7 @@ def test_tally_equals_the_array_sums():
         want["s2"][active] += (dv * dv).sum(axis=1)
         want["count"][active] += nb
         for r in range(reps):
-            want["r1"][active, r] += dv[:, (r - done) % reps::reps].sum(axis=1)
+            want["r1"][active, r] += dv[:, (r - done) % reps :: reps].sum(axis=1)
         done += nb
     got = dict(ref=ref, s1=s1, s2=s2, r1=r1, count=count, trunc=trunc, depth=depth, material=material)
     for k in want:
@@ -364,8 +413,23 @@ def test_tile_means_are_the_sample_statistics():
     depth, material = np.full(npx, np.inf), np.full(npx, -1.0)
     for px, v in enumerate(samples):  # one pixel at a time, all its samples in one chunk
         n = v.shape[0]
-        kernels.tally(np.array([px]), v, np.zeros((n, 2)), np.ones(n), np.zeros(n), 0, 2, ref, s1, s2, r1, count,
-                      trunc, depth, material)
+        kernels.tally(
+            np.array([px]),
+            v,
+            np.zeros((n, 2)),
+            np.ones(n),
+            np.zeros(n),
+            0,
+            2,
+            ref,
+            s1,
+            s2,
+            r1,
+            count,
+            trunc,
+            depth,
+            material,
+        )
     mean, err, diff = np.empty((npx, 4)), np.empty((npx, 4)), np.empty((npx, 4))
     kernels.tile_means(ref, s1, s2, r1, count, mean, err, diff)
     alone = np.empty((npx, 4))
@@ -400,8 +464,18 @@ def test_sky_emission_kernel_equals_the_jones_algebra():
     p = np.cross(-d, s)
     m = rng.normal(size=(n, 2, 2)) + 1j * rng.normal(size=(n, 2, 2))
     sid = np.arange(n) // 2
-    wave = Wave(o=np.zeros((n, 3)), d=d, s=s, p=p, m=m, sid=sid, depth=np.zeros(n, np.int32),
-                stack=np.zeros((n, 8), np.int16), top=np.zeros(n, np.int32), last_t=np.zeros(n))
+    wave = Wave(
+        o=np.zeros((n, 3)),
+        d=d,
+        s=s,
+        p=p,
+        m=m,
+        sid=sid,
+        depth=np.zeros(n, np.int32),
+        stack=np.zeros((n, 8), np.int16),
+        top=np.zeros(n, np.int32),
+        last_t=np.zeros(n),
+    )
     rows = np.arange(0, n, 1)[rng.random(n) < 0.7]
     rows = np.union1d(rows, [0])
     tv, th = rng.uniform(2.0, 300.0, rows.size), rng.uniform(2.0, 300.0, rows.size)
@@ -442,8 +516,18 @@ def test_crossing_a_rough_coating_layer_is_beer_lambert():
     normals[0] = np.cross(d[along], [0.0, 0.0, 1.0])
     normals[0] /= np.linalg.norm(normals[0])
     m = rng.normal(size=(n, 2, 2)) + 1j * rng.normal(size=(n, 2, 2))
-    wave = WaveArrays(np.zeros((n, 3)), d, np.zeros((n, 3)), np.zeros((n, 3)), m.copy(), np.arange(n),
-                      np.zeros(n, np.int32), np.zeros((n, 8), np.int16), np.zeros(n, np.int32), np.zeros(n))
+    wave = WaveArrays(
+        np.zeros((n, 3)),
+        d,
+        np.zeros((n, 3)),
+        np.zeros((n, 3)),
+        m.copy(),
+        np.arange(n),
+        np.zeros(n, np.int32),
+        np.zeros((n, 8), np.int16),
+        np.zeros(n, np.int32),
+        np.zeros(n),
+    )
     acc = np.zeros((n, 4))
     alpha, thickness, temp = 50.0, 2e-3, 300.0
     kernels.cross_layer(wave, normals, rows, alpha, thickness, temp, acc)

@@ -126,17 +126,23 @@ def test_empty_ray_batch_and_empty_scene(kind):
 
 @pytest.mark.parametrize("kind", ["embree", "numpy"])
 def test_degenerate_and_duplicate_triangles(kind):
-    v = np.array([
-        [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],  # a good triangle
-        [2.0, 0.0, 0.0],  # collinear with 0 and 1
-    ])
-    f = np.array([
-        [0, 1, 3],  # zero area: collinear
-        [0, 1, 2],  # good
-        [0, 1, 2],  # exact duplicate
-        [2, 2, 2],  # zero area: one point
-        [0, 0, 1],  # zero area: repeated vertex
-    ])
+    v = np.array(
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],  # a good triangle
+            [2.0, 0.0, 0.0],  # collinear with 0 and 1
+        ]
+    )
+    f = np.array(
+        [
+            [0, 1, 3],  # zero area: collinear
+            [0, 1, 2],  # good
+            [0, 1, 2],  # exact duplicate
+            [2, 2, 2],  # zero area: one point
+            [0, 0, 1],  # zero area: repeated vertex
+        ]
+    )
     isect = make_intersector(v, f, kind=kind)
     o = np.array([[0.25, 0.25, 1.0], [0.5, 0.0, 1.0], [0.0, 1.0, 1.0], [1.5, 0.0, 1.0]])
     d = np.tile([0.0, 0.0, -1.0], (4, 1))

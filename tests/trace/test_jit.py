@@ -42,6 +42,9 @@ def test_every_module_with_compiled_code_is_watched():
     `SOURCES` would leave its callers' caches stale after an edit: the list must be complete."""
     import re
 
-    found = sorted(str(p.relative_to(jit.ROOT)) for p in jit.ROOT.rglob("*.py")
-                   if p.name != "jit.py" and re.search(r"from pmmw\.jit import|numba\.njit", p.read_text()))
+    found = sorted(
+        str(p.relative_to(jit.ROOT))
+        for p in jit.ROOT.rglob("*.py")
+        if p.name != "jit.py" and re.search(r"from pmmw\.jit import|numba\.njit", p.read_text())
+    )
     assert found == sorted(jit.SOURCES)

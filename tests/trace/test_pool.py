@@ -18,8 +18,10 @@ REPO = Path(__file__).resolve().parents[2]
 def test_workers_return_every_array_of_every_tile_as_one_process_renders_it():
     # adaptive sampling (per-pixel sample counts differ), tiles of three sizes (37 x 21 in tiles
     # of 8: the slots that held a full tile then hold smaller ones), more tiles than slots
-    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml",
-                  ["imager.resolution=[37, 21]", "render.tile=8", "render.spp=16", "render.min_spp=2"])
+    res = resolve(
+        REPO / "configs" / "cinderblocks_35ghz.yaml",
+        ["imager.resolution=[37, 21]", "render.tile=8", "render.spp=16", "render.min_spp=2"],
+    )
     job = make_job(res, res.scenario.frequencies[0])
     one = pool.render_tiles(job, workers=1)
     two = pool.render_tiles(job, workers=2)
@@ -36,9 +38,19 @@ def test_workers_return_every_array_of_every_tile_as_one_process_renders_it():
 def test_slots_round_trip_a_tile_and_leave_the_result_without_arrays():
     rng = np.random.default_rng(3)
     h, w = 3, 5
-    r = pool.TileResult(7, (2, 4, 2 + w, 4 + h), rng.random((h, w, 4)), rng.random((h, w, 4)), rng.random((h, w)),
-                        rng.integers(-1, 4, (h, w)).astype(float), 11, rng.integers(1, 2**31 - 1, (h, w)).astype(np.int32),
-                        0.5, rng.random((h, w, 2)), rng.random((h, w, 4)))
+    r = pool.TileResult(
+        7,
+        (2, 4, 2 + w, 4 + h),
+        rng.random((h, w, 4)),
+        rng.random((h, w, 4)),
+        rng.random((h, w)),
+        rng.integers(-1, 4, (h, w)).astype(float),
+        11,
+        rng.integers(1, 2**31 - 1, (h, w)).astype(np.int32),
+        0.5,
+        rng.random((h, w, 2)),
+        rng.random((h, w, 4)),
+    )
     want = {name: getattr(r, name).copy() for name, _ in pool._PLANES}
     slots = pool._Slots(2, 64)
     sent = slots.put(1, r)
@@ -67,14 +79,14 @@ print(faults[-1])
 """
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux") or platform.libc_ver()[0] != "glibc",
-                    reason="glibc's mallopt")
+@pytest.mark.skipif(not sys.platform.startswith("linux") or platform.libc_ver()[0] != "glibc", reason="glibc's mallopt")
 def test_a_rendering_process_reuses_the_memory_of_freed_arrays():
     """With `pool._reuse_freed_memory` (what every rendering process calls first) the arrays of the
     next wave land on memory the process already has: writing them faults in no page. By glibc's
     default the 64 MiB freed at the top of the heap go back to the system (its trim threshold is
     twice the largest array freed so far) and every round faults them in again, about 4000 pages
     here (the cost that was 15 % of the landing scene's trace on the workers)."""
+
     def faults(mode):
         out = subprocess.run([sys.executable, "-c", _REFAULTS, mode], capture_output=True, text=True, check=True)
         return int(out.stdout)
@@ -88,8 +100,9 @@ def _tiles_and_what_they_see(*overrides):
     media that an 8 x 8 grid of camera rays per tile hits (Embree)."""
     from pmmw.trace.intersect import make_intersector
 
-    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml",
-                  ["imager.resolution=[64, 64]", "render.tile=16", *overrides])
+    res = resolve(
+        REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[64, 64]", "render.tile=16", *overrides]
+    )
     job = make_job(res, res.scenario.frequencies[0])
     tiles = job.tiles()
     order = [t[0] for t in pool._by_cost(job, tiles)]
@@ -113,7 +126,7 @@ def test_workers_take_the_tiles_with_most_of_the_scene_first_and_the_sky_last():
     assert len(with_block) >= 4 and with_block == list(range(len(with_block)))
     order, hits = _tiles_and_what_they_see("imager.look_at=[0.05, 5.25, 1.5]")
     sky = [i for i in order if not hits[i]]
-    assert len(sky) >= 4 and order[-len(sky):] == sorted(sky)
+    assert len(sky) >= 4 and order[-len(sky) :] == sorted(sky)
 
 
 def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(monkeypatch):
@@ -126,8 +139,9 @@ def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(mo
     from pmmw import jit
     from pmmw.trace import kernels
 
-    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[16, 8]", "render.tile=8",
-                                                                  "render.spp=1"])
+    res = resolve(
+        REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[16, 8]", "render.tile=8", "render.spp=1"]
+    )
     job = make_job(res, res.scenario.frequencies[0])
     real_warm = kernels.warm
 

@@ -84,8 +84,10 @@ def test_blur_adjoint_is_the_transpose_of_blur():
     """<blur(x), y> = <x, blur_adjoint(y)> for random images, also when the kernel is wider than
     the image (mirrored padding repeats). Rounding of two FFT convolutions: 1e-10 relative."""
     rng = np.random.default_rng(3)
-    for shape, kernel in (((17, 23), psf_kernel(2e-3, 2 * np.pi * 95e9 / 3e8, 0.6)),
-                          ((9, 6), psf_kernel(1e-3, 2 * np.pi * 35e9 / 3e8, 0.3))):
+    for shape, kernel in (
+        ((17, 23), psf_kernel(2e-3, 2 * np.pi * 95e9 / 3e8, 0.6)),
+        ((9, 6), psf_kernel(1e-3, 2 * np.pi * 35e9 / 3e8, 0.3)),
+    ):
         assert kernel.shape[0] > 2 * min(shape) or shape == (17, 23)
         x, y = rng.normal(size=shape), rng.normal(size=shape)
         lhs, rhs = np.sum(blur(x, kernel) * y), np.sum(x * blur_adjoint(y, kernel))
@@ -95,10 +97,12 @@ def test_blur_adjoint_is_the_transpose_of_blur():
 def _roulette_room(seed):
     """An isothermal room at 300 K with a coarse roulette threshold: every pixel's expectation
     is 300 K and the Monte Carlo noise is about 1.7 K per sample (test_render_physics)."""
-    room = [(box([-5, -5, -0.1], [5, 5, 0]), material(eps=3.0 + 0.5j, temperature=300.0)),
-            (box([-5, -5, 3.0], [5, 5, 3.1]), material(kind="metal", temperature=300.0)),
-            (box([-5, 4.9, 0], [5, 5, 3]), material(kind="metal", temperature=300.0)),
-            (sphere([0, 1.0, 1.0], 0.7), material(eps=2.5 + 0.01j, temperature=300.0))]
+    room = [
+        (box([-5, -5, -0.1], [5, 5, 0]), material(eps=3.0 + 0.5j, temperature=300.0)),
+        (box([-5, -5, 3.0], [5, 5, 3.1]), material(kind="metal", temperature=300.0)),
+        (box([-5, 4.9, 0], [5, 5, 3]), material(kind="metal", temperature=300.0)),
+        (sphere([0, 1.0, 1.0], 0.7), material(eps=2.5 + 0.01j, temperature=300.0)),
+    ]
     from pmmw.scene.camera import Camera
 
     cam = Camera.look_at([0.0, -4.0, 1.5], [0.0, 2.0, 0.8], [0, 0, 1], np.radians(60), (32, 32))
@@ -116,8 +120,11 @@ def test_region_standard_errors_predict_the_scatter_over_seeds():
     regions = {"a": Region(box=[4, 4, 14, 14]), "b": Region(box=[18, 10, 28, 26])}
     kernel = psf_kernel(np.radians(60) / 32, 2 * np.pi * 95e9 / 3e8, 0.02)
     assert kernel.shape[0] > 3
-    scn = SimpleNamespace(output=SimpleNamespace(regions=regions), imager=SimpleNamespace(noise=0.0),
-                          render=SimpleNamespace(max_depth=40, termination="roulette"))
+    scn = SimpleNamespace(
+        output=SimpleNamespace(regions=regions),
+        imager=SimpleNamespace(noise=0.0),
+        render=SimpleNamespace(max_depth=40, termination="roulette"),
+    )
     means, se_mean = _predicted_and_observed_scatter(_roulette_room, scn, kernel)
     assert abs(np.mean(means) - 300.0) < 4.0 * np.mean(se_mean) / np.sqrt(12)
 
@@ -136,8 +143,10 @@ def _predicted_and_observed_scatter(make, scn, kernel):
         contrasts.append(st["contrasts"]["a - b"]["Ex2"]["K"])
         se_mean.append(st["stderr"]["a"]["Ex2"])
         se_con.append(st["contrasts"]["a - b"]["Ex2"]["stderr_K"])
-    for observed, predicted in ((np.std(means, ddof=1), np.mean(se_mean)),
-                                (np.std(contrasts, ddof=1), np.mean(se_con))):
+    for observed, predicted in (
+        (np.std(means, ddof=1), np.mean(se_mean)),
+        (np.std(contrasts, ddof=1), np.mean(se_con)),
+    ):
         assert 0.55 < observed / predicted < 1.45, (observed, predicted)
     return means, se_mean
 
@@ -147,8 +156,11 @@ def test_one_sample_per_pixel_gives_no_standard_error():
     img = _image(job)
     from pmmw.config.schema import Region
 
-    scn = SimpleNamespace(output=SimpleNamespace(regions={"a": Region(box=[0, 0, 2, 2])}),
-                          imager=SimpleNamespace(noise=1.0), render=SimpleNamespace(max_depth=2, termination="temperature"))
+    scn = SimpleNamespace(
+        output=SimpleNamespace(regions={"a": Region(box=[0, 0, 2, 2])}),
+        imager=SimpleNamespace(noise=1.0),
+        render=SimpleNamespace(max_depth=2, termination="temperature"),
+    )
     st = region_stats(scn, job.camera, stokes_images(img.mean), img, None)
     assert st["stderr"]["a"]["Ex2"] is None
     assert st["truncation"]["a"]["bound_K"] == pytest.approx(0.0)
@@ -165,7 +177,11 @@ def _checkerboard(seed, spp):
     for i in range(n):
         for j in range(n):
             lo = [(i - n / 2) * a, (j - n / 2) * a, -0.1]
-            spec = material(kind="metal", temperature=300.0) if (i + j) % 2 else material(kind="blackbody", temperature=300.0)
+            spec = (
+                material(kind="metal", temperature=300.0)
+                if (i + j) % 2
+                else material(kind="blackbody", temperature=300.0)
+            )
             objects.append((box(lo, [lo[0] + a, lo[1] + a, 0.0]), spec))
     up = [np.sin(np.radians(30.0)), np.cos(np.radians(30.0)), 0.0]
     cam = Camera.look_at([0.0, 0.0, 4.0], [0.0, 0.0, 0.0], up, np.radians(30.0), (32, 32))
@@ -183,8 +199,11 @@ def test_region_standard_errors_hold_for_low_discrepancy_samples_at_edges():
 
     regions = {"a": Region(box=[2, 2, 16, 16]), "b": Region(box=[16, 14, 30, 30])}
     kernel = psf_kernel(np.radians(30) / 32, 2 * np.pi * 95e9 / 3e8, 0.05)
-    scn = SimpleNamespace(output=SimpleNamespace(regions=regions), imager=SimpleNamespace(noise=0.0),
-                          render=SimpleNamespace(max_depth=4, termination="roulette"))
+    scn = SimpleNamespace(
+        output=SimpleNamespace(regions=regions),
+        imager=SimpleNamespace(noise=0.0),
+        render=SimpleNamespace(max_depth=4, termination="roulette"),
+    )
     _predicted_and_observed_scatter(lambda seed: _checkerboard(seed, 8), scn, kernel)
 
 
@@ -197,8 +216,13 @@ def test_the_rain_sky_stays_within_the_range_the_truncation_bound_assumes():
     from pmmw.atmosphere.model import Atmosphere, AtmosphereLayer, AtmosphereModel
     from pmmw.scene.sky import AtmosphereSky
 
-    atm = Atmosphere(profile="standard", layers=(AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=10.0),
-                                                 AtmosphereLayer("cloud", 1000.0, 2000.0, liquid_water=1.3e-3)))
+    atm = Atmosphere(
+        profile="standard",
+        layers=(
+            AtmosphereLayer("rain", 0.0, 1500.0, rain_rate=10.0),
+            AtmosphereLayer("cloud", 1000.0, 2000.0, liquid_water=1.3e-3),
+        ),
+    )
     model = AtmosphereModel(atm, 95e9, ground_temperature=250.0)
     assert np.abs(model.source_mu).max() > 1.0  # the direction term is there to be covered
     sky = AtmosphereSky(model, 250.0)
@@ -214,6 +238,11 @@ def test_the_rain_two_stream_ground_is_the_skys_ground():
     the same atmosphere stands on the same ground."""
     from pmmw.pipeline import atmosphere_model, resolve
 
-    res = resolve("configs/sar_cessna_95ghz.yaml", ["sky.ground_temperature=260 K",
-                                                   "atmosphere.layers=[{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h}]"])
+    res = resolve(
+        "configs/sar_cessna_95ghz.yaml",
+        [
+            "sky.ground_temperature=260 K",
+            "atmosphere.layers=[{kind: rain, base: 0 m, top: 1500 m, rain_rate: 10 mm/h}]",
+        ],
+    )
     assert atmosphere_model(res.scenario, 95e9).ground_temperature == pytest.approx(260.0)

@@ -97,8 +97,11 @@ scene:
   - {mesh: ground.obj, material: concrete}
 """
     images = {}
-    for name, extra in (("bare", ""), ("absent", "  - {mesh: block.obj, material: absent}\n"),
-                        ("metal", "  - {mesh: block.obj, material: metal}\n")):
+    for name, extra in (
+        ("bare", ""),
+        ("absent", "  - {mesh: block.obj, material: absent}\n"),
+        ("metal", "  - {mesh: block.obj, material: metal}\n"),
+    ):
         (tmp_path / f"{name}.yaml").write_text(base + extra)
         res = resolve(tmp_path / f"{name}.yaml")
         _, img, _ = trace_frequency(res, 95e9, workers=1)
@@ -111,8 +114,17 @@ scene:
     assert np.abs(z("metal", "bare")).max() > 4.5
 
 
-@pytest.mark.parametrize("text, value, half", [("2.2", 2.2, 0.05), ("0.17", 0.17, 0.005), ("500", 500, 50),
-                                                ("13", 13, 0.5), ("~14", 14, 1.0), ("11.7", 11.7, 0.05)])
+@pytest.mark.parametrize(
+    "text, value, half",
+    [
+        ("2.2", 2.2, 0.05),
+        ("0.17", 0.17, 0.005),
+        ("500", 500, 50),
+        ("13", 13, 0.5),
+        ("~14", 14, 1.0),
+        ("11.7", 11.7, 0.05),
+    ],
+)
 def test_printed_numbers_carry_half_a_unit_of_their_last_digit(text, value, half):
     assert v.printed(text) == pytest.approx((value, half))
 

@@ -43,7 +43,9 @@ def _region_means(path, overrides=(), values=None, names=None) -> dict:
     res = resolve(path, [*QUICK, *overrides], values=values)
     job = make_job(res, res.scenario.frequencies[0])
     img = stokes_images(assemble(job, render_tiles(job, workers=2)).mean)
-    regions = {n: Region(**r.model_dump()) for n, r in res.scenario.output.regions.items() if names is None or n in names}
+    regions = {
+        n: Region(**r.model_dump()) for n, r in res.scenario.output.regions.items() if names is None or n in names
+    }
     masks = region_masks(regions, job.camera)
     assert all(m.sum() >= 1 for m in masks.values()), {n: int(m.sum()) for n, m in masks.items()}
     PIXELS.update({n: int(m.sum()) for n, m in masks.items()})
@@ -59,6 +61,7 @@ def _warmer(means, a, b, pols=POLS) -> bool:
 
 
 # -- the truck (sec. 2.3.3) -----------------------------------------------------------------------
+
 
 def test_truck_shows_the_thesis_claims():
     """Sec. 2.3.3: "the reflection of the truck is clearly visible in the ground, appearing as a
@@ -79,6 +82,7 @@ def test_truck_shows_the_thesis_claims():
     # the other side of the truck, at the same depression, shows nothing against the sand.
     assert _warmer(m, "under_reflection", "ground", ["Ex2"]), m
     assert not _warmer(m, "ground_right", "ground", ["Ex2"]), m
+
     # Ey2 washes the ground's reflections out (sand's p reflectance at 76 deg incidence is a fifth
     # of its s reflectance: the contrast must fall to under half), while the metal's contrast
     # stays: the hood against the sand is not washed out (control).
@@ -97,9 +101,17 @@ def test_truck_shows_the_thesis_claims():
 
 # -- the bike racks (sec. 2.3.4) ------------------------------------------------------------------
 
-BIKE_MATERIALS = {"bricks": "concrete_table_2_3", "grass": "moist_soil_bikes", "windows": "fused_silica",
-                  "posts": "metal", "chain": "metal", "frame": "metal", "lock": "metal",
-                  "tires": "sa9_tire_table_2_3", "plastics": "polypropylene_table_2_3"}
+BIKE_MATERIALS = {
+    "bricks": "concrete_table_2_3",
+    "grass": "moist_soil_bikes",
+    "windows": "fused_silica",
+    "posts": "metal",
+    "chain": "metal",
+    "frame": "metal",
+    "lock": "metal",
+    "tires": "sa9_tire_table_2_3",
+    "plastics": "polypropylene_table_2_3",
+}
 METAL = ["frame", "near_rear_wheel", "cap", "lock"]
 NON_METAL = ["bricks", "wall", "window", "grass", "far_rear_wheel"]  # the far wheel: its rubber tread, edge-on
 
@@ -140,8 +152,12 @@ def test_bikeracks_show_the_thesis_claims():
     crop = ["imager.look_at=[0.2, 8.96, 0.25]", "imager.fov=8 deg", "imager.resolution=[40, 60]", "render.spp=64"]
     names = ["post_in_bricks", "bricks", "cap", "behind_cap"]
     tree = _region_means(BIKES, crop, names=names)
-    bare = _region_means(BIKES, crop, names=names, values={"scene": [{"mesh": "../scenes/bikeracks/bikeracks.glb",
-                                                                      "materials": BIKE_MATERIALS}]})
+    bare = _region_means(
+        BIKES,
+        crop,
+        names=names,
+        values={"scene": [{"mesh": "../scenes/bikeracks/bikeracks.glb", "materials": BIKE_MATERIALS}]},
+    )
 
     def change(target, background):
         with_tree = tree[target]["Ex2"] - tree[background]["Ex2"]

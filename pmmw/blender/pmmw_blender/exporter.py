@@ -77,8 +77,9 @@ def _camera(scene) -> dict | None:
 def mesh_objects(scene, view_layer) -> list:
     """The objects exported: visible in renders, in the view layer, of type mesh; by name."""
     names = {o.name for o in view_layer.objects}
-    return sorted((o for o in scene.objects if o.type == "MESH" and not o.hide_render and o.name in names),
-                  key=lambda o: o.name)
+    return sorted(
+        (o for o in scene.objects if o.type == "MESH" and not o.hide_render and o.name in names), key=lambda o: o.name
+    )
 
 
 def _slots(obj) -> list[dict]:
@@ -87,8 +88,14 @@ def _slots(obj) -> list[dict]:
         return []
     top = len(obj.material_slots) - 1
     used = {min(i, top) for i in used}  # Blender draws an index past the slots with the last one
-    return [{"name": s.material.name if s.material else None, "props": _props(s.material) if s.material else {},
-             "used": i in used} for i, s in enumerate(obj.material_slots)]
+    return [
+        {
+            "name": s.material.name if s.material else None,
+            "props": _props(s.material) if s.material else {},
+            "used": i in used,
+        }
+        for i, s in enumerate(obj.material_slots)
+    ]
 
 
 def _file_name(name: str, taken: set) -> str:
@@ -114,7 +121,9 @@ def _export_glb(context, obj, path: Path) -> None:
         view_layer.objects.active = obj
         result = bpy.ops.export_scene.gltf(filepath=str(path), **options)
         if "FINISHED" not in result:
-            raise mapping.ExportError(f"Blender's glTF exporter did not finish ({sorted(result)})", f"object {obj.name!r}")
+            raise mapping.ExportError(
+                f"Blender's glTF exporter did not finish ({sorted(result)})", f"object {obj.name!r}"
+            )
     finally:
         obj.hide_set(hidden)
         for o in view_layer.objects:
@@ -139,20 +148,41 @@ def export(context, yaml_path) -> tuple[Path, list[str]]:
     scene = context.scene
     yaml_path = Path(yaml_path).resolve()
     folder = yaml_path.parent / f"{yaml_path.stem}_meshes"
-    notes = [f"object {o.name!r} ({o.type.lower()}) is not a mesh: left out (Object > Convert > Mesh)"
-             for o in scene.objects if o.type in ("CURVE", "SURFACE", "META", "FONT") and not o.hide_render]
-    notes += [f"object {o.name!r} instances a collection: left out (Object > Apply > Make Instances Real)"
-              for o in scene.objects if o.type == "EMPTY" and o.instance_type == "COLLECTION" and not o.hide_render]
+    notes = [
+        f"object {o.name!r} ({o.type.lower()}) is not a mesh: left out (Object > Convert > Mesh)"
+        for o in scene.objects
+        if o.type in ("CURVE", "SURFACE", "META", "FONT") and not o.hide_render
+    ]
+    notes += [
+        f"object {o.name!r} instances a collection: left out (Object > Apply > Make Instances Real)"
+        for o in scene.objects
+        if o.type == "EMPTY" and o.instance_type == "COLLECTION" and not o.hide_render
+    ]
     objects = mesh_objects(scene, context.view_layer)
     records, taken = [], set()
     for obj in objects:
         name = _file_name(obj.name, taken)
-        records.append({"name": obj.name, "mesh": f"{folder.name}/{name}", "props": _props(obj),
-                        "slots": _slots(obj), "file": folder / name})
-    regions = [{"name": o.name, "location": list(o.matrix_world.translation), "radius": o["pmmw_region"]}
-               for o in scene.objects if "pmmw_region" in o.keys()]
-    record = {"camera": _camera(scene), "objects": records, "regions": regions, "props": _props(scene),
-              "scale": scene.unit_settings.scale_length if scene.unit_settings.system != "NONE" else 1.0}
+        records.append(
+            {
+                "name": obj.name,
+                "mesh": f"{folder.name}/{name}",
+                "props": _props(obj),
+                "slots": _slots(obj),
+                "file": folder / name,
+            }
+        )
+    regions = [
+        {"name": o.name, "location": list(o.matrix_world.translation), "radius": o["pmmw_region"]}
+        for o in scene.objects
+        if "pmmw_region" in o.keys()
+    ]
+    record = {
+        "camera": _camera(scene),
+        "objects": records,
+        "regions": regions,
+        "props": _props(scene),
+        "scale": scene.unit_settings.scale_length if scene.unit_settings.system != "NONE" else 1.0,
+    }
     data, errors = mapping.build(record)
     if errors:
         err = errors[0]
@@ -161,8 +191,10 @@ def export(context, yaml_path) -> tuple[Path, list[str]]:
     folder.mkdir(parents=True, exist_ok=True)
     for obj, r in zip(objects, records):
         _export_glb(context, obj, r["file"])
-    text = (f"# pmmw scenario exported from Blender {bpy.app.version_string}"
-            f" ({Path(bpy.data.filepath).name or 'unsaved file'}, scene {scene.name!r}) by the pmmw add-on\n")
+    text = (
+        f"# pmmw scenario exported from Blender {bpy.app.version_string}"
+        f" ({Path(bpy.data.filepath).name or 'unsaved file'}, scene {scene.name!r}) by the pmmw add-on\n"
+    )
     tmp = yaml_path.with_name(yaml_path.name + ".tmp")
     tmp.write_text(text + mapping.to_yaml(data) + "\n", encoding="utf-8")
     os.replace(tmp, yaml_path)

@@ -40,11 +40,11 @@ def _header(buf: bytes) -> tuple[dict, int]:
         end = buf.index(b"\0", pos)
         kind = buf[pos:end].decode()
         (size,) = struct.unpack_from("<i", buf, end + 1)
-        value = buf[end + 5:end + 5 + size]
+        value = buf[end + 5 : end + 5 + size]
         pos = end + 5 + size
         if kind == "chlist":
             channels, p = [], 0
-            while value[p:p + 1] != b"\0":
+            while value[p : p + 1] != b"\0":
                 e = value.index(b"\0", p)
                 cname = value[p:e].decode()
                 ptype, _, xs, ys = struct.unpack_from("<iB3xii", value, e + 1)
@@ -109,7 +109,7 @@ def read(path) -> dict[str, np.ndarray]:
     for off in offsets:
         y, size = struct.unpack_from("<ii", buf, off)
         rows = min(lines, y1 + 1 - y)
-        data = buf[off + 8:off + 8 + size]
+        data = buf[off + 8 : off + 8 + size]
         block = data if compression == 0 else _unzip(data, rows * row_bytes)
         p = 0
         for r in range(rows):

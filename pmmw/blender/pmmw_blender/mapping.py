@@ -56,14 +56,23 @@ class ExportError(Exception):
 
 # -- the camera -----------------------------------------------------------------------------------
 
+
 def render_resolution(resolution_x: int, resolution_y: int, percentage: int) -> tuple[int, int]:
     """The size Blender renders at: ``resolution_x/y`` scaled by ``resolution_percentage`` (its
     rounding down, as Blender's render does) [pixels]."""
     return max(1, int(resolution_x * percentage / 100)), max(1, int(resolution_y * percentage / 100))
 
 
-def horizontal_fov(lens_mm: float, sensor_width_mm: float, sensor_height_mm: float, sensor_fit: str,
-                   width_px: int, height_px: int, pixel_aspect_x: float = 1.0, pixel_aspect_y: float = 1.0) -> float:
+def horizontal_fov(
+    lens_mm: float,
+    sensor_width_mm: float,
+    sensor_height_mm: float,
+    sensor_fit: str,
+    width_px: int,
+    height_px: int,
+    pixel_aspect_x: float = 1.0,
+    pixel_aspect_y: float = 1.0,
+) -> float:
     """The horizontal field of view [rad] of a perspective Blender camera on its rendered image.
 
     Blender fits the sensor to the image (Blender manual, Camera, "Sensor Fit"): ``HORIZONTAL``
@@ -83,7 +92,9 @@ def horizontal_fov(lens_mm: float, sensor_width_mm: float, sensor_height_mm: flo
     """
     aspect = (width_px * pixel_aspect_x) / (height_px * pixel_aspect_y)  # image width / height
     if sensor_fit == "AUTO":
-        sensor_fit, sensor_height_mm = ("HORIZONTAL", sensor_height_mm) if aspect >= 1 else ("VERTICAL", sensor_width_mm)
+        sensor_fit, sensor_height_mm = (
+            ("HORIZONTAL", sensor_height_mm) if aspect >= 1 else ("VERTICAL", sensor_width_mm)
+        )
     if sensor_fit == "HORIZONTAL":
         return 2.0 * math.atan(sensor_width_mm / (2.0 * lens_mm))
     half_tan_v = sensor_height_mm / (2.0 * lens_mm)
@@ -116,17 +127,22 @@ def imager(camera: dict, scale: float = 1.0) -> dict:
     """
     key = f"camera {camera['name']!r}"
     if camera.get("type", "PERSP") != "PERSP":
-        raise ExportError(f"pmmw's imager is a perspective camera; this one is {camera['type']} "
-                          "(set the camera's Type to Perspective)", key)
+        raise ExportError(
+            f"pmmw's imager is a perspective camera; this one is {camera['type']} "
+            "(set the camera's Type to Perspective)",
+            key,
+        )
     if camera.get("shift_x") or camera.get("shift_y"):
         raise ExportError("lens shift is not supported by pmmw's imager (set Shift X and Y to 0)", key)
     w, h = render_resolution(*camera["resolution"], camera.get("percentage", 100))
     ax, ay = camera.get("pixel_aspect", (1.0, 1.0))
     if abs(ax / ay - 1.0) > 1e-9:
-        raise ExportError(f"pmmw's pixels are square; the render's pixel aspect is {ax:g}:{ay:g} (set it to 1:1)",
-                          "render settings")
-    fov = horizontal_fov(camera["lens"], camera["sensor_width"], camera["sensor_height"],
-                         camera.get("sensor_fit", "AUTO"), w, h, ax, ay)
+        raise ExportError(
+            f"pmmw's pixels are square; the render's pixel aspect is {ax:g}:{ay:g} (set it to 1:1)", "render settings"
+        )
+    fov = horizontal_fov(
+        camera["lens"], camera["sensor_width"], camera["sensor_height"], camera.get("sensor_fit", "AUTO"), w, h, ax, ay
+    )
     m = camera["matrix_world"]
     position = [float(m[i][3]) * scale for i in range(3)]
     forward = [-c for c in _unit(_column(m, 2), "camera's Z", key)]
@@ -150,6 +166,7 @@ def _num(x: float) -> float:
 
 
 # -- materials ------------------------------------------------------------------------------------
+
 
 def _quantity(value, unit: str, what: str, key: str) -> str:
     if isinstance(value, bool):
@@ -179,8 +196,11 @@ def roughness(value, key: str) -> dict:
             return spec
     elif isinstance(value, dict):
         return dict(value)
-    raise ExportError('pmmw_roughness is a GGX alpha (e.g. 0.3) or a mapping as JSON, e.g. '
-                      f'{{"model": "beckmann", "alpha": 0.2}}; got {value!r}', key)
+    raise ExportError(
+        "pmmw_roughness is a GGX alpha (e.g. 0.3) or a mapping as JSON, e.g. "
+        f'{{"model": "beckmann", "alpha": 0.2}}; got {value!r}',
+        key,
+    )
 
 
 def coating(value, key: str) -> list[dict]:
@@ -193,8 +213,9 @@ def coating(value, key: str) -> list[dict]:
     for text in value.split(";"):
         words = text.split()
         if len(words) not in (3, 5) or not ID_RE.match(words[0]):
-            raise ExportError(f"pmmw_coating layer {text.strip()!r}: expected ID THICKNESS [TEMPERATURE], e.g. {example}",
-                              key)
+            raise ExportError(
+                f"pmmw_coating layer {text.strip()!r}: expected ID THICKNESS [TEMPERATURE], e.g. {example}", key
+            )
         layer = {"material": words[0], "thickness": f"{words[1]} {words[2]}"}
         if len(words) == 5:
             layer["temperature"] = f"{words[3]} {words[4]}"
@@ -219,8 +240,10 @@ def material_id(name: str, props: dict, key: str) -> str:
     """A Blender material's database id: its ``pmmw_material`` property, else its name."""
     mid = props.get("pmmw_material", name)
     if not isinstance(mid, str) or not ID_RE.match(mid):
-        how = ("name the material by a database id (e.g. concrete, metal, murakowski2014.asphalt) or give it the "
-               "custom property pmmw_material")
+        how = (
+            "name the material by a database id (e.g. concrete, metal, murakowski2014.asphalt) or give it the "
+            "custom property pmmw_material"
+        )
         if "pmmw_material" in props:
             raise ExportError(f"pmmw_material {mid!r} is not a database id (lower_snake_case); {how}", key)
         raise ExportError(f"material {name!r} is not a pmmw database id; {how}", key)
@@ -255,6 +278,7 @@ class _Materials:
 
 # -- the scenario ---------------------------------------------------------------------------------
 
+
 def scene_entry(obj: dict, materials: _Materials, scale: float) -> dict:
     """One ``scene`` entry of an object record: ``name``, ``mesh`` (its GLB, relative to the
     scenario), ``props``, ``slots`` (``[{"name": material name or None, "props": {...}, "used":
@@ -268,13 +292,19 @@ def scene_entry(obj: dict, materials: _Materials, scale: float) -> dict:
         entry["material"] = materials.resolve(base, material_fields(own, key), obj["name"])
     else:
         if not used:
-            raise ExportError("no material: give the object a material named by a database id (e.g. concrete, "
-                              "metal), or the custom property pmmw_material", key)
+            raise ExportError(
+                "no material: give the object a material named by a database id (e.g. concrete, "
+                "metal), or the custom property pmmw_material",
+                key,
+            )
         ids = {}
         for s in used:
             if s.get("name") is None:
-                raise ExportError("some faces are in an empty material slot: give the slot a material, or the object "
-                                  "the custom property pmmw_material", key)
+                raise ExportError(
+                    "some faces are in an empty material slot: give the slot a material, or the object "
+                    "the custom property pmmw_material",
+                    key,
+                )
             where = f"material {s['name']!r} of {key}"
             fields = {**material_fields(s.get("props", {}), where), **material_fields(own, key)}
             base = material_id(s["name"], s.get("props", {}), where)
@@ -329,8 +359,12 @@ def build(scene: dict) -> tuple[dict, list[ExportError]]:
     scale = float(scene.get("scale", 1.0))
     data: dict = {"frequency": DEFAULT_FREQUENCY}
     if scene.get("camera") is None:
-        errors.append(ExportError("the scene has no active camera: pmmw's imager is the active camera "
-                                  "(Scene properties > Camera)", "scene"))
+        errors.append(
+            ExportError(
+                "the scene has no active camera: pmmw's imager is the active camera (Scene properties > Camera)",
+                "scene",
+            )
+        )
     else:
         try:
             data["imager"] = imager(scene["camera"], scale)
@@ -352,8 +386,11 @@ def build(scene: dict) -> tuple[dict, list[ExportError]]:
     for r in scene.get("regions", []):
         radius = r["radius"]
         if isinstance(radius, bool) or not isinstance(radius, (int, float)) or not radius > 0:
-            errors.append(ExportError(f"pmmw_region is the region's radius in pixels (> 0), got {radius!r}",
-                                      f"object {r['name']!r}"))
+            errors.append(
+                ExportError(
+                    f"pmmw_region is the region's radius in pixels (> 0), got {radius!r}", f"object {r['name']!r}"
+                )
+            )
             continue
         regions[r["name"]] = {"center": [_num(c * scale) for c in r["location"]], "radius": _num(float(radius))}
     if regions:
@@ -361,13 +398,14 @@ def build(scene: dict) -> tuple[dict, list[ExportError]]:
     for name, value in sorted(scene.get("props", {}).items()):
         if name.startswith(KEY_PREFIX):
             try:
-                set_key(data, name[len(KEY_PREFIX):], value, f"scene custom property {name!r}")
+                set_key(data, name[len(KEY_PREFIX) :], value, f"scene custom property {name!r}")
             except ExportError as e:
                 errors.append(e)
     return data, errors
 
 
 # -- YAML -----------------------------------------------------------------------------------------
+
 
 def to_yaml(data, indent: int = 0) -> str:
     """A small YAML writer (Blender ships no YAML library): block mappings, lists of scalars in
@@ -389,7 +427,7 @@ def to_yaml(data, indent: int = 0) -> str:
         for item in data:
             if isinstance(item, dict) and item:
                 body = to_yaml(item, indent + 2)
-                lines.append(f"{pad}- {body[indent + 2:]}")
+                lines.append(f"{pad}- {body[indent + 2 :]}")
             else:
                 lines.append(f"{pad}- {_flow(item)}")
     return "\n".join(lines)

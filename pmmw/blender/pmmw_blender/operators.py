@@ -117,7 +117,7 @@ def load_result(context, path: Path) -> list:
         shown = bpy.data.images.load(str(preview), check_existing=True)
         shown.reload()
         images.append(shown)
-    for area in (context.screen.areas if context.screen else []):
+    for area in context.screen.areas if context.screen else []:
         if area.type == "IMAGE_EDITOR" and shown is not None:
             area.spaces.active.image = shown
             break
@@ -153,8 +153,9 @@ class PMMW_OT_render(bpy.types.Operator):
             self._proc = subprocess.Popen(args, stdout=self._log, stderr=subprocess.STDOUT)
         except OSError as e:
             self._log.close()
-            self.report({"ERROR"}, f"cannot run {command[0]!r} ({e.strerror}): set the pmmw command in the "
-                                   "add-on's preferences")
+            self.report(
+                {"ERROR"}, f"cannot run {command[0]!r} ({e.strerror}): set the pmmw command in the add-on's preferences"
+            )
             return {"CANCELLED"}
         if bpy.app.background or context.window is None:  # no window to wait in (a script): wait here
             self._proc.wait()
