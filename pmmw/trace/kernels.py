@@ -321,10 +321,16 @@ def tally(active, vals, cut, first_t, first_m, done, replicates, ref, s1, s2, r1
         count[px] += nb
 
 
-def warm(stack_size: int = 8) -> None:
+def warm(stack_size: int = 8, rough: bool = True) -> None:
     """Compile (first time after an install) or load the bounce loop's compiled code with the
     integrator's types (these kernels, the Fresnel and coating arithmetic, the intersector's
-    float64 distances), so that forked workers inherit it instead of each loading its own."""
+    float64 distances), so that forked workers inherit it instead of each loading its own.
+
+    ``rough`` False leaves out what only rough faces, bump maps and rough coating layers run (the
+    masked specialization of `scatter`, `settle`, the facet draws, `cross_layer`): a smooth
+    scene's first render after an install then compiles only what it runs. Whatever is left out
+    compiles (or loads) where it is first called, so leaving out too much costs time, never a
+    wrong number."""
     cos1, eps = np.array([0.5]), np.array([2.0 + 0.1j])
     fresnel.interface(eps, eps * 2.0, cos1, with_q2=True)
     multilayer.stack(np.array([[1.0, 2.0 + 0.1j, 3.0]]), np.array([[1e-3]]), cos1, 1e3)
@@ -389,74 +395,76 @@ def warm(stack_size: int = 8) -> None:
     survivors(wave, empty, limits, acc, cut, np.zeros(n, bool))
     ints = np.zeros(0, np.int64)
     compact(wave, np.zeros(n, bool))
-    rough = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
-    # rough faces with compiled masking (`Surfaces._scatter_masked`)
-    scatter(
-        np.zeros(0, np.int64),
-        wave,
-        hit,
-        films,
-        prim,
-        faces,
-        media,
-        (0, 0),
-        empty,
-        empty,
-        limits,
-        acc,
-        cut,
-        wave,
-        masked(
-            np.zeros(1, bool),
+    if rough:
+        rough_table = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
+        # rough faces with compiled masking (`Surfaces._scatter_masked`)
+        scatter(
+            np.zeros(0, np.int64),
+            wave,
+            hit,
+            films,
+            prim,
+            faces,
+            media,
+            (0, 0),
             empty,
             empty,
+            limits,
+            acc,
+            cut,
+            wave,
+            masked(
+                np.zeros(1, bool),
+                empty,
+                empty,
+                np.zeros((n, 3)),
+                np.zeros((n, 3)),
+                empty,
+                rough_table,
+                False,
+                1e-3,
+                -1,
+                (ints, ints, ints, np.zeros(0, bool), empty),
+                np.zeros(3, np.int64),
+            ),
+        )
+        settle(
+            wave,
+            ints,
+            np.zeros(0, np.int8),
+            empty,
+            empty,
+            hit,
             np.zeros((n, 3)),
             np.zeros((n, 3)),
-            empty,
-            rough,
-            False,
+            np.zeros(n),
+            (np.zeros(n, bool), np.zeros((n, 2))),
+            media,
+            rough_table,
             1e-3,
-            -1,
+            acc,
+            wave,
+            wave,
             (ints, ints, ints, np.zeros(0, bool), empty),
-            np.zeros(3, np.int64),
-        ),
-    )
-    settle(
-        wave,
-        ints,
-        np.zeros(0, np.int8),
-        empty,
-        empty,
-        hit,
-        np.zeros((n, 3)),
-        np.zeros((n, 3)),
-        np.zeros(n),
-        (np.zeros(n, bool), np.zeros((n, 2))),
-        media,
-        rough,
-        1e-3,
-        acc,
-        wave,
-        wave,
-        (ints, ints, ints, np.zeros(0, bool), empty),
-        (ints, empty),
-        True,
-        -1,
-        (empty, limits, cut),
-    )
+            (ints, empty),
+            True,
+            -1,
+            (empty, limits, cut),
+        )
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
     frozen = np.zeros(0)
     frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), frozen, frozen)
-    # rough faces and bump maps (`Surfaces._facets`, `_bumped`)
-    v3 = np.zeros((n, 3))
-    roughness._ggx_sample_rows(v3, v3, v3, empty, empty, 1.0, 1.0, 0.0, v3, empty)
-    roughness._smith_masking_rows(v3, v3, v3, roughness.GGX_CODE, 1.0, 1.0, 0.0, empty)
-    bump._perturb_rows(v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
-    bump._shade_rows(v3, v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
-    tangents(v3, v3)
-    off_surface(wave, v3, np.zeros(n))
-    cross_layer(wave, v3, np.zeros(n, np.int64), 1.0, 1e-3, 300.0, acc)
+    if rough:
+        # rough faces and bump maps (`Surfaces._facets`, `_bumped`)
+        v3 = np.zeros((n, 3))
+        roughness._ggx_sample_rows(v3, v3, v3, empty, empty, 1.0, 1.0, 0.0, v3, empty)
+        roughness._smith_masking_rows(v3, v3, v3, roughness.GGX_CODE, 1.0, 1.0, 0.0, empty)
+        bump._perturb_rows(v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
+        bump._shade_rows(v3, v3, v3, np.zeros((1, 1)), np.zeros((1, 1)), 1.0, 1.0, v3)
+        tangents(v3, v3)
+        off_surface(wave, v3, np.zeros(n))
+        cross_layer(wave, v3, np.zeros(n, np.int64), 1.0, 1e-3, 300.0, acc)
     # a tile's per-pixel sums (`Integrator.render_tile`)
     px4, ints1 = np.zeros((1, 4)), np.zeros(1, np.int64)
     tally(

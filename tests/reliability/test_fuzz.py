@@ -508,6 +508,7 @@ def _closed_port() -> int:
         return s.getsockname()[1]
 
 
+@pytest.mark.full  # test_reliability_dask's wrong addresses (a fixed list of every kind) check the same
 @settings(
     max_examples=25,
     deadline=None,

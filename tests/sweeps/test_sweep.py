@@ -171,6 +171,7 @@ def test_a_failed_variant_is_recorded_and_the_others_go_on(tmp_path):
     assert "v001" in res.output
 
 
+@pytest.mark.full  # zipped axes: test_product_zip_and_partial_zip; a sweep file rendered: the local sweep test
 def test_sweep_file_with_a_zipped_flight_path(tmp_path):
     _scene(tmp_path)  # the meshes and tiny.yaml the sweep file names
     sweep = tmp_path / "trade.yaml"

@@ -145,8 +145,8 @@ def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(mo
     job = make_job(res, res.scenario.frequencies[0])
     real_warm = kernels.warm
 
-    def slow_warm(stack_size=8):
-        real_warm(stack_size)
+    def slow_warm(stack_size=8, rough=True):
+        real_warm(stack_size, rough)
         time.sleep(1.5)
 
     monkeypatch.setattr(kernels, "warm", slow_warm)
@@ -163,3 +163,20 @@ def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(mo
         assert len(elapsed) == 2 and elapsed[0] < 1.5, elapsed
     for a, b in zip(*images):  # the pixel traced to compile the rest changes no random number of the image
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_smooth_scene_warms_only_what_it_runs(monkeypatch):
+    """`prepare_kernels` asks `kernels.warm` for the rough surfaces' kernels only when the scene
+    has rough faces, bump maps or rough layers (the landing's first render after an install
+    compiled in 49 s instead of 80 s, docs/benchmarks_command.md); the control: the rough
+    cinderblocks ask for them. Either way the images are the kernels', whatever was warmed."""
+    from pmmw.trace import kernels
+
+    asked = []
+    monkeypatch.setattr(kernels, "warm", lambda stack_size=8, rough=True: asked.append(rough))
+    for cfg, rough in (("cinderblocks_35ghz.yaml", False), ("cinderblocks_rough_35ghz.yaml", True)):
+        res = resolve(REPO / "configs" / cfg, ["imager.resolution=[8, 8]", "render.spp=1"])
+        job = make_job(res, res.scenario.frequencies[0])
+        assert job.media.any_rough is rough
+        pool.prepare_kernels(job)
+    assert asked == [False, True]
