@@ -62,7 +62,7 @@ $(BPY_VENV)/bin/python:
 	$(BPY_VENV)/bin/python -m pip install 'bpy==5.0.1'  # the version tested (pyproject's extra allows 4.2+)
 
 test-blender: install-test $(BPY_VENV)/bin/python
-	PMMW_BLENDER_PYTHON=$(BPY_VENV)/bin/python $(BIN)/python -m pytest tests/blender/test_blender.py "tests/cli/test_docs_commands.py::test_the_cheap_documented_commands_run" $(PYTEST_ARGS)
+	PMMW_BLENDER_PYTHON=$(abspath $(BPY_VENV))/bin/python $(BIN)/python -m pytest tests/blender/test_blender.py "tests/cli/test_docs_commands.py::test_the_cheap_documented_commands_run" $(PYTEST_ARGS)
 
 # the site (mkdocs.yml): guides, reference pages generated from the code, the examples run small
 # (PMMW_GALLERY=skip leaves them out, for a quick look); warnings (a broken link) fail it
