@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -35,6 +36,8 @@ INSTALL_HINT = (
 )
 
 KEEP_DAYS = 7  # exports of .blend files unused this long are removed when another is made
+#: The names of what pmmw makes in `export_root`: finished exports and unfinished ones
+EXPORT_NAME = re.compile(r"[0-9a-f]{20}|\.export-[A-Za-z0-9_]+")
 
 
 def blender_python() -> str:
@@ -92,10 +95,11 @@ def scenario_of_blend(path) -> Path:
     root = export_root()
     final = root / f"{digest.hexdigest()[:20]}"
     out = final / f"{path.stem}.yaml"
+    root.mkdir(mode=0o700, parents=True, exist_ok=True)
+    check_root(root)
     if out.is_file():
         os.utime(final)
         return out
-    root.mkdir(parents=True, exist_ok=True)
     _prune(root)
     work = Path(tempfile.mkdtemp(prefix=".export-", dir=root))
     try:
@@ -142,10 +146,30 @@ def _export(python: str, path: Path, out: Path) -> None:
         raise EnvironmentProblem(f"Blender's export of {path.name} failed (exit {run.returncode}): {tail}", file=path)
 
 
+def check_root(root: Path) -> None:
+    """Refuse an export folder that is a link or not this user's own (the temporary folder is
+    shared: another user could have made it, pointing anywhere): pmmw neither reads a scenario
+    from it nor removes anything in it."""
+    st = root.lstat()
+    if root.is_symlink() or not root.is_dir() or (hasattr(os, "getuid") and st.st_uid != os.getuid()):
+        raise EnvironmentProblem(
+            f"{root} is a link, not a folder, or another user's: pmmw keeps .blend exports only in a folder "
+            "of its own there; remove it (or set TMPDIR elsewhere)",
+            file=root,
+        )
+
+
 def _prune(root: Path) -> None:
-    """Remove the exports (pmmw's own folders here) unused for `KEEP_DAYS`."""
+    """Remove the exports unused for `KEEP_DAYS`: only pmmw's own folders (`EXPORT_NAME`, not
+    links) in a folder `check_root` accepts; anything else there is left alone."""
+    try:
+        check_root(root)
+    except (EnvironmentProblem, OSError):
+        return
     old = time.time() - KEEP_DAYS * 86400
     for d in root.iterdir():
+        if not EXPORT_NAME.fullmatch(d.name):
+            continue
         try:
             if d.is_dir() and not d.is_symlink() and d.stat().st_mtime < old:
                 shutil.rmtree(d, ignore_errors=True)

@@ -588,3 +588,54 @@ def test_every_process_reads_a_blend_as_the_same_scenario(tmp_path):
         assert folder.parent == tmp_path / f"pmmw-blend-{os.getuid()}"
         shutil.rmtree(folder)
     assert got[0] == got[1]
+
+
+def test_old_exports_are_pruned_and_nothing_else(tmp_path):
+    """`_prune` removes pmmw's own export folders unused for KEEP_DAYS and nothing else in the
+    folder: a user's old folder and a link are kept. The control: the same old export, fresh, is
+    kept too, and the old one is gone."""
+    import time
+
+    from pmmw.blender import KEEP_DAYS, _prune
+
+    root = tmp_path / "pmmw-blend-x"
+    root.mkdir()
+    old = time.time() - (KEEP_DAYS + 1) * 86400
+    made = {name: root / name for name in ("0123456789abcdef0123", "fedcba9876543210fedc", ".export-ab_12", "notes")}
+    for d in made.values():
+        d.mkdir()
+        (d / "f.txt").write_text("x")
+    elsewhere = tmp_path / "user"
+    elsewhere.mkdir()
+    (elsewhere / "keep.txt").write_text("mine")
+    (root / "0011223344556677aabb").symlink_to(elsewhere)
+    for name in ("0123456789abcdef0123", ".export-ab_12", "notes"):
+        os.utime(made[name], (old, old))
+    os.utime(elsewhere, (old, old))
+    _prune(root)
+    assert sorted(p.name for p in root.iterdir()) == ["0011223344556677aabb", "fedcba9876543210fedc", "notes"]
+    assert (elsewhere / "keep.txt").read_text() == "mine" and (made["notes"] / "f.txt").is_file()
+
+
+def test_an_export_folder_that_is_a_link_is_refused_and_its_target_untouched(tmp_path):
+    """The temporary folder is shared: a `pmmw-blend-UID` made by someone else as a link is
+    neither read from nor pruned (its old folders would be another user's); the control: a real
+    folder of one's own passes."""
+    import time
+
+    from pmmw.blender import KEEP_DAYS, _prune, check_root
+    from pmmw.errors import EnvironmentProblem
+
+    target = tmp_path / "victim"
+    (target / "0123456789abcdef0123").mkdir(parents=True)
+    old = time.time() - (KEEP_DAYS + 1) * 86400
+    os.utime(target / "0123456789abcdef0123", (old, old))
+    link = tmp_path / "pmmw-blend-x"
+    link.symlink_to(target)
+    with pytest.raises(EnvironmentProblem, match="link"):
+        check_root(link)
+    _prune(link)
+    assert (target / "0123456789abcdef0123").is_dir()
+    own = tmp_path / "own"
+    own.mkdir()
+    check_root(own)
