@@ -30,7 +30,7 @@ from pmmw.io.lock import FolderLock
 from pmmw.io.preview import write_depth_figure, write_figure, write_material_figure, write_regions_figure
 from pmmw.io.progress import StatusLine, say
 from pmmw.io.report import write_report
-from pmmw.io.rundir import Staging, check_outputs, os_problem, remove_stale_staging
+from pmmw.io.rundir import Staging, check_outputs, made_by_pmmw, os_problem, remove_stale_staging
 from pmmw.io.tilestore import (
     TILE_ROOT,
     claim,
@@ -427,6 +427,8 @@ def view_preview(scn, geom, path: Path) -> Path:
     facing = np.abs(np.sum(n * d, axis=1)) / np.maximum(np.linalg.norm(n, axis=1), 1e-300)
     shade = np.where(prim >= 0, facing, np.nan).reshape(cam.height, cam.width)
     shapes = region_shapes(scn.output.regions, cam) if scn.output.regions else {}
+    if (path.exists() or path.is_symlink()) and not made_by_pmmw(path):  # a user's file is never replaced
+        raise UserError("exists and is not a preview pmmw wrote: pmmw does not replace it; name another file", path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         write_regions_figure(

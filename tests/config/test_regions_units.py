@@ -171,3 +171,20 @@ def test_validate_preview_draws_the_view_and_the_regions(tmp_path):
     assert _colour_pixels(tmp_path / "none.png", to_rgb(REGION_COLOURS[0])) == 0
     res = runner.invoke(app, ["validate", str(ROOT / "configs/po_sphere.yaml"), "--preview", str(tmp_path / "x.png")])
     assert res.exit_code == 2 and "--preview" in res.output
+
+
+def test_validate_preview_never_replaces_a_users_file(tmp_path):
+    """`--preview FILE` where FILE is not a preview pmmw wrote: one error line, the file keeps its
+    bytes; the control: a preview pmmw wrote there before is replaced."""
+    path = _scenario(tmp_path, "{block: {bounds: [[-0.5, 4.9, 1.2], [0.5, 5.1, 1.8]]}}")
+    mine = tmp_path / "holiday.png"
+    mine.write_bytes(b"\x89PNG not pmmw's")
+    res = runner.invoke(app, ["validate", str(path), "--preview", str(mine)])
+    assert res.exit_code == 2 and "does not replace" in res.output, res.output
+    assert mine.read_bytes() == b"\x89PNG not pmmw's"
+    ours = tmp_path / "view.png"
+    assert runner.invoke(app, ["validate", str(path), "--preview", str(ours)]).exit_code == 0
+    before = ours.stat().st_mtime_ns
+    res = runner.invoke(app, ["validate", str(path), "--preview", str(ours)])
+    assert res.exit_code == 0, res.output
+    assert ours.stat().st_mtime_ns >= before and ours.read_bytes().startswith(b"\x89PNG")
