@@ -635,6 +635,24 @@ def _po_run(
         write_plot(res, plot, Path(mesh).name)
 
 
+def check_bench_target(target: Path) -> None:
+    """`pmmw bench` writes ``target`` (Markdown) and its ``.json`` beside it: neither may replace a
+    file it did not write (a Markdown page of `pmmw bench`'s, and the JSON written with it)."""
+    md, js = target, target.with_suffix(".json")
+
+    def ours(p: Path) -> bool:
+        try:
+            return p.is_file() and not p.is_symlink() and b"pmmw bench" in p.read_bytes()[:2048]
+        except OSError:
+            return False
+
+    for p in (md, js):
+        if (p.exists() or p.is_symlink()) and not (ours(md) and (p == md or p.is_file())):
+            raise UserError(
+                f"{p} exists and is not a page pmmw bench wrote: pmmw does not replace it; give another --out", "--out"
+            )
+
+
 @app.command()
 @_user_errors
 def bench(
@@ -674,6 +692,7 @@ def bench(
         raise UserError("give --out or --write-docs, not both", "--write-docs")
     name = "benchmarks_po.md" if po else "benchmarks.md"
     target = out or (Path("docs") / name if write_docs else Path("out") / "bench" / name)
+    check_bench_target(target)
     target.parent.mkdir(parents=True, exist_ok=True)
     if po:
         from pmmw_cli.bench_po import run as run_po_bench
