@@ -221,7 +221,7 @@ def make_job(res: Resolved, f: float) -> TraceJob:
     footprint = 1.0
     if r.target_error is not None and im.aperture_diameter > 0.0:
         # adaptive sampling to the error left after the imager's blur (Integrator.render_tile)
-        footprint = error_footprint(psf_kernel(cam.pixel_angle, 2.0 * np.pi * f / C0, im.aperture_diameter))
+        footprint = error_footprint(imager_kernel(scn, cam.pixel_angle, 2.0 * np.pi * f / C0))
     settings = RenderSettings(
         spp=r.spp,
         max_depth=r.max_depth,
@@ -787,6 +787,19 @@ def aperture_of(scn):
     )
 
 
+def imager_kernel(scn, pixel_angle: float, k0: float):
+    """The imager's unit-sum PSF kernel at wavenumber ``k0`` [1/m] on pixels of ``pixel_angle``
+    [rad]: the antenna's (`imaging.antenna.antenna_kernel`) with ``imager.antenna``, else the
+    uniform aperture's Airy kernel (`imaging.imager.psf_kernel`); None without an aperture. The one
+    kernel the imager model blurs with and adaptive sampling sizes its error target by."""
+    im = scn.imager
+    if not im.aperture_diameter > 0.0:
+        return None
+    if im.antenna is not None:
+        return antenna_kernel(pixel_angle, k0, im.aperture_diameter, aperture_of(scn))
+    return psf_kernel(pixel_angle, k0, im.aperture_diameter)
+
+
 def imager_model(scn, job, ideal: dict, noise_maps: dict | None = None):
     """The sensor image (`apply_imager` with the scenario's aperture, antenna, noise or receiver and
     seed) and the PSF kernel of the scene's signal: the unit-sum PSF times (1 - spillover) (None
@@ -794,12 +807,7 @@ def imager_model(scn, job, ideal: dict, noise_maps: dict | None = None):
     the imager has a receiver."""
     im = scn.imager
     ap = aperture_of(scn) if im.antenna is not None else None
-    if ap is not None:
-        kernel = antenna_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter, ap)
-    else:
-        kernel = (
-            psf_kernel(job.camera.pixel_angle, job.k0, im.aperture_diameter) if im.aperture_diameter > 0.0 else None
-        )
+    kernel = imager_kernel(scn, job.camera.pixel_angle, job.k0)
     spill = ap.spillover if ap is not None else 0.0
     sensor = apply_imager(
         ideal,

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import threading
+from functools import lru_cache
 
 import numpy as np
 from scipy.special import j1
@@ -50,7 +51,9 @@ def _airy_encircled_energy(x):
 
 
 def psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int = _MAX_RADIUS_PX):
-    """Pixel-integrated Airy kernel, normalized to unit sum.
+    """Pixel-integrated Airy kernel, normalized to unit sum (computed once per set of arguments:
+    a render asks for it when sizing adaptive sampling and again for the imager model; each caller
+    gets its own copy).
 
     Parameters
     ----------
@@ -65,6 +68,11 @@ def psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radi
     -------
     ndarray, shape (2r+1, 2r+1), float64
     """
+    return _psf_kernel(float(pixel_angle), float(k0), float(aperture_diameter), int(max_radius)).copy()
+
+
+@lru_cache(maxsize=8)
+def _psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int):
     a = aperture_diameter / 2.0
     # radius (in x = k a th) enclosing all but PSF_ENERGY_TAIL of the energy; the tail of the
     # encircled energy goes as 2 / (pi x), so x_max ~ 2 / (pi tail)

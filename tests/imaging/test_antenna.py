@@ -1,5 +1,6 @@
 """The antenna's beam (`pmmw.imaging.antenna`) against closed forms and published tables."""
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -130,3 +131,36 @@ def test_renders_without_an_antenna_block_keep_their_image():
     want = {c: blur(ideal[c], k) + noise.normal(0.0, 4.0, (16, 16)) for c in ("Ex2", "Ey2", "U", "V")}
     assert np.array_equal(sensor["Ex2"], want["Ex2"]) and np.array_equal(sensor["V"], want["V"])
     assert np.array_equal(kernel, k)
+
+
+def test_adaptive_sampling_sizes_its_target_by_the_kernel_the_imager_blurs_with(tmp_path):
+    """`make_job`'s error footprint is the one of the kernel the imager model uses
+    (`pipeline.imager_kernel`): with a tapered antenna the antenna's kernel, not the uniform Airy
+    one it used before; the control: without an antenna the Airy kernel's, and the two differ."""
+    from pmmw.imaging.imager import error_footprint, psf_kernel
+    from pmmw.pipeline import imager_kernel, make_job, resolve
+
+    cfg = Path(__file__).resolve().parents[2] / "configs" / "cwd_outdoor_95ghz.yaml"
+    base = ["imager.resolution=[16, 12]", "render.target_error=1 K"]
+    tapered = base + ["imager.antenna={illumination: parabolic, edge_taper: 10 dB}"]
+    res = resolve(cfg, tapered)
+    f = res.scenario.frequencies[0]
+    job = make_job(res, f)
+    kern = imager_kernel(res.scenario, job.camera.pixel_angle, job.k0)
+    assert job.settings.error_footprint == pytest.approx(error_footprint(kern), rel=1e-12)
+    plain = make_job(resolve(cfg, base), f)
+    airy = psf_kernel(plain.camera.pixel_angle, plain.k0, resolve(cfg, base).scenario.imager.aperture_diameter)
+    assert plain.settings.error_footprint == pytest.approx(error_footprint(airy), rel=1e-12)
+    assert abs(job.settings.error_footprint - plain.settings.error_footprint) > 1e-3 * plain.settings.error_footprint
+
+
+def test_the_airy_kernel_is_computed_once_and_each_caller_gets_its_own():
+    """`psf_kernel` caches its work: the same arguments give equal kernels, and changing one
+    caller's array leaves the next caller's alone."""
+    from pmmw.imaging.imager import psf_kernel
+
+    a = psf_kernel(1e-3, 2e3, 0.5)
+    b = psf_kernel(1e-3, 2e3, 0.5)
+    np.testing.assert_array_equal(a, b)
+    a[:] = 0.0
+    assert psf_kernel(1e-3, 2e3, 0.5).sum() == pytest.approx(1.0, abs=1e-12)
