@@ -20,6 +20,7 @@ import numpy as np
 from pmmw import __version__, timings
 from pmmw.config import load_scenario
 from pmmw.config.load import scenario_to_display
+from pmmw.constants import C0
 from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
 from pmmw.imaging import detection
 from pmmw.imaging.antenna import Aperture, antenna_kernel, beam_report, gaussian_feed_spillover
@@ -44,15 +45,8 @@ from pmmw.scene.camera import Camera
 from pmmw.scene.geometry import asset_files, build_geometry, file_up_axis
 from pmmw.scene.materials import MaterialDB
 from pmmw.scene.sky import make_sky
-from pmmw.trace.job import (  # build_media: pipeline.build_media as before
-    BLACKBODY,
-    C0,
-    KIND_CODES,
-    METAL,
-    RenderSettings,
-    TraceJob,
-    build_media,
-)
+from pmmw.surface.media import BLACKBODY, KIND_CODES, METAL, build_media  # build_media: also pipeline's, as before
+from pmmw.trace.job import RenderSettings, TraceJob
 from pmmw.trace.pool import assemble, default_workers, render_tiles
 
 CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
@@ -350,9 +344,12 @@ def region_shapes(regions, cam) -> dict:
             )
             continue
         (u,), (v,), (depth,) = cam.image_coordinates(np.asarray(r.center, float)[None])
+        if not depth > 0:  # in the imager's plane or behind it: not on the image
+            shapes[name] = None
+            continue
         unit = getattr(r, "radius_unit", "px")
         radius = {"px": r.radius, "m": focal * r.radius / depth, "rad": focal * np.tan(min(r.radius, 1.5))}[unit]
-        shapes[name] = ("circle", float(u), float(v), float(radius)) if depth > 0 else None
+        shapes[name] = ("circle", float(u), float(v), float(radius))
     return shapes
 
 

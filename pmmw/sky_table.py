@@ -10,10 +10,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from pydantic import ValidationError
 
 from pmmw.errors import UserError
 from pmmw.io.preview import save_figure
+from pmmw.io.records import validate
 from pmmw.io.yamlio import read_yaml
 from pmmw.units import parse_quantity
 
@@ -96,13 +96,7 @@ def load_atmosphere(
         raw["ground_temperature"] = ground_temperature
     if humidity:
         raw["humidity"] = humidity
-    try:
-        atm = AtmosphereConfig.model_validate(raw)
-    except ValidationError as exc:
-        err = exc.errors()[0]
-        key = ".".join(str(p) for p in ("atmosphere", *err["loc"]))
-        msg = str(err.get("ctx", {}).get("error", err["msg"]))
-        raise UserError(msg, file=file or "command line", key=key) from None
+    atm = validate(AtmosphereConfig, raw, file or "command line", prefix=("atmosphere",))
     if atm.model != "layered":
         raise UserError("pmmw sky needs a layered atmosphere (profile, layers), not model: uniform", file=file)
     return atm

@@ -3,18 +3,16 @@
 from __future__ import annotations
 
 import copy
-import difflib
 import math
 import re
-import typing
 from pathlib import Path
 
 import numpy as np
-from pydantic import BaseModel, ValidationError
 
 from pmmw.config.schema import _FREQUENCY_SUFFIX, _NAME_MARKS, ScenarioConfig
 from pmmw.errors import UserError, UserErrors
 from pmmw.io.inputs import check_input_path
+from pmmw.io.records import key_path, problem, validate
 from pmmw.io.yamlio import MalformedYAML, load_yaml, read_yaml
 
 _INDEX = re.compile(r"^(.*?)\[(\d+)\]$")
@@ -212,27 +210,20 @@ def apply_overrides(raw: dict, overrides: list[str], *, values: dict | None = No
                 part = part if part in node else str(part)  # a mapping key that happens to be digits
             if isinstance(part, int):
                 if not isinstance(node, list):
-                    raise UserError(f"{_fmt(parts[:i]) or 'the top level'} is not a list", file="--set", key=key)
+                    raise UserError(f"{key_path(parts[:i]) or 'the top level'} is not a list", file="--set", key=key)
                 if part >= len(node):
                     raise UserError(f"index {part} is past the end of a list of {len(node)}", file="--set", key=key)
             elif not isinstance(node, dict):
-                raise UserError(f"{_fmt(parts[:i])} is not a mapping", file="--set", key=key)
+                raise UserError(f"{key_path(parts[:i])} is not a mapping", file="--set", key=key)
             if last:
                 node[part] = value
             else:
                 nxt = node[part] if (isinstance(part, int) or part in node) else None
                 if nxt is None:
                     if isinstance(part, int):
-                        raise UserError(f"cannot set inside {_fmt(parts[: i + 1])}", file="--set", key=key)
+                        raise UserError(f"cannot set inside {key_path(parts[: i + 1])}", file="--set", key=key)
                     nxt = node[part] = {}
                 node = nxt
-    return out
-
-
-def _fmt(loc) -> str:
-    out = ""
-    for part in loc:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
     return out
 
 
@@ -263,95 +254,49 @@ def _validate(raw: dict, path: Path) -> ScenarioConfig:
             if isinstance(e, dict):
                 if "key" in e:
                     extra = {"type": "extra_forbidden", "loc": ("scene", i, "key")}
-                    errors.append(_user_error(extra, path, freq_key, raw))
+                    errors.append(
+                        problem(
+                            extra,
+                            path,
+                            ScenarioConfig,
+                            relocate=lambda loc: _relocate(loc, freq_key, raw),
+                            allowed=_allowed,
+                        )
+                    )
                 e = dict(e, key=f"scene[{i}]")
             entries.append(e)
         data["scene"] = entries
-    try:
-        scn = ScenarioConfig.model_validate(data, context={"base_dir": path.parent})
-    except ValidationError as exc:
-        errors += [_user_error(err, path, freq_key, raw) for err in exc.errors()]
-    except UserError as e:  # raised unwrapped by a validator: still name the file
-        e.file = e.file or str(path)
-        errors.append(e)
-    if errors:
-        _raise(errors)
-    return scn
+    return validate(
+        ScenarioConfig,
+        data,
+        path,
+        context={"base_dir": path.parent},
+        relocate=lambda loc: _relocate(loc, freq_key, raw),
+        allowed=_allowed,
+        errors=errors,
+    )
 
 
-def _raise(errors):
-    unique, seen = [], set()
-    for e in errors:
-        if str(e) not in seen:
-            seen.add(str(e))
-            unique.append(e)
-    raise UserErrors(unique) if len(unique) > 1 else unique[0]
-
-
-def _user_error(err: dict, path: Path, freq_key: str, raw: dict) -> UserError:
-    """One pydantic error entry -> a UserError with the key path as the user wrote it."""
-    loc = list(err["loc"])
+def _relocate(loc: list, freq_key: str, raw: dict) -> list:
+    """Where the loader moved a key, the key the user wrote: ``frequencies`` back to
+    ``frequency`` (or ``imager.frequency``), ``sky.file`` back to ``sky.texture``."""
     if loc and loc[0] == "frequencies":
         loc = freq_key.split(".") + loc[1:]
     sky = raw.get("sky")
     if loc[:2] == ["sky", "file"] and isinstance(sky, dict) and "texture" in sky:
-        loc[1] = "texture"  # the loader's shorthand: report the key the user wrote
-    typ = err["type"]
-    if typ == "extra_forbidden":
-        allowed = _allowed_keys(loc[:-1])
-        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
-        msg = (
-            f"unknown key {loc[-1]!r}"
-            + (f" (did you mean {close[0]!r}?)" if close else "")
-            + (f"; allowed: {', '.join(allowed)}" if allowed else "")
-        )
-    elif typ == "missing":
-        msg = "required key missing"
-    elif typ in ("value_error", "assertion_error"):
-        msg = str(err.get("ctx", {}).get("error", err["msg"]))
-    else:
-        msg = err["msg"]
-        if "input" in err and not isinstance(err["input"], (dict, list)):
-            msg += f", got {err['input']!r}"
-    # drop pydantic's union/function-wrapper tags from the location
-    loc = [p for p in loc if not (isinstance(p, str) and ("[" in p or p.startswith("function-")))]
-    return UserError(msg, file=path, key=_fmt(loc) or None)
+        loc[1] = "texture"
+    return loc
 
 
-def _allowed_keys(loc) -> list[str]:
-    """The field names of the model at ``loc`` inside `ScenarioConfig`, for "unknown key" messages."""
-    tp = ScenarioConfig
-    for part in loc:
-        tp = _item_type(tp, part)
-        if tp is None:
-            return []
-    if isinstance(tp, type) and issubclass(tp, BaseModel):
-        hidden = {"source_file", "frequencies", "key"}
-        names = [n for n in tp.model_fields if n not in hidden]
-        if tp is ScenarioConfig:
-            names.insert(1, "frequency")
-        if tp.__name__ == "Sky":
-            names.insert(names.index("file"), "texture")
-        return names
-    return []
-
-
-def _item_type(tp, part):
-    tp = _unwrap(tp)
-    if isinstance(part, int):
-        args = typing.get_args(tp)
-        return _unwrap(args[0]) if args else None
-    if isinstance(tp, type) and issubclass(tp, BaseModel) and part in tp.model_fields:
-        return _unwrap(tp.model_fields[part].annotation)
-    return None
-
-
-def _unwrap(tp):
-    origin = typing.get_origin(tp)
-    if origin is typing.Union or (origin is not None and str(origin) == "types.UnionType"):
-        args = [a for a in typing.get_args(tp) if a is not type(None)]
-        return _unwrap(args[0]) if len(args) == 1 else tp
-    return tp
+def _allowed(loc: list, names: list[str]) -> list[str]:
+    """The keys a user may write at ``loc``: the model's fields less the loader's own, with the
+    spellings the loader accepts for them (``frequency``, ``sky.texture``)."""
+    names = [n for n in names if n != "frequencies"]
+    if not loc:
+        names.insert(1, "frequency")
+    elif loc == ["sky"]:
+        names.insert(names.index("file"), "texture")
+    return names
 
 
 def _region_display(r) -> dict:

@@ -137,7 +137,7 @@ class Target:
 def make_target(vertices, faces, face_material, material_ids, db, f: float) -> Target:
     """A `Target` of the given triangles, ``face_material`` (F,) indexing ``material_ids`` in the
     material database ``db``, with the media at frequency f [Hz] (air around it)."""
-    from pmmw.trace.job import build_media
+    from pmmw.surface.media import build_media
 
     media = build_media(db, material_ids, f)
     return Target(np.asarray(vertices, float), np.asarray(faces, np.int64), np.asarray(face_material, int) + 1, media)

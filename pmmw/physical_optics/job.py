@@ -25,12 +25,13 @@ from pathlib import Path
 from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from pmmw import interrupt
 from pmmw.config.schema import Quantity, SceneEntry, _Model, frequency_problem
-from pmmw.errors import UserError, UserErrors
+from pmmw.errors import UserError
 from pmmw.io.lock import output_lock
+from pmmw.io.records import validate
 from pmmw.io.yamlio import read_yaml
 from pmmw.physical_optics import command, solver
 
@@ -98,28 +99,14 @@ def load_job(path: Path, out: Path | None = None) -> PoJob:
         ]
     if out is not None:
         data["output"] = dict(data.get("output") or {}, dir=str(out))
-    try:
-        job = PoJob.model_validate(data, context={"base_dir": path.resolve().parent})
-    except ValidationError as exc:
-        errors = []
-        for err in exc.errors():
-            loc = [
-                "frequency" if p == "frequencies" else p
-                for p in err["loc"]
-                if not (isinstance(p, str) and ("[" in p or p.startswith("function-")))
-            ]
-            key = "".join(f"[{p}]" if isinstance(p, int) else (f".{p}" if i else str(p)) for i, p in enumerate(loc))
-            msg = (
-                "unknown key"
-                if err["type"] == "extra_forbidden"
-                else (
-                    "required key missing"
-                    if err["type"] == "missing"
-                    else str(err.get("ctx", {}).get("error", err["msg"]))
-                )
-            )
-            errors.append(UserError(msg, path, key or None))
-        raise (UserErrors(errors) if len(errors) > 1 else errors[0]) from None
+    job = validate(
+        PoJob,
+        data,
+        path,
+        context={"base_dir": path.resolve().parent},
+        relocate=lambda loc: ["frequency" if p == "frequencies" else p for p in loc],
+        allowed=lambda loc, names: ["frequency" if n == "frequencies" else n for n in names],
+    )
     if job.output.dir is not None and not job.output.dir.is_absolute():
         object.__setattr__(job.output, "dir", Path.cwd() / job.output.dir)
     return job

@@ -22,7 +22,7 @@ from pmmw.physics.jones import basis_change
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jones
 from pmmw.reflectance.stack import Stack
 from pmmw.surface import Surfaces, Wave, kernels
-from pmmw.surface.media import DIELECTRIC, METAL, OPAQUE, Coating, Media, RoughLayer
+from pmmw.surface.media import stack_media  # noqa: F401  (re-exported: its home is the media module)
 from pmmw.surface.records import Faces, Hit, HitCode, Limits
 
 __all__ = ["monte_carlo", "stack_media"]
@@ -52,45 +52,6 @@ class _Tally:
     fallback_weights: int = 0  # rejection fallbacks (roughness module)
 
 
-def stack_media(stack: Stack) -> Media:
-    """A stack as the renderer's media (`pmmw.trace.job.Media`): index 0 the ambient medium,
-    index 1 the substrate with the stack's layers above it as rough coating layers
-    (`job.RoughLayer`, each with its films and the roughness of its top), the substrate's own
-    films and roughness, every absorber at 1 K.
-
-    A layer without a thickness absorbs nothing on its way across (Optics Express 2016,
-    assumption 3); what enters a lossy substrate stays there (an ``opaque`` body: its
-    transmitted power is absorbed at the surface); a perfect conductor (``metal``) reflects
-    everything."""
-    k0 = stack.k0
-
-    def films(layer):
-        if not layer.coating:
-            return None
-        eps, thick = zip(*layer.coating)
-        return Coating(np.array(eps, complex), np.array(thick, float), _T_ABSORBER)
-
-    rough = []
-    for layer in stack.layers[:-1]:
-        eps = complex(layer.eps)
-        lossy = layer.thickness is not None and k0 is not None
-        alpha = 2.0 * k0 * np.sqrt(eps).imag if lossy else 0.0  # power attenuation [1/m] (PHYSICS.md)
-        rough.append(RoughLayer(eps, alpha, float(layer.thickness or 0.0), _T_ABSORBER, layer.roughness, films(layer)))
-    sub = stack.layers[-1]
-    kind = METAL if sub.metal else OPAQUE if complex(sub.eps).imag > 0.0 else DIELECTRIC
-    return Media(
-        ids=["ambient", sub.name or "substrate"],
-        eps=np.array([stack.ambient_eps, sub.eps], complex),
-        kind=np.array([DIELECTRIC, kind], np.int8),
-        temperature=np.full(2, _T_ABSORBER),
-        alpha=np.zeros(2),
-        coating=(None, films(sub)),
-        roughness=(None, sub.roughness),
-        bump=(),
-        layers=((), tuple(rough)),
-    )
-
-
 def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, threshold=1e-3):
     """Optics Express 2016's Monte Carlo over a rough layered surface (`pmmw.reflectance` docstring).
 
@@ -115,7 +76,7 @@ def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, thres
     _Tally
         Sums over paths (divide by ``samples`` for fractions of the incident power).
     """
-    media = stack_media(stack)
+    media = stack_media(stack, _T_ABSORBER)
     faces = Faces(np.ones(1, np.int32), np.array([[0.0, 0.0, 1.0]]), np.full(1, _STEP))
     # the branch drawn by power (``stochastic``); depth counts facet events, ending at _MAX_EVENTS
     surfaces = Surfaces(

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from pmmw.constants import C0 as _C0
 from pmmw.errors import UserError, UserErrors
+from pmmw.io.records import check_keys
 from pmmw.io.yamlio import read_yaml
 from pmmw.physics import roughness as rough
 
@@ -206,9 +207,7 @@ def load_stack(path, *, frequency=None, wavelength=None) -> Stack:
     if not isinstance(raw, dict):
         raise UserError("a stack file is a mapping with `layers:` (and optionally frequency, ambient)", file)
     errors: list[UserError] = []
-    for k in raw:
-        if k not in _STACK_KEYS:
-            errors.append(UserError(f"unknown key {k!r}; expected: {', '.join(_STACK_KEYS)}", file, str(k)))
+    errors += check_keys(raw, _STACK_KEYS, file)
     if frequency is not None or wavelength is not None:
         f = _frequency(frequency, wavelength, "command line", "--frequency", "--wavelength")
     else:
@@ -235,9 +234,7 @@ def load_stack(path, *, frequency=None, wavelength=None) -> Stack:
         if not isinstance(entry, dict):
             errors.append(UserError("a layer is a mapping like {n: 1.5, roughness: {...}}", file, key))
             continue
-        bad = [k for k in entry if k not in _LAYER_KEYS]
-        for k in bad:
-            errors.append(UserError(f"unknown key {k!r}; expected: {', '.join(_LAYER_KEYS)}", file, f"{key}.{k}"))
+        errors += check_keys(entry, _LAYER_KEYS, file, prefix=("layers", i))
         try:
             eps, metal = _medium_eps(entry, frequency=f, file=file, key=key)
             if metal and i != len(layers_raw) - 1:

@@ -34,7 +34,6 @@ together (`pmmw.errors.UserErrors`).
 from __future__ import annotations
 
 import difflib
-import json
 import math
 import os
 import re
@@ -46,6 +45,7 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, StrictStr, ValidationError
 
 from pmmw.errors import UserError, UserErrors, warn
+from pmmw.io.records import key_path, problem, unknown_key
 from pmmw.io.yamlio import read_yaml
 from pmmw.physics.roughness import make_model
 from pmmw.scene.bump import make_bump
@@ -231,20 +231,9 @@ _PLAIN_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
 def _join(base: str | None, *parts) -> str:
-    """Dotted key path: `base` (already a key path, taken as is) then `parts`, each quoted if it
-    is not a plain name: ``_join("materials", "runway", "eps", "95 GHz", 1)`` ->
-    ``materials.runway.eps."95 GHz"[1]``."""
-    out = base or ""
-    for p in parts:
-        if p is None or p == "":
-            continue
-        if isinstance(p, int) and not isinstance(p, bool):
-            out += f"[{p}]"
-            continue
-        s = str(p)
-        seg = s if _PLAIN_KEY.match(s) else json.dumps(s, ensure_ascii=False)
-        out = f"{out}.{seg}" if out else seg
-    return out
+    """Dotted key path (`pmmw.io.records.key_path`): ``_join("materials", "runway", "eps", "95 GHz", 1)``
+    -> ``materials.runway.eps."95 GHz"[1]``."""
+    return key_path(parts, base)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -396,44 +385,41 @@ def _suggest(word: str, choices: Iterable[str], n: int = 5) -> str:
 
 
 def _pydantic_errors(ex: ValidationError, file, base_key: str) -> list[UserError]:
+    """pydantic's problems with one entry, in `pmmw.io.records`' wording but for the entry's own
+    messages (`_wording`); a field's several problems (`_Problems`) each with its own key."""
     out = []
     for er in ex.errors():
-        loc = tuple(er["loc"])
-        typ = er["type"]
-        in_layer = len(loc) >= 2 and loc[0] == "coating"
-        if typ == "value_error":
-            err = er.get("ctx", {}).get("error")
-            if isinstance(err, _Problems):
-                out += [UserError(m, file, _join(base_key, *loc, *p)) for p, m in err.problems]
-                continue
-            msg = str(err) if err is not None else er["msg"].removeprefix("Value error, ")
-        elif typ == "extra_forbidden":
-            allowed = _LAYER_KEYS if in_layer else _ENTRY_KEYS
-            what = "coating layer" if in_layer else "material"
-            msg = (
-                f"unknown key {loc[-1]!r} for a {what}{_suggest(loc[-1], allowed, 3)} "
-                f"(allowed keys: {', '.join(allowed)})"
-            )
-        elif typ == "missing":
-            msg = f"missing required key {loc[-1]!r}"
-            if in_layer:
-                msg += f" (a coating layer is {_LAYER_EXAMPLE})"
-        elif typ in ("model_type", "model_attributes_type", "dict_type"):
-            if in_layer:
-                msg = f"expected a coating layer {_LAYER_EXAMPLE}, got {er.get('input')!r}"
-            else:
-                msg = f"expected a mapping of material fields ({', '.join(_ENTRY_KEYS)}), got {er.get('input')!r}"
-        elif typ == "list_type":
-            msg = "expected a list of layers, outermost first, e.g. [{material: denim, thickness: 0.8 mm}]"
-        elif typ == "literal_error":
-            got = er.get("input")
-            msg = f"unknown kind {got!r}{_suggest(got, KINDS, 1)} (expected one of {', '.join(KINDS)})"
-        elif typ == "string_type":
-            msg = f"expected a string, got {er.get('input')!r}"
+        err = er.get("ctx", {}).get("error") if er["type"] == "value_error" else None
+        if isinstance(err, _Problems):
+            out += [UserError(m, file, _join(base_key, *er["loc"], *p)) for p, m in err.problems]
         else:
-            msg = er["msg"]
-        out.append(UserError(msg, file, _join(base_key, *loc)))
+            out.append(problem(er, file, _EntryIn, prefix=base_key, wording=_wording))
     return out
+
+
+def _wording(er: dict, loc: list) -> str | None:
+    """The material entry's own messages: the keys of an entry or a coating layer, what a layer
+    looks like, the kinds; None: the common wording."""
+    typ = er["type"]
+    in_layer = len(loc) >= 2 and loc[0] == "coating"
+    if typ == "extra_forbidden":
+        allowed = _LAYER_KEYS if in_layer else _ENTRY_KEYS
+        what = "coating layer" if in_layer else "material"
+        return unknown_key(loc[-1], allowed, what)
+    if typ == "missing":
+        return f"missing required key {loc[-1]!r}" + (f" (a coating layer is {_LAYER_EXAMPLE})" if in_layer else "")
+    if typ in ("model_type", "model_attributes_type", "dict_type"):
+        if in_layer:
+            return f"expected a coating layer {_LAYER_EXAMPLE}, got {er.get('input')!r}"
+        return f"expected a mapping of material fields ({', '.join(_ENTRY_KEYS)}), got {er.get('input')!r}"
+    if typ == "list_type":
+        return "expected a list of layers, outermost first, e.g. [{material: denim, thickness: 0.8 mm}]"
+    if typ == "literal_error":
+        got = er.get("input")
+        return f"unknown kind {got!r}{_suggest(got, KINDS, 1)} (expected one of {', '.join(KINDS)})"
+    if typ == "string_type":
+        return f"expected a string, got {er.get('input')!r}"
+    return None
 
 
 def _parse_entry(mid, raw, file, base_key: str) -> tuple[dict | None, list[UserError]]:

@@ -1,8 +1,9 @@
 """The media of a scene at one frequency, as the surfaces and the tracer take them: each material's
 kind (Murakowski 2014 sec. 2.2.9), permittivity, absorption, temperature, coherent coating films,
 roughness, rough coating layers and bump map (`Media`), numbered as `pmmw.trace.job` says (0 the
-ambient medium). `pmmw.trace.job.build_media` makes them from the materials database; the surface
-layer (`pmmw.surface`) and the compiled kernels read them.
+ambient medium), and the two places they are made: `build_media` from the materials database (a
+scenario's materials at one frequency), `stack_media` from a reflectance stack (`pmmw.reflectance`).
+The surface layer (`pmmw.surface`) and the compiled kernels read them.
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from pmmw.constants import C0
 
 # Material kind codes (Murakowski 2014 sec. 2.2.9).
 DIELECTRIC, METAL, BLACKBODY, OPAQUE, THIN = 0, 1, 2, 3, 4
@@ -152,3 +155,93 @@ class Media:
     def any_rough(self) -> bool:
         """Whether any surface is rough or bumped (smooth scenes skip all of that work)."""
         return any(r is not None for r in self.roughness) or any(b is not None for b in self.bump) or any(self.layers)
+
+
+def build_media(db, material_ids, f: float, t_default: float = 290.0, atm=None) -> Media:
+    """Optical properties of the ambient medium and every material at frequency f [Hz]: the one
+    place where a database material (`pmmw.scene.materials.MaterialDB` ``db``) becomes a
+    medium of the tracer. ``t_default`` [K] for materials without a temperature, ``atm`` the
+    scenario's atmosphere (a uniform one fills the ambient medium; None or layered: lossless air)."""
+    k0 = 2.0 * np.pi * f / C0
+    ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
+    rough, bump, stacks = [None], [None], [()]
+    uniform = atm is not None and atm.model == "uniform"  # the layered model lives on the job
+    temp.append(atm.temperature if uniform else t_default)
+    alpha.append(atm.loss if uniform else 0.0)
+    for mid in material_ids:
+        m = db.get(mid)
+        code = KIND_CODES[m.kind]
+        t_m = m.temperature if m.temperature is not None else t_default
+        e = m.eps_at(f, t_m) if m.has_eps() else 1.0 + 0j
+        ids.append(mid)
+        kind.append(code)
+        eps.append(complex(e))
+        temp.append(t_m)
+        alpha.append(2.0 * k0 * np.sqrt(complex(e)).imag if code == DIELECTRIC else 0.0)
+        rough.append(m.roughness)
+        bump.append(m.bump)
+        layers = []
+        for layer in m.coating:
+            lm = db.get(layer.material)
+            t_l = (
+                layer.temperature
+                if layer.temperature is not None
+                else (lm.temperature if lm.temperature is not None else t_m)
+            )
+            layers.append((lm.eps_at(f, t_l), layer.thickness, t_l, layer.roughness))
+        if code == THIN:
+            layers.append((e, m.thickness or 0.0, t_m, None))
+        rough_layers, films = split_coating(layers, k0)
+        coat.append(films)
+        stacks.append(rough_layers)
+    return Media(
+        ids,
+        np.array(eps),
+        np.array(kind, np.int8),
+        np.array(temp, float),
+        np.array(alpha, float),
+        tuple(coat),
+        tuple(rough),
+        tuple(bump),
+        tuple(stacks),
+    )
+
+
+def stack_media(stack, t_absorber: float = 1.0) -> Media:
+    """A reflectance stack (`pmmw.reflectance.stack.Stack`) as the renderer's media: index 0 the
+    ambient medium, index 1 the substrate with the stack's layers above it as rough coating layers
+    (`RoughLayer`, each with its films and the roughness of its top), the substrate's own films
+    and roughness, every absorber at ``t_absorber`` [K] (1 K: the brightness a path deposits is
+    the power it loses).
+
+    A layer without a thickness absorbs nothing on its way across (Optics Express 2016,
+    assumption 3); what enters a lossy substrate stays there (an ``opaque`` body: its
+    transmitted power is absorbed at the surface); a perfect conductor (``metal``) reflects
+    everything."""
+    k0 = stack.k0
+
+    def films(layer):
+        if not layer.coating:
+            return None
+        eps, thick = zip(*layer.coating)
+        return Coating(np.array(eps, complex), np.array(thick, float), t_absorber)
+
+    rough = []
+    for layer in stack.layers[:-1]:
+        eps = complex(layer.eps)
+        lossy = layer.thickness is not None and k0 is not None
+        alpha = 2.0 * k0 * np.sqrt(eps).imag if lossy else 0.0  # power attenuation [1/m] (PHYSICS.md)
+        rough.append(RoughLayer(eps, alpha, float(layer.thickness or 0.0), t_absorber, layer.roughness, films(layer)))
+    sub = stack.layers[-1]
+    kind = METAL if sub.metal else OPAQUE if complex(sub.eps).imag > 0.0 else DIELECTRIC
+    return Media(
+        ids=["ambient", sub.name or "substrate"],
+        eps=np.array([stack.ambient_eps, sub.eps], complex),
+        kind=np.array([DIELECTRIC, kind], np.int8),
+        temperature=np.full(2, t_absorber),
+        alpha=np.zeros(2),
+        coating=(None, films(sub)),
+        roughness=(None, sub.roughness),
+        bump=(),
+        layers=((), tuple(rough)),
+    )

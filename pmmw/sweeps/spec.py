@@ -15,6 +15,7 @@ from pathlib import Path
 import yaml
 
 from pmmw.errors import UserError, UserErrors
+from pmmw.io.records import check_keys, raise_all
 from pmmw.io.yamlio import load_yaml, read_yaml
 
 MAX_VARIANTS = 10_000
@@ -96,15 +97,10 @@ def load_sweep_file(path: Path) -> SweepSpec:
     raw = read_yaml(path, "sweep file")
     if not isinstance(raw, dict):
         raise UserError("a sweep file is a mapping with scenario and grid", path)
-    allowed = {"scenario", "grid", "zip", "executor", "scheduler", "cluster", "out", "workers", "names", "axis"}
-    errors = [
-        UserError(f"unknown key; allowed: {', '.join(sorted(allowed))}", path, k) for k in raw if k not in allowed
-    ]
-    for k in ("scenario", "grid"):
-        if k not in raw:
-            errors.append(UserError("required key missing", path, k))
+    allowed = ("scenario", "grid", "zip", "names", "axis", "executor", "scheduler", "cluster", "workers", "out")
+    errors = check_keys(raw, allowed, path, required=("scenario", "grid"))
     if errors:
-        raise UserErrors(errors) if len(errors) > 1 else errors[0]
+        raise_all(errors)
     if not isinstance(raw["grid"], dict) or not raw["grid"]:
         raise UserError("expected a mapping of scenario key -> list of values", path, "grid")
     base = path.resolve().parent

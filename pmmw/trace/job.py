@@ -13,7 +13,7 @@ import numpy as np
 
 from pmmw.constants import C0
 from pmmw.scene.camera import Camera
-from pmmw.surface.media import (  # noqa: F401  (the media records live below the tracer; re-exported)
+from pmmw.surface.media import (  # noqa: F401  (the media and their builders live below the tracer; re-exported)
     BLACKBODY,
     DIELECTRIC,
     KIND_CODES,
@@ -23,7 +23,9 @@ from pmmw.surface.media import (  # noqa: F401  (the media records live below th
     Coating,
     Media,
     RoughLayer,
+    build_media,
     split_coating,
+    stack_media,
 )
 
 
@@ -96,53 +98,3 @@ class TraceJob:
             for x0 in range(0, w, ts):
                 out.append((len(out), x0, y0, min(x0 + ts, w), min(y0 + ts, h)))
         return out
-
-
-def build_media(db, material_ids, f: float, t_default: float = 290.0, atm=None) -> Media:
-    """Optical properties of the ambient medium and every material at frequency f [Hz]: the one
-    place where a database material (`pmmw.scene.materials.MaterialDB` ``db``) becomes a
-    medium of the tracer. ``t_default`` [K] for materials without a temperature, ``atm`` the
-    scenario's atmosphere (a uniform one fills the ambient medium; None or layered: lossless air)."""
-    k0 = 2.0 * np.pi * f / C0
-    ids, eps, kind, temp, alpha, coat = ["ambient"], [1.0 + 0j], [DIELECTRIC], [], [], [None]
-    rough, bump, stacks = [None], [None], [()]
-    uniform = atm is not None and atm.model == "uniform"  # the layered model lives on the job
-    temp.append(atm.temperature if uniform else t_default)
-    alpha.append(atm.loss if uniform else 0.0)
-    for mid in material_ids:
-        m = db.get(mid)
-        code = KIND_CODES[m.kind]
-        t_m = m.temperature if m.temperature is not None else t_default
-        e = m.eps_at(f, t_m) if m.has_eps() else 1.0 + 0j
-        ids.append(mid)
-        kind.append(code)
-        eps.append(complex(e))
-        temp.append(t_m)
-        alpha.append(2.0 * k0 * np.sqrt(complex(e)).imag if code == DIELECTRIC else 0.0)
-        rough.append(m.roughness)
-        bump.append(m.bump)
-        layers = []
-        for layer in m.coating:
-            lm = db.get(layer.material)
-            t_l = (
-                layer.temperature
-                if layer.temperature is not None
-                else (lm.temperature if lm.temperature is not None else t_m)
-            )
-            layers.append((lm.eps_at(f, t_l), layer.thickness, t_l, layer.roughness))
-        if code == THIN:
-            layers.append((e, m.thickness or 0.0, t_m, None))
-        rough_layers, films = split_coating(layers, k0)
-        coat.append(films)
-        stacks.append(rough_layers)
-    return Media(
-        ids,
-        np.array(eps),
-        np.array(kind, np.int8),
-        np.array(temp, float),
-        np.array(alpha, float),
-        tuple(coat),
-        tuple(rough),
-        tuple(bump),
-        tuple(stacks),
-    )
