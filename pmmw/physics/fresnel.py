@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import cmath
 import math
-from typing import NamedTuple
+from typing import Literal, NamedTuple, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -421,6 +421,18 @@ def _interface_loop(eps1, eps2, cos1, amp, power, q2):
         rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2[i] = interface1(eps1[i], eps2[i], cos1[i])
         amp[i, 0], amp[i, 1], amp[i, 2], amp[i, 3] = rs, rp, ts, tp
         power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
+
+
+@overload
+def interface(
+    eps1: npt.ArrayLike, eps2: npt.ArrayLike, cos1: npt.ArrayLike, with_q2: Literal[False] = False
+) -> Fresnel: ...
+
+
+@overload
+def interface(
+    eps1: npt.ArrayLike, eps2: npt.ArrayLike, cos1: npt.ArrayLike, with_q2: Literal[True]
+) -> tuple[Fresnel, ComplexArray]: ...
 
 
 def interface(

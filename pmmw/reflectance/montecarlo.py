@@ -74,7 +74,9 @@ def stack_media(stack: Stack) -> Media:
     for layer in stack.layers[:-1]:
         eps = complex(layer.eps)
         lossy = layer.thickness is not None and k0 is not None
-        alpha = 2.0 * k0 * np.sqrt(eps).imag if lossy else 0.0  # power attenuation [1/m] (PHYSICS.md)
+        alpha = (
+            2.0 * k0 * np.sqrt(eps).imag if lossy and k0 is not None else 0.0
+        )  # power attenuation [1/m] (PHYSICS.md)
         rough.append(RoughLayer(eps, alpha, float(layer.thickness or 0.0), _T_ABSORBER, layer.roughness, films(layer)))
     sub = stack.layers[-1]
     kind = METAL if sub.metal else OPAQUE if complex(sub.eps).imag > 0.0 else DIELECTRIC
@@ -91,7 +93,15 @@ def stack_media(stack: Stack) -> Media:
     )
 
 
-def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, threshold=1e-3):
+def monte_carlo(
+    stack: Stack,
+    wi: np.ndarray,
+    stokes_in: np.ndarray,
+    *,
+    samples: int = 1_000_000,
+    seed: int = 0,
+    threshold: float = 1e-3,
+) -> _Tally:
     """Optics Express 2016's Monte Carlo over a rough layered surface (`pmmw.reflectance` docstring).
 
     Parameters
