@@ -40,14 +40,21 @@ import functools
 import inspect
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pmmw.errors import UserError, UserErrors
 from pmmw.io.inputs import name_too_long, path_problem, shown
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
+
+    from pmmw.config.schema import ScenarioConfig
 
 __all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "load", "regions"]
 
@@ -226,13 +233,13 @@ class Scenario:
 
     @classmethod
     @_api("Scenario.load")
-    def load(cls, path) -> Scenario:
+    def load(cls, path: str | os.PathLike[str]) -> Scenario:
         """The scenario of a YAML file (read when rendered or validated)."""
         return cls(None, _path("pmmw.Scenario.load", "path", path).resolve())
 
     @classmethod
     @_api("Scenario.from_dict")
-    def from_dict(cls, data: dict, base_dir=".") -> Scenario:
+    def from_dict(cls, data: dict, base_dir: str | os.PathLike[str] = ".") -> Scenario:
         """A scenario from a mapping as the YAML would hold it; relative paths (meshes, sky
         texture) resolve against ``base_dir``."""
         where = "pmmw.Scenario.from_dict"
@@ -248,7 +255,7 @@ class Scenario:
         return cls(copy.deepcopy(dict(data)), _path(where, "base_dir", base_dir).resolve() / "<scenario dict>.yaml")
 
     @_api("Scenario.set")
-    def set(self, values: dict | None = None, **keys) -> Scenario:
+    def set(self, values: dict | None = None, **keys: object) -> Scenario:
         """A copy with more overrides: ``s.set({"imager.noise": "2 K"})`` or, for top-level keys,
         ``s.set(frequency="35 GHz")``."""
         from pmmw.config.load import _split_key
@@ -271,7 +278,7 @@ class Scenario:
                 ) from None
         return replace(self, values={**self.values, **(values or {}), **keys})
 
-    def resolved(self):
+    def resolved(self) -> ScenarioConfig:
         """The validated, typed scenario (`pmmw.config.schema.ScenarioConfig`): SI values, defaults
         filled in, paths absolute."""
         from pmmw.config import load_scenario
@@ -280,6 +287,11 @@ class Scenario:
 
     def _kw(self) -> dict:
         return {"data": self.data, "values": self.values}
+
+
+# What the functions below take as a scenario: a `Scenario`, a mapping as the YAML holds it, or the
+# path of a YAML file.
+ScenarioLike = Scenario | Mapping | str | os.PathLike
 
 
 def _scenario(s, where: str, name: str = "scenario") -> Scenario:
@@ -294,7 +306,7 @@ def _scenario(s, where: str, name: str = "scenario") -> Scenario:
 
 
 @_api("validate")
-def validate(scenario) -> dict:
+def validate(scenario: ScenarioLike) -> dict:
     """What ``pmmw validate`` prints: the resolved scenario, geometry, media per frequency, the
     slab sky's values, resources and warnings; for the path of another pmmw file (a sweep file,
     a physical-optics job, a brdf stack or a Dask cluster file) its check as that kind, ``kind``
@@ -313,14 +325,14 @@ def validate(scenario) -> dict:
 
 @_api("render")
 def render(
-    scenario,
+    scenario: ScenarioLike,
     *,
     spp: int | None = None,
     workers: int | None = None,
     seed: int | None = None,
-    out=None,
+    out: str | os.PathLike[str] | None = None,
     quiet: bool = True,
-):
+) -> xr.Dataset:
     """Render a scenario; returns an `xarray.Dataset`.
 
     Parameters
@@ -443,7 +455,7 @@ def _dataset(per_f, regions):
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def regions(ds) -> dict:
+def regions(ds: xr.Dataset) -> dict:
     """The region statistics of a rendered Dataset (``ds.attrs["regions"]``, JSON text so that
     the Dataset saves to netCDF and Zarr) as a mapping: frequency label (``"95 GHz"``) ->
     ``means``, ``contrasts``, ``verdicts``, ... as in ``report.json``; {} without regions."""
@@ -460,7 +472,7 @@ POSE_KEYS = ("position", "look_at", "up", "fov", "resolution", "focus_distance")
 
 
 @_api("load")
-def load(scenario):
+def load(scenario: ScenarioLike) -> LoadedScene:
     """Read a scenario and build its scene once, for many renders (`LoadedScene.render`).
 
     Parameters
@@ -488,7 +500,7 @@ class LoadedScene:
     """A scenario resolved once (`load`): `render` many times with other poses, frequencies or
     materials. ``builds`` counts how often the geometry and the material database were built."""
 
-    def __init__(self, scenario: Scenario):
+    def __init__(self, scenario: Scenario) -> None:
         from pmmw import pipeline
 
         self.scenario = scenario
@@ -504,14 +516,14 @@ class LoadedScene:
         self,
         *,
         pose: dict | None = None,
-        frequency=None,
+        frequency: str | float | list | None = None,
         materials: dict | None = None,
         values: dict | None = None,
         spp: int | None = None,
         workers: int | None = None,
         seed: int | None = None,
         quiet: bool = True,
-    ):
+    ) -> xr.Dataset:
         """Render the loaded scene with overrides; returns an `xarray.Dataset` as `render` does.
 
         Parameters
@@ -579,7 +591,11 @@ def _loaded_render(loaded, pose, frequency, materials, values, spp, workers, see
 
 
 @_api("sky")
-def sky(frequency, atmosphere: dict | None = None, elevations_deg=(5, 10, 15, 20, 30, 45, 60, 90)):
+def sky(
+    frequency: str | float,
+    atmosphere: dict | None = None,
+    elevations_deg: Sequence[float] = (5, 10, 15, 20, 30, 45, 60, 90),
+) -> xr.Dataset:
     """Sky brightness of a layered atmosphere against elevation, as ``pmmw sky`` computes it.
 
     frequency : str or float ('95 GHz' or [Hz]); atmosphere : a scenario's ``atmosphere:`` mapping
@@ -643,7 +659,7 @@ def _complex(where, name, v):
 
 
 @_api("brdf")
-def brdf(*, method: str = "mc", out=None, **options):
+def brdf(*, method: str = "mc", out: str | os.PathLike[str] | None = None, **options: Any) -> dict[str, xr.Dataset]:
     """The polarized BRDF of a rough (layered) surface, as ``pmmw brdf`` computes it; keyword
     options as its flags (``n``, ``eps``, ``material``, ``stack``, ``frequency``, ``incidence``,
     ``azimuth``, ``model``, ``ex``, ``alpha``, ``samples``, ``seed``, ...; docs/brdf.md).
@@ -736,20 +752,20 @@ def _angles(where, name, v, many: bool):
 
 @_api("po")
 def po(
-    mesh,
+    mesh: str | os.PathLike[str],
     *,
-    frequency,
+    frequency: str | float,
     material: str | None = None,
     eps: str | None = None,
-    incidence="0,0",
-    polarization="theta",
-    theta=None,
-    phi=None,
-    monostatic=False,
-    bounces=1,
-    method="auto",
-    force=False,
-):
+    incidence: str | Sequence[float] = "0,0",
+    polarization: str = "theta",
+    theta: str | float | None = None,
+    phi: str | float | Sequence[float] | None = None,
+    monostatic: bool = False,
+    bounces: int = 1,
+    method: str = "auto",
+    force: bool = False,
+) -> xr.Dataset:
     """Radar cross sections of a mesh by physical optics (``pmmw po``'s quick form); returns an
     `xarray.Dataset` with ``rcs_theta`` and ``rcs_phi`` [m^2] over (phi, theta) in degrees and
     the run's summary (backscatter, peak, lit facets) as attributes.
@@ -813,16 +829,16 @@ def po(
 
 @_api("sweep")
 def sweep(
-    scenario,
+    scenario: ScenarioLike,
     grid: dict,
     *,
-    out,
+    out: str | os.PathLike[str],
     zip: bool | list = False,
     executor: str = "local",
-    workers=None,
+    workers: int | None = None,
     resume: bool = False,
     quiet: bool = True,
-):
+) -> pd.DataFrame:
     """Render every variant of ``grid`` ({key: list of values}) as ``pmmw sweep`` does, into
     ``out``; returns the results table (``sweep.csv``) as a `pandas.DataFrame`."""
     import pandas as pd

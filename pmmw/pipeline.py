@@ -11,9 +11,11 @@ import contextlib
 import hashlib
 import json
 import time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -49,6 +51,12 @@ from pmmw.surface.media import BLACKBODY, KIND_CODES, METAL, build_media  # buil
 from pmmw.trace.job import RenderSettings, TraceJob
 from pmmw.trace.pool import assemble, default_workers, render_tiles
 
+if TYPE_CHECKING:
+    from pmmw.atmosphere.model import AtmosphereModel
+    from pmmw.config.schema import Region, ScenarioConfig
+    from pmmw.scene.geometry import SceneGeometry
+    from pmmw.trace.pool import Image
+
 CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
 
 
@@ -56,12 +64,18 @@ CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
 class Resolved:
     """A scenario with its materials and geometry resolved, ready to make trace jobs."""
 
-    scenario: object
+    scenario: ScenarioConfig
     db: MaterialDB
-    geometry: object
+    geometry: SceneGeometry
 
 
-def resolve(path, overrides=(), cli=None, data=None, values=None) -> Resolved:
+def resolve(
+    path: str | Path | None,
+    overrides: Sequence[str] = (),
+    cli: dict | None = None,
+    data: dict | None = None,
+    values: dict | None = None,
+) -> Resolved:
     """Load and check the scenario and every asset it names; raise `UserErrors` on problems.
     ``data``, ``values``: a scenario mapping and typed overrides (`config.load_scenario`)."""
     scn = load_scenario(path, list(overrides), cli=cli, data=data, values=values)
@@ -81,14 +95,14 @@ def resolve(path, overrides=(), cli=None, data=None, values=None) -> Resolved:
     return Resolved(scn, db, geom)
 
 
-def material_database(scn) -> MaterialDB:
+def material_database(scn: ScenarioConfig) -> MaterialDB:
     """The database with the scenario's ``materials:`` overrides, checked."""
     db = MaterialDB.load().with_overrides(dict(scn.materials), file=scn.source_file)
     db.check()
     return db
 
 
-def check_material_ids(entries, db: MaterialDB, file) -> None:
+def check_material_ids(entries: Sequence[Any], db: MaterialDB, file: str | Path | None) -> None:
     """Every material id the scene entries (``material`` or ``materials``) name exists in ``db``;
     all unknown ones are reported together, each by its key."""
     errors = []
@@ -107,7 +121,7 @@ def check_material_ids(entries, db: MaterialDB, file) -> None:
         raise UserErrors(errors)
 
 
-def aux_channels(img, aux) -> dict:
+def aux_channels(img: Image, aux: Sequence[str]) -> dict[str, np.ndarray]:
     """The auxiliary EXR channels asked for in ``output.aux`` (stderr, depth, material, samples)
     of an assembled image, float32."""
     channels = {}
@@ -144,7 +158,7 @@ def channel_quantity(name: str) -> tuple[str, str]:
     return _AUX_QUANTITIES.get(name, ("K", "brightness temperature"))
 
 
-def traced_settings(scn) -> dict:
+def traced_settings(scn: ScenarioConfig) -> dict:
     """The resolved scenario without what leaves the traced tiles unchanged (output settings,
     worker count): what `scenario_hash` hashes and a tile folder's manifest records."""
     d = scenario_to_display(scn)
@@ -153,7 +167,7 @@ def traced_settings(scn) -> dict:
     return d
 
 
-def scenario_hash(scn, db: MaterialDB | None = None, files=None) -> str:
+def scenario_hash(scn: ScenarioConfig, db: MaterialDB | None = None, files: Sequence[Path] | None = None) -> str:
     """Hash of everything that changes the traced tiles (not workers, not output settings): the
     scenario, the pmmw version, every byte of every file the trace reads (`input_files`: meshes
     with their glTF buffers, OBJ material libraries and textures, the sky texture) and, given the
@@ -174,7 +188,7 @@ def scenario_hash(scn, db: MaterialDB | None = None, files=None) -> str:
     return h.hexdigest()[:16]
 
 
-def input_files(scn) -> list[Path]:
+def input_files(scn: ScenarioConfig) -> list[Path]:
     """Every file a render of ``scn`` reads besides the material database: the scenario, each
     mesh and the files it names (`asset_files`), the sky texture."""
     # a scenario given as a mapping (the Python API) has no file: its content is in the settings
@@ -186,7 +200,7 @@ def input_files(scn) -> list[Path]:
     return list(dict.fromkeys(Path(p).resolve() for p in files))
 
 
-def parse_shard(text: str | None):
+def parse_shard(text: str | None) -> tuple[int, int] | None:
     """``"I/N"`` -> (I, N) with 1 <= I <= N (as a job array numbers its tasks); None -> None."""
     if text is None:
         return None
@@ -246,7 +260,7 @@ def make_job(res: Resolved, f: float) -> TraceJob:
     )
 
 
-def atmosphere_summary(job) -> dict:
+def atmosphere_summary(job: TraceJob) -> dict:
     """What the layered atmosphere does to this scene (Murakowski 2014 reports path losses so)."""
     atm, cam = job.atmosphere, job.camera
     target = np.asarray(cam.position) + cam.k * _target_distance(job)
@@ -269,7 +283,7 @@ def _target_distance(job) -> float:
     return float(t[0]) if np.isfinite(t[0]) else 1000.0
 
 
-def atmosphere_model(scn, f: float):
+def atmosphere_model(scn: ScenarioConfig, f: float) -> AtmosphereModel | None:
     """The layered atmosphere at frequency f [Hz], or None (vacuum / uniform ambient medium)."""
     a = scn.atmosphere
     if a is None or a.model != "layered":
@@ -296,7 +310,7 @@ def atmosphere_model(scn, f: float):
 class _Progress:
     """Progress of a render (`io.progress.StatusLine`): tiles done/total, rays per second, time left."""
 
-    def __init__(self, label: str, quiet: bool):
+    def __init__(self, label: str, quiet: bool) -> None:
         self.label = label
         self.line = None if quiet else StatusLine()
 
@@ -305,7 +319,7 @@ class _Progress:
         if self.line is not None:
             self.line.say(f"{self.label}: {text}")
 
-    def __call__(self, done, total, rays, elapsed):
+    def __call__(self, done: int, total: int, rays: float, elapsed: float) -> None:
         if self.line is None:
             return
         rate = rays / elapsed if elapsed > 0 else 0.0
@@ -315,7 +329,7 @@ class _Progress:
         )
 
 
-def region_shapes(regions, cam) -> dict:
+def region_shapes(regions: Mapping[str, Region], cam: Camera) -> dict[str, tuple | None]:
     """The named regions (`output.regions`) in image coordinates [px] (x right, y down, pixel k
     spanning [k, k + 1)): ``("box", x0, y0, x1, y1)`` or ``("circle", u, v, radius)``, None for a
     centre behind the imager."""
@@ -353,7 +367,7 @@ def region_shapes(regions, cam) -> dict:
     return shapes
 
 
-def check_regions(scn) -> dict:
+def check_regions(scn: ScenarioConfig) -> dict:
     """``output.regions`` on the image, checked before rendering (`validate`): each region's
     pixel shape and pixel count. A region behind the imager or wholly outside the image is a
     `UserError` naming it; one partly outside is warned about.
@@ -400,7 +414,7 @@ def check_regions(scn) -> dict:
     return out
 
 
-def view_preview(scn, geom, path: Path) -> Path:
+def view_preview(scn: ScenarioConfig, geom: SceneGeometry, path: Path) -> Path:
     """What the imager sees, before any render: the first surface through each pixel centre,
     shaded by how squarely it faces the imager (|cos| of the angle between the ray and the face
     normal; the sky blank), with ``output.regions`` outlined and named
@@ -441,7 +455,7 @@ def view_preview(scn, geom, path: Path) -> Path:
     return path
 
 
-def region_masks(regions, cam) -> dict:
+def region_masks(regions: Mapping[str, Region], cam: Camera) -> dict[str, np.ndarray]:
     """Boolean (H, W) masks of the named regions (`output.regions`) on the image."""
     h, w = cam.height, cam.width
     yy, xx = np.mgrid[0:h, 0:w]
@@ -465,7 +479,7 @@ def region_masks(regions, cam) -> dict:
 REGION_CHANNELS = ("Ex2", "Ey2", "I")
 
 
-def report_channel(scn) -> str:
+def report_channel(scn: ScenarioConfig) -> str:
     """The channel a render's report leads with (its verdicts, its regions preview): Ey2 when
     ``output.channels`` has it, else the first of them that the region statistics cover (Ex2,
     Ey2, I), else Ey2."""
@@ -485,7 +499,15 @@ def region_limit(noise: float) -> float:
     return TRUNCATION_NOISE_FRACTION * noise if noise > 0 else TRUNCATION_LIMIT_NO_NOISE
 
 
-def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps=None) -> dict:
+def region_stats(
+    scn: ScenarioConfig,
+    cam: Camera,
+    sensor: Mapping[str, np.ndarray],
+    img: Image | None = None,
+    kernel: np.ndarray | None = None,
+    ideal: Mapping[str, np.ndarray] | None = None,
+    noise_maps: Mapping[str, np.ndarray] | None = None,
+) -> dict:
     """Per region: mean sensor temperature, its Monte Carlo standard error and truncation bound;
     per pair of regions: the contrast in K and noise sigmas, with the same two figures, and its
     detection by the one criterion (`imaging.detection`).
@@ -628,7 +650,7 @@ def region_stats(scn, cam, sensor, img=None, kernel=None, ideal=None, noise_maps
     }
 
 
-def truncation_summary(img, scn) -> dict:
+def truncation_summary(img: Image, scn: ScenarioConfig) -> dict:
     """Image-wide figures of the paths ended on a guessed temperature (`TileResult.truncated`)."""
     frac, b = img.truncated[..., 0], img.truncated[..., 1]
     return {
@@ -649,7 +671,7 @@ def band_frequencies(f: float, bandwidth: float, n: int) -> list[float]:
     return [f - bandwidth / 2.0 + (k + 0.5) * bandwidth / n for k in range(n)]
 
 
-def average_images(imgs):
+def average_images(imgs: Sequence[Image]) -> Image:
     """Mean of images rendered at the sub-band frequencies (independent samples)."""
     from pmmw.trace.pool import Image
 
@@ -668,17 +690,17 @@ def average_images(imgs):
 
 
 def trace_frequency(
-    res,
+    res: Resolved,
     f: float,
     *,
     workers: int,
     tile_root: Path | None = None,
     shash: str = "",
     resume: bool = False,
-    shard=None,
+    shard: tuple[int, int] | None = None,
     quiet: bool = True,
-    client=None,
-):
+    client: Any = None,
+) -> tuple[TraceJob | None, Image | None, list[Path]]:
     """Trace the image at frequency f [Hz], averaged over the imager's sub-bands.
 
     Tiles are kept in ``tile_root/<folder>/`` (`tile_folders`) when a root is given (resumable),
@@ -740,7 +762,7 @@ def trace_frequency(
     return make_job(res, f), average_images(imgs), dirs
 
 
-def receiver_of(scn):
+def receiver_of(scn: ScenarioConfig) -> Receiver | None:
     """The scenario's `imaging.receiver.Receiver`, or None without ``imager.receiver``."""
     rx, im = scn.imager.receiver, scn.imager
     if rx is None:
@@ -761,7 +783,7 @@ def receiver_of(scn):
     )
 
 
-def aperture_of(scn):
+def aperture_of(scn: ScenarioConfig) -> Aperture | None:
     """The scenario's `imaging.antenna.Aperture` (a uniform one without ``imager.antenna``), or
     None without an aperture."""
     im = scn.imager
@@ -784,7 +806,7 @@ def aperture_of(scn):
     )
 
 
-def imager_kernel(scn, pixel_angle: float, k0: float):
+def imager_kernel(scn: ScenarioConfig, pixel_angle: float, k0: float) -> np.ndarray | None:
     """The imager's unit-sum PSF kernel at wavenumber ``k0`` [1/m] on pixels of ``pixel_angle``
     [rad]: the antenna's (`imaging.antenna.antenna_kernel`) with ``imager.antenna``, else the
     uniform aperture's Airy kernel (`imaging.imager.psf_kernel`); None without an aperture. The one
@@ -797,7 +819,9 @@ def imager_kernel(scn, pixel_angle: float, k0: float):
     return psf_kernel(pixel_angle, k0, im.aperture_diameter)
 
 
-def imager_model(scn, job, ideal: dict, noise_maps: dict | None = None):
+def imager_model(
+    scn: ScenarioConfig, job: TraceJob, ideal: dict, noise_maps: dict | None = None
+) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
     """The sensor image (`apply_imager` with the scenario's aperture, antenna, noise or receiver and
     seed) and the PSF kernel of the scene's signal: the unit-sum PSF times (1 - spillover) (None
     without an aperture). ``noise_maps`` is filled with the per-pixel noise of each channel when
@@ -822,7 +846,7 @@ def imager_model(scn, job, ideal: dict, noise_maps: dict | None = None):
     return sensor, (None if kernel is None else kernel * (1.0 - spill))
 
 
-def imager_summary(scn, job, noise_maps: dict | None = None) -> dict:
+def imager_summary(scn: ScenarioConfig, job: TraceJob, noise_maps: dict | None = None) -> dict:
     """What a report states about the imager: ``receiver`` (NETD, per-pixel noise range:
     `imaging.receiver.Receiver.summary`) and ``beam`` (`imaging.antenna.beam_report`), each when
     the imager has it."""
@@ -845,7 +869,7 @@ def _stem(scn, f: float) -> str:
     return scn.name if len(scn.frequencies) == 1 else f"{scn.name}_{f / 1e9:g}GHz"
 
 
-def preview_channels(scn) -> tuple[str, ...]:
+def preview_channels(scn: ScenarioConfig) -> tuple[str, ...]:
     """The channels a render draws a preview of: with ``output.previews: true`` (the default, or
     ``all``) every channel of ``output.channels``, a PNG preview per channel as the product
     promises; with ``quick`` I alone (the first channel listed where I is not), the image a person
@@ -860,7 +884,7 @@ def preview_channels(scn) -> tuple[str, ...]:
     return ("I",) if "I" in chans else tuple(chans[:1])
 
 
-def output_names(scn, f: float) -> dict:
+def output_names(scn: ScenarioConfig, f: float) -> dict:
     """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``,
     ``previews`` and ``side_by_side`` (channel -> PNG: `preview_channels`; the ideal image beside
     the sensor's with ``output.previews: true``), ``aux_previews`` (``depth``, ``material`` -> PNG,
@@ -923,7 +947,7 @@ LOAD_BYTES_PER_TRIANGLE = 1000
 WORKER_BYTES_PER_TRIANGLE = 600
 
 
-def estimate_resources(scn, triangles: int, workers: int) -> dict:
+def estimate_resources(scn: ScenarioConfig, triangles: int, workers: int) -> dict:
     """Memory, disk and time a render of ``scn`` needs, from its size (upper bounds, except the
     time, which is a rough guide for landing-like scenes).
 
@@ -983,7 +1007,7 @@ def available_memory() -> float | None:
     return memory.available_memory()
 
 
-def check_memory(est: dict, source, force: bool = False) -> None:
+def check_memory(est: dict, source: str | Path | None, force: bool = False) -> None:
     """Refuse (`UserError`, exit status 2 as every input sized beyond its limit: `memory`) a
     render whose estimate `est` exceeds the available memory, unless ``force``."""
     free = available_memory()
@@ -995,13 +1019,13 @@ def check_memory(est: dict, source, force: bool = False) -> None:
         )
 
 
-def tile_manifest(scn, shash: str) -> dict:
+def tile_manifest(scn: ScenarioConfig, shash: str) -> dict:
     """What a tile folder of ``scn`` records (`io.tilestore.claim`): the scenario's name, the
     hash of its traced settings and inputs, the version and the settings themselves."""
     return {"name": scn.name, "hash": shash, "version": __version__, "scenario": traced_settings(scn)}
 
 
-def tile_folders(scn, f: float, shash: str) -> list[tuple[float, str, str]]:
+def tile_folders(scn: ScenarioConfig, f: float, shash: str) -> list[tuple[float, str, str]]:
     """(sub-band frequency [Hz], progress label, tile folder name) of each sub-band traced for the
     frequency f [Hz]. Folder names are ``<stem>-<hash>`` or ``<stem>@band<k>of<n>-<hash>``: a name
     cannot hold ``@`` nor end like a frequency suffix (`config.schema`), so no scenario's folder
@@ -1015,7 +1039,7 @@ def tile_folders(scn, f: float, shash: str) -> list[tuple[float, str, str]]:
     ]
 
 
-def other_tile_folders(tile_root: Path, scn, shash: str) -> list[tuple[Path, dict]]:
+def other_tile_folders(tile_root: Path, scn: ScenarioConfig, shash: str) -> list[tuple[Path, dict]]:
     """(folder, manifest) of the pmmw tile folders of this scenario (by its name) made from other
     inputs (another hash)."""
     return [(d, rec) for d, rec in own_folders(tile_root) if rec.get("name") == scn.name and rec["hash"] != shash]
@@ -1032,7 +1056,7 @@ def _differences(a, b, prefix="") -> list[str]:
     return out
 
 
-def refuse_other_tiles(tile_root: Path, scn, shash: str, what: str) -> None:
+def refuse_other_tiles(tile_root: Path, scn: ScenarioConfig, shash: str, what: str) -> None:
     """Tiles of this scenario made with other settings are never mixed in nor silently
     re-rendered over: name the folder and the settings that differ."""
     for d, old in other_tile_folders(tile_root, scn, shash):
@@ -1053,7 +1077,7 @@ def refuse_other_tiles(tile_root: Path, scn, shash: str, what: str) -> None:
         )
 
 
-def remove_stale_tiles(tile_root: Path, out_dir: Path, scn, shash: str) -> tuple[int, int]:
+def remove_stale_tiles(tile_root: Path, out_dir: Path, scn: ScenarioConfig, shash: str) -> tuple[int, int]:
     """Delete the tile folders of this scenario made from other inputs (another hash): they can
     never be resumed. Only pmmw's own folders inside the real output folder are deleted
     (`io.tilestore.remove_folder`). Returns (removed, kept)."""
@@ -1063,23 +1087,23 @@ def remove_stale_tiles(tile_root: Path, out_dir: Path, scn, shash: str) -> tuple
 
 
 def render(
-    path,
-    overrides=(),
+    path: str | Path | None,
+    overrides: Sequence[str] = (),
     *,
-    out=None,
-    spp=None,
-    workers=None,
-    seed=None,
-    resume=False,
-    quiet=False,
-    keep_tiles=False,
-    shard=None,
-    force=False,
-    executor="local",
-    scheduler=None,
-    cluster=None,
-    data=None,
-    values=None,
+    out: str | Path | None = None,
+    spp: int | None = None,
+    workers: int | None = None,
+    seed: int | None = None,
+    resume: bool = False,
+    quiet: bool = False,
+    keep_tiles: bool = False,
+    shard: tuple[int, int] | None = None,
+    force: bool = False,
+    executor: str = "local",
+    scheduler: str | None = None,
+    cluster: str | Path | None = None,
+    data: dict | None = None,
+    values: dict | None = None,
 ) -> list[Path]:
     """The ``pmmw render`` job. Returns the EXR paths written.
 
@@ -1274,7 +1298,7 @@ def spp_words(spp: int, mean: float) -> str:
     return f"{spp} spp"
 
 
-def frequency_images(scn, f, job, img, shash: str = "") -> dict:
+def frequency_images(scn: ScenarioConfig, f: float, job: TraceJob, img: Image, shash: str = "") -> dict:
     """The images of one frequency from its traced ``img``: ``ideal`` and ``sensor`` (Stokes and
     polarization channels [K], float64), the PSF ``kernel``, and what the EXR holds: ``channels``
     (float32: the sensor's, ``ideal.*``, ``aux.*``) with its header ``attrs``."""
@@ -1365,7 +1389,17 @@ def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, 
     }
 
 
-def write_previews(scn, f, job, img, names, path_of, sensor, ideal, regions) -> dict:
+def write_previews(
+    scn: ScenarioConfig,
+    f: float,
+    job: TraceJob,
+    img: Image,
+    names: dict,
+    path_of: Callable[[str], Path],
+    sensor: Mapping[str, np.ndarray],
+    ideal: Mapping[str, np.ndarray],
+    regions: dict | None,
+) -> dict:
     """Draw the previews ``names`` asks for (`output_names`) of one frequency's images at
     ``path_of(relative name)``. Returns {channel: (low, high)}: the temperatures [K] shown as
     black and white in each channel's own preview."""
@@ -1401,7 +1435,13 @@ def write_previews(scn, f, job, img, names, path_of, sensor, ideal, regions) -> 
     return shown
 
 
-def validate(path, overrides=(), data=None, values=None, preview=None) -> dict:
+def validate(
+    path: str | Path | None,
+    overrides: Sequence[str] = (),
+    data: dict | None = None,
+    values: dict | None = None,
+    preview: str | Path | None = None,
+) -> dict:
     """The ``pmmw validate`` job: the resolved scenario and, per frequency, the media (and the slab
     sky's opacity and brightness, defaults included), the geometry and the resources. With
     ``preview`` (a PNG path) also the view's distance map with the regions outlined and named

@@ -31,22 +31,25 @@ import numbers
 import re
 import sys
 from functools import lru_cache
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 from pmmw.errors import UserError
 
 if TYPE_CHECKING:  # the type checker's view of the pint imported below without Dask
+    from pathlib import Path
+
     import pint
 
 
-def _import_pint():
+def _import_pint() -> ModuleType:
     """Import pint without Dask: pint looks for Dask when it is imported (``pint.compat``) and
     imports it (with Jinja2) when installed, about 0.3 s of every command's start on a 2-core
     machine, for Dask arrays of quantities that pmmw never makes. Dask itself is imported as
     usual later (``--executor dask``)."""
     hidden = "dask" not in sys.modules
     if hidden:
-        sys.modules["dask"] = None  # importlib.util.find_spec("dask") is then None
+        sys.modules["dask"] = None  # type: ignore[assignment]  # importlib.util.find_spec("dask") is then None
     try:
         import pint
     finally:
@@ -143,7 +146,9 @@ def _a(noun: str) -> str:
     return ("an " if noun[:1] in "aeiou" else "a ") + noun
 
 
-def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit: str | None = None) -> float:
+def parse_quantity(
+    value: object, kind: str, *, file: str | Path | None = None, key: str | None = None, unit: str | None = None
+) -> float:
     """Parse a number or unit string into a float in the kind's internal (SI) unit.
 
     Parameters
@@ -178,7 +183,7 @@ def parse_quantity(value, kind: str, *, file=None, key: str | None = None, unit:
     reg = ureg()
     target = reg.Unit(_unit_text(unit, kind)) if unit is not None else reg.Unit(internal)
 
-    def fail(why: str):
+    def fail(why: str) -> UserError:
         return UserError(f"{value!r} {why}; expected e.g. {example}", file, key)
 
     if isinstance(value, numbers.Real) and not isinstance(value, (bool, int, float)):

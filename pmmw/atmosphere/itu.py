@@ -23,9 +23,15 @@ stay in mm/h (``_mm_h``). Pressures passed to the P.676 functions are the DRY ai
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
 
 from pmmw.atmosphere.data import p676, p838, rain_albedo, rain_asymmetry
+
+if TYPE_CHECKING:  # scipy.interpolate is imported where it is used (~0.3 s)
+    from scipy.interpolate import RegularGridInterpolator
 
 NP_M_PER_DB_KM = np.log(10.0) / 10.0 / 1000.0  # [Np/m] per [dB/km] (power)
 
@@ -50,11 +56,17 @@ TROPOPAUSE_HEIGHT = {
 
 PROFILE_TOP = 100.0e3  # P.835 profiles are defined up to 100 km altitude [m]
 
+FloatArray = npt.NDArray[np.float64]
+ComplexArray = npt.NDArray[np.complex128]
+# a scalar or an array, for the closed forms that keep their arguments' kind (no np.asarray)
+FloatLike = float | FloatArray
+ComplexLike = complex | npt.NDArray[np.complexfloating]
+
 _OX = np.array(p676.OXYGEN_LINES, dtype=np.float64)  # (44, 7)
 _WV = np.array(p676.WATER_VAPOUR_LINES, dtype=np.float64)  # (35, 7)
 
 
-def water_vapour_pressure(rho, T):
+def water_vapour_pressure(rho: npt.ArrayLike, T: npt.ArrayLike) -> FloatArray:
     """Partial pressure of water vapour ``e = rho T / 216.7`` (P.835-6 eq. 8) [Pa].
 
     Parameters
@@ -67,7 +79,9 @@ def water_vapour_pressure(rho, T):
     return np.asarray(rho) * 1e3 * np.asarray(T) / 216.7 * 100.0
 
 
-def _ghz_hpa(f, p_dry, rho, T):
+def _ghz_hpa(
+    f: npt.ArrayLike, p_dry: npt.ArrayLike, rho: npt.ArrayLike, T: npt.ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Recommendation units: f [GHz], p [hPa], e [hPa], theta = 300/T; each with a line axis."""
     f_ghz = np.asarray(f, dtype=np.float64)[..., None] / 1e9
     p = np.asarray(p_dry, dtype=np.float64)[..., None] / 100.0
@@ -76,7 +90,9 @@ def _ghz_hpa(f, p_dry, rho, T):
     return f_ghz, p, e, 300.0 / T
 
 
-def oxygen_specific_attenuation_db_km(f, p_dry, rho, T):
+def oxygen_specific_attenuation_db_km(
+    f: npt.ArrayLike, p_dry: npt.ArrayLike, rho: npt.ArrayLike, T: npt.ArrayLike
+) -> FloatArray:
     """Specific attenuation of dry air, gamma_o [dB/km] (P.676-13 Annex 1 eqs. 1-8).
 
     The 44 oxygen lines of Table 1 plus the non-resonant Debye spectrum of oxygen and the
@@ -110,7 +126,9 @@ def oxygen_specific_attenuation_db_km(f, p_dry, rho, T):
     return 0.1820 * f * ((S * F).sum(axis=-1) + N_D)  # eqs. 1-2
 
 
-def water_vapour_specific_attenuation_db_km(f, p_dry, rho, T):
+def water_vapour_specific_attenuation_db_km(
+    f: npt.ArrayLike, p_dry: npt.ArrayLike, rho: npt.ArrayLike, T: npt.ArrayLike
+) -> FloatArray:
     """Specific attenuation of water vapour, gamma_w [dB/km] (P.676-13 Annex 1 eqs. 1-6).
 
     The 35 lines of Table 2, the last (1780 GHz) standing for the water-vapour continuum.
@@ -125,14 +143,23 @@ def water_vapour_specific_attenuation_db_km(f, p_dry, rho, T):
     return 0.1820 * f[..., 0] * (S * F).sum(axis=-1)
 
 
-def gas_specific_attenuation_db_km(f, p_dry, rho, T):
+def gas_specific_attenuation_db_km(
+    f: npt.ArrayLike, p_dry: npt.ArrayLike, rho: npt.ArrayLike, T: npt.ArrayLike
+) -> FloatArray:
     """Total gaseous specific attenuation gamma_o + gamma_w [dB/km]; arguments as above."""
     return oxygen_specific_attenuation_db_km(f, p_dry, rho, T) + water_vapour_specific_attenuation_db_km(
         f, p_dry, rho, T
     )
 
 
-def double_debye(f_ghz, eps_s, eps_1, eps_inf, f_1, f_2):
+def double_debye(
+    f_ghz: FloatLike,
+    eps_s: FloatLike,
+    eps_1: FloatLike,
+    eps_inf: FloatLike,
+    f_1: FloatLike,
+    f_2: FloatLike,
+) -> ComplexLike:
     """eps' + i eps'' (eps'' >= 0) of two Debye relaxations, P.840-8 eqs. 4-5 and P.527-6
     eqs. (6)-(7): eps_s static, eps_1 between them, eps_inf high-frequency, relaxation
     frequencies f_1, f_2 [GHz]; f_ghz [GHz]. Arrays broadcast."""
@@ -143,7 +170,7 @@ def double_debye(f_ghz, eps_s, eps_1, eps_inf, f_1, f_2):
     return eps_r + 1j * eps_i
 
 
-def water_permittivity(f, T):
+def water_permittivity(f: npt.ArrayLike, T: npt.ArrayLike) -> ComplexLike:
     """Relative permittivity of liquid water eps' + i eps'' (eps'' >= 0), P.840-8 eqs. 4-10.
 
     The double-Debye model of Liebe et al. (1991), valid to 1000 GHz.
@@ -165,7 +192,7 @@ def water_permittivity(f, T):
     return double_debye(f, eps0, eps1, eps2, fp, fs)
 
 
-def p527_water_permittivity(f, T, salinity=0.0):
+def p527_water_permittivity(f: npt.ArrayLike, T: npt.ArrayLike, salinity: npt.ArrayLike = 0.0) -> ComplexLike:
     """Relative permittivity eps' + i eps'' (eps'' >= 0) of pure or saline water, P.527-6 sec. 5.1.
 
     Pure water (sec. 5.1.1, eqs. (6)-(13)) is Liebe et al. (1991)'s double Debye as P.840's, but
@@ -215,7 +242,7 @@ def p527_water_permittivity(f, T, salinity=0.0):
     return double_debye(f, eps_ss, eps_1s, eps_infs, f_1s, f_2s) + 1j * 18.0 * sigma_sw / f  # eqs. (15)-(16)
 
 
-def liquid_water_kl(f, T):
+def liquid_water_kl(f: npt.ArrayLike, T: npt.ArrayLike) -> FloatArray:
     """Cloud/fog liquid-water attenuation coefficient K_l [(dB/km)/(g/m^3)] (P.840-8 eq. 2).
 
     Rayleigh absorption by droplets << wavelength: gamma_c = K_l * M with M the liquid water
@@ -233,14 +260,14 @@ def liquid_water_kl(f, T):
     return 0.819 * (np.asarray(f, dtype=np.float64) / 1e9) / (eps.imag * (1.0 + eta**2))
 
 
-def _p838_fit(table, x, log_k: bool):
+def _p838_fit(table: tuple, x: FloatArray, log_k: bool) -> FloatArray:
     a, b, c, m, c0 = table
     s = sum(aj * np.exp(-(((x - bj) / cj) ** 2)) for aj, bj, cj in zip(a, b, c, strict=True))
     y = s + m * x + c0
     return 10.0**y if log_k else y
 
 
-def rain_coefficients(f):
+def rain_coefficients(f: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """P.838-3 coefficients ``(k_H, alpha_H, k_V, alpha_V)`` at frequency f [Hz] (eqs. 2-3).
 
     k is in (dB/km)/(mm/h)^alpha; alpha is dimensionless. Valid 1-1000 GHz.
@@ -254,7 +281,9 @@ def rain_coefficients(f):
     )
 
 
-def rain_specific_attenuation_db_km(rain_rate_mm_h, f, elevation=0.0, tilt=np.pi / 4):
+def rain_specific_attenuation_db_km(
+    rain_rate_mm_h: npt.ArrayLike, f: npt.ArrayLike, elevation: npt.ArrayLike = 0.0, tilt: npt.ArrayLike = np.pi / 4
+) -> FloatArray:
     """Rain specific attenuation (extinction) gamma_R = k R^alpha [dB/km] (P.838-3 eqs. 1, 4, 5).
 
     Parameters
@@ -277,7 +306,7 @@ def rain_specific_attenuation_db_km(rain_rate_mm_h, f, elevation=0.0, tilt=np.pi
     return k * np.asarray(rain_rate_mm_h, dtype=np.float64) ** alpha
 
 
-def _rain_table(values):
+def _rain_table(values: object) -> RegularGridInterpolator:
     """Bilinear interpolator in (log f [GHz], log R [mm/h]) on the Mie tables' grid."""
     from scipy.interpolate import RegularGridInterpolator
 
@@ -290,16 +319,18 @@ def _rain_table(values):
     )
 
 
-_TABLES: dict = {}  # the interpolators, made on first use (scipy.interpolate: ~0.3 s to import)
+_TABLES: dict[
+    str, RegularGridInterpolator
+] = {}  # the interpolators, made on first use (scipy.interpolate: ~0.3 s to import)
 
 
-def _table(name: str):
+def _table(name: str) -> RegularGridInterpolator:
     if name not in _TABLES:
         _TABLES[name] = _rain_table(rain_albedo.ALBEDO if name == "albedo" else rain_asymmetry.ASYMMETRY)
     return _TABLES[name]
 
 
-def _rain_lookup(table, f, rain_rate_mm_h):
+def _rain_lookup(table: RegularGridInterpolator, f: npt.ArrayLike, rain_rate_mm_h: npt.ArrayLike) -> FloatArray:
     lf, lr = np.broadcast_arrays(
         np.log(np.asarray(f, dtype=np.float64) / 1e9), np.log(np.maximum(rain_rate_mm_h, 1e-12))
     )
@@ -309,7 +340,7 @@ def _rain_lookup(table, f, rain_rate_mm_h):
     return table(pts)
 
 
-def rain_single_scattering_albedo(f, rain_rate_mm_h):
+def rain_single_scattering_albedo(f: npt.ArrayLike, rain_rate_mm_h: npt.ArrayLike) -> FloatArray:
     """Single-scattering albedo of rain omega = scattering / extinction (Mie, Marshall-Palmer).
 
     Bilinear in (log f, log R) in the table of `pmmw.atmosphere.data.rain_albedo` (1-1000 GHz,
@@ -326,7 +357,7 @@ def rain_single_scattering_albedo(f, rain_rate_mm_h):
     return _rain_lookup(_table("albedo"), f, rain_rate_mm_h)
 
 
-def rain_asymmetry_parameter(f, rain_rate_mm_h):
+def rain_asymmetry_parameter(f: npt.ArrayLike, rain_rate_mm_h: npt.ArrayLike) -> FloatArray:
     """Asymmetry parameter of rain g = <cos Theta> of its scattering (Mie, Marshall-Palmer) [-].
 
     Bilinear in (log f, log R) in the table of `pmmw.atmosphere.data.rain_asymmetry`, same
@@ -343,12 +374,12 @@ def rain_asymmetry_parameter(f, rain_rate_mm_h):
     return _rain_lookup(_table("asymmetry"), f, rain_rate_mm_h)
 
 
-def rain_absorption_fraction(f, rain_rate_mm_h):
+def rain_absorption_fraction(f: npt.ArrayLike, rain_rate_mm_h: npt.ArrayLike) -> FloatArray:
     """Fraction 1 - omega of rain extinction that is absorption [-]."""
     return 1.0 - rain_single_scattering_albedo(f, rain_rate_mm_h)
 
 
-def refractivity(p, rho, T):
+def refractivity(p: npt.ArrayLike, rho: npt.ArrayLike, T: npt.ArrayLike) -> FloatArray:
     """Radio refractivity N = (n - 1) 1e6 (P.453-14 eq. 6, ``N = 77.6/T (P + 4810 e/T)``).
 
     Parameters
@@ -369,7 +400,7 @@ def refractivity(p, rho, T):
 # Formulas in km, K, hPa, g/m^3 as in the Recommendation; converted at `reference_atmosphere`.
 
 
-def _standard(h):
+def _standard(h: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """P.835-6 sec. 1: mean annual global reference atmosphere (US Standard Atmosphere 1976)."""
     hp = 6356.766 * h / (6356.766 + h)  # geopotential height [km'] (eq. 1a)
     g = 34.1632
@@ -405,7 +436,7 @@ def _standard(h):
     return T, P, rho
 
 
-def _upper_pressure(h, p_poly, k_mid, k_top):
+def _upper_pressure(h: FloatArray, p_poly: list[float], k_mid: float, k_top: float) -> FloatArray:
     """P.835-6 sec. 2-4 pressure: polynomial to 10 km, then exponentials (continuous)."""
     p10 = np.polyval(p_poly, 10.0)
     p72 = p10 * np.exp(-k_mid * 62.0)
@@ -416,7 +447,7 @@ def _upper_pressure(h, p_poly, k_mid, k_top):
     )
 
 
-def _low_latitude(h):
+def _low_latitude(h: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     T = np.select(
         [h < 17, h < 47, h < 52, h < 80],
         [
@@ -437,7 +468,7 @@ def _low_latitude(h):
     return T, P, rho
 
 
-def _mid_latitude_summer(h):
+def _mid_latitude_summer(h: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     T = np.select(
         [h < 13, h < 17, h < 47, h < 53, h < 80],
         [
@@ -455,7 +486,7 @@ def _mid_latitude_summer(h):
     return T, P, rho
 
 
-def _mid_latitude_winter(h):
+def _mid_latitude_winter(h: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     T = np.select(
         [h < 10, h < 33, h < 47, h < 53, h < 80],
         [
@@ -473,7 +504,7 @@ def _mid_latitude_winter(h):
     return T, P, rho
 
 
-def _high_latitude_summer(h):
+def _high_latitude_summer(h: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     T = np.select(
         [h < 10, h < 23, h < 48, h < 53, h < 79],
         [
@@ -491,7 +522,7 @@ def _high_latitude_summer(h):
     return T, P, rho
 
 
-def _high_latitude_winter(h):
+def _high_latitude_winter(h: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     T = np.select(
         [h < 8.5, h < 30, h < 50, h < 54],
         [
@@ -520,7 +551,7 @@ _PROFILE_FUNCS = {
 MIXING_RATIO_FLOOR = 2e-6  # P.835-6 sec. 1.2: constant water-vapour mixing ratio e/P aloft
 
 
-def reference_atmosphere(profile: str, h):
+def reference_atmosphere(profile: str, h: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
     """P.835-6 reference profile at altitude h above sea level.
 
     "standard" is the mean annual global reference atmosphere (sec. 1) with rho_0 = 7.5 g/m^3 and

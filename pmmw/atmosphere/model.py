@@ -76,10 +76,12 @@ mu = (z0 - z1) / L.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from pmmw.atmosphere import itu
 from pmmw.atmosphere.itu import NP_M_PER_DB_KM, PROFILES
@@ -87,6 +89,8 @@ from pmmw.jit import njit
 
 if TYPE_CHECKING:  # scipy.interpolate is imported where it is used: ~0.3 s a command need not pay
     from scipy.interpolate import CubicSpline
+
+FloatArray = npt.NDArray[np.float64]
 
 T_CMB = 2.725  # cosmic microwave background [K]
 R_EARTH = 6371.0e3  # mean earth radius [m]
@@ -143,7 +147,7 @@ class AtmosphereLayer:
     power_law: tuple[float, float] | None = None
     scattering: bool = True
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in LAYER_KINDS:
             raise ValueError(f"unknown weather layer kind {self.kind!r}; known: {', '.join(LAYER_KINDS)}")
         if not (0.0 <= self.base < self.top):
@@ -190,7 +194,7 @@ class Atmosphere:
     layers: tuple[AtmosphereLayer, ...] = ()
     ground_altitude: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.profile not in PROFILES:
             raise ValueError(f"unknown atmosphere profile {self.profile!r}; known: {', '.join(PROFILES)}")
         object.__setattr__(self, "layers", tuple(self.layers))
@@ -207,7 +211,7 @@ class Atmosphere:
             raise ValueError(f"humidity must be >= 0 kg/m^3, got {self.humidity}")
 
 
-def rain_power_law_db_km(rain_rate_mm_h, a, b):
+def rain_power_law_db_km(rain_rate_mm_h: npt.ArrayLike, a: float, b: float) -> FloatArray:
     """Rain specific attenuation A = a R^b [dB/km] (Murakowski 2014 sec. 3.3.4, Table 3.5).
 
     Parameters
@@ -222,7 +226,7 @@ def rain_power_law_db_km(rain_rate_mm_h, a, b):
     return a * np.asarray(rain_rate_mm_h, dtype=np.float64) ** b
 
 
-def atmosphere_profile(atm: Atmosphere, z):
+def atmosphere_profile(atm: Atmosphere, z: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Temperature, pressure and water vapour at heights z above the scene's ground.
 
     Parameters
@@ -250,7 +254,7 @@ def atmosphere_profile(atm: Atmosphere, z):
     return T, p, rho
 
 
-def vertical_grid(top: float, dz: float = DZ_GROUND, breaks=()) -> np.ndarray:
+def vertical_grid(top: float, dz: float = DZ_GROUND, breaks: Iterable[float] = ()) -> FloatArray:
     """Cell edges [m] from 0 to top: dz at the ground, growing by DZ_GROWTH up to the caps.
 
     Every height in ``breaks`` strictly inside (0, top) becomes an edge exactly; grid edges
@@ -272,7 +276,15 @@ def vertical_grid(top: float, dz: float = DZ_GROUND, breaks=()) -> np.ndarray:
     return edges
 
 
-def scattering_source(dtau, omega, g, T, *, ground_temperature, top_temperature=T_CMB):
+def scattering_source(
+    dtau: FloatArray,
+    omega: FloatArray,
+    g: FloatArray,
+    T: FloatArray,
+    *,
+    ground_temperature: float,
+    top_temperature: float = T_CMB,
+) -> tuple[FloatArray, FloatArray]:
     """Source function of each cell from the delta-Eddington field of a plane-parallel stack.
 
     The diffuse field ``I(s, mu) = I0(s) + I1(s) mu`` (mu: cosine of the propagation direction to
@@ -324,7 +336,7 @@ def scattering_source(dtau, omega, g, T, *, ground_temperature, top_temperature=
     n = 2 * K
     ab = np.zeros((5, n))  # ab[2 + i - j, j] = A[i, j]
 
-    def put(rows, cols, values):
+    def put(rows: int | npt.NDArray[np.intp], cols: int | npt.NDArray[np.intp], values: npt.ArrayLike) -> None:
         ab[2 + rows - cols, cols] = values
 
     c = 2.0 / 3.0
@@ -362,17 +374,17 @@ def scattering_source(dtau, omega, g, T, *, ground_temperature, top_temperature=
 
 
 def layered_sky_temperature(
-    edges,
-    alpha,
-    source,
-    elevation,
+    edges: npt.ArrayLike,
+    alpha: npt.ArrayLike,
+    source: npt.ArrayLike,
+    elevation: npt.ArrayLike,
     *,
-    observer_height=0.0,
-    earth_radius=R_EARTH,
-    refractive_index=None,
-    background=T_CMB,
-    source_mu=None,
-):
+    observer_height: float = 0.0,
+    earth_radius: float = R_EARTH,
+    refractive_index: npt.ArrayLike | None = None,
+    background: float = T_CMB,
+    source_mu: npt.ArrayLike | None = None,
+) -> FloatArray:
     """Brightness temperature [K] looking up through a stack of cells (Murakowski 2014 sec. 2.2.7).
 
     Parameters
@@ -416,7 +428,7 @@ def layered_sky_temperature(
         c = r_obs * np.cos(el)  # impact parameter of the ray at the observer
         if refractive_index is not None:
             n = np.asarray(refractive_index, dtype=np.float64)
-            i_obs = min(max(np.searchsorted(edges, observer_height, side="right") - 1, 0), n.size - 1)
+            i_obs = min(max(int(np.searchsorted(edges, observer_height, side="right")) - 1, 0), n.size - 1)
             b = c * (n[i_obs] / n)[None, :]  # Bouguer: n_j r cos(el_j) = n_obs r_obs cos(el)
         else:
             b = c
@@ -483,7 +495,7 @@ class AtmosphereModel:
         top: float = 100e3,
         dz: float | None = None,
         ground_temperature: float | None = None,
-    ):
+    ) -> None:
         if not (F_MIN <= frequency <= F_MAX):
             raise ValueError(f"frequency {frequency:g} Hz outside the 1-1000 GHz of the ITU-R models")
         if dz is not None and not dz > 0.0:
@@ -566,11 +578,11 @@ class AtmosphereModel:
         """Top of the model above the ground [m]."""
         return float(self.edges[-1])
 
-    def _cell(self, z) -> np.ndarray:
+    def _cell(self, z: npt.ArrayLike) -> npt.NDArray[np.intp]:
         i = np.searchsorted(self.edges, z, side="right") - 1
         return np.clip(i, 0, self.alpha.size - 1)
 
-    def specific_attenuation_db_km(self, z=0.0):
+    def specific_attenuation_db_km(self, z: npt.ArrayLike = 0.0) -> float | FloatArray:
         """Total specific attenuation at height z above the ground [dB/km] (float for scalar z)."""
         a = self.alpha[self._cell(z)] / NP_M_PER_DB_KM
         return float(a) if np.ndim(a) == 0 else a
@@ -596,7 +608,7 @@ class AtmosphereModel:
             self._sky_tables[key] = (el, T)
         return self._sky_tables[key]
 
-    def sky_temperature(self, elevation, height: float = 0.0) -> np.ndarray:
+    def sky_temperature(self, elevation: npt.ArrayLike, height: float = 0.0) -> FloatArray:
         """Sky brightness temperature Tv = Th [K] for rays leaving at these elevations.
 
         Earth curvature and refraction included; interpolated in a table computed once per
@@ -639,7 +651,7 @@ class AtmosphereModel:
         z1 = np.clip(z1.ravel(), 0.0, self.top)
         return shape, z0, z1, length.ravel()
 
-    def path(self, z0, z1, length) -> tuple[np.ndarray, np.ndarray]:
+    def path(self, z0: npt.ArrayLike, z1: npt.ArrayLike, length: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Transmittance and own emission of straight segments, seen by an observer at the z0 end.
 
         Parameters
@@ -666,7 +678,7 @@ class AtmosphereModel:
         self.walk(np.ascontiguousarray(z0), np.ascontiguousarray(z1), np.ascontiguousarray(L), trans, emission)
         return trans.reshape(shape), emission.reshape(shape)
 
-    def walk(self, z0, z1, length, trans, emission):
+    def walk(self, z0: FloatArray, z1: FloatArray, length: FloatArray, trans: FloatArray, emission: FloatArray) -> None:
         """`path` in place, for the renderer's segments (`pmmw.trace.kernels.ambient_segments`):
         ``z0``, ``z1`` already within 0..`top`, every argument a contiguous float64 array of
         shape (N,); a segment of length 0 gives transmittance 1 and no emission."""
@@ -684,7 +696,9 @@ class AtmosphereModel:
             emission,
         )
 
-    def column(self, z_top: float, z_bottom: float, s_lo: float, s_hi: float, tolerance: float = 1e-9):
+    def column(
+        self, z_top: float, z_bottom: float, s_lo: float, s_hi: float, tolerance: float = 1e-9
+    ) -> _Column | None:
         """The column between two heights as seen from its top along every slope in a range, for
         `walk_below`: its own emission against the stretch s = L / |dz| [-], a cubic spline on a
         uniform grid fine enough to be within ``tolerance`` [K] of the cell walk at every
@@ -713,7 +727,15 @@ class AtmosphereModel:
             n *= 2
         return None
 
-    def walk_below(self, column, z0, z1, length, trans, emission):
+    def walk_below(
+        self,
+        column: _Column,
+        z0: FloatArray,
+        z1: FloatArray,
+        length: FloatArray,
+        trans: FloatArray,
+        emission: FloatArray,
+    ) -> None:
         """`walk` of segments some of which cross ``column`` (`column`) in full: those that start
         at its top, end at or below its bottom and lie in its range of slopes walk only their
         part below it, with the column's transmittance and tabulated emission ahead of it
@@ -761,7 +783,7 @@ class AtmosphereModel:
             float((self.source[sl] + spread).max()),
         )
 
-    def path_loss_db(self, z0, z1, length) -> np.ndarray:
+    def path_loss_db(self, z0: npt.ArrayLike, z1: npt.ArrayLike, length: npt.ArrayLike) -> FloatArray:
         """Attenuation of straight segments, 10 log10(1/transmittance) [dB]; arguments as `path`."""
         shape, z0, z1, L = self._segments(z0, z1, length)
         return (self._tau(z0, z1, L) * (10.0 / np.log(10.0))).reshape(shape)

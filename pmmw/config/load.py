@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import math
 import re
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +30,12 @@ def default_name(path: Path) -> str:
 
 
 def load_scenario(
-    path, overrides=(), *, cli: dict | None = None, data: dict | None = None, values: dict | None = None
+    path: str | Path | None,
+    overrides: Sequence[str] = (),
+    *,
+    cli: dict | None = None,
+    data: dict | None = None,
+    values: dict | None = None,
 ) -> ScenarioConfig:
     """Read, override, validate and resolve a scenario file.
 
@@ -107,7 +113,7 @@ def load_scenario(
         raise UserErrors(list(getattr(e, "errors", [e]))) from None
 
 
-def plain(value):
+def plain(value: object) -> object:
     """A copy of ``value`` with numpy scalars and arrays as the Python numbers, booleans and
     lists they hold (in mappings, lists and tuples too): a value from numpy stands wherever its
     Python type does (``np.int64(8)`` for ``8``, ``np.bool_(True)`` for ``True``)."""

@@ -21,15 +21,26 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal, Optional, Union
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    GetCoreSchemaHandler,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 from pydantic_core import core_schema
 
 from pmmw.atmosphere.model import F_MAX, F_MIN
 from pmmw.errors import UserError
 from pmmw.io.inputs import format_suffix, no_extension, path_problem, shown
 from pmmw.units import TEMPERATURE_MAX, parse_quantity
+
+if TYPE_CHECKING:
+    from pmmw.atmosphere.model import AtmosphereLayer
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".stl", ".off")
 CHANNELS = ("I", "Q", "U", "V", "Ex2", "Ey2")
@@ -58,10 +69,10 @@ class Quantity:
     n: Optional[int] = None
     many: bool = False
 
-    def __get_pydantic_core_schema__(self, source, handler):
+    def __get_pydantic_core_schema__(self, source: Any, handler: GetCoreSchemaHandler) -> core_schema.CoreSchema:
         return core_schema.no_info_before_validator_function(self.parse, handler(source))
 
-    def parse(self, value):
+    def parse(self, value: object) -> float | tuple | None:
         if value is None:
             return None
         if self.n is not None:
@@ -147,7 +158,7 @@ def frequency_problem(f: float) -> str | None:
     )
 
 
-def parse_frequency(value, option: str = "--frequency") -> float:
+def parse_frequency(value: str | float, option: str = "--frequency") -> float:
     """A frequency given on the command line or to the Python API ('95 GHz', or a number [Hz]),
     checked against `FREQUENCY_RANGE`; errors name ``option``."""
     f = parse_quantity(value, "frequency", file=option) if isinstance(value, str) else float(value)
@@ -562,7 +573,7 @@ class WeatherLayer(_Model):
             )
         return self
 
-    def model_layer(self, f: float, half_band: float = 0.0):
+    def model_layer(self, f: float, half_band: float = 0.0) -> AtmosphereLayer | None:
         """This slab as the atmosphere model takes it at frequency f [Hz] (`pmmw.atmosphere.model.AtmosphereLayer`);
         None where its power law has no coefficients within ``half_band`` [Hz] of f."""
         from pmmw.atmosphere.model import AtmosphereLayer
@@ -626,7 +637,7 @@ class AtmosphereConfig(_Model):
             )
         return self
 
-    def weather_at(self, f: float, half_band: float = 0.0, file=None) -> tuple:
+    def weather_at(self, f: float, half_band: float = 0.0, file: str | Path | None = None) -> tuple:
         """The weather layers as `pmmw.atmosphere.model.AtmosphereLayer` records at frequency f [Hz], a
         rain power law's entry taken within ``half_band`` [Hz] of f (a sub-band of the imager's band).
 

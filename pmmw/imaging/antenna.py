@@ -57,7 +57,9 @@ def edge_field(edge_taper_db: float) -> float:
     return 10.0 ** (-edge_taper_db / 20.0)
 
 
-def illumination(rho, kind: str = "uniform", edge_taper_db: float = 0.0, blockage: float = 0.0):
+def illumination(
+    rho: np.typing.ArrayLike, kind: str = "uniform", edge_taper_db: float = 0.0, blockage: float = 0.0
+) -> np.ndarray:
     """Aperture field f(rho) [-] at normalized radius ``rho`` (ndarray in [0, 1]); zero inside the
     blockage (ratio of diameters ``blockage``)."""
     rho = np.asarray(rho, dtype=float)
@@ -83,7 +85,7 @@ class Aperture:
     spillover: float = 0.0  # fraction of the feed's power that misses the reflector [-]
     spillover_temperature: float = 290.0  # [K]
 
-    def _nodes(self, u_max: float):
+    def _nodes(self, u_max: float) -> tuple[np.ndarray, np.ndarray]:
         """Gauss-Legendre nodes and weights on [blockage, 1], enough for J0(u rho) up to ``u_max``."""
         n = int(max(64, u_max / 2.0 + 64))
         x, w = np.polynomial.legendre.leggauss(n)
@@ -91,7 +93,7 @@ class Aperture:
         rho = 0.5 * (1.0 - b) * x + 0.5 * (1.0 + b)
         return rho, 0.5 * (1.0 - b) * w
 
-    def field(self, u):
+    def field(self, u: np.typing.ArrayLike) -> np.ndarray:
         """F(u) [-] (module docstring) at ``u`` = k a sin(theta) (ndarray)."""
         u = np.asarray(u, dtype=float)
         flat = u.ravel()
@@ -102,7 +104,7 @@ class Aperture:
             out[s : s + 4096] = j0(np.outer(flat[s : s + 4096], rho)) @ fw
         return out.reshape(u.shape)
 
-    def power(self, u):
+    def power(self, u: np.typing.ArrayLike) -> np.ndarray:
         """Normalized power pattern |F(u) / F(0)|^2 [-] (1 on axis)."""
         return (self.field(u) / self.field(np.zeros(1))[0]) ** 2
 
@@ -117,7 +119,7 @@ class Aperture:
         s1, s2 = self.aperture_integrals()
         return 2.0 * s1 * s1 / s2
 
-    def encircled_energy(self, u) -> np.ndarray:
+    def encircled_energy(self, u: np.typing.ArrayLike) -> np.ndarray:
         """Fraction of the beam's energy within ``u`` (ndarray of increasing u >= 0) by the
         trapezoidal rule on a `_U_STEP` grid, normalized by Parseval's aperture integral."""
         u = np.atleast_1d(np.asarray(u, dtype=float))
@@ -156,7 +158,7 @@ def gaussian_feed_spillover(edge_taper_db: float) -> float:
 
 def antenna_kernel(
     pixel_angle: float, k0: float, aperture_diameter: float, aperture: Aperture, max_radius: int = _MAX_RADIUS_PX
-):
+) -> np.ndarray:
     """Pixel-integrated PSF of ``aperture``, normalized to unit sum (as `imaging.imager.psf_kernel`
     does for the Airy pattern, with the same radius: that enclosing all but `PSF_ENERGY_TAIL` of
     the Airy pattern's energy, which tapered beams' lower sidelobes enclose better).

@@ -57,7 +57,7 @@ def channel_sigma(noise: float, channel: str) -> float:
     return float(noise) if channel in POLARIZATION_CHANNELS else float(noise) * np.sqrt(2.0)
 
 
-def footprint(mask, kernel=None) -> np.ndarray:
+def footprint(mask: np.typing.ArrayLike, kernel: np.ndarray | None = None) -> np.ndarray:
     """The blurred footprint of a region: ``psf * 1_M``, (H, W) float64, from a boolean (H, W)
     ``mask`` and the imager's unit-sum PSF ``kernel`` (None: no blur)."""
     m = np.asarray(mask, dtype=float)
@@ -68,13 +68,13 @@ def footprint(mask, kernel=None) -> np.ndarray:
     return blur(m, kernel)
 
 
-def footprint_norm(mask, kernel=None) -> float:
+def footprint_norm(mask: np.typing.ArrayLike, kernel: np.ndarray | None = None) -> float:
     """sqrt(sum_k (psf * 1_M)_k^2) [-]: sqrt(N) for an unblurred region of N pixels, less where
     the blur spreads it."""
     return float(np.sqrt(np.sum(np.square(footprint(mask, kernel)))))
 
 
-def matched_filter_snr(signal, sigma: float) -> float | None:
+def matched_filter_snr(signal: np.typing.ArrayLike, sigma: float) -> float | None:
     """SNR of the matched filter for ``signal`` (H, W) [K] in white noise ``sigma`` [K] per pixel:
     sqrt(sum signal^2) / sigma; None when ``sigma`` is 0 (no noise: nothing to say)."""
     if not sigma > 0.0:
@@ -82,7 +82,7 @@ def matched_filter_snr(signal, sigma: float) -> float | None:
     return float(np.sqrt(np.sum(np.square(np.asarray(signal, dtype=float)))) / sigma)
 
 
-def replicate_snr(signal_a, signal_b, sigma: float) -> float | None:
+def replicate_snr(signal_a: np.typing.ArrayLike, signal_b: np.typing.ArrayLike, sigma: float) -> float | None:
     """`matched_filter_snr` of a signal known only through two independent Monte Carlo estimates
     ``signal_a``, ``signal_b`` (H, W) [K] (the two replicates of a render pair, `trace.integrator.
     TileResult.replicate_diff`): sqrt(max(sum a b, 0)) / sigma. The product of independent
@@ -94,7 +94,13 @@ def replicate_snr(signal_a, signal_b, sigma: float) -> float | None:
     return float(np.sqrt(max(energy, 0.0)) / sigma)
 
 
-def region_snr(contrast: float, mask, kernel, sigma: float, norm: float | None = None) -> float | None:
+def region_snr(
+    contrast: float,
+    mask: np.typing.ArrayLike,
+    kernel: np.ndarray | None,
+    sigma: float,
+    norm: float | None = None,
+) -> float | None:
     """SNR of a target of uniform ``contrast`` [K] (ideal image) over the region ``mask``, seen
     through the PSF ``kernel`` in noise ``sigma`` [K] per pixel; None without noise. ``norm``:
     the region's `footprint_norm`, when the caller has it already (a report uses it for every
@@ -104,7 +110,7 @@ def region_snr(contrast: float, mask, kernel, sigma: float, norm: float | None =
     return abs(float(contrast)) * (footprint_norm(mask, kernel) if norm is None else float(norm)) / sigma
 
 
-def effective_sigma(mask, kernel, sigma_map) -> float:
+def effective_sigma(mask: np.typing.ArrayLike, kernel: np.ndarray | None, sigma_map: np.typing.ArrayLike) -> float:
     """The one noise sigma [K] of a matched filter for the target ``mask`` blurred by ``kernel`` in
     independent noise whose sigma differs from pixel to pixel (``sigma_map`` (H, W) [K], a
     receiver's: `imaging.receiver`). The prewhitened matched filter's SNR is
@@ -116,7 +122,7 @@ def effective_sigma(mask, kernel, sigma_map) -> float:
     return float(norm / np.sqrt(np.sum(np.square(fp / np.asarray(sigma_map, dtype=float)))))
 
 
-def probability_of_detection(snr, pfa: float):
+def probability_of_detection(snr: np.typing.ArrayLike, pfa: float) -> float | np.ndarray:
     """Probability of detection [-] of a matched filter at matched-filter SNR ``snr`` (float or
     ndarray) and false-alarm probability ``pfa`` [-] per test, for a known signal in white
     Gaussian noise: Pd = Q(Q^-1(Pfa) - SNR), Q the Gaussian tail probability (Kay 1998, eq. 4.14).
@@ -165,7 +171,7 @@ def verdict_words(snr: float | None, snr_stderr: float | None = None) -> str:
     return words
 
 
-def contrast_verdict(pair: str, by_channel) -> str:
+def contrast_verdict(pair: str, by_channel: dict[str, tuple[float | None, ...]]) -> str:
     """One line in words for a contrast over its channels, the best first:
     ``beacon - runway: detectable in Ey2 (SNR 7.2 ± 0.3), I (SNR 6.1 ± 0.2); not in Ex2 (SNR 3.1 ±
     0.2)``. ``by_channel``: channel -> (snr, snr_stderr) as `verdict_words` takes them, or (snr,
@@ -194,7 +200,9 @@ def contrast_verdict(pair: str, by_channel) -> str:
     return f"{pair}: {words}"
 
 
-def detection_limit(xs, snrs, snr_stderrs=None) -> dict:
+def detection_limit(
+    xs: np.typing.ArrayLike, snrs: np.typing.ArrayLike, snr_stderrs: list[float | None] | None = None
+) -> dict:
     """Where along a swept axis a contrast stops being detected (`ROSE_SNR`): its detection range
     (or frequency, aperture, integration time).
 

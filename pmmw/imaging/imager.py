@@ -16,15 +16,22 @@ from __future__ import annotations
 import hashlib
 import threading
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 from scipy.special import j1
+
+if TYPE_CHECKING:
+    from pmmw.imaging.receiver import Receiver
 
 PSF_ENERGY_TAIL = 2e-3  # fraction of the Airy energy allowed outside the kernel
 _MAX_RADIUS_PX = 256
 
+FloatArray = npt.NDArray[np.float64]
 
-def airy(theta, k0: float, radius: float):
+
+def airy(theta: FloatArray, k0: float, radius: float) -> FloatArray:
     """Airy intensity pattern (eq. 2.41), 1 on axis.
 
     Parameters
@@ -50,7 +57,7 @@ def _airy_encircled_energy(x):
     return 1.0 - j0(x) ** 2 - j1(x) ** 2
 
 
-def psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int = _MAX_RADIUS_PX):
+def psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int = _MAX_RADIUS_PX) -> FloatArray:
     """Pixel-integrated Airy kernel, normalized to unit sum (computed once per set of arguments:
     a render asks for it when sizing adaptive sampling and again for the imager model; each caller
     gets its own copy).
@@ -72,7 +79,7 @@ def psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radi
 
 
 @lru_cache(maxsize=8)
-def _psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int):
+def _psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int) -> FloatArray:
     a = aperture_diameter / 2.0
     # radius (in x = k a th) enclosing all but PSF_ENERGY_TAIL of the energy; the tail of the
     # encircled energy goes as 2 / (pi x), so x_max ~ 2 / (pi tail)
@@ -95,7 +102,7 @@ def _psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_rad
     return val / val.sum()
 
 
-def error_footprint(kernel) -> float:
+def error_footprint(kernel: FloatArray) -> float:
     """1 / sqrt(sum psf^2) of a unit-sum kernel: how much larger than the blurred error the
     per-pixel errors may be (>= 1).
 
@@ -106,7 +113,7 @@ def error_footprint(kernel) -> float:
     return float(1.0 / np.sqrt(np.sum(np.square(kernel))))
 
 
-def fftconvolve(in1, in2, mode: str = "same"):
+def fftconvolve(in1: FloatArray, in2: FloatArray, mode: str = "same") -> FloatArray:
     """``scipy.signal.fftconvolve(in1, in2, mode="same")`` of two real arrays, by the same
     operations with `scipy.fft` alone (scipy 1.17's ``_freq_domain_conv``: real FFTs of the
     next fast lengths, axes of length 1 by broadcasting, the centre cut out), so the numbers are
@@ -154,7 +161,7 @@ def _spectrum(kernel, fshape, axes):
         return _SPECTRA[key]
 
 
-def blur(img, kernel):
+def blur(img: FloatArray, kernel: FloatArray) -> FloatArray:
     """Convolve an image (H, W) with a kernel, mirroring the borders. Returns (H, W) float64."""
     r = kernel.shape[0] // 2
     h, w = img.shape
@@ -163,7 +170,7 @@ def blur(img, kernel):
     return out[r : r + h, r : r + w]
 
 
-def blur_adjoint(weights, kernel):
+def blur_adjoint(weights: FloatArray, kernel: FloatArray) -> np.ndarray:
     """The transpose of `blur`: for a linear functional sum(weights * blur(img)) of the sensor
     image, the per-pixel weights it puts on the ideal image. (H, W) -> (H, W) float64.
 
@@ -187,12 +194,12 @@ def apply_imager(
     aperture_diameter: float,
     noise: float,
     seed: int,
-    kernel=None,
+    kernel: FloatArray | None = None,
     spillover: float = 0.0,
     spillover_temperature: float = 0.0,
-    receiver=None,
+    receiver: Receiver | None = None,
     noise_maps: dict | None = None,
-):
+) -> dict[str, FloatArray]:
     """The sensor image from the ideal one.
 
     Parameters

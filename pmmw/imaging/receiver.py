@@ -32,9 +32,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 T0_NOISE_FIGURE = 290.0  # [K] the reference temperature of a noise figure (IEEE; Pozar 2012, sec. 10.2)
 NETD_SCENE_K = 300.0  # [K] the scene temperature the NETD is stated at (a room-temperature scene)
+FloatArray = npt.NDArray[np.float64]
+
 MODES = ("total_power", "dicke")
 
 
@@ -50,14 +53,14 @@ def dwell_time(frame_rate: float, pixels_per_receiver: int) -> float:
 
 
 def radiometer_sigma(
-    t_a,
+    t_a: npt.ArrayLike,
     t_rec: float,
     bandwidth: float,
     tau: float,
     mode: str = "total_power",
     gain_fluctuation: float = 0.0,
-    t_ref=None,
-):
+    t_ref: float | None = None,
+) -> float | FloatArray:
     """1-sigma noise [K] of a radiometer reading antenna temperature ``t_a`` (module docstring).
 
     Parameters
@@ -105,7 +108,7 @@ class Receiver:
     gain_fluctuation: float = 0.0
     t_ref: float | None = None
 
-    def sigma(self, t_a):
+    def sigma(self, t_a: npt.ArrayLike) -> float | FloatArray:
         """`radiometer_sigma` of this receiver at antenna temperature ``t_a`` [K]."""
         return radiometer_sigma(t_a, self.t_rec, self.bandwidth, self.tau, self.mode, self.gain_fluctuation, self.t_ref)
 

@@ -30,13 +30,16 @@ from __future__ import annotations
 
 import cmath
 import math
-from typing import NamedTuple
+from typing import Literal, NamedTuple, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from pmmw.jit import inline, njit
 
 __all__ = ["Fresnel", "normal_component", "interface"]
+
+ComplexArray = npt.NDArray[np.complex128]
 
 # Tolerance on Im(eps - kpar2), in units of |eps| + |kpar2|, below which a negative imaginary part
 # is taken as rounding noise of an exactly real argument (a few ulp of the subtraction).
@@ -81,7 +84,7 @@ class Fresnel(NamedTuple):
     Ap: np.ndarray
 
 
-def normal_component(eps, kpar2, branch="decaying"):
+def normal_component(eps: npt.ArrayLike, kpar2: npt.ArrayLike, branch: str = "decaying") -> ComplexArray:
     """Normal wave-vector component ``q = sqrt(eps - kpar2)`` on an explicit branch.
 
     Parameters
@@ -407,7 +410,7 @@ def conductor1():
     return (-1.0 + 0j, 1.0 + 0j, 0j, 0j, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, complex(np.nan, 0.0))
 
 
-def perfect_conductor(n):
+def perfect_conductor(n: int) -> Fresnel:
     """`conductor1` for n rays, as a `Fresnel` of arrays of shape (n,)."""
     return Fresnel(*(np.full(n, v) for v in conductor1()[:10]))
 
@@ -420,7 +423,21 @@ def _interface_loop(eps1, eps2, cos1, amp, power, q2):
         power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 
 
-def interface(eps1, eps2, cos1, with_q2=False):
+@overload
+def interface(
+    eps1: npt.ArrayLike, eps2: npt.ArrayLike, cos1: npt.ArrayLike, with_q2: Literal[False] = False
+) -> Fresnel: ...
+
+
+@overload
+def interface(
+    eps1: npt.ArrayLike, eps2: npt.ArrayLike, cos1: npt.ArrayLike, with_q2: Literal[True]
+) -> tuple[Fresnel, ComplexArray]: ...
+
+
+def interface(
+    eps1: npt.ArrayLike, eps2: npt.ArrayLike, cos1: npt.ArrayLike, with_q2: bool = False
+) -> Fresnel | tuple[Fresnel, ComplexArray]:
     """Fresnel coefficients of a smooth interface from medium 1 into medium 2.
 
     Parameters

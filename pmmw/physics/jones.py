@@ -46,9 +46,13 @@ All four are Rayleigh-Jeans brightness temperatures [K] and add linearly over ra
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+ComplexArray = npt.NDArray[np.complex128]
 
 
-def basis_change(s_old, p_old, s_new, p_new):
+def basis_change(s_old: FloatArray, p_old: FloatArray, s_new: FloatArray, p_new: FloatArray) -> FloatArray:
     """Matrix taking components in (s_new, p_new) to components in (s_old, p_old).
 
     Parameters
@@ -69,7 +73,7 @@ def basis_change(s_old, p_old, s_new, p_new):
     return b
 
 
-def rebase(m, s_old, p_old, s_new, p_new):
+def rebase(m: ComplexArray, s_old: FloatArray, p_old: FloatArray, s_new: FloatArray, p_new: FloatArray) -> ComplexArray:
     """``M @ basis_change(s_old, p_old, s_new, p_new)``: a Jones matrix re-expressed in a new
     local basis (Murakowski 2014 eq. 2.35), written out per element (3 x faster than a batched matmul
     of 2 x 2 matrices).
@@ -91,7 +95,7 @@ def rebase(m, s_old, p_old, s_new, p_new):
     return out
 
 
-def stokes_terms(n_mat, ta, tb):
+def stokes_terms(n_mat: ComplexArray, ta: FloatArray, tb: FloatArray) -> FloatArray:
     """Stokes contributions of incoherent emission seen through ``N``.
 
     Parameters
@@ -116,7 +120,7 @@ def stokes_terms(n_mat, ta, tb):
     return out
 
 
-def row_power(m):
+def row_power(m: ComplexArray) -> FloatArray:
     """Largest fraction of detector power a branch can still carry, max over Ex and Ey rows.
 
     Parameters
@@ -132,7 +136,7 @@ def row_power(m):
     return np.maximum(p[:, 0, 0] + p[:, 0, 1], p[:, 1, 0] + p[:, 1, 1])
 
 
-def stokes_images(acc):
+def stokes_images(acc: FloatArray) -> dict[str, FloatArray]:
     """Per-pixel (Ex2, Ey2, U, V) -> the six output channels.
 
     Parameters

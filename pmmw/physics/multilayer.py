@@ -35,9 +35,10 @@ import cmath
 import math
 
 import numpy as np
+import numpy.typing as npt
 
 from pmmw.jit import inline, njit
-from pmmw.physics.fresnel import _as_fresnel, _close1, _incident1, _l1, _normal_below1, _yp1
+from pmmw.physics.fresnel import Fresnel, _as_fresnel, _close1, _incident1, _l1, _normal_below1, _yp1
 
 __all__ = ["stack", "stack1"]
 
@@ -145,7 +146,9 @@ def _stack_loop(eps, thickness, cos1, k0, metal, amp, power):
         power[i, 0], power[i, 1], power[i, 2], power[i, 3], power[i, 4], power[i, 5] = Rs, Rp, Ts, Tp, As, Ap
 
 
-def stack(eps, thickness, cos1, k0, substrate="dielectric"):
+def stack(
+    eps: npt.ArrayLike, thickness: npt.ArrayLike, cos1: npt.ArrayLike, k0: float, substrate: str = "dielectric"
+) -> Fresnel:
     """Reflection, transmission and absorption of a coherent multilayer stack.
 
     Parameters

@@ -133,9 +133,11 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+import numpy.typing as npt
 from scipy import special
 
 from pmmw.errors import UserError, UserErrors
@@ -173,6 +175,8 @@ _BATCH = 8192  # candidates per numpy call once few rays remain
 _TINY = 1e-300
 _SQRT_PI = math.sqrt(math.pi)
 
+FloatArray = npt.NDArray[np.float64]
+
 
 @runtime_checkable
 class MicrofacetModel(Protocol):
@@ -180,13 +184,17 @@ class MicrofacetModel(Protocol):
 
     name: str
 
-    def sample_normals(self, n_macro, tangent, wo, u1, u2) -> tuple[np.ndarray, np.ndarray]: ...
+    def sample_normals(
+        self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]: ...
 
-    def shadowing(self, n_macro, m, wi, wo, tangent=None) -> np.ndarray: ...
+    def shadowing(
+        self, n_macro: FloatArray, m: FloatArray, wi: FloatArray, wo: FloatArray, tangent: FloatArray | None = None
+    ) -> FloatArray: ...
 
-    def masking(self, n_macro, tangent, w) -> np.ndarray: ...
+    def masking(self, n_macro: FloatArray, tangent: FloatArray | None, w: FloatArray) -> FloatArray: ...
 
-    def pdf(self, n_macro, tangent, wo, m) -> np.ndarray: ...
+    def pdf(self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, m: FloatArray) -> FloatArray: ...
 
 
 # ----------------------------------------------------------------------------------------------
@@ -194,7 +202,9 @@ class MicrofacetModel(Protocol):
 # ----------------------------------------------------------------------------------------------
 
 
-def local_frame(n_macro, tangent, orientation=0.0):
+def local_frame(
+    n_macro: npt.ArrayLike, tangent: npt.ArrayLike, orientation: float = 0.0
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Orthonormal frame (x, y, z = n) with x the tangent rotated by ``orientation`` about n.
 
     Parameters
@@ -517,7 +527,7 @@ class _Microfacet:
     anisotropic = False
     code = OTHER_CODE  # masking by the array code (`smith_g1` covers GGX and Beckmann)
 
-    def __init__(self, orientation_deg=0.0):
+    def __init__(self, orientation_deg: float = 0.0) -> None:
         self.orientation = math.radians(float(orientation_deg))
 
     # -- local-frame hooks ----------------------------------------------------------------
@@ -548,7 +558,7 @@ class _Microfacet:
         return local_frame(n_macro, tangent, self.orientation)
 
     # -- public API (world frame) --------------------------------------------------------------
-    def D(self, n_macro, tangent, m):
+    def D(self, n_macro: FloatArray, tangent: FloatArray | None, m: FloatArray) -> FloatArray:
         """Normal distribution ``D(m)`` [1/sr], normalized as ``int D (m.n) dw = 1``.
 
         Parameters
@@ -565,7 +575,7 @@ class _Microfacet:
         frame = self._frame(n_macro, tangent)
         return self._d_local(_to_local(np.asarray(m, dtype=np.float64), frame))
 
-    def projected_area(self, n_macro, tangent, w):
+    def projected_area(self, n_macro: FloatArray, tangent: FloatArray | None, w: FloatArray) -> FloatArray:
         """``A(w) = int (w.m)+ D(m) dw_m`` [-] for any unit ``w`` (also below the horizon).
 
         ``A(n) = 1``; ``A(w) - A(-w) = w.n``; Smith's masking is ``G1 = (w.n)/A(w)``.
@@ -573,7 +583,7 @@ class _Microfacet:
         frame = self._frame(n_macro, tangent)
         return _area_any(self._a_up_local, _to_local(np.asarray(w, dtype=np.float64), frame))
 
-    def masking(self, n_macro, tangent, w):
+    def masking(self, n_macro: FloatArray, tangent: FloatArray | None, w: FloatArray) -> FloatArray:
         """Smith masking ``G1(w) = max(w.n, 0) / A(w)`` in [0, 1]: the probability that a ray
         leaving the surface along ``w`` (unit, shape (N, 3)) is not blocked by the microsurface;
         0 for directions on the wrong side of the macro surface."""
@@ -586,14 +596,16 @@ class _Microfacet:
             out[up] = np.clip(wl[up, 2] / a, 0.0, 1.0)
         return out
 
-    def shadowing(self, n_macro, m, wi, wo, tangent=None):
+    def shadowing(
+        self, n_macro: FloatArray, m: FloatArray, wi: FloatArray, wo: FloatArray, tangent: FloatArray | None = None
+    ) -> FloatArray:
         """Bidirectional shadowing-masking ``G2`` of the estimator: ``G1(wi) G1(wo)`` where both
         see the facet (``wi.m > 0`` and ``wo.m > 0``), else 0. Shapes (N, 3) -> (N,), in [0, 1]."""
         m = np.asarray(m, dtype=np.float64)
         g = self.masking(n_macro, tangent, wi) * self.masking(n_macro, tangent, wo)
         return np.where((dot(np.asarray(wi, float), m) > 0.0) & (dot(np.asarray(wo, float), m) > 0.0), g, 0.0)
 
-    def pdf(self, n_macro, tangent, wo, m):
+    def pdf(self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, m: FloatArray) -> FloatArray:
         """Density of `sample_normals`, the visible normals ``D_wo(m) = (wo.m)+ D(m)/A(wo)``
         [1/sr of m]."""
         frame = self._frame(n_macro, tangent)
@@ -603,7 +615,9 @@ class _Microfacet:
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(a > 0.0, np.maximum(dot(wl, ml), 0.0) * self._d_local(ml) / np.where(a > 0.0, a, 1.0), 0.0)
 
-    def sample_normals(self, n_macro, tangent, wo, u1, u2):
+    def sample_normals(
+        self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         """Draw microfacet normals visible from ``wo`` (exact; weight 1 but in the rare fallback).
 
         Parameters
@@ -636,7 +650,9 @@ class _Microfacet:
         ml, weight = self._vndf_local(wl, u1, u2)
         return _to_world(ml, frame), np.where(dot(ml, wl) > 0.0, weight, 0.0)
 
-    def sample_dcos(self, n_macro, tangent, u1, u2):
+    def sample_dcos(
+        self, n_macro: FloatArray, tangent: FloatArray | None, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         """Normals drawn from ``D(m) (m.n)`` (Optics Express 2016's sampling formula generalized), with
         that density [1/sr]; no visibility. Used for quadratures (`pmmw brdf --method analytic`)."""
         frame = self._frame(n_macro, tangent)
@@ -710,11 +726,11 @@ class _Microfacet:
             weighted(idx, v1, v2)
         return m, weight
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         params = ", ".join(f"{k}={v!r}" for k, v in self.params().items())
         return f"{type(self).__name__}({params})"
 
-    def params(self) -> dict:
+    def params(self) -> dict[str, float]:
         return {}
 
 
@@ -731,7 +747,7 @@ class _ASProjectedArea:
     _N_PHI = 49
     _N_QUAD = 48
 
-    def __init__(self, ex, ey):
+    def __init__(self, ex: float, ey: float) -> None:
         self.ex, self.ey = float(ex), float(ey)
         t = np.linspace(0.0, 1.0, self._N_COS)
         self.cos_nodes = np.sin(0.5 * np.pi * t) ** 2  # dense near grazing (cos -> 0)
@@ -743,11 +759,11 @@ class _ASProjectedArea:
         approx = _phong_a_up(self.effective_exponent(np.cos(p) ** 2, np.sin(p) ** 2), c, s2)
         self.ratio = (exact / approx).reshape(self._N_COS, self._N_PHI)
 
-    def effective_exponent(self, cos2, sin2):
+    def effective_exponent(self, cos2: FloatArray, sin2: FloatArray) -> FloatArray:
         """``1/(e+2) = cos^2 phi/(ex+2) + sin^2 phi/(ey+2)`` (exact along the axes when ex == ey)."""
         return 1.0 / (cos2 / (self.ex + 2.0) + sin2 / (self.ey + 2.0)) - 2.0
 
-    def exact(self, c, phi_w):
+    def exact(self, c: FloatArray, phi_w: FloatArray) -> FloatArray:
         """Exact A for cos(theta_w) = c >= 0 and azimuth phi_w, arrays of one shape (slow).
 
         The azimuth integral runs over ``psi`` with ``tan(phi) = k tan(psi)``,
@@ -787,7 +803,7 @@ class _ASProjectedArea:
             total += (j * dphi * (0.5 * np.pi) * wq[None, :]).sum(axis=1)
         return root / (2.0 * math.pi) * total
 
-    def __call__(self, w):
+    def __call__(self, w: FloatArray) -> FloatArray:
         """A for local directions with w.z >= 0, shape (N, 3)."""
         c = w[:, 2]
         r2 = w[:, 0] ** 2 + w[:, 1] ** 2
@@ -823,7 +839,7 @@ class AshikhminShirley(_Microfacet):
 
     name = "ashikhmin_shirley"
 
-    def __init__(self, ex, ey, orientation_deg=0.0):
+    def __init__(self, ex: float, ey: float, orientation_deg: float = 0.0) -> None:
         super().__init__(orientation_deg)
         self.ex, self.ey = float(ex), float(ey)
         if not (self.ex >= 0.0 and self.ey >= 0.0 and math.isfinite(self.ex) and math.isfinite(self.ey)):
@@ -833,7 +849,7 @@ class AshikhminShirley(_Microfacet):
         self._area_table = _area_table(self.ex, self.ey) if self.anisotropic else None
         self._setup_proposal()
 
-    def params(self):
+    def params(self) -> dict[str, float]:
         return {"ex": self.ex, "ey": self.ey, "orientation_deg": math.degrees(self.orientation)}
 
     def _setup_proposal(self):
@@ -843,7 +859,7 @@ class AshikhminShirley(_Microfacet):
         # over t is 1 for gamma >= 4 and h*(e) at t = (4-gamma)/e otherwise; h* decreases with e,
         # so the bound is at the smaller exponent. gamma is chosen to minimize the bound.
         emin = min(self.ex, self.ey)
-        best = None
+        best: tuple[float, float, float] | None = None
         for gamma in np.linspace(1.0, 4.0, 301):
             log_h = self._log_hstar(emin, gamma)
             log_k = (
@@ -855,6 +871,7 @@ class AshikhminShirley(_Microfacet):
             )
             if best is None or log_k < best[0]:
                 best = (log_k, gamma, log_h)
+        assert best is not None  # the loop runs 301 times
         _, self._gamma, self._log_hsup = best
         self._ax = math.sqrt(self._gamma / (self.ex + 4.0))
         self._ay = math.sqrt(self._gamma / (self.ey + 4.0))
@@ -931,19 +948,19 @@ class BlinnPhong(AshikhminShirley):
 
     name = "blinn_phong"
 
-    def __init__(self, m):
+    def __init__(self, m: float) -> None:
         super().__init__(m, m, 0.0)
         self.m = float(m)
 
-    def params(self):
+    def params(self) -> dict[str, float]:
         return {"m": self.m}
 
-    def mean_cos(self, cos_theta):
+    def mean_cos(self, cos_theta: npt.ArrayLike) -> FloatArray:
         """Stryjewski et al. 2009 eq. 18: ``<k.h>+`` over ``rho(h) = (m+1)/(2 pi) cos^m`` (`blinn_phong_mean_cos`)."""
         return blinn_phong_mean_cos(self.m, cos_theta)
 
 
-def blinn_phong_mean_cos(m, cos_theta):
+def blinn_phong_mean_cos(m: npt.ArrayLike, cos_theta: npt.ArrayLike) -> FloatArray:
     """Stryjewski et al. 2009 eq. 18, ``<k.h>+ = int rho(h) (k.h)+ dw_h`` with ``rho = (m+1)/(2 pi) cos^m``.
 
     Stable replacement of Stryjewski et al. 2009 eq. 19-23 (module docstring): ``(m+1)/(m+2) A(theta)``.
@@ -975,16 +992,24 @@ class GGX(_Microfacet):
     name = "ggx"
     code = GGX_CODE  # compiled masking (`smith_g1`)
 
-    def __init__(self, alpha=None, alpha_x=None, alpha_y=None, orientation_deg=0.0):
+    def __init__(
+        self,
+        alpha: float | None = None,
+        alpha_x: float | None = None,
+        alpha_y: float | None = None,
+        orientation_deg: float = 0.0,
+    ) -> None:
         super().__init__(orientation_deg)
         if alpha is not None:
             alpha_x = alpha_y = alpha
+        if alpha_x is None or alpha_y is None:
+            raise ValueError("give alpha, or both alpha_x and alpha_y")
         self.ax, self.ay = float(alpha_x), float(alpha_y)
         if not (self.ax > 0.0 and self.ay > 0.0 and math.isfinite(self.ax) and math.isfinite(self.ay)):
             raise ValueError(f"alpha must be finite and > 0, got {alpha_x!r}, {alpha_y!r}")
         self.anisotropic = self.ax != self.ay
 
-    def params(self):
+    def params(self) -> dict[str, float]:
         if self.anisotropic:
             return {"alpha_x": self.ax, "alpha_y": self.ay, "orientation_deg": math.degrees(self.orientation)}
         return {"alpha": self.ax}
@@ -1002,7 +1027,9 @@ class GGX(_Microfacet):
     def _vndf_local(self, wo, u1, u2):
         return _ggx_vndf_local(wo, self.ax, self.ay, u1, u2), np.ones(wo.shape[0])
 
-    def sample_normals(self, n_macro, tangent, wo, u1, u2):
+    def sample_normals(
+        self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         # the compiled per-ray draw (the same arithmetic as the array code of the base class)
         if self.anisotropic and tangent is None:
             raise ValueError(f"{self.name}: an anisotropic model needs the tangent")
@@ -1022,7 +1049,7 @@ class GGX(_Microfacet):
         )
         return m, weight
 
-    def masking(self, n_macro, tangent, w):
+    def masking(self, n_macro: FloatArray, tangent: FloatArray | None, w: FloatArray) -> FloatArray:
         if self.anisotropic and tangent is None:
             raise ValueError(f"{self.name}: an anisotropic model needs the tangent")
         n, t, w = _rows(n_macro, tangent, w)
@@ -1067,7 +1094,9 @@ class Beckmann(GGX):
     def _vndf_local(self, wo, u1, u2):
         return self._rejection_vndf(wo, u1, u2, self.ax, self.ay, self._log_accept, 4.0 / math.e)
 
-    def sample_normals(self, n_macro, tangent, wo, u1, u2):
+    def sample_normals(
+        self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         return _Microfacet.sample_normals(self, n_macro, tangent, wo, u1, u2)  # by rejection (array code)
 
     def _dcos_local(self, u1, u2):
@@ -1084,14 +1113,14 @@ class BlenderGloss(_Microfacet):
 
     name = "blender_gloss"
 
-    def __init__(self, gloss):
+    def __init__(self, gloss: float) -> None:
         super().__init__(0.0)
         self.gloss = float(gloss)
         if not 0.0 <= self.gloss <= 1.0:
             raise ValueError(f"gloss must lie in [0, 1], got {gloss!r}")
         self.L = (1.0 - self.gloss) ** 3
 
-    def params(self):
+    def params(self) -> dict[str, float]:
         return {"gloss": self.gloss}
 
     def _perturbation(self, u1, u2):
@@ -1134,23 +1163,25 @@ class BlenderGloss(_Microfacet):
             m[back] = unit(np.stack([-px[back], -py[back], np.ones(int(back.sum()))], axis=1))
         return m
 
-    def sample_normals(self, n_macro, tangent, wo, u1, u2):
+    def sample_normals(
+        self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         frame = self._frame(n_macro, tangent)
         wl = _to_local(np.asarray(wo, dtype=np.float64), frame)
         ml = self._sample(wl, np.asarray(u1, dtype=np.float64), np.asarray(u2, dtype=np.float64))
         return _to_world(ml, frame), (dot(ml, wl) > 0.0).astype(np.float64)
 
-    def masking(self, n_macro, tangent, w):
+    def masking(self, n_macro: FloatArray, tangent: FloatArray | None, w: FloatArray) -> FloatArray:
         """No masking in the thesis's recipe: 1 above the macro surface, 0 on the wrong side."""
         w = np.asarray(w, dtype=np.float64)
         n = np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)
         return (dot(w, n) > 0.0).astype(np.float64)
 
-    def projected_area(self, n_macro, tangent, w):
+    def projected_area(self, n_macro: FloatArray, tangent: FloatArray | None, w: FloatArray) -> FloatArray:
         w = np.asarray(w, dtype=np.float64)
         return np.maximum(dot(w, np.broadcast_to(np.asarray(n_macro, dtype=np.float64), w.shape)), 0.0)
 
-    def pdf(self, n_macro, tangent, wo, m):
+    def pdf(self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, m: FloatArray) -> FloatArray:
         """Density of the literal recipe with the mirror replacement of back-facing draws."""
         frame = self._frame(n_macro, tangent)
         wl = _to_local(np.asarray(wo, dtype=np.float64), frame)
@@ -1163,7 +1194,9 @@ class BlenderGloss(_Microfacet):
     def _dcos_local(self, u1, u2):
         raise NotImplementedError("blender_gloss has no D(m) cos sampler")
 
-    def sample_dcos(self, n_macro, tangent, u1, u2):
+    def sample_dcos(
+        self, n_macro: FloatArray, tangent: FloatArray | None, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         raise NotImplementedError("blender_gloss is not a microfacet distribution (no analytic BRDF)")
 
 
@@ -1172,7 +1205,7 @@ class BlenderGloss(_Microfacet):
 # ----------------------------------------------------------------------------------------------
 
 
-def torrance_sparrow(n_macro, m, wi, wo):
+def torrance_sparrow(n_macro: FloatArray, m: FloatArray, wi: FloatArray, wo: FloatArray) -> FloatArray:
     """V-groove shadowing of Torrance and Sparrow (1967), as SCATMECH's
     ``Torrance_Sparrow_Shadow_Function``: ``min(1, 2 (n.m)(n.wi)/(wi.m), 2 (n.m)(n.wo)/(wo.m))``.
 
@@ -1193,7 +1226,9 @@ def torrance_sparrow(n_macro, m, wi, wo):
     return np.clip(np.minimum(1.0, np.minimum(gi, go)), 0.0, 1.0)
 
 
-def ashikhmin_pair(g1_i, g1_o, n_macro, wi, wo):
+def ashikhmin_pair(
+    g1_i: FloatArray, g1_o: FloatArray, n_macro: FloatArray, wi: FloatArray, wo: FloatArray
+) -> FloatArray:
     """Stryjewski et al. 2009 eq. 6: ``(1 - f) G1(wi) G1(wo) + f min(G1(wi), G1(wo))`` with ``f = cos(phi/2)``,
     phi the angle between the projections of wi and wo on the macro surface (f = 1 in
     backscatter, 0 in the forward specular plane).
@@ -1248,7 +1283,7 @@ def _join(key, sub):
     return f"{key}.{sub}" if key else sub
 
 
-def make_model(spec, *, file=None, key=None) -> MicrofacetModel:
+def make_model(spec: object, *, file: str | Path | None = None, key: str | None = None) -> MicrofacetModel:
     """Build a roughness model from its YAML record.
 
     Parameters

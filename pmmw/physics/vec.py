@@ -8,11 +8,14 @@ row-wise dot product and normalization that the microfacet models and `pmmw brdf
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = ["cross", "dot", "unit"]
 
+FloatArray = npt.NDArray[np.float64]
 
-def cross(a, b):
+
+def cross(a: npt.ArrayLike, b: npt.ArrayLike) -> FloatArray:
     """``a x b`` for arrays of 3-vectors (last axis), broadcasting like `numpy.cross`.
 
     Parameters
@@ -34,7 +37,7 @@ def cross(a, b):
     return out
 
 
-def dot(a, b):
+def dot(a: FloatArray, b: FloatArray) -> FloatArray:
     """Row-wise dot product ``a . b`` over the last axis.
 
     Parameters
@@ -49,7 +52,7 @@ def dot(a, b):
     return np.einsum("...i,...i->...", a, b)
 
 
-def unit(v):
+def unit(v: FloatArray) -> FloatArray:
     """``v / |v|`` over the last axis; zero vectors are returned unchanged (no NaN).
 
     Parameters

@@ -51,7 +51,17 @@ def _facet_jones(itf: _Interface, m, k_in, k_out, s_in_basis, p_in_basis, s_out_
     return j, s, p_out
 
 
-def analytic_mueller(stack: Stack, wi, wo, *, phi_o=None, shadowing="smith", double=True, double_samples=256, seed=0):
+def analytic_mueller(
+    stack: Stack,
+    wi: np.ndarray,
+    wo: np.ndarray,
+    *,
+    phi_o: np.ndarray | None = None,
+    shadowing: str = "smith",
+    double: bool = True,
+    double_samples: int = 256,
+    seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Stryjewski et al. 2009's polarized Ashikhmin BRDF for given outgoing directions (`pmmw.reflectance` docstring).
 
     Parameters
@@ -222,7 +232,15 @@ def _double_term(itf: _Interface, model, wi, wo, h_in, v_in, h_out, v_out, n_sam
     return acc / n_samples
 
 
-def analytic_totals(stack: Stack, wi, *, shadowing="smith", double=True, n_points=1 << 16, seed=0):
+def analytic_totals(
+    stack: Stack,
+    wi: np.ndarray,
+    *,
+    shadowing: str = "smith",
+    double: bool = True,
+    n_points: int = 1 << 16,
+    seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Hemispherical Mueller matrices [-] of the analytic single and double terms, integrated
     over facet normals rather than over the grid (accurate for any roughness, also where the
     lobe is narrower than a grid cell):
@@ -295,7 +313,15 @@ def analytic_totals(stack: Stack, wi, *, shadowing="smith", double=True, n_point
     return single, dbl
 
 
-def analytic(stack: Stack, wi, *, shadowing="smith", double=True, double_samples=256, seed=0):
+def analytic(
+    stack: Stack,
+    wi: np.ndarray,
+    *,
+    shadowing: str = "smith",
+    double: bool = True,
+    double_samples: int = 256,
+    seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
     """`analytic_mueller` at the centres of the 91 x 360 grid.
 
     A smooth interface has a delta BRDF: its Fresnel Mueller matrix divided by the projected

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -135,8 +136,15 @@ def _material_stack(mid, eps_val, metal, model, f):
 
 
 def roughness_spec_from_options(
-    model=None, ex=None, ey=None, m=None, alpha=None, alpha_y=None, gloss=None, orientation=None
-):
+    model: str | None = None,
+    ex: float | None = None,
+    ey: float | None = None,
+    m: float | None = None,
+    alpha: float | None = None,
+    alpha_y: float | None = None,
+    gloss: float | None = None,
+    orientation: float | None = None,
+) -> dict[str, object] | None:
     """The ``roughness:`` record implied by the command-line options (None: smooth)."""
     opts = {"ex": ex, "ey": ey, "m": m, "alpha": alpha, "alpha_y": alpha_y, "gloss": gloss}
     given = {k: v for k, v in opts.items() if v is not None}
@@ -151,7 +159,7 @@ def roughness_spec_from_options(
             model = "blender_gloss"
         else:
             model = "ggx"
-    spec = {"model": model}
+    spec: dict[str, object] = {"model": model}
     if model == "ashikhmin_shirley":
         if "ex" in given and "ey" not in given:
             given["ey"] = given["ex"]
@@ -198,33 +206,33 @@ def _specular(mueller, wi):
 
 def run_brdf(
     *,
-    n=None,
-    eps=None,
-    material=None,
-    stack=None,
-    frequency=None,
-    wavelength=None,
-    incidence=0.0,
-    azimuth=0.0,
-    stokes=(1.0, 0.0, 0.0, 0.0),
-    model=None,
-    ex=None,
-    ey=None,
-    m=None,
-    alpha=None,
-    alpha_y=None,
-    gloss=None,
-    orientation=None,
-    method="mc",
-    samples=1_000_000,
-    seed=0,
-    shadowing="smith",
-    double=True,
-    double_samples=256,
-    mueller=False,
-    threshold=1e-3,
-    out=None,
-    plots=True,
+    n: str | complex | None = None,
+    eps: str | complex | None = None,
+    material: str | None = None,
+    stack: Stack | str | Path | None = None,
+    frequency: str | float | None = None,
+    wavelength: str | float | None = None,
+    incidence: float = 0.0,
+    azimuth: float = 0.0,
+    stokes: Sequence[float] = (1.0, 0.0, 0.0, 0.0),
+    model: str | None = None,
+    ex: float | None = None,
+    ey: float | None = None,
+    m: float | None = None,
+    alpha: float | None = None,
+    alpha_y: float | None = None,
+    gloss: float | None = None,
+    orientation: float | None = None,
+    method: str = "mc",
+    samples: int = 1_000_000,
+    seed: int = 0,
+    shadowing: str = "smith",
+    double: bool = True,
+    double_samples: int = 256,
+    mueller: bool = False,
+    threshold: float = 1e-3,
+    out: str | Path | None = None,
+    plots: bool = True,
 ) -> BrdfResult:
     """The ``pmmw brdf`` job: build the surface, run the method(s), write the files.
 

@@ -15,7 +15,7 @@ __all__ = ["N_PHI", "N_THETA", "grid_directions", "mueller_from_jones", "project
 N_THETA, N_PHI = 91, 360
 
 
-def grid_directions():
+def grid_directions() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Cell-centre directions of the 91 x 360 grid.
 
     Returns
@@ -31,7 +31,7 @@ def grid_directions():
     return th, ph, w
 
 
-def projected_solid_angle():
+def projected_solid_angle() -> np.ndarray:
     """``int cos(theta) dw`` over each cell [sr], shape (91, 360); sums to pi."""
     lo = np.radians(np.clip(np.arange(N_THETA) - 0.5, 0.0, 90.0))
     hi = np.radians(np.clip(np.arange(N_THETA) + 0.5, 0.0, 90.0))
@@ -62,7 +62,7 @@ def _hv(k, phi_fallback):
     return h, v
 
 
-def mueller_from_jones(j):
+def mueller_from_jones(j: np.ndarray) -> np.ndarray:
     """Mueller matrices of Jones matrices in `pmmw.reflectance`'s Stokes convention.
 
     Parameters

@@ -52,7 +52,15 @@ class _Tally:
     fallback_weights: int = 0  # rejection fallbacks (roughness module)
 
 
-def monte_carlo(stack: Stack, wi, stokes_in, *, samples=1_000_000, seed=0, threshold=1e-3):
+def monte_carlo(
+    stack: Stack,
+    wi: np.ndarray,
+    stokes_in: np.ndarray,
+    *,
+    samples: int = 1_000_000,
+    seed: int = 0,
+    threshold: float = 1e-3,
+) -> _Tally:
     """Optics Express 2016's Monte Carlo over a rough layered surface (`pmmw.reflectance` docstring).
 
     Parameters

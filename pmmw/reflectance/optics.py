@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from pmmw.physics import fresnel, multilayer
+from pmmw.physics.fresnel import Fresnel
 from pmmw.physics.vec import cross, dot, unit
 from pmmw.reflectance.stack import Stack
 
@@ -43,7 +44,7 @@ def _facet_basis(m, k, s_fallback):
 class _Interface:
     """Interface ``i`` between media i (above) and i+1 (below) of a stack, top of layer i."""
 
-    def __init__(self, stack: Stack, i: int):
+    def __init__(self, stack: Stack, i: int) -> None:
         media = stack.media()
         layer = stack.layers[i]
         self.above, self.below = media[i], media[i + 1]
@@ -55,7 +56,7 @@ class _Interface:
         # a substrate that absorbs what enters it (lossy half-space or perfect conductor)
         self.sink = self.last and (self.metal or self.below.imag > 0.0)
 
-    def fresnel(self, cos1, from_above: bool):
+    def fresnel(self, cos1: np.ndarray, from_above: bool) -> Fresnel:
         """Facet coefficients for rays crossing from the side ``from_above`` (N,) cosines."""
         n = cos1.shape[0]
         eps1, eps2 = (self.above, self.below) if from_above else (self.below, self.above)
@@ -70,7 +71,7 @@ class _Interface:
         )
 
 
-def flat_reflectance(stack: Stack, theta_i):
+def flat_reflectance(stack: Stack, theta_i: float) -> float:
     """Unpolarized reflectance of the same stack with every interface smooth (the specular
     limit of the rough one): per polarization, incoherent multiple reflections between the
     interfaces summed in closed form from the substrate up,

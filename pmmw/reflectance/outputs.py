@@ -27,7 +27,9 @@ def _dop_aop(stokes):
     return dop, aop
 
 
-def write_outputs(out: Path, results, summary, wi, mueller, plots):
+def write_outputs(
+    out: Path, results: dict[str, MethodResult], summary: dict, wi: np.ndarray, mueller: bool, plots: bool
+) -> list[Path]:
     from pmmw.io.exr import write_exr
 
     files = []

@@ -70,15 +70,15 @@ class Stack:
     frequency: float | None = None
 
     @property
-    def k0(self):
+    def k0(self) -> float | None:
         return None if self.frequency is None else 2.0 * math.pi * self.frequency / _C0
 
-    def media(self):
+    def media(self) -> list[complex]:
         """Permittivities of the ambient medium, the layers and the substrate, top down."""
         return [complex(self.ambient_eps)] + [complex(layer.eps) for layer in self.layers]
 
 
-def parse_complex(value, *, file=None, key=None) -> complex:
+def parse_complex(value: object, *, file: str | Path | None = None, key: str | None = None) -> complex:
     """``0.23+3.46j`` (or ``i``), a number, or a pair ``[re, im]`` -> complex."""
     if isinstance(value, bool):
         raise UserError(f"expected a complex number like 0.23+3.46j, got {value!r}", file, key)
@@ -176,7 +176,9 @@ def _frequency(frequency, wavelength, file, key_f="frequency", key_w="wavelength
     return f
 
 
-def load_stack(path, *, frequency=None, wavelength=None) -> Stack:
+def load_stack(
+    path: str | Path, *, frequency: str | float | None = None, wavelength: str | float | None = None
+) -> Stack:
     """Read a stack file (YAML)::
 
         frequency: 95 GHz          # or wavelength: 635 nm (needed for coatings, thicknesses,

@@ -68,8 +68,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from pmmw.constants import EPS0  # [F/m]
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 
 @dataclass(frozen=True)
@@ -88,7 +92,7 @@ class ModelSpec:
     optional: tuple[str, ...] = ()  # parameters with defaults in `fn`
     parsers: dict = field(default_factory=dict, repr=False, compare=False)  # name -> parse(v, file, key)
     example: str = ""  # a complete ``model:`` mapping, for error messages
-    check: Callable[[dict, object, str], None] | None = field(
+    check: Callable[[dict, object, str | None], None] | None = field(
         default=None, repr=False, compare=False
     )  # check(params, file, key): cross-parameter rules
     outside: Callable[[float, float, dict], str | None] | None = field(
@@ -355,14 +359,14 @@ def _leaves(f, T, dry_matter, salinity=10.0):
     return 0.522 * (1.0 - 1.32 * dry_matter) * eps_sw + 0.51 + 3.84 * dry_matter
 
 
-def p527_bulk_density(sand, clay):
+def p527_bulk_density(sand: float, clay: float) -> float:
     """Soil bulk density [g/cm^3] from its texture [%], ITU-R P.527-6 eq. (57). A constituent under
     1 % is left out (its logarithm would diverge); silt is the rest."""
     silt = 100.0 - sand - clay
     return 1.07256 + sum(c * math.log(p) for c, p in ((0.078886, sand), (0.038753, clay), (0.032732, silt)) if p >= 1.0)
 
 
-def p527_conductivities(sand, clay, rho_b):
+def p527_conductivities(sand: float, clay: float, rho_b: float) -> tuple[float, float]:
     """The effective conductivities [S/m] of P.527-6 sec. 5.2: sigma_1 (Peplinski et al. 1995,
     fitted at 0.3-1.3 GHz) and sigma_2 (Dobson et al. 1985, 1.4-18 GHz, as refitted by Peplinski
     et al.); sand, clay [%], rho_b [g/cm^3]."""
@@ -611,7 +615,7 @@ MODELS = {
 }
 
 
-def make_dielectric(spec, *, file=None, key=None) -> DielectricModel:
+def make_dielectric(spec: object, *, file: str | Path | None = None, key: str | None = None) -> DielectricModel:
     """A `DielectricModel` from a material's ``model:`` mapping, e.g. ``{name: conductor,
     conductivity: 3.5e7}`` (conductivity in S/m) or ``{name: soil, sand: 40, clay: 20, moisture:
     0.2}``; errors name the key."""

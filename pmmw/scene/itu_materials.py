@@ -96,11 +96,11 @@ P2040_HARD_LIMITED = ("very_dry_ground", "medium_dry_ground", "wet_ground")  # "
 P2040_EDITION = "ITU-R P.2040-4 (09/2025), Table 3"
 
 
-def _row_text(row) -> str:
+def _row_text(row: tuple[float, ...]) -> str:
     return f"{row[4]:g}-{row[5]:g} GHz"
 
 
-def _row_values(row, f_ghz: float) -> tuple[float, float]:
+def _row_values(row: tuple[float, ...], f_ghz: float) -> tuple[float, float]:
     """eps' and sigma [S/m] of one Table 3 row at f_ghz [GHz] (P.2040-4 eqs. (58)-(59))."""
     a, b, c, d = row[:4]
     return a * f_ghz**b, c * f_ghz**d
@@ -111,7 +111,7 @@ def _eps(eps_r: float, sigma: float, f_hz: float) -> complex:
     return complex(eps_r, sigma / (2.0 * math.pi * f_hz * EPS0))
 
 
-def _rows(material: str):
+def _rows(material: str) -> tuple[tuple[float, ...], ...]:
     try:
         return P2040_ROWS[material]
     except KeyError:
@@ -204,13 +204,13 @@ P527_VEGETATION_T_FREEZE = 273.15  # [K]: at or below, sec. 5.3.2; above, sec. 5
 P527_VEGETATION_T_F = -6.5  # [C] the reference temperature T_f of sec. 5.3.2
 
 
-def _p527_f1(T):
+def _p527_f1(T: float) -> float:
     """Relaxation frequency f_1 [GHz] of pure water, P.527-6 eqs. (11)-(12); T [K]."""
     theta = 300.0 / T - 1.0
     return 20.20 - 146.4 * theta + 316.0 * theta**2
 
 
-def _vegetation_above(f_ghz, T, mg):
+def _vegetation_above(f_ghz: float, T: float, mg: float) -> complex:
     """P.527-6 sec. 5.3.1, eqs. (72)-(77), as eps' + i eps''."""
     from pmmw.atmosphere.itu import p527_water_permittivity
 
@@ -226,7 +226,7 @@ def _vegetation_above(f_ghz, T, mg):
     return complex(eps_r, eps_i)
 
 
-def _vegetation_below(f_ghz, T, mg):
+def _vegetation_below(f_ghz: float, T: float, mg: float) -> complex:
     """P.527-6 sec. 5.3.2, eqs. (78)-(89), as eps' + i eps''."""
     delta = (T - 273.15) - P527_VEGETATION_T_F  # [C]
     c1 = f_ghz / 1.2582
