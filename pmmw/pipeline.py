@@ -113,6 +113,28 @@ def check_material_ids(entries, db: MaterialDB, file) -> None:
         raise UserErrors(errors)
 
 
+def variant_check():
+    """A check of one sweep variant's scenario for `sweeps.spec.check_variants`: its ``materials:``
+    overrides and every material id its scene names (as `resolve` checks them, without reading a
+    mesh). The database is built once per distinct ``materials:`` map, so a sweep over poses reads
+    it once.
+
+    Returns
+    -------
+    callable
+        ``check(scenario)``, raising `UserError` or `UserErrors`.
+    """
+    dbs: dict[str, MaterialDB] = {}
+
+    def check(scn) -> None:
+        k = json.dumps(scenario_to_display(scn).get("materials") or {}, sort_keys=True, default=str)
+        if k not in dbs:
+            dbs[k] = material_database(scn)
+        check_material_ids(scn.scene, dbs[k], scn.source_file)
+
+    return check
+
+
 def aux_channels(img, aux) -> dict:
     """The auxiliary EXR channels asked for in ``output.aux`` (stderr, depth, material, samples)
     of an assembled image, float32."""
