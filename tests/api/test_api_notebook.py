@@ -134,3 +134,44 @@ def test_a_loaded_scene_renders_overrides_as_render_does_without_rebuilding(fold
     assert scene.builds["geometry"] == 2
     with pytest.raises(pmmw.UserError, match="unknown pose key 'pos'"):
         scene.render(pose={"pos": [0, 0, 1]})
+
+
+@pytest.mark.parametrize(
+    "maker, antenna",
+    [("antenna_kernel", {"illumination": "parabolic", "edge_taper": "10 dB"}), ("psf_kernel", None)],
+)
+def test_a_loaded_scene_makes_its_psf_kernel_once_per_frequency(folder, monkeypatch, maker, antenna):
+    """The imager's PSF kernel is made once for two renders at one frequency (other poses, same
+    pixel pitch) and the image is the one `render` gives with a kernel of its own, bit for bit (same
+    seed); the control: two frequencies make two kernels. Before, every render of a loaded scene
+    made its kernel again (the antenna's had no cache at all)."""
+    from pmmw import pipeline
+
+    made = []
+    real = getattr(pipeline, maker)
+
+    def counted(*args, **kwargs):
+        made.append(args[1])  # the wavenumber [1/m]
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(pipeline, maker, counted)
+    imager = {"imager.aperture_diameter": "0.3 m", "imager.noise": "0.5 K"}
+    if antenna is not None:
+        imager["imager.antenna"] = antenna
+    base = pmmw.Scenario.load(folder / "tiny.yaml").set(imager)
+    scene = pmmw.load(base)
+    moved = {"position": [0.2, 0, 1.5]}
+    first, second = scene.render(pose=moved), scene.render()
+    assert len(made) == 1, made
+    made.clear()
+    np.testing.assert_array_equal(second["I"].values, pmmw.render(base)["I"].values)
+    np.testing.assert_array_equal(
+        first["I"].values, pmmw.render(base.set({"imager.position": [0.2, 0, 1.5]}))["I"].values
+    )
+    assert len(made) == 2, made  # `render` resolves anew each time: a kernel of its own
+    # the control: another frequency is another kernel, made once too
+    made.clear()
+    other = pmmw.load(base)
+    for f in ("35 GHz", "95 GHz", "35 GHz", "95 GHz"):
+        other.render(frequency=f)
+    assert len(made) == 2 and made[0] != made[1], made
