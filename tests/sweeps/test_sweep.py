@@ -158,16 +158,18 @@ def test_local_sweep_table_report_and_resume(tmp_path, monkeypatch):
 def test_a_failed_variant_is_recorded_and_the_others_go_on(tmp_path):
     scn = _scene(tmp_path)
     out = tmp_path / "sw"
-    # a material id the database lacks: the scenario schema takes it, the render refuses it
-    # (a value the schema refuses stops the sweep before anything renders: tests/cli/test_filekinds.py)
+    # a mesh file without triangles: the sweep's checks take it (they read no mesh), the render
+    # refuses it (a value the schema refuses or an unknown material id stops the sweep before
+    # anything renders: tests/cli/test_filekinds.py, test_a_sweeps_unknown_material_id_is_one_line...)
+    (tmp_path / "empty.obj").write_text("# no faces\nv 0 0 0\n")
     res = runner.invoke(
-        app, ["sweep", str(scn), "--grid", "scene[1].material=[metal, nosuch, metal]", "--out", str(out), "-q"]
+        app, ["sweep", str(scn), "--grid", "scene[1].mesh=[block.obj, empty.obj, block.obj]", "--out", str(out), "-q"]
     )
-    assert res.exit_code == 1
+    assert res.exit_code == 1, res.output
     with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
     assert [r["status"] for r in rows][0::2] == ["done", "done"]
-    assert rows[1]["status"].startswith("failed:") and "nosuch" in rows[1]["status"]
+    assert rows[1]["status"].startswith("failed:") and "empty.obj" in rows[1]["status"], rows[1]
     assert "v001" in res.output
 
 
