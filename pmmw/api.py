@@ -397,7 +397,7 @@ def _render_resolved(res, quiet: bool, earlier_warnings=()):
     per_f, regions = [], {}
     for f in scn.frequencies:
         job, img, _ = pipeline.trace_frequency(res, f, workers=n, quiet=quiet)
-        images = pipeline.frequency_images(scn, f, job, img, shash)
+        images = pipeline.frequency_images(scn, f, job, img, shash, res.kernels)
         per_f.append((f, images["channels"], images["attrs"]))
         if scn.output.regions:
             regions[f"{f / 1e9:g} GHz"] = pipeline.region_stats(
@@ -490,8 +490,9 @@ def load(scenario: ScenarioLike) -> LoadedScene:
         0.55-0.62 s per image by `render`, 0.21-0.26 s by `LoadedScene.render` (2.1-3.0 times
         as fast); the cinderblocks scene (512 triangles) 0.45-0.79 s against 0.34-0.52 s
         (1.3-1.5 times). What is saved is the YAML, the material database and the meshes read
-        each time; what is left is the trace and the imager model (its PSF), which a large
-        image makes dominant.
+        each time; what is left is the trace and the imager model (the blur and the noise), which
+        a large image makes dominant. The imager's PSF kernel is made once per frequency, pixel
+        pitch and aperture and reused by the renders that share them.
     """
     return LoadedScene(_scenario(scenario, "pmmw.load"))
 
@@ -508,6 +509,7 @@ class LoadedScene:
         self._res = pipeline.resolve(scenario.path, (), **scenario._kw())
         self._warnings = list(pipeline.collected_warnings())  # the scene's own (meshes, materials)
         self.builds = {"geometry": 1, "materials": 1}
+        self._kernels: dict = {}  # the imager's PSF kernels, shared by the renders (`pipeline.imager_kernel`)
 
     def __repr__(self) -> str:
         return f"LoadedScene({self.scenario.path.name}: {self._res.geometry.faces.shape[0]} triangles)"
@@ -587,7 +589,8 @@ def _loaded_render(loaded, pose, frequency, materials, values, spp, workers, see
         loaded.builds["geometry"] += 1
     elif db is not old.db:
         pipeline.check_material_ids(scn.scene, db, scn.source_file)
-    return _render_resolved(pipeline.Resolved(scn, db, geom), _flag(where, "quiet", quiet), loaded._warnings)
+    res = pipeline.Resolved(scn, db, geom, kernels=loaded._kernels)
+    return _render_resolved(res, _flag(where, "quiet", quiet), loaded._warnings)
 
 
 @_api("sky")

@@ -114,13 +114,13 @@ def validate_file(path, overrides=(), preview=None) -> dict:
 
 
 def _sweep(path: Path, preview=None) -> dict:
-    from pmmw.pipeline import validate
+    from pmmw.pipeline import validate, variant_check
     from pmmw.sweeps.spec import check_variants, load_sweep_file, zipped_keys
 
     spec = load_sweep_file(path)
     if not spec.scenario.is_file():
         raise UserError(f"scenario file not found: {spec.scenario}", path, "scenario")
-    count = check_variants(spec)
+    count = check_variants(spec, variant_check())
     base = validate(spec.scenario, preview=preview)
     _check_variant_regions(spec)
     base["warnings"] = collected_warnings()

@@ -12,7 +12,7 @@ import hashlib
 import json
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
@@ -67,6 +67,10 @@ class Resolved:
     scenario: ScenarioConfig
     db: MaterialDB
     geometry: SceneGeometry
+    # the imager's PSF kernels made so far, by what each depends on (`imager_kernel`): a render's
+    # adaptive sampling and imager model share one, and a loaded scene's renders (`pmmw.load`) share
+    # them across renders
+    kernels: dict = field(default_factory=dict)
 
 
 def resolve(
@@ -119,6 +123,28 @@ def check_material_ids(entries: Sequence[Any], db: MaterialDB, file: str | Path 
                 errors.append(e)
     if errors:
         raise UserErrors(errors)
+
+
+def variant_check() -> Callable[[Any], None]:
+    """A check of one sweep variant's scenario for `sweeps.spec.check_variants`: its ``materials:``
+    overrides and every material id its scene names (as `resolve` checks them, without reading a
+    mesh). The database is built once per distinct ``materials:`` map, so a sweep over poses reads
+    it once.
+
+    Returns
+    -------
+    callable
+        ``check(scenario)``, raising `UserError` or `UserErrors`.
+    """
+    dbs: dict[str, MaterialDB] = {}
+
+    def check(scn) -> None:
+        k = json.dumps(scenario_to_display(scn).get("materials") or {}, sort_keys=True, default=str)
+        if k not in dbs:
+            dbs[k] = material_database(scn)
+        check_material_ids(scn.scene, dbs[k], scn.source_file)
+
+    return check
 
 
 def aux_channels(img: Image, aux: Sequence[str]) -> dict[str, np.ndarray]:
@@ -229,7 +255,7 @@ def make_job(res: Resolved, f: float) -> TraceJob:
     footprint = 1.0
     if r.target_error is not None and im.aperture_diameter > 0.0:
         # adaptive sampling to the error left after the imager's blur (Integrator.render_tile)
-        footprint = error_footprint(imager_kernel(scn, cam.pixel_angle, 2.0 * np.pi * f / C0))
+        footprint = error_footprint(imager_kernel(scn, cam.pixel_angle, 2.0 * np.pi * f / C0, res.kernels))
     settings = RenderSettings(
         spp=r.spp,
         max_depth=r.max_depth,
@@ -806,29 +832,46 @@ def aperture_of(scn: ScenarioConfig) -> Aperture | None:
     )
 
 
-def imager_kernel(scn: ScenarioConfig, pixel_angle: float, k0: float) -> np.ndarray | None:
+def imager_kernel(scn: ScenarioConfig, pixel_angle: float, k0: float, cache: dict | None = None) -> np.ndarray | None:
     """The imager's unit-sum PSF kernel at wavenumber ``k0`` [1/m] on pixels of ``pixel_angle``
     [rad]: the antenna's (`imaging.antenna.antenna_kernel`) with ``imager.antenna``, else the
     uniform aperture's Airy kernel (`imaging.imager.psf_kernel`); None without an aperture. The one
-    kernel the imager model blurs with and adaptive sampling sizes its error target by."""
+    kernel the imager model blurs with and adaptive sampling sizes its error target by.
+
+    ``cache`` (`Resolved.kernels`): kernels made before, keyed by all the kernel depends on (pixel
+    pitch, wavenumber, aperture diameter, the antenna's illumination); a kernel found there is
+    not computed again. Each caller gets its own copy.
+    """
     im = scn.imager
     if not im.aperture_diameter > 0.0:
         return None
-    if im.antenna is not None:
-        return antenna_kernel(pixel_angle, k0, im.aperture_diameter, aperture_of(scn))
-    return psf_kernel(pixel_angle, k0, im.aperture_diameter)
+    aperture = aperture_of(scn) if im.antenna is not None else None
+    key = (float(pixel_angle), float(k0), float(im.aperture_diameter), aperture)
+    kernel = None if cache is None else cache.get(key)
+    if kernel is None:
+        if aperture is not None:
+            kernel = antenna_kernel(pixel_angle, k0, im.aperture_diameter, aperture)
+        else:
+            kernel = psf_kernel(pixel_angle, k0, im.aperture_diameter)
+        if cache is not None:
+            cache[key] = kernel
+    return kernel.copy()
 
 
 def imager_model(
-    scn: ScenarioConfig, job: TraceJob, ideal: dict, noise_maps: dict | None = None
+    scn: ScenarioConfig,
+    job: TraceJob,
+    ideal: dict,
+    noise_maps: dict | None = None,
+    kernels: dict | None = None,
 ) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
     """The sensor image (`apply_imager` with the scenario's aperture, antenna, noise or receiver and
     seed) and the PSF kernel of the scene's signal: the unit-sum PSF times (1 - spillover) (None
     without an aperture). ``noise_maps`` is filled with the per-pixel noise of each channel when
-    the imager has a receiver."""
+    the imager has a receiver; ``kernels``: the PSF kernels made before (`imager_kernel`)."""
     im = scn.imager
     ap = aperture_of(scn) if im.antenna is not None else None
-    kernel = imager_kernel(scn, job.camera.pixel_angle, job.k0)
+    kernel = imager_kernel(scn, job.camera.pixel_angle, job.k0, kernels)
     spill = ap.spillover if ap is not None else 0.0
     sensor = apply_imager(
         ideal,
@@ -1261,7 +1304,7 @@ def _render_and_commit(
                 continue
             t_trace = time.perf_counter() - t1
             staged = staging.enter_context(Staging(out_dir))
-            renders.append((staged, _finish_frequency(scn, f, job, img, names[f], staged, shash, t_trace, n_workers)))
+            renders.append((staged, _finish_frequency(res, f, job, img, names[f], staged, shash, t_trace, n_workers)))
             written.append(out_dir / names[f]["exr"])
         total = time.perf_counter() - t0
         for staged, r in renders:
@@ -1298,13 +1341,16 @@ def spp_words(spp: int, mean: float) -> str:
     return f"{spp} spp"
 
 
-def frequency_images(scn: ScenarioConfig, f: float, job: TraceJob, img: Image, shash: str = "") -> dict:
+def frequency_images(
+    scn: ScenarioConfig, f: float, job: TraceJob, img: Image, shash: str = "", kernels: dict | None = None
+) -> dict:
     """The images of one frequency from its traced ``img``: ``ideal`` and ``sensor`` (Stokes and
     polarization channels [K], float64), the PSF ``kernel``, and what the EXR holds: ``channels``
-    (float32: the sensor's, ``ideal.*``, ``aux.*``) with its header ``attrs``."""
+    (float32: the sensor's, ``ideal.*``, ``aux.*``) with its header ``attrs``. ``kernels``: the
+    PSF kernels made before (`Resolved.kernels`)."""
     ideal = stokes_images(img.mean)
     noise_maps = {}
-    sensor, kernel = imager_model(scn, job, ideal, noise_maps)
+    sensor, kernel = imager_model(scn, job, ideal, noise_maps, kernels)
     if not all(np.isfinite(sensor[c]).all() for c in scn.output.channels):
         raise RuntimeError(f"non-finite pixels in the {f / 1e9:g} GHz image: a bug, please report it")
     channels = {c: sensor[c].astype(np.float32) for c in scn.output.channels}
@@ -1338,12 +1384,13 @@ def frequency_images(scn: ScenarioConfig, f: float, job: TraceJob, img: Image, s
     }
 
 
-def _finish_frequency(scn, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
+def _finish_frequency(res, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
     """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
     frequency's report entry (the caller adds the report and commits them together)."""
+    scn = res.scenario
     t1 = time.perf_counter()
     with timings.phase("imager model"):
-        images = frequency_images(scn, f, job, img, shash)
+        images = frequency_images(scn, f, job, img, shash, res.kernels)
         summary = imager_summary(scn, job, images["noise_maps"])
     ideal, sensor, kernel = images["ideal"], images["sensor"], images["kernel"]
     cam = job.camera

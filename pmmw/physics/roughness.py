@@ -944,7 +944,8 @@ class AshikhminShirley(_Microfacet):
 
 
 class BlinnPhong(AshikhminShirley):
-    """Blinn-Phong distribution of Stryjewski et al. 2009 eq. 3 with exponent ``m`` >= 0 (isotropic)."""
+    """Blinn-Phong distribution of Stryjewski et al. 2009 eq. 3 with exponent ``m`` >= 0 (isotropic:
+    ``ashikhmin_shirley`` with ex = ey = m; 0 to 1e6 and beyond)."""
 
     name = "blinn_phong"
 
@@ -987,7 +988,8 @@ def blinn_phong_mean_cos(m: npt.ArrayLike, cos_theta: npt.ArrayLike) -> FloatArr
 
 
 class GGX(_Microfacet):
-    """GGX / Trowbridge-Reitz distribution, roughness ``alpha`` (or ``alpha_x``, ``alpha_y``) > 0."""
+    """GGX / Trowbridge-Reitz distribution (Walter et al. 2007; as in Blender, Mitsuba and pbrt),
+    roughness ``alpha`` (or ``alpha_x``, ``alpha_y``) > 0."""
 
     name = "ggx"
     code = GGX_CODE  # compiled masking (`smith_g1`)
@@ -1109,7 +1111,8 @@ class Beckmann(GGX):
 
 
 class BlenderGloss(_Microfacet):
-    """Murakowski 2014 sec. 2.2.6: Blender's gloss perturbation, ``gloss`` g in [0, 1] (1 = smooth)."""
+    """Murakowski 2014 sec. 2.2.6: Blender's gloss perturbation, ``gloss`` g in [0, 1] (1 = smooth),
+    for the thesis's scenes."""
 
     name = "blender_gloss"
 

@@ -10,7 +10,8 @@ Frames. The world frame is Z up, right-handed. glTF is Y up by its specification
 asset is turned +90 deg about X on load: ``(x, y, z)_gltf -> (x, -z, y)_world``, unless the file
 says otherwise in ``asset.extras.up_axis`` ("Y" or "Z": what pmmw's own exporter writes,
 `scene.export.export_glb`). A glTF that trimesh wrote without that mark is read as Y up with a
-warning whatever its shape: trimesh keeps its own (Z-up) coordinates on export. OBJ, PLY and STL
+warning whatever its shape: trimesh keeps its own (Z-up) coordinates on export; any other with a
+warning when it or its ground stands on its edge once turned (`_warn_if_z_up`). OBJ, PLY and STL
 carry no convention and are taken as Z up. A scene entry's ``up_axis: y|z`` overrides all of these.
 
 Orientation. Face normals point outward by counter-clockwise winding (trimesh's convention); the
@@ -228,6 +229,28 @@ def _parts(path: Path, fmt: str, scene, up_axis) -> list[tuple[str, trimesh.Trim
 
 
 FLAT_RATIO = 5.0  # a scene this many times wider than tall lies flat on its ground
+# a ground: flat faces at one end of the scene along an axis, their normals within GROUND_TILT of
+# it, covering at least GROUND_COVER of the scene's extent across it and GROUND_MARGIN times the
+# area of such faces across the other horizontal axis (the shipped Y-up scenes, read both ways:
+# 2.7 to 8e4 times in favour of the right axis)
+GROUND_TILT = np.radians(1.0)  # [rad]
+GROUND_COVER = 0.5  # [-]
+GROUND_MARGIN = 2.0  # [-]
+
+
+def _end_flat_area(parts, axis: int, lo: np.ndarray, hi: np.ndarray) -> float:
+    """The larger of the areas of flat faces lying at the lowest and at the highest coordinate
+    along ``axis`` (within 1e-4 of the scene's size) with their normals along it [m^2]."""
+    tol = 1e-4 * float((hi - lo).max())
+    area = {"lo": 0.0, "hi": 0.0}
+    for _, m in parts:
+        with _quiet():
+            flat = np.abs(np.asarray(m.face_normals)[:, axis]) >= np.cos(GROUND_TILT)
+        along = np.asarray(m.vertices)[np.asarray(m.faces)][:, :, axis]  # (F, 3) the corners' coordinates
+        for side, at in (("lo", lo[axis]), ("hi", hi[axis])):
+            on = flat & (np.abs(along - at) <= tol).all(axis=1)
+            area[side] += float(np.asarray(m.area_faces)[on].sum())
+    return max(area.values())
 
 
 def _warn_if_z_up(path: Path, parts) -> None:
@@ -236,7 +259,11 @@ def _warn_if_z_up(path: Path, parts) -> None:
     A file that states its up axis (``asset.extras.up_axis``) is read so, without a warning; one
     written by trimesh without it is warned about whatever its shape; any other is warned about
     when it lies on its edge (after the Y-up -> Z-up turn a ground-like scene is wide in x and y
-    and thin in z; thin in y instead means the file was Z-up)."""
+    and thin in z; thin in y instead means the file was Z-up) or when its ground does: the flat
+    faces at one end of y, facing along y, cover at least half the scene's x-z extent
+    (`GROUND_COVER`) and twice the area of those at its bottom or top (`GROUND_MARGIN`). A Z-up
+    model's ground turns so, whatever stands on it; a lone box has flat ends both ways and says
+    nothing."""
     if _stated_up_axis(path) is not None:
         return
     v = np.concatenate([np.asarray(m.vertices) for _, m in parts])
@@ -259,12 +286,22 @@ def _warn_if_z_up(path: Path, parts) -> None:
             "to say so"
         )
         return
+    by = f" (written by {generator.split()[0]!r})" if generator else ""
     if flat_on_edge:
         warn(
             f"{path.name}: the glTF is taken as Y-up (its specification) but lies on its edge, {ext[1]:.3g} m "
-            f"thick along y against {ext[0]:.3g} x {ext[2]:.3g} m"
-            + (f" (written by {generator.split()[0]!r}, which keeps Z-up coordinates)" if generator else "")
-            + ": if it is Z-up, set `up_axis: z` on its scene entry"
+            f"thick along y against {ext[0]:.3g} x {ext[2]:.3g} m{by}: if it is Z-up, set `up_axis: z` on its "
+            "scene entry"
+        )
+        return
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    on_edge, lying = _end_flat_area(parts, 1, lo, hi), _end_flat_area(parts, 2, lo, hi)
+    if on_edge >= GROUND_COVER * ext[0] * ext[2] and on_edge > GROUND_MARGIN * lying:
+        warn(
+            f"{path.name}: the glTF is taken as Y-up (its specification) but its ground stands on its edge: "
+            f"its largest flat end, {on_edge:.3g} m^2 across its {ext[0]:.3g} x {ext[2]:.3g} m extent, faces "
+            f"along y, against {lying:.3g} m^2 lying flat at its bottom or top{by}. If it was modelled Z-up, "
+            "set `up_axis: z` on its scene entry; if it is Y-up, `up_axis: y` there says so"
         )
 
 

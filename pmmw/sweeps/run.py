@@ -184,7 +184,10 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
         return 0
     if not spec.scenario.is_file():
         raise UserError("scenario file not found", spec.scenario)
-    check_variants(spec)  # every swept key and value against the schema, before anything is written
+    from pmmw.pipeline import variant_check
+
+    # every swept key and value against the schema, and the material ids, before anything is written
+    check_variants(spec, variant_check())
     from pmmw.filekinds import _check_variant_regions
 
     _check_variant_regions(spec)  # a region out of some variants' view: one warning before they render

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import yaml
 
+from pmmw.config.load import _split_key
 from pmmw.errors import UserError, UserErrors
 from pmmw.io.records import check_keys, raise_all
 from pmmw.io.yamlio import load_yaml, read_yaml
@@ -199,24 +200,44 @@ def _label(spec: SweepSpec, key: str, value):
     return value if isinstance(value, (int, float, str)) else _yaml_value(value)
 
 
+def _key_path(key: str) -> list:
+    """A key as its path of segments, so that ``scene.1.material`` and ``scene[1].material`` are one key."""
+    try:
+        return _split_key(key)
+    except ValueError:
+        return [key]
+
+
 def _grid_key_of(key: str | None, grid_keys: list[str]) -> str | None:
     """The grid key an error's scenario key path belongs to: the same key, one inside it
     (``imager`` swept whole, ``imager.noise`` wrong) or one it is inside."""
     if not key:
         return None
+    path = _key_path(key)
     for gk in grid_keys:
-        if key == gk or key.startswith((gk + ".", gk + "[")) or gk.startswith((key + ".", key + "[")):
+        g = _key_path(gk)
+        n = min(len(g), len(path))
+        if path[:n] == g[:n]:
             return gk
     return None
 
 
-def check_variants(spec: SweepSpec) -> int:
+def check_variants(spec: SweepSpec, check=None) -> int:
     """Check every variant's scenario (the scenario file with the variant's values) against the
     scenario schema, before anything is rendered; returns the number of variants.
 
     A problem with a swept key or value is named in the sweep's own terms, once per key and
     message: ``FILE: grid.imager.nosie: unknown key 'nosie' (did you mean 'noise'?)``, with the
     value when only some values are wrong. A problem of the scenario file itself is named there.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+        The sweep.
+    check : callable, optional
+        ``check(scenario)``, run on each variant's loaded scenario and raising `UserError` or
+        `UserErrors` (the jobs pass `pipeline.variant_check`: the material ids, which this layer
+        cannot resolve); its errors are named as the schema's are.
 
     Raises
     ------
@@ -231,7 +252,9 @@ def check_variants(spec: SweepSpec) -> int:
     found: dict[tuple, list] = {}  # (grid key or None, file, key, message) -> the values it was seen with
     for params in combos:
         try:
-            load_scenario(spec.scenario, overrides_of(params))
+            scn = load_scenario(spec.scenario, overrides_of(params))
+            if check is not None:
+                check(scn)
         except UserError as exc:
             for e in getattr(exc, "errors", [exc]):
                 gk = _grid_key_of(e.key, grid_keys)

@@ -81,3 +81,20 @@ def test_every_material_and_model_has_its_row(gen):
     assert "model `pure_water`" in water and "1-1000 GHz, 269.15-313.15 K" in water
     for name in [*REGISTRY, *SKY_MODELS, *MODELS]:
         _row(models, name)
+
+
+def _model_rows(page: str, names) -> list[str]:
+    """The table rows of ``page`` that start with one of ``names`` in backticks."""
+    return [line for line in page.splitlines() if any(line.startswith(f"| `{n}` |") for n in names)]
+
+
+def test_the_roughness_models_are_tabled_once_from_the_registry(gen):
+    """The roughness table exists once, generated from `pmmw.physics.roughness.REGISTRY`: the BRDF
+    notes and the guides link to it and hold no table of their own (the BRDF notes' own table had
+    drifted from the code). The control: the generated page has a row per model."""
+    from pmmw.physics.roughness import REGISTRY
+
+    assert len(_model_rows(gen.models_page(), REGISTRY)) == len(REGISTRY)
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
+        assert _model_rows(page.read_text(), REGISTRY) == [], page
+    assert "reference/models.md#roughness-models" in (ROOT / "docs" / "brdf.md").read_text()

@@ -78,6 +78,57 @@ def test_a_glb_that_states_its_up_axis_is_read_so(tmp_path):
     assert file_up_axis(ours) == "y"
 
 
+def _ground_and_tower() -> trimesh.Trimesh:
+    """A 10 x 10 m ground slab 0.1 m thick with a 1 x 1 x 8 m tower on it, Z-up: once turned as a
+    Y-up file it is 8.1 m along y against 10 x 10 m, not flat enough to be caught as lying on its
+    edge (5 times thinner), which is what the ground's check is for."""
+    ground = trimesh.creation.box(extents=[10.0, 10.0, 0.1])
+    ground.apply_translation([0.0, 0.0, -0.05])
+    tower = trimesh.creation.box(extents=[1.0, 1.0, 8.0])
+    tower.apply_translation([0.0, 0.0, 4.0])
+    return trimesh.util.concatenate([ground, tower])
+
+
+def _export_as(mesh: trimesh.Trimesh, path: Path, generator: str) -> Path:
+    """``mesh`` in a GLB whose ``asset.generator`` names another exporter, stating no up axis."""
+
+    def name_it(tree):
+        tree["asset"]["generator"] = generator
+
+    trimesh.Scene(mesh).export(path, file_type="glb", tree_postprocessor=name_it)
+    return path
+
+
+# Blender's glTF exporter with "+Y Up" unticked writes Blender's Z-up coordinates as they are
+BLENDER = "Khronos glTF Blender I/O v4.2.70"
+
+
+def test_a_z_up_glb_of_another_exporter_is_warned_about_by_its_ground(tmp_path):
+    """A Z-up scene with a ground and a tower, from an exporter that states nothing: read as Y-up the
+    ground stands on its edge and the tower lies along y. Before, nothing was said (the scene is not
+    5 times thinner along y than across); now one warning names the fix, and the fix reads it upright
+    without a warning."""
+    path = _export_as(_ground_and_tower(), tmp_path / "yard.glb", BLENDER)
+    ext, warnings = _extent(path)
+    assert np.allclose(ext, [10.0, 8.1, 10.0], atol=ATOL)  # on its edge: the file's z is the world's -y
+    assert len(warnings) == 1 and "yard.glb" in warnings[0] and "ground stands on its edge" in warnings[0]
+    assert "`up_axis: z`" in warnings[0] and "Khronos" in warnings[0], warnings
+    ext, warnings = _extent(path, up_axis="z")
+    assert np.allclose(ext, [10.0, 10.0, 8.1], atol=ATOL) and warnings == []
+
+
+def test_a_y_up_glb_of_another_exporter_is_read_upright_without_a_warning(tmp_path):
+    """The control: the same scene turned to Y-up before export (as the exporter does by default),
+    and a lone upright box (flat ends both ways: no sound signal, so no warning either way)."""
+    to_y_up = trimesh.transformations.rotation_matrix(-np.pi / 2, [1.0, 0.0, 0.0])  # (x, y, z) -> (x, z, -y)
+    path = _export_as(_ground_and_tower().apply_transform(to_y_up), tmp_path / "yard.glb", BLENDER)
+    ext, warnings = _extent(path)
+    assert np.allclose(ext, [10.0, 10.0, 8.1], atol=ATOL) and warnings == []
+    box = _export_as(_upright_box(), tmp_path / "box.glb", BLENDER)
+    ext, warnings = _extent(box)
+    assert np.allclose(ext, [1.0, 2.0, 1.0], atol=ATOL) and warnings == []
+
+
 def test_validate_prints_each_objects_bounds_and_up_axis(tmp_path):
     from pmmw.pipeline import validate
 

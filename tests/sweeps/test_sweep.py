@@ -158,16 +158,18 @@ def test_local_sweep_table_report_and_resume(tmp_path, monkeypatch):
 def test_a_failed_variant_is_recorded_and_the_others_go_on(tmp_path):
     scn = _scene(tmp_path)
     out = tmp_path / "sw"
-    # a material id the database lacks: the scenario schema takes it, the render refuses it
-    # (a value the schema refuses stops the sweep before anything renders: tests/cli/test_filekinds.py)
+    # a mesh file without triangles: the sweep's checks take it (they read no mesh), the render
+    # refuses it (a value the schema refuses or an unknown material id stops the sweep before
+    # anything renders: tests/cli/test_filekinds.py, test_a_sweeps_unknown_material_id_is_one_line...)
+    (tmp_path / "empty.obj").write_text("# no faces\nv 0 0 0\n")
     res = runner.invoke(
-        app, ["sweep", str(scn), "--grid", "scene[1].material=[metal, nosuch, metal]", "--out", str(out), "-q"]
+        app, ["sweep", str(scn), "--grid", "scene[1].mesh=[block.obj, empty.obj, block.obj]", "--out", str(out), "-q"]
     )
-    assert res.exit_code == 1
+    assert res.exit_code == 1, res.output
     with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
     assert [r["status"] for r in rows][0::2] == ["done", "done"]
-    assert rows[1]["status"].startswith("failed:") and "nosuch" in rows[1]["status"]
+    assert rows[1]["status"].startswith("failed:") and "empty.obj" in rows[1]["status"], rows[1]
     assert "v001" in res.output
 
 
@@ -344,3 +346,49 @@ def test_render_progress_in_a_log_is_plain_lines(tmp_path):
     res = runner.invoke(app, ["render", str(_scene(tmp_path)), "--out", str(tmp_path / "o")])
     assert res.exit_code == 0, res.output
     assert "tiny: tiles 6/6" in res.stderr and "Mrays/s" in res.stderr and "\r" not in res.stderr
+
+
+@pytest.mark.parametrize(
+    "grid, key, value",
+    [
+        ("scene[1].material: [metal, metl]", "grid.scene[1].material: value metl: ", "'metl'; did you mean 'metal'?"),
+        # the same entry written with a dot: named by the grid key as the sweep file spells it
+        ("scene.1.material: [metl, metal]", "grid.scene.1.material: value metl: ", "'metl'; did you mean 'metal'?"),
+        # a swept materials map whose entry names an unknown id: every value is wrong, no value named
+        ("materials: [{concrete: {same_as: metl}}]", "grid.materials: ", "'metl' in same_as; did you mean 'metal'?"),
+    ],
+)
+def test_a_sweeps_unknown_material_id_is_one_line_before_any_render(tmp_path, monkeypatch, grid, key, value):
+    """Before, `validate` passed such a sweep and `pmmw sweep` rendered it, each bad variant failing at
+    render time; now the ids of every variant are checked as `validate` checks a scenario's: one line
+    naming the grid key, the bad id and the nearest known id, exit 2, nothing rendered."""
+    _scene(tmp_path)
+    sweep = tmp_path / "sw.yaml"
+    sweep.write_text(f"scenario: tiny.yaml\ngrid:\n  {grid}\nout: {tmp_path / 'out'}\n")
+
+    def no_render(*a, **k):
+        raise AssertionError("a variant was rendered")
+
+    monkeypatch.setattr(pipeline, "render", no_render)
+    for command in (["sweep", str(sweep), "-q"], ["validate", str(sweep)]):
+        res = runner.invoke(app, command)
+        assert res.exit_code == 2, res.output
+        lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+        assert len(lines) == 1, lines
+        assert lines[0].startswith(f"error: {sweep}: {key}"), lines[0]
+        assert value in lines[0], lines[0]
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_sweep_over_known_material_ids_passes_the_check(tmp_path):
+    """The control: the same grids with known ids (and a materials map defining a new id) pass."""
+    _scene(tmp_path)
+    sweep = tmp_path / "sw.yaml"
+    sweep.write_text(
+        "scenario: tiny.yaml\ngrid:\n  scene[1].material: [metal, concrete]\n"
+        "  materials: [{}, {concrete: {same_as: metal}}]\n"
+        f"out: {tmp_path / 'out'}\n"
+    )
+    res = runner.invoke(app, ["validate", str(sweep)])
+    assert res.exit_code == 0, res.output
+    assert "variants: 4" in res.stdout, res.stdout
