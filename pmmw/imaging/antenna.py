@@ -12,7 +12,7 @@ C = 10^(-T_e / 20) for an edge taper T_e [dB]:
 
 - ``uniform``: f = 1: F(u) = J1(u) / u, the Airy pattern of Murakowski 2014 eq. 2.41.
 - ``parabolic`` (parabolic on a pedestal): f = C + (1 - C)(1 - rho^2) (Balanis 2016, ch. 12, circular apertures;
-  Silver 1949, Table 6.2, for C = 0).
+  Silver 1949, ch. 6, its table of the (1 - r^2)^p illuminations, for C = 0).
 - ``gaussian`` (a Gaussian feed beam truncated at the rim): f = exp(-ln(1/C) rho^2) (Goldsmith
   1998, the Gaussian illumination of an antenna).
 
@@ -27,7 +27,7 @@ within angle u is (Parseval's theorem for the Hankel transform)
 (for the uniform aperture Rayleigh's 1 - J0(u)^2 - J1(u)^2; Born & Wolf 1999, sec. 8.5.2, 0.838 at
 the first null). The main-beam efficiency is (1 - spillover) EE(first null). The aperture
 (taper) efficiency is eta_a = 2 |int f rho d rho|^2 / int |f|^2 rho d rho over the whole disc
-(Balanis 2016, ch. 12, circular apertures; 1 for the uniform aperture, 0.75 for 1 - rho^2 as Silver 1949, Table 6.2,
+(Balanis 2016, ch. 12, circular apertures; 1 for the uniform aperture, 0.75 for 1 - rho^2 as Silver 1949, ch. 6,
 1 - b^2 with a blockage b).
 
 Sampling: an aperture of diameter D passes angular frequencies up to D / lambda [cycles/rad], so
