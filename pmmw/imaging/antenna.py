@@ -262,11 +262,12 @@ def off_axis_kernel(
     ellipse of semi-axes a cos(theta) in the plane of theta (radial) and a across it (tangential).
     By the Fourier transform's similarity theorem (Goodman 2005, ch. 2) its pattern is the disc's
     with the radial direction cosine scaled by cos(theta): u = k a sqrt((cos(theta) s_r)^2 + s_t^2),
-    so the beam widens by 1 / cos(theta) radially and keeps its width tangentially (the projected
-    aperture of a scanned array, whose beamwidth grows as 1 / cos(theta_0); Mailloux 2005, ch. 1),
-    angles s_r, s_t [rad] from the beam's centre. Coma and the beam deviation factor of a displaced feed are not modelled. The pinhole's
-    pixels shrink off axis: a pixel step is an angle of pixel_angle cos^2(theta) radially and
-    pixel_angle cos(theta) tangentially (the gnomonic projection), so in pixels the beam spans
+    so the beam widens by 1 / cos(theta) radially and keeps its width tangentially, as a scanned
+    array's beam widens as 1 / cos(theta_0) (Mailloux 2005, the beamwidth of a scanned array); s_r,
+    s_t [rad] are the angles from the beam's centre. Coma and the beam deviation factor of a
+    displaced feed are not modelled. The pinhole's pixels shrink off axis: a pixel step is an
+    angle of pixel_angle cos^2(theta) radially and pixel_angle cos(theta) tangentially (the
+    gnomonic projection), so in pixels the beam spans
     1 / cos^3(theta) radially and 1 / cos(theta) tangentially what it spans at the centre. At
     theta = 0 this is `antenna_kernel`. ``table``: `power_table` reaching the largest u, when the
     caller has it (`FieldPSF`: one for all its kernels).
