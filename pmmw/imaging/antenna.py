@@ -333,7 +333,7 @@ class FieldPSF:
         # the nodes lie symmetrically about the image's centre lines, where the beam is mirrored:
         # the kernel of node (i, j) is that of (i, W-1-j) flipped left-right, and of (H-1-i, j)
         # flipped up-down, so a quarter of them are computed
-        self.kernels = {}
+        self.kernels: dict[tuple[int, int], np.ndarray] = {}
         for i in self.rows:
             for j in self.cols:
                 mi, mj = height - 1 - i, width - 1 - j
