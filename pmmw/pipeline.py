@@ -25,7 +25,14 @@ from pmmw.config.load import scenario_to_display
 from pmmw.constants import C0
 from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
 from pmmw.imaging import detection
-from pmmw.imaging.antenna import Aperture, antenna_kernel, beam_report, gaussian_feed_spillover
+from pmmw.imaging.antenna import (
+    Aperture,
+    FieldPSF,
+    antenna_kernel,
+    beam_report,
+    gaussian_feed_spillover,
+    pixel_field_angles,
+)
 from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
 from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature
 from pmmw.io.exr import write_exr
@@ -873,6 +880,7 @@ def imager_model(
     ap = aperture_of(scn) if im.antenna is not None else None
     kernel = imager_kernel(scn, job.camera.pixel_angle, job.k0, kernels)
     spill = ap.spillover if ap is not None else 0.0
+    field = field_psf_of(scn, job) if ap is not None else None
     sensor = apply_imager(
         ideal,
         pixel_angle=job.camera.pixel_angle,
@@ -885,8 +893,21 @@ def imager_model(
         spillover_temperature=ap.spillover_temperature if ap is not None else 0.0,
         receiver=receiver_of(scn),
         noise_maps=noise_maps,
+        field_psf=field,
     )
     return sensor, (None if kernel is None else kernel * (1.0 - spill))
+
+
+def field_psf_of(scn: ScenarioConfig, job: TraceJob) -> FieldPSF | None:
+    """The field-dependent blur (`imaging.antenna.FieldPSF`) of ``imager.antenna.off_axis:
+    projected``, else None (one PSF over the image)."""
+    im = scn.imager
+    if im.antenna is None or im.antenna.off_axis != "projected" or not im.aperture_diameter > 0.0:
+        return None
+    cam = job.camera
+    return FieldPSF(
+        job.camera.pixel_angle, job.k0, im.aperture_diameter, aperture_of(scn), cam.width, cam.height, cam.fov
+    )
 
 
 def imager_summary(scn: ScenarioConfig, job: TraceJob, noise_maps: dict | None = None) -> dict:
@@ -900,6 +921,17 @@ def imager_summary(scn: ScenarioConfig, job: TraceJob, noise_maps: dict | None =
     ap = aperture_of(scn)
     if ap is not None:
         out["beam"] = beam_report(ap, job.k0, scn.imager.aperture_diameter, job.camera.pixel_angle)
+        if scn.imager.antenna is not None and scn.imager.antenna.off_axis == "projected":
+            cam = job.camera
+            tc = float(pixel_field_angles(cam.width, cam.height, cam.fov)[0].max())
+            u_half = ap.beam_shape()["hpbw_u"] / 2.0
+            ka = job.k0 * scn.imager.aperture_diameter / 2.0
+            out["beam"]["off_axis"] = {
+                "model": "projected aperture",
+                "corner_field_angle_deg": float(np.degrees(tc)),
+                "corner_hpbw_radial_mrad": 2e3 * float(np.arcsin(min(1.0, u_half / (ka * np.cos(tc))))),
+                "corner_hpbw_tangential_mrad": out["beam"]["hpbw_mrad"],
+            }
         if out["beam"]["pitch_over_nyquist"] > 1.0 + 1e-9:
             out["beam"]["sampling"] += (
                 f" ({out['beam']['pitch_over_nyquist']:.3g} x the Nyquist pitch: "

@@ -345,6 +345,7 @@ def _antenna_display(a) -> dict:
         "blockage": a.blockage,
         **({"spillover": a.spillover} if a.spillover is not None else {}),
         "spillover_temperature": _qty(a.spillover_temperature, "K"),
+        **({"off_axis": a.off_axis} if a.off_axis != "fixed" else {}),
     }
 
 

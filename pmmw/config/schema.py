@@ -245,6 +245,9 @@ class Antenna(_Model):
     blockage: float = Field(0.0, ge=0.0, lt=0.9)  # central blockage diameter / aperture diameter
     spillover: Optional[float] = Field(None, ge=0.0, lt=1.0)  # fraction of the feed's power off the reflector
     spillover_temperature: Annotated[float, Quantity("temperature")] = 290.0
+    # fixed: one PSF over the image (the on-axis beam); projected: each pixel's beam from the aperture
+    # projected onto the plane normal to that pixel's direction (`pmmw.imaging.antenna.FieldPSF`)
+    off_axis: Literal["fixed", "projected"] = "fixed"
 
     @field_validator("edge_taper", mode="before")
     @classmethod

@@ -12,7 +12,7 @@ C = 10^(-T_e / 20) for an edge taper T_e [dB]:
 
 - ``uniform``: f = 1: F(u) = J1(u) / u, the Airy pattern of Murakowski 2014 eq. 2.41.
 - ``parabolic`` (parabolic on a pedestal): f = C + (1 - C)(1 - rho^2) (Balanis 2016, ch. 12, circular apertures;
-  Silver 1949, Table 6.2, for C = 0).
+  Silver 1949, ch. 6, its table of the (1 - r^2)^p illuminations, for C = 0).
 - ``gaussian`` (a Gaussian feed beam truncated at the rim): f = exp(-ln(1/C) rho^2) (Goldsmith
   1998, the Gaussian illumination of an antenna).
 
@@ -27,7 +27,7 @@ within angle u is (Parseval's theorem for the Hankel transform)
 (for the uniform aperture Rayleigh's 1 - J0(u)^2 - J1(u)^2; Born & Wolf 1999, sec. 8.5.2, 0.838 at
 the first null). The main-beam efficiency is (1 - spillover) EE(first null). The aperture
 (taper) efficiency is eta_a = 2 |int f rho d rho|^2 / int |f|^2 rho d rho over the whole disc
-(Balanis 2016, ch. 12, circular apertures; 1 for the uniform aperture, 0.75 for 1 - rho^2 as Silver 1949, Table 6.2,
+(Balanis 2016, ch. 12, circular apertures; 1 for the uniform aperture, 0.75 for 1 - rho^2 as Silver 1949, ch. 6,
 1 - b^2 with a blockage b).
 
 Sampling: an aperture of diameter D passes angular frequencies up to D / lambda [cycles/rad], so
@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import j0
 
-from pmmw.imaging.imager import PSF_ENERGY_TAIL, _airy_encircled_energy
+from pmmw.imaging.imager import PSF_ENERGY_TAIL, FloatArray, _airy_encircled_energy, blur
 
 ILLUMINATIONS = ("uniform", "parabolic", "gaussian")
 _U_STEP = 0.01  # [-] table step in u = k a sin(theta): the pattern's finest structure has period ~pi
@@ -227,3 +227,147 @@ def _floats(d):
     return {
         k: _floats(v) if isinstance(v, dict) else float(v) if isinstance(v, np.floating) else v for k, v in d.items()
     }
+
+
+# --- the field-dependent PSF: each pixel's beam seen through the projected aperture -------------
+
+OFF_AXIS = ("fixed", "projected")
+_FIELD_NODES = 7  # kernels per image axis, interpolated bilinearly between (`FieldPSF`)
+
+
+def pixel_field_angles(width: int, height: int, fov: float) -> tuple[FloatArray, FloatArray]:
+    """Field angle theta [rad] from the boresight and azimuth phi [rad] (from the image's +x,
+    to the right, towards its top) of every pixel centre of a pinhole imager (`scene.camera`:
+    square pixels, ``fov`` across the width), each of shape (height, width)."""
+    half = np.tan(fov / 2.0)
+    a = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * half
+    b = (height - 2.0 * (np.arange(height) + 0.5)) / width * half
+    aa, bb = np.meshgrid(a, b)
+    return np.arctan(np.hypot(aa, bb)), np.arctan2(bb, aa)
+
+
+def off_axis_kernel(
+    pixel_angle: float,
+    k0: float,
+    aperture_diameter: float,
+    aperture: Aperture,
+    theta: float,
+    phi: float,
+    max_radius: int = _MAX_RADIUS_PX,
+    table: tuple[FloatArray, FloatArray] | None = None,
+) -> FloatArray:
+    """Pixel-integrated, unit-sum PSF of the beam that looks ``theta`` [rad] off the boresight, in
+    the image direction ``phi`` [rad] (`pixel_field_angles`), on the pixels of a pinhole imager
+    whose central pixel subtends ``pixel_angle`` [rad].
+
+    The aperture seen from theta is the disc projected onto the plane normal to that direction: an
+    ellipse of semi-axes a cos(theta) in the plane of theta (radial) and a across it (tangential).
+    By the Fourier transform's similarity theorem (Goodman 2005, ch. 2) its pattern is the disc's
+    with the radial direction cosine scaled by cos(theta): u = k a sqrt((cos(theta) s_r)^2 + s_t^2),
+    so the beam widens by 1 / cos(theta) radially and keeps its width tangentially, as a scanned
+    array's beam widens as 1 / cos(theta_0) (Mailloux 2005, the beamwidth of a scanned array); s_r,
+    s_t [rad] are the angles from the beam's centre. Coma and the beam deviation factor of a
+    displaced feed are not modelled. The pinhole's pixels shrink off axis: a pixel step is an
+    angle of pixel_angle cos^2(theta) radially and pixel_angle cos(theta) tangentially (the
+    gnomonic projection), so in pixels the beam spans
+    1 / cos^3(theta) radially and 1 / cos(theta) tangentially what it spans at the centre. At
+    theta = 0 this is `antenna_kernel`. ``table``: `power_table` reaching the largest u, when the
+    caller has it (`FieldPSF`: one for all its kernels).
+
+    Returns
+    -------
+    ndarray, shape (2r+1, 2r+1), float64
+    """
+    a = aperture_diameter / 2.0
+    c = float(np.cos(theta))
+    xs = np.linspace(1.0, 1.5 * 2.0 / (np.pi * PSF_ENERGY_TAIL), 20000)
+    x_max = xs[np.argmax(_airy_encircled_energy(xs) >= 1.0 - PSF_ENERGY_TAIL)]
+    theta_max = np.arcsin(min(1.0, x_max / (k0 * a)))
+    r = max(1, min(int(np.ceil(theta_max / (pixel_angle * c**3))), max_radius))
+    core = 3.8317 / (k0 * a)
+    sub = int(np.clip(np.ceil(5.0 * pixel_angle / core), 3, 15)) | 1
+    offs = (np.arange(sub) + 0.5) / sub - 0.5
+    grid = np.arange(-r, r + 1, dtype=float)
+    g = (grid[:, None] + offs[None, :]).ravel()
+    du, dv = np.meshgrid(g, g)  # pixel offsets: du to the right, dv down the rows
+    da, db = du, -dv  # to the right and up
+    s_r = (da * np.cos(phi) + db * np.sin(phi)) * pixel_angle * c**2  # radial angle [rad]
+    s_t = (-da * np.sin(phi) + db * np.cos(phi)) * pixel_angle * c  # tangential angle [rad]
+    u = k0 * a * np.sin(np.minimum(np.hypot(c * s_r, s_t), np.pi / 2))
+    table_u, power = table if table is not None else power_table(aperture, float(u.max()))
+    val = np.interp(u, table_u, power).reshape(2 * r + 1, sub, 2 * r + 1, sub).mean(axis=(1, 3))
+    return val / val.sum()
+
+
+def power_table(aperture: Aperture, u_max: float) -> tuple[FloatArray, FloatArray]:
+    """(u, |F(u) / F(0)|^2) on the `_U_STEP` grid from 0 past ``u_max``, for `np.interp`."""
+    table_u = np.arange(0.0, u_max + 2 * _U_STEP, _U_STEP)
+    return table_u, aperture.power(table_u)
+
+
+class FieldPSF:
+    """A field-dependent blur: each sensor pixel reads the scene through its own beam
+    (`off_axis_kernel` at that pixel's field angle). The kernels are computed on a grid of
+    ``nodes`` x ``nodes`` pixels spanning the image (corners included) and interpolated bilinearly
+    between them: sensor(x) = sum_j w_j(x) (K_j * T)(x), with hat weights w_j that sum to 1, so a
+    uniform scene stays uniform. The error of the interpolation is second order in the kernels'
+    change over a node spacing. The kernels reach at most the image's larger side (beyond it the
+    mirrored borders would only repeat the image), so that a small image's many kernels stay small."""
+
+    def __init__(
+        self,
+        pixel_angle: float,
+        k0: float,
+        aperture_diameter: float,
+        aperture: Aperture,
+        width: int,
+        height: int,
+        fov: float,
+        nodes: int = _FIELD_NODES,
+    ) -> None:
+        theta, phi = pixel_field_angles(width, height, fov)
+        self.shape = (height, width)
+        self.max_field_angle = float(theta.max())  # [rad], at the corners
+        self.max_radius = min(_MAX_RADIUS_PX, max(width, height))
+        self.rows = np.unique(np.round(np.linspace(0, height - 1, min(nodes, height))).astype(int))
+        self.cols = np.unique(np.round(np.linspace(0, width - 1, min(nodes, width))).astype(int))
+        table = power_table(aperture, k0 * aperture_diameter / 2.0)  # u = k a sin(.) <= k a
+        # the nodes lie symmetrically about the image's centre lines, where the beam is mirrored:
+        # the kernel of node (i, j) is that of (i, W-1-j) flipped left-right, and of (H-1-i, j)
+        # flipped up-down, so a quarter of them are computed
+        self.kernels: dict[tuple[int, int], np.ndarray] = {}
+        for i in self.rows:
+            for j in self.cols:
+                mi, mj = height - 1 - i, width - 1 - j
+                if (i, mj) in self.kernels:
+                    self.kernels[(i, j)] = self.kernels[(i, mj)][:, ::-1].copy()
+                elif (mi, j) in self.kernels:
+                    self.kernels[(i, j)] = self.kernels[(mi, j)][::-1, :].copy()
+                else:
+                    self.kernels[(i, j)] = off_axis_kernel(
+                        pixel_angle, k0, aperture_diameter, aperture, theta[i, j], phi[i, j], self.max_radius, table
+                    )
+
+    @staticmethod
+    def _hats(nodes: FloatArray, n: int) -> FloatArray:
+        """Hat weights (len(nodes), n) of positions 0..n-1 on ``nodes`` (piecewise-linear, sum 1)."""
+        x = np.arange(n, dtype=float)
+        if len(nodes) == 1:
+            return np.ones((1, n))
+        return np.stack([np.interp(x, nodes, np.eye(len(nodes))[k]) for k in range(len(nodes))])
+
+    def blur_all(self, images: dict[str, FloatArray]) -> dict[str, FloatArray]:
+        """The sensor images (H, W) float64 of the ideal ones (a dict of name -> (H, W)), each kernel
+        applied to every image in turn (its spectrum is computed once: `imaging.imager.blur`)."""
+        imgs = {c: np.asarray(v, float) for c, v in images.items()}
+        wr, wc = self._hats(self.rows, self.shape[0]), self._hats(self.cols, self.shape[1])
+        out = {c: np.zeros(self.shape) for c in imgs}
+        for (i, j), kern in self.kernels.items():
+            w = np.outer(wr[list(self.rows).index(i)], wc[list(self.cols).index(j)])
+            for c, v in imgs.items():
+                out[c] += w * blur(v, kern)
+        return out
+
+    def blur(self, img: FloatArray) -> FloatArray:
+        """The sensor image (H, W) float64 of the ideal image ``img`` (H, W)."""
+        return self.blur_all({"": img})[""]

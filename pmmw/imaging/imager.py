@@ -23,6 +23,7 @@ import numpy.typing as npt
 from scipy.special import j1
 
 if TYPE_CHECKING:
+    from pmmw.imaging.antenna import FieldPSF
     from pmmw.imaging.receiver import Receiver
 
 PSF_ENERGY_TAIL = 2e-3  # fraction of the Airy energy allowed outside the kernel
@@ -199,6 +200,7 @@ def apply_imager(
     spillover_temperature: float = 0.0,
     receiver: Receiver | None = None,
     noise_maps: dict | None = None,
+    field_psf: FieldPSF | None = None,
 ) -> dict[str, FloatArray]:
     """The sensor image from the ideal one.
 
@@ -223,6 +225,8 @@ def apply_imager(
     noise_maps : dict, optional
         Filled with the per-pixel 1-sigma noise [K] of every channel (``I, Q, U, V, Ex2, Ey2``)
         when a ``receiver`` is given.
+    field_psf : imaging.antenna.FieldPSF, optional
+        A field-dependent blur (each pixel's own beam) instead of ``kernel``'s one PSF.
 
     Returns
     -------
@@ -230,7 +234,9 @@ def apply_imager(
         ``I, Q, U, V, Ex2, Ey2`` of the sensor.
     """
     base = {c: np.asarray(ideal[c], float) for c in ("Ex2", "Ey2", "U", "V")}
-    if aperture_diameter > 0.0:
+    if aperture_diameter > 0.0 and field_psf is not None:
+        base = field_psf.blur_all(base)
+    elif aperture_diameter > 0.0:
         kern = kernel if kernel is not None else psf_kernel(pixel_angle, k0, aperture_diameter)
         base = {c: blur(v, kern) for c, v in base.items()}
     if spillover > 0.0:

@@ -13,7 +13,7 @@ integration. A balanced Dicke receiver (T_ref = T_A) gives dT = 2 (T_A + T_rec) 
 twice the total-power receiver's without gain fluctuation, and no gain-fluctuation term at all.
 So the noise of a pixel depends on what it looks at: a pixel seeing a 300 K body is noisier than
 one seeing a 40 K sky. A noise figure F [dB] gives T_rec = T0 (10^(F/10) - 1) with T0 = 290 K
-(the IEEE reference temperature; Pozar 2012, sec. 10.2).
+(the IEEE reference temperature; Pozar 2012, ch. 10, noise figure).
 
 The time each pixel is integrated is ``integration_time``, or, for a scanned imager making
 ``frame_rate`` images per second with ``receivers`` receivers each scanning ``pixels_per_receiver``
@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-T0_NOISE_FIGURE = 290.0  # [K] the reference temperature of a noise figure (IEEE; Pozar 2012, sec. 10.2)
+T0_NOISE_FIGURE = 290.0  # [K] the reference temperature of a noise figure (IEEE; Pozar 2012, ch. 10, noise figure)
 NETD_SCENE_K = 300.0  # [K] the scene temperature the NETD is stated at (a room-temperature scene)
 FloatArray = npt.NDArray[np.float64]
 

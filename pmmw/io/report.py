@@ -324,6 +324,13 @@ def _imager_lines(imager: Mapping) -> list[str]:
             f"- sampling: pixel pitch {_num(beam.get('pixel_pitch_mrad'), '.3g')} mrad, Nyquist pitch "
             f"{_num(beam.get('nyquist_pitch_mrad'), '.3g')} mrad: {beam.get('sampling')}",
         ]
+        off = beam.get("off_axis")
+        if off:
+            lines.append(
+                f"- off axis ({off.get('model')}): at the image's corner, {_num(off.get('corner_field_angle_deg'), '.3g')}"
+                f" deg off the boresight, the beam is {_num(off.get('corner_hpbw_radial_mrad'), '.3g')} mrad wide "
+                f"radially and {_num(off.get('corner_hpbw_tangential_mrad'), '.3g')} mrad across"
+            )
     return lines + [""]
 
 

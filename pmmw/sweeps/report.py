@@ -78,8 +78,10 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
             "",
         ]
         lines += _detection_lines(spec, table, snr_cols)
+    limit_lines, limit_plots = _limits_against(out, spec, table, snr_cols)
+    lines += limit_lines
     lines += _warning_lines(out, table)
-    plots = _plots(out, spec, table, snr_cols) + _heatmaps(out, spec, table, snr_cols)
+    plots = _plots(out, spec, table, snr_cols) + limit_plots + _heatmaps(out, spec, table, snr_cols)
     sheet = _contact_sheet(out, spec, table)
     lines += [""] + [f"![{p.stem}]({p.name})" for p in plots + ([sheet] if sheet else [])]
     movies = _animations(out, spec, table)
@@ -235,6 +237,77 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
         save_figure(fig, path)
         written.append(path)
     return written
+
+
+def _limits_against(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]):
+    """With two numeric axes or more: each contrast's detection limit along the first (a detection
+    range) against the second (the fog's liquid water, the aperture), one line per value of the
+    other keys, as a table in report.md and a plot (``limits_PAIR.png``). A limit beyond the
+    swept values (detected everywhere, or nowhere) is drawn at the end it lies past, with a
+    triangle pointing past it. Returns (report lines, plot paths)."""
+    from pmmw.io.preview import subplots
+
+    axes = _numeric_axes(spec)
+    if len(axes) < 2 or not snr_cols:
+        return [], []
+    (x_key, x_of), (y_key, y_of) = axes[:2]
+    line_keys = _other_keys(spec, [x_key, y_key])
+    x_name, y_name = _axis_label(spec, x_key), _axis_label(spec, y_key)
+    lines, written = [], []
+    for col in snr_cols:
+        pair, chan = _pair_channel(col)
+        curves: dict[str, dict[str, list[dict]]] = {}
+        for r in table:
+            if r["status"] == "done" and _finite(r.get(col)):
+                label = ", ".join(str(r[k]) for k in line_keys)
+                curves.setdefault(label, {}).setdefault(r[y_key], []).append(r)
+        if not curves:
+            continue
+        ys = sorted({y for c in curves.values() for y in c}, key=lambda y: y_of[y])
+        lines += [
+            f"Detection limit of {pair} ({chan}) along {x_name} against {y_name} (± its error; "
+            "> or <: beyond the swept values, the triangles of the plot):",
+            "",
+            "| " + " | ".join([y_name, *(k or "limit" for k in curves)]) + " |",
+            "| " + " | ".join("---" for _ in range(len(curves) + 1)) + " |",
+        ]
+        cells: dict[str, list[str]] = {y: [] for y in ys}
+        fig, ax = subplots(figsize=(6.4, 4.2), dpi=110)
+        x_lo, x_hi = min(x_of.values()), max(x_of.values())
+        for label, by_y in curves.items():
+            pts = []
+            for y in ys:
+                rows = sorted(by_y.get(y, []), key=lambda r: x_of[r[x_key]])
+                lim = _limit(rows, col, x_key, x_of) if len(rows) > 1 else {"kind": "one"}
+                if lim["kind"] == "limit":
+                    cells[y].append(f"{lim['crossing_x']:.4g} ± {lim['error']:.2g}")
+                    pts.append((y_of[y], lim["crossing_x"], lim["error"], "o"))
+                elif lim["kind"] in ("all", "none"):
+                    # beyond the swept values: past the end the SNR falls towards (a range), or
+                    # before the start (an aperture); a line detected nowhere, the other way
+                    falls = rows[-1][col] < rows[0][col]
+                    high = falls == (lim["kind"] == "all")
+                    cells[y].append(f"> {x_hi:g}" if high else f"< {x_lo:g}")
+                    pts.append((y_of[y], x_hi if high else x_lo, 0.0, "^" if high else "v"))
+                else:
+                    cells[y].append("")
+            if not pts:
+                continue
+            (line,) = ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", label=label or None)
+            for yv, xv, err, mark in pts:
+                ax.errorbar([yv], [xv], yerr=[err] if err else None, fmt=mark, ms=6, capsize=3, color=line.get_color())
+        lines += ["| " + " | ".join([str(y), *cells[y]]) + " |" for y in ys] + [""]
+        ax.set_xlabel(y_name)
+        ax.set_ylabel(f"detection limit: {x_name}")
+        ax.set_title(f"{spec.scenario.stem}: {pair} ({chan}), SNR {ROSE_SNR:g} crossed", fontsize=9)
+        ax.grid(True, alpha=0.3)
+        if any(curves):
+            ax.legend(fontsize=7, title=", ".join(line_keys) or None, title_fontsize=7)
+        fig.tight_layout()
+        path = out / ("limits_" + re.sub(r"[^A-Za-z0-9]+", "_", pair) + ".png")
+        save_figure(fig, path)
+        written.append(path)
+    return lines, written
 
 
 def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None:

@@ -43,8 +43,8 @@ def test_parabolic_taper_matches_its_closed_form_and_silver_table():
 
     u_half = brentq(lambda u: (8 * jv(2, u) / u**2) ** 2 - 0.5, 0.5, 4.0)
     assert np.degrees(s["hpbw_u"] / np.pi) == pytest.approx(np.degrees(2 * u_half / np.pi), abs=1e-3)
-    # Silver 1949, Table 6.2, (1 - r^2)^1: HPBW 72.8 lambda/D deg, first sidelobe 24.6 dB down, gain
-    # factor 0.75; printed to 0.1 deg and 0.1 dB. A finding, not a pass: the exact width 72.748 deg
+    # Silver 1949, ch. 6, the table of the (1 - r^2)^p illuminations, p = 1: HPBW 72.8 lambda/D deg,
+    # first sidelobe 24.6 dB down, gain factor 0.75; printed to 0.1 deg and 0.1 dB. A finding, not a pass: the exact width 72.748 deg
     # rounds to 72.7, so the 1949 table is 0.05 deg high (its own arithmetic); it is checked at one
     # unit of its last digit, and the exact root above is the check of pmmw's width
     assert np.degrees(s["hpbw_u"] / np.pi) == pytest.approx(72.8, abs=0.1)

@@ -1,0 +1,161 @@
+"""The field-dependent PSF (`imager.antenna.off_axis: projected`, `imaging.antenna.off_axis_kernel`,
+`FieldPSF`) against the projected aperture's closed form, and off by default bit for bit."""
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from scipy.special import j1
+
+from pmmw.imaging.antenna import Aperture, FieldPSF, antenna_kernel, off_axis_kernel, pixel_field_angles
+from pmmw.imaging.imager import blur
+
+K0 = 2 * np.pi / 3.156e-3  # 95 GHz [1/m]
+D = 0.6  # [m]
+PITCH = 0.2e-3  # [rad]: about 27 pixels across the 5.4 mrad beam, so pixel integration is negligible
+
+
+def _u_half():
+    """The Airy pattern's half-power point in u = k a sin(theta), by scipy's root finder on scipy's
+    Bessel function (no pmmw code): 1.6163."""
+    return brentq(lambda u: (2 * j1(u) / u) ** 2 - 0.5, 0.5, 3.0)
+
+
+def _width(profile) -> float:
+    """Half-power full width [pixels] of a centred 1-D profile, by linear interpolation."""
+    p = profile / profile.max()
+    c = len(p) // 2
+    right = c + int(np.argmax(p[c:] < 0.5))
+    left = c - int(np.argmax(p[c::-1] < 0.5))
+    xr = right - 1 + (p[right - 1] - 0.5) / (p[right - 1] - p[right])
+    xl = left + 1 - (p[left + 1] - 0.5) / (p[left + 1] - p[left])
+    return xr - xl
+
+
+def test_on_axis_the_beam_is_the_fixed_one():
+    # theta = 0: the same pixel integration of the same pattern (rounding of the rotation: 1e-12)
+    ap = Aperture("gaussian", edge_taper_db=12.0)
+    a = off_axis_kernel(1e-3, K0, D, ap, 0.0, 0.7)
+    b = antenna_kernel(1e-3, K0, D, ap)
+    assert a.shape == b.shape and np.max(np.abs(a - b)) < 1e-12
+
+
+@pytest.mark.parametrize("phi", [0.0, np.pi / 2])
+def test_off_axis_widths_are_the_projected_apertures(phi):
+    """At theta = 40 deg the aperture seen from the beam's direction is an ellipse of axes D cos(theta)
+    (radially) and D: half-power widths 2 arcsin(u_half / (k a cos theta)) and 2 arcsin(u_half / (k
+    a)) in angle, which the pinhole's pixels (a step of pitch cos^2 theta radially, pitch cos theta
+    tangentially) make 2 arcsin(...) / (pitch cos^2 theta) and 2 arcsin(...) / (pitch cos theta)
+    pixels. Tolerance 1 %: the kernel's linear interpolation between pixels (widths of 37 and 94
+    pixels: under 0.2 % each) and its pixel integration (about pitch^2 / 12 against the width^2)."""
+    theta = np.radians(40.0)
+    c = np.cos(theta)
+    a = D / 2
+    uh = _u_half()
+    radial = 2 * np.arcsin(uh / (K0 * a * c)) / (PITCH * c**2)
+    tangential = 2 * np.arcsin(uh / (K0 * a)) / (PITCH * c)
+    k = off_axis_kernel(PITCH, K0, D, Aperture(), theta, phi)
+    r = k.shape[0] // 2
+    along_x, along_y = _width(k[r, :]), _width(k[:, r])
+    want_x, want_y = (radial, tangential) if phi == 0.0 else (tangential, radial)
+    assert along_x == pytest.approx(want_x, rel=0.01)
+    assert along_y == pytest.approx(want_y, rel=0.01)
+    # control: the fixed beam has one width both ways, the on-axis one, which is neither
+    f = antenna_kernel(PITCH, K0, D, Aperture())
+    rf = f.shape[0] // 2
+    assert _width(f[rf, :]) == pytest.approx(_width(f[:, rf]), rel=1e-9)
+    assert abs(_width(f[rf, :]) - want_x) > 0.1 * want_x
+
+
+def test_field_angles_of_the_pinhole():
+    # the corner pixel's centre of a 10 x 6 image over 40 deg: tan(theta) = hypot(9/10, 5/10) tan(20 deg)
+    th, ph = pixel_field_angles(10, 6, np.radians(40.0))
+    t = np.tan(np.radians(20.0))
+    assert th[0, 0] == pytest.approx(np.arctan(np.hypot(0.9 * t, 0.5 * t)), rel=1e-12)
+    assert ph[0, -1] == pytest.approx(np.arctan2(0.5, 0.9), rel=1e-12)  # top right: up and right
+
+
+def test_field_psf_keeps_a_uniform_scene_and_blurs_the_edge_more_than_the_centre():
+    # hat weights sum to 1 and each kernel to 1: a uniform 250 K scene reads 250 K everywhere (1e-9 K)
+    psf = FieldPSF(2e-3, K0, 0.3, Aperture(), 41, 41, np.radians(70.0), nodes=5)
+    flat = np.full((41, 41), 250.0)
+    assert np.max(np.abs(psf.blur(flat) - 250.0)) < 1e-9
+    # point sources at the centre and near the left edge: the edge's response is wider, along the
+    # radial (x) direction; the control: the centre's matches the fixed beam's (one kernel there)
+    centre, edge = np.zeros((41, 41)), np.zeros((41, 41))
+    centre[20, 20] = edge[20, 4] = 1.0
+    fixed = antenna_kernel(2e-3, K0, 0.3, Aperture(), max_radius=41)  # FieldPSF's reach: the image
+    # the centre pixel is a node at theta = 0: exactly the fixed blur there (rounding, 1e-12)
+    assert psf.blur(centre)[20, 20] == pytest.approx(blur(centre, fixed)[20, 20], rel=1e-12)
+    assert psf.blur(edge)[20, 4] < 0.8 * blur(edge, fixed)[20, 4]
+
+
+PITCH_16 = 2 * np.arctan(np.tan(np.radians(20.0)) / 16)  # the pinhole's central pixel: 40 deg over 16
+
+
+def _imager_model(off_axis):
+    from pmmw import pipeline
+
+    rng = np.random.default_rng(0)
+    ideal = {c: rng.uniform(50, 300, (16, 16)) for c in ("Ex2", "Ey2", "U", "V")}
+    ant = (
+        None
+        if off_axis is None
+        else SimpleNamespace(
+            illumination="uniform",
+            edge_taper=None,
+            blockage=0.0,
+            spillover=None,
+            spillover_temperature=290.0,
+            off_axis=off_axis,
+        )
+    )
+    im = SimpleNamespace(aperture_diameter=0.3, noise=4.0, antenna=ant, receiver=None, resolution=(16, 16))
+    scn = SimpleNamespace(imager=im, render=SimpleNamespace(seed=7))
+    fov = np.radians(40.0)
+    cam = SimpleNamespace(pixel_angle=PITCH_16, width=16, height=16, fov=fov)
+    job = SimpleNamespace(camera=cam, k0=2 * np.pi / 3.2e-3)
+    return ideal, pipeline.imager_model(scn, job, ideal)[0]
+
+
+def test_off_by_default_and_images_unchanged():
+    # the default (fixed) blurs every pixel with the antenna's one kernel, bit for bit as before the
+    # option: the sensor is blur(ideal, antenna_kernel) plus the seeded noise, computed here directly
+    from pmmw.config.schema import Antenna
+
+    assert Antenna().off_axis == "fixed"
+    ideal, fixed = _imager_model("fixed")
+    k = antenna_kernel(PITCH_16, 2 * np.pi / 3.2e-3, 0.3, Aperture())  # the full reach: not FieldPSF's
+    noise = np.random.Generator(np.random.PCG64(np.random.SeedSequence([7, 0x5EED])))
+    want = {c: blur(ideal[c], k) + noise.normal(0.0, 4.0, (16, 16)) for c in ("Ex2", "Ey2", "U", "V")}
+    assert all(np.array_equal(fixed[c], want[c]) for c in want)
+    # control: projected changes the image (a 40 deg field)
+    _, proj = _imager_model("projected")
+    assert not np.array_equal(proj["Ex2"], want["Ex2"])
+
+
+def test_scenario_hash_unchanged_by_the_default(tmp_path):
+    # the option at its default leaves the resolved scenario (and so its hash and cached images)
+    # as before; projected changes it (control)
+    from pmmw.pipeline import resolve, scenario_hash
+
+    cfg = Path(__file__).resolve().parents[2] / "configs" / "cwd_design_94ghz.yaml"
+    base = scenario_hash(resolve(cfg, []).scenario)
+    assert scenario_hash(resolve(cfg, ["imager.antenna.off_axis=fixed"]).scenario) == base
+    assert scenario_hash(resolve(cfg, ["imager.antenna.off_axis=projected"]).scenario) != base
+
+
+def test_every_node_has_its_own_beam():
+    # FieldPSF computes a quarter of its kernels and mirrors the rest: each must be the kernel of
+    # its own node's field angle and azimuth (rounding of the mirrored angles: 1e-12 of the peak)
+    psf = FieldPSF(5e-3, K0, 0.3, Aperture(), 30, 20, np.radians(40.0))
+    th, ph = pixel_field_angles(30, 20, np.radians(40.0))
+    assert len(psf.kernels) == 49
+    for (i, j), k in psf.kernels.items():
+        want = off_axis_kernel(5e-3, K0, 0.3, Aperture(), th[i, j], ph[i, j], psf.max_radius)
+        assert np.max(np.abs(k - want)) < 1e-12 * want.max(), (i, j)
+    # control: the kernels differ across the field (a mirror taken the wrong way would not show
+    # otherwise): the top-left corner's is not the top-right's
+    assert np.max(np.abs(psf.kernels[(0, 0)] - psf.kernels[(0, 29)])) > 1e-3 * psf.kernels[(0, 0)].max()
