@@ -511,37 +511,10 @@ def _scatter(
     swallows (eq. 2.36), the branch choice (`_choose1`), and each child's fate (termination, a
     masked child's way back, its row, offset and medium stack)."""
     finish = mode == FINISH
-    d, s_old, p_old, m, sid, depth, stack, top = (
-        wave.d,
-        wave.s,
-        wave.p,
-        wave.m,
-        wave.sid,
-        wave.depth,
-        wave.stack,
-        wave.top,
-    )
-    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = (
-        hit.pos,
-        hit.n_in,
-        hit.cos1,
-        hit.cur,
-        hit.face_med,
-        hit.other,
-        hit.leaving,
-    )
-    oo, od, os_, op, om, osid, odepth, ostack, otop, olast = (
-        out.o,
-        out.d,
-        out.s,
-        out.p,
-        out.m,
-        out.sid,
-        out.depth,
-        out.stack,
-        out.top,
-        out.last_t,
-    )
+    d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top  # fmt: skip
+    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving  # fmt: skip
+    oo, od, os_, op, om = out.o, out.d, out.s, out.p, out.m
+    osid, odepth, ostack, otop, olast = out.sid, out.depth, out.stack, out.top, out.last_t
     buf_eps, buf_d = _film_buffers(films)
     roulette, cap, last_row = u_roul.shape[0] > 0, stack.shape[1], oo.shape[0] - 1
     if facets is not None:

@@ -413,8 +413,10 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     stderr(px4, px4, ints1, px4.copy())
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
-    # the sky (`Integrator._sky`)
-    sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
+    # the sky (`Integrator._sky`): a model's own arrays, or its temperatures broadcast from one value
+    for temps in (empty, frozen):
+        sky_emit(np.zeros(0, np.int64), wave, temps, temps, True, acc)
+    from pmmw.atmosphere.model import SKY_ELEVATIONS
     from pmmw.scene.sky import _sky_lookup
 
     _sky_lookup(
@@ -423,8 +425,8 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
         1.0,
         1.0,
         np.zeros(1, np.int64),
-        cells3 := np.array([0.0, 1.0]),
-        cells3[None],
+        SKY_ELEVATIONS,  # (read-only, as `sky` passes it)
+        np.zeros((1, SKY_ELEVATIONS.size)),
         0.0,
         empty,
         np.zeros(0, np.int64),
