@@ -23,7 +23,7 @@ from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jone
 from pmmw.reflectance.stack import Stack
 from pmmw.surface import Surfaces, Wave, kernels
 from pmmw.surface.media import stack_media  # noqa: F401  (re-exported: its home is the media module)
-from pmmw.surface.records import Faces, Hit, HitCode, Limits
+from pmmw.surface.records import Choice, Faces, Hit, HitCode, Limits
 
 __all__ = ["monte_carlo", "stack_media"]
 
@@ -92,7 +92,7 @@ def monte_carlo(
         stack.frequency or 1.0,
         faces,
         Limits(_MAX_EVENTS, float(threshold), True, 0.0, 0.0),
-        (kernels.STRATEGIES["stochastic"], 0),
+        Choice(kernels.STRATEGIES["stochastic"], 0),
         count_facets=True,
     )
     tally = _Tally(by_order=np.zeros((3, N_THETA, N_PHI, 4, 4)))

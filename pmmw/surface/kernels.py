@@ -38,7 +38,7 @@ import numpy as np
 from pmmw.jit import inline, njit
 from pmmw.physics import fresnel, multilayer, roughness
 from pmmw.surface.media import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
-from pmmw.surface.records import HitCode
+from pmmw.surface.records import Facets, HitCode, Settle
 
 # `Hit.code` as compiled constants (numba reads a module's int globals as constants)
 _MISSED, _PASSED, _INTERACTS, _ENDED = (
@@ -53,37 +53,23 @@ STRATEGIES = {"split": 0, "stochastic": 1, "hybrid": 2}
 #: surface at once and are terminated (smooth faces); they stay at the hit point (the rough code's
 #: steps that follow); or, on rough faces, each leaves or comes back by Smith masking here.
 FINISH, AT_POINT, MASKED = 0, 1, 2
-_I64, _I8, _F8, _B1 = np.zeros(0, np.int64), np.zeros(0, np.int8), np.zeros(0), np.zeros(0, bool)
-NO_SETTLE = (FINISH, _I64, _I8, None)  # `scatter`'s children leave at once
+_I64, _I8 = np.zeros(0, np.int64), np.zeros(0, np.int8)
+NO_SETTLE = Settle(FINISH, _I64, _I8, None)  # `scatter`'s children leave at once
 
 
 def at_point(src, branch):
     """`scatter`'s ``settle`` argument for children left at the hit point (``AT_POINT``), each
     one's row in the wave to ``src`` and +1 (reflected) or -1 (transmitted) to ``branch``."""
-    return (AT_POINT, src, branch, None)
+    return Settle(AT_POINT, src, branch, None)
 
 
-def masked(draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts):
-    """`scatter`'s ``settle`` argument for rough faces (``MASKED``): see `scatter`."""
-    return (
-        MASKED,
-        _I64,
-        _I8,
-        (
-            draw,
-            u1,
-            u2,
-            n_geo,
-            n_mac,
-            u_leave,
-            rough,
-            bool(over),
-            float(wavelength),
-            int(rehit_depth),
-            back_side,
-            counts,
-        ),
+def masked(draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back, counts):
+    """`scatter`'s ``settle`` argument for rough faces (``MASKED``): a `Facets` record (see there
+    and `scatter`), its scalars as the kernels' types."""
+    facets = Facets(
+        draw, u1, u2, n_geo, n_mac, u_leave, rough, bool(over), float(wavelength), int(rehit_depth), back, counts
     )
+    return Settle(MASKED, _I64, _I8, facets)
 
 
 _jit = njit()
@@ -269,7 +255,7 @@ def off_surface(wave, g, step):
 @_inline
 def _film_buffers(films):
     """Room for one ray's stack of media (`_coefficients1`)."""
-    n = films[1].max() + 2 if films[1].shape[0] else 2
+    n = films.count.max() + 2 if films.count.shape[0] else 2
     return np.empty(n, np.complex128), np.empty(n, np.float64)
 
 
@@ -305,7 +291,7 @@ def _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
     through them (innermost first when leaving) to the far medium, its absorption emitting at
     the films' temperature."""
     kind, eps = media.kind, media.eps
-    f_start, f_count, f_eps, f_d, f_temp, k0 = films
+    f_start, f_count, f_eps, f_d = films.start, films.count, films.eps, films.thickness
     kd = kind[fm]
     e1 = eps[cur]
     nf, st = f_count[fm], f_start[fm]
@@ -315,13 +301,15 @@ def _coated1(fm, cur, other, leaving, cos1, media, films, buf_eps, buf_d):
         buf_eps[1 + q], buf_d[q] = f_eps[f], f_d[f]
     # a blackbody is index-matched to the films' innermost layer
     buf_eps[nf + 1] = f_eps[st + nf - 1] if kd == BLACKBODY else _far_eps1(kd, e1, eps[other])
-    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(buf_eps[: nf + 2], buf_d[:nf], cos1, k0, kd == METAL)
+    rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap = multilayer.stack1(
+        buf_eps[: nf + 2], buf_d[:nf], cos1, films.k0, kd == METAL
+    )
     q2 = complex(np.nan, 0.0)
     if kd == DIELECTRIC:
         eo = eps[other]
         kpar2 = e1 * (1.0 - cos1**2)
         q2 = fresnel._root1(eo - kpar2, fresnel._l1(eo) + fresnel._l1(kpar2), False)
-    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, f_temp[fm]
+    return rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2, films.temperature[fm]
 
 
 @_jit
@@ -361,45 +349,48 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
     ``hit``); their children are written to ``out`` (room for two per row). Returns how many
     (with ``MASKED``: how many leave).
 
+    What the surface does to a ray (its response, as pbrt's BxDF: the facet drawn, `_facet1`;
+    the local basis and the interface's coefficients, `_response1`; each child's direction and
+    amplitudes, `_child1`; its masking, `_masking1`) is apart from the integrator's bookkeeping
+    in `_scatter` (the emission deposited, the branch choice, termination and Russian roulette,
+    the child's row, offset and medium stack, a masked child's way back).
+
     Parameters
     ----------
-    hit : tuple (pos, n, cos1, cur, face_med, other, leaving, code)
-        As `arrive` fills it; on a rough face ``n`` is the facet normal drawn for the ray and
+    hit : Hit
+        As `arrive` fills it; on a rough face ``n_in`` is the facet normal drawn for the ray and
         ``cos1`` the cosine about it (with ``MASKED``: the macro normal, or the facet normal a
         model without a compiled draw gave, and ``cos1`` is not read).
-    films : tuple (start, count, eps, thickness, temperature, k0)
-        The media's coherent films (`job.Coating`, outermost first), flattened: medium k's are
-        ``eps[start[k]:start[k] + count[k]]`` and ``thickness[...]`` [m], their absorption emits at
-        ``temperature[k]`` [K]; ``k0`` [1/m]. A face under films is the stack from the incident
-        medium through them (innermost first for a ray leaving the body) to the far medium
+    films : Films
+        The media's coherent films. A face under films is the stack from the incident medium
+        through them (innermost first for a ray leaving the body) to the far medium
         (`multilayer.stack1`); a bare interface `fresnel.interface1`, a perfect conductor
         `fresnel.conductor1`.
-    choice : tuple (strategy code, split_depth)
+    prim, faces, media : the face each row hit, `Faces`, `MediaTable`
+    choice : Choice
     u_choose, u_roul : ndarray
         Uniforms for the branch choice (one per row; empty with ``split``) and Russian roulette
         (two per row, the reflected child's first; empty without roulette; read by ``FINISH`` and
         ``MASKED``).
-    settle : tuple (mode, src, branch, facets)
+    limits, acc, cut : `Limits`, the per-sample sums and truncation sums (`survive`)
+    out : WaveArrays
+    settle : Settle
         ``FINISH`` (`NO_SETTLE`): the children leave the surface here (offset along the side
         normal, then `survive`). ``AT_POINT`` (`at_point`; the rough code's steps decide what
         follows): they stay at the hit point, unterminated, and ``src``/``branch`` receive each
         child's row in the wave and +1 (reflected) or -1 (transmitted). ``MASKED`` (`masked`):
         a rough face's whole interaction, `Surfaces._interact` without the steps between
-        kernels. ``facets`` = (draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength,
-        rehit_depth, back_side, counts): per row its face normal and macro normal (facing the
-        incident side); where ``draw[face_med]``, the GGX facet drawn here from ``u1``, ``u2``
-        (`roughness.ggx_draw1` about the `_tangent1` frame; a facet that faces away: the power
-        emitted at the face's temperature, the ray goes on with none about the macro normal).
-        Each child then leaves (terminated by `survive` with ``u_roul`` as with ``FINISH``, then
-        off the surface as `settle` sends it: rows 0, 1, ... of ``out``) unless the next of
-        ``u_leave`` (one per child of a rough face, in order) is at or above its Smith masking
-        probability (`roughness.smith_g1`, ``rough`` the media's
-        codes as `settle` takes them); a masked child emits its power at the face's temperature
-        if ``over`` (the chain's end), else it crosses one ``wavelength`` of its side's medium and
-        comes back for a re-hit (depth changed by ``rehit_depth``): rows ``len(out) - 1``,
-        ``len(out) - 2``, ... of ``out``, its row, media and branch in ``back_side`` (src, cur,
-        other, leaving, sign) as `settle` fills them. ``counts`` receives (draws of weight other
-        than 1, uniforms of ``u_leave`` used, children that came back).
+        kernels, its `Facets`: where ``draw[face_med]``, the GGX facet drawn here from ``u1``,
+        ``u2`` (`roughness.ggx_draw1` about the `_tangent1` frame; a facet that faces away: the
+        power emitted at the face's temperature, the ray goes on with none about the macro
+        normal). Each child then leaves (terminated by `survive` with ``u_roul`` as with
+        ``FINISH``, then off the surface as `settle` sends it: rows 0, 1, ... of ``out``) unless
+        the next of ``u_leave`` (one per child of a rough face, in order) is at or above its
+        Smith masking probability (`roughness.smith_g1`); a masked child emits its power at the
+        face's temperature if ``over`` (the chain's end), else it crosses one ``wavelength`` of
+        its side's medium and comes back for a re-hit (depth changed by ``rehit_depth``): rows
+        ``len(out) - 1``, ``len(out) - 2``, ... of ``out``, its row, media and branch in
+        ``back`` as `settle` fills them; ``counts`` as `Facets` says.
     """
     return _scatter(
         rows,
@@ -416,11 +407,79 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         acc,
         cut,
         out,
-        settle[0],
-        settle[1],
-        settle[2],
-        settle[3],
+        settle.mode,
+        settle.src,
+        settle.branch,
+        settle.facets,
     )
+
+
+# -- the surface's response to one ray (scalars in, scalars out: see `_scatter`) ---------------
+
+
+@_inline
+def _facet1(nx, ny, nz, mx, my, mz, tx, ty, tz, dx, dy, dz, u1, u2, ax, ay, orient):
+    """The GGX facet visible from a ray of direction d on a rough face of macro normal m and
+    tangent t (`roughness.ggx_draw1`), and the draw's weight; where no facet is visible (weight
+    0, degenerate input only) the normal n it had."""
+    fx, fy, fz, w = roughness.ggx_draw1((mx, my, mz), (tx, ty, tz), (-dx, -dy, -dz), u1, u2, ax, ay, orient)
+    if w > 0.0:
+        return fx, fy, fz, w
+    return nx, ny, nz, w
+
+
+@_inline
+def _response1(nx, ny, nz, dx, dy, dz, s_old, p_old, m00, m01, m10, m11):
+    """The ray's outgoing (s, p) basis about the normal n (s = unit(n x k), k = -d, eq. 2.23; the
+    ray's own s at normal incidence; p = k x s) and its Jones matrix re-expressed in it (eq.
+    2.35): (sx, sy, sz, px, py, pz, ml00, ml01, ml10, ml11)."""
+    sx, sy, sz = -(ny * dz - nz * dy), -(nz * dx - nx * dz), -(nx * dy - ny * dx)
+    norm = math.sqrt(sx * sx + sy * sy + sz * sz)
+    if norm > _NORMAL:
+        sx, sy, sz = sx / norm, sy / norm, sz / norm
+    else:
+        sx, sy, sz = s_old
+    px, py, pz = _k_cross(dx, dy, dz, sx, sy, sz)
+    ml00, ml01, ml10, ml11 = _rebase1(m00, m01, m10, m11, s_old, p_old, (sx, sy, sz), (px, py, pz))
+    return sx, sy, sz, px, py, pz, ml00, ml01, ml10, ml11
+
+
+@_inline
+def _child1(br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2, n1, diel):
+    """The reflected (``br`` 0, eq. 2.21, 2.39: on the incident side, along +n) or transmitted
+    child (eq. 2.19, 2.40: refracted into the other medium, straight through a sheet) of a ray of
+    direction d at a face of normal n: its direction and (s, p) amplitudes (renormalized to the
+    powers R, T). The refracted wave is homogeneous (sec. 2.2.4): the tangential part kept
+    (eq. 2.18), the normal part Re q2 of the outgoing root (eq. 2.20): Snell's law for lossless
+    media; ``n1`` the incident side's real index."""
+    dn = dx * nx + dy * ny + dz * nz
+    if br == 0:
+        return dx - 2.0 * dn * nx, dy - 2.0 * dn * ny, dz - 2.0 * dn * nz, _amplitude(rs, Rs), _amplitude(rp, Rp)
+    if not diel:
+        return dx, dy, dz, _amplitude(ts, Ts), _amplitude(tp, Tp)
+    qr = q2.real
+    cx = n1 * (dx - dn * nx) - qr * nx
+    cy = n1 * (dy - dn * ny) - qr * ny
+    cz = n1 * (dz - dn * nz) - qr * nz
+    norm = math.sqrt(cx * cx + cy * cy + cz * cz)
+    return cx / norm, cy / norm, cz / norm, _amplitude(ts, Ts), _amplitude(tp, Tp)
+
+
+# -- the integrator's bookkeeping ---------------------------------------------------------------
+
+
+@_inline
+def _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u):
+    """One branch drawn by power (``render.strategy``): the branches' shares of the power the ray
+    carries (its Jones columns' powers times R and T), so that for a lossless interface the chosen
+    child keeps that power exactly. Returns (keep_r, keep_t, gain_r, gain_t)."""
+    c0 = ml00.real**2 + ml00.imag**2 + ml10.real**2 + ml10.imag**2
+    c1 = ml01.real**2 + ml01.imag**2 + ml11.real**2 + ml11.imag**2
+    r_sum, t_sum = c0 * Rs + c1 * Rp, c0 * Ts + c1 * Tp
+    p_r = r_sum / max(r_sum + t_sum, _TINY)
+    if u < p_r:
+        return True, False, 1.0 / math.sqrt(p_r), 1.0
+    return False, True, 1.0, 1.0 / math.sqrt(1.0 - p_r)
 
 
 @_jit
@@ -446,103 +505,51 @@ def _scatter(
 ):
     """`scatter` with its ``settle`` unpacked: ``facets`` is None but with ``MASKED``, so that
     numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
-    6 % of an interaction as run-time branches)."""
+    6 % of an interaction as run-time branches). The integrator's bookkeeping of each ray's
+    interaction around the surface's response (`_facet1`, `_response1`, `_coated1`/`_bare1`,
+    `_child1`, `roughness.smith_g1`): the emission of what the interface absorbs or a sink
+    swallows (eq. 2.36), the branch choice (`_choose1`), and each child's fate (termination, a
+    masked child's way back, its row, offset and medium stack)."""
     finish = mode == FINISH
-    d, s_old, p_old, m, sid, depth, stack, top = (
-        wave.d,
-        wave.s,
-        wave.p,
-        wave.m,
-        wave.sid,
-        wave.depth,
-        wave.stack,
-        wave.top,
-    )
-    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = (
-        hit.pos,
-        hit.n_in,
-        hit.cos1,
-        hit.cur,
-        hit.face_med,
-        hit.other,
-        hit.leaving,
-    )
-    oo, od, os_, op, om, osid, odepth, ostack, otop, olast = out
-    if facets is not None:
-        draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back_side, counts = facets
-        r_code, r_ax, r_ay, r_orient = rough
-        b_src, b_cur, b_other, b_leaving, b_sign = back_side
+    d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top  # fmt: skip
+    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving  # fmt: skip
+    oo, od, os_, op, om = out.o, out.d, out.s, out.p, out.m
+    osid, odepth, ostack, otop, olast = out.sid, out.depth, out.stack, out.top, out.last_t
     buf_eps, buf_d = _film_buffers(films)
-    face_offset = faces.offset
-    kind, alpha, temperature, n1_real, has_coat, eps = (
-        media.kind,
-        media.alpha,
-        media.temperature,
-        media.n1_real,
-        media.has_coat,
-        media.eps,
-    )
-    strategy, split_depth = choice
-    roulette = u_roul.shape[0] > 0
-    cap = stack.shape[1]
-    last_row = oo.shape[0] - 1
+    roulette, cap, last_row = u_roul.shape[0] > 0, stack.shape[1], oo.shape[0] - 1
+    if facets is not None:
+        n_mac, n_geo, rough, back = facets.n_mac, facets.n_geo, facets.rough, facets.back
+    kind, temperature, n1_real, has_coat, eps = media.kind, media.temperature, media.n1_real, media.has_coat, media.eps
     # The loop body calls no helper that takes arrays: numba counts references to an array
     # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
     # than all of an interaction's arithmetic. Helpers here take and return scalars.
     n_out, n_back, used, drawn_off = 0, 0, 0, 0
     for j in range(rows.shape[0]):
         i = rows[j]
-        k = sid[i]
-        fm = fm_a[i]
-        kd = kind[fm]
-        t_body = temperature[fm]
+        k, fm = sid[i], fm_a[i]
+        kd, t_body = kind[fm], temperature[fm]
         nx, ny, nz = n_in[i, 0], n_in[i, 1], n_in[i, 2]
         dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+        tx, ty, tz = 0.0, 0.0, 0.0
         if facets is not None:
-            code, tx, ty, tz = r_code[fm], 0.0, 0.0, 0.0
-            if code != roughness.NOT_ROUGH:
+            if rough.code[fm] != roughness.NOT_ROUGH:
                 tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
-            if draw[fm]:  # the facet visible from the ray (GGX)
-                fx, fy, fz, w = roughness.ggx_draw1(
-                    (n_mac[i, 0], n_mac[i, 1], n_mac[i, 2]),
-                    (tx, ty, tz),
-                    (-dx, -dy, -dz),
-                    u1[i],
-                    u2[i],
-                    r_ax[fm],
-                    r_ay[fm],
-                    r_orient[fm],
-                )
-                if w != 1.0:
-                    drawn_off += 1
-                if w > 0.0:
-                    nx, ny, nz = fx, fy, fz
-                else:  # no facet visible (degenerate input only): the power emitted here, none goes on
+            if facets.draw[fm]:  # the facet visible from the ray (GGX)
+                nx, ny, nz, w = _facet1(
+                    nx, ny, nz, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, dx, dy, dz,
+                    facets.u1[i], facets.u2[i], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
+                )  # fmt: skip
+                drawn_off += w != 1.0
+                if not w > 0.0:  # no facet visible (degenerate input only): the power emitted here, none goes on
                     _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
                     m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
             cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0)
         else:
             cos1 = cos1_a[i]
-        # the outgoing wave's (s, p) about the normal: s = unit(n x k), k = -d (eq. 2.23)
-        sx, sy, sz = -(ny * dz - nz * dy), -(nz * dx - nx * dz), -(nx * dy - ny * dx)
-        norm = math.sqrt(sx * sx + sy * sy + sz * sz)
-        if norm > _NORMAL:
-            sx, sy, sz = sx / norm, sy / norm, sz / norm
-        else:
-            sx, sy, sz = s_old[i, 0], s_old[i, 1], s_old[i, 2]
-        # p = k x s
-        px, py, pz = _k_cross(dx, dy, dz, sx, sy, sz)
-        # M re-expressed in (s, p) (eq. 2.35)
-        ml00, ml01, ml10, ml11 = _rebase1(
-            m[i, 0, 0],
-            m[i, 0, 1],
-            m[i, 1, 0],
-            m[i, 1, 1],
-            (s_old[i, 0], s_old[i, 1], s_old[i, 2]),
-            (p_old[i, 0], p_old[i, 1], p_old[i, 2]),
-            (sx, sy, sz),
-            (px, py, pz),
-        )
+        sx, sy, sz, px, py, pz, ml00, ml01, ml10, ml11 = _response1(
+            nx, ny, nz, dx, dy, dz, (s_old[i, 0], s_old[i, 1], s_old[i, 2]), (p_old[i, 0], p_old[i, 1], p_old[i, 2]),
+            m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
+        )  # fmt: skip
         if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
             rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(
                 fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d
@@ -561,60 +568,33 @@ def _scatter(
         diel = kd == DIELECTRIC
         trans = (diel or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
         keep_r, keep_t, gain_r, gain_t = True, trans, 1.0, 1.0
-        if strategy != 0 and trans and (strategy == 1 or depth[i] >= split_depth):
-            # the branches' shares of the power this ray carries (its Jones columns' powers
-            # times R and T): for a lossless interface the chosen child keeps that power exactly
-            c0 = ml00.real**2 + ml00.imag**2 + ml10.real**2 + ml10.imag**2
-            c1 = ml01.real**2 + ml01.imag**2 + ml11.real**2 + ml11.imag**2
-            r_sum, t_sum = c0 * Rs + c1 * Rp, c0 * Ts + c1 * Tp
-            p_r = r_sum / max(r_sum + t_sum, _TINY)
-            if u_choose[j] < p_r:
-                keep_t, gain_r = False, 1.0 / math.sqrt(p_r)
-            else:
-                keep_r, gain_t = False, 1.0 / math.sqrt(1.0 - p_r)
-        step = face_offset[prim[i]]
-        dn = dx * nx + dy * ny + dz * nz
-        depth_c = depth[i] + 1
-        tp_i = top[i]
+        if choice.strategy != 0 and trans and (choice.strategy == 1 or depth[i] >= choice.split_depth):
+            keep_r, keep_t, gain_r, gain_t = _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u_choose[j])
+        tp_i, step = top[i], faces.offset[prim[i]]
         for br in range(2):
-            if br == 0:  # reflected (eq. 2.21, 2.39): stays on the incident side, along +n
-                if not keep_r:
-                    continue
-                a_s, a_p = gain_r * _amplitude(rs, Rs), gain_r * _amplitude(rp, Rp)
-                cx, cy, cz = dx - 2.0 * dn * nx, dy - 2.0 * dn * ny, dz - 2.0 * dn * nz
-                side, top_c = 1.0, tp_i
-            else:  # transmitted (eq. 2.19, 2.40): refracted into the other medium, or straight through a sheet
-                if not keep_t:
-                    continue
-                a_s, a_p = gain_t * _amplitude(ts, Ts), gain_t * _amplitude(tp, Tp)
-                if diel:
-                    # homogeneous wave (sec. 2.2.4): tangential part kept (eq. 2.18), normal part
-                    # Re q2 of the outgoing root (eq. 2.20); Snell's law for lossless media
-                    n1 = n1_real[cur_a[i]]
-                    qr = q2c.real
-                    cx = n1 * (dx - dn * nx) - qr * nx
-                    cy = n1 * (dy - dn * ny) - qr * ny
-                    cz = n1 * (dz - dn * nz) - qr * nz
-                    norm = math.sqrt(cx * cx + cy * cy + cz * cz)
-                    cx, cy, cz = cx / norm, cy / norm, cz / norm
-                    top_c = tp_i - 1 if leaving_a[i] else tp_i + 1  # the body's medium popped or pushed
-                else:
-                    cx, cy, cz = dx, dy, dz
-                    top_c = tp_i
+            if not (keep_t if br else keep_r):
+                continue
+            cx, cy, cz, a_s, a_p = _child1(
+                br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2c, n1_real[cur_a[i]], diel
+            )
+            gain = gain_t if br else gain_r
+            a_s, a_p = gain * a_s, gain * a_p
+            side, top_c = 1.0, tp_i
+            if br:
                 side = -1.0
+                if diel:
+                    top_c = tp_i - 1 if leaving_a[i] else tp_i + 1  # the body's medium popped or pushed
             m00, m01, m10, m11 = ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p
+            depth_c = depth[i] + 1
             leaves = True
-            if facets is not None and code != roughness.NOT_ROUGH:  # masked by the microsurface? (as `settle`)
+            if (
+                facets is not None and rough.code[fm] != roughness.NOT_ROUGH
+            ):  # masked by the microsurface? (as `settle`)
                 g1 = roughness.smith_g1(
-                    (side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]),
-                    (tx, ty, tz),
-                    (cx, cy, cz),
-                    code,
-                    r_ax[fm],
-                    r_ay[fm],
-                    r_orient[fm],
-                )
-                leaves = not u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
+                    (side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz), (cx, cy, cz),
+                    rough.code[fm], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
+                )  # fmt: skip
+                leaves = not facets.u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
                 used += 1
             if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
                 g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
@@ -626,43 +606,28 @@ def _scatter(
                     m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
             gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
             ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
+            sx_c, sy_c, sz_c = sx, sy, sz
             row, depth_row, comes_back = n_out, depth_c, False
-            if facets is not None:
-                if leaves:  # along the face's side normal (a wrong-side child mirrored)
-                    ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
-                        ox,
-                        oy,
-                        oz,
-                        cx,
-                        cy,
-                        cz,
-                        sx,
-                        sy,
-                        sz,
-                        side * n_geo[i, 0],
-                        side * n_geo[i, 1],
-                        side * n_geo[i, 2],
-                        step,
-                    )
-                else:
-                    if over:  # the chain's end: its power emitted where it is
-                        _add(acc, k, m00, m01, m10, m11, t_body, t_body)
-                        continue
-                    cur, oth, lv = _masked_side1(side, diel, cur_a[i], other_a[i], leaving_a[i])
-                    tau, e, g = _to_next_facet1(alpha[cur], wavelength)
-                    if tau < 1.0:
-                        tc = temperature[cur]
-                        _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
-                        m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
-                    if not tau > A_ROUNDING:
-                        continue
-                    row, depth_row, comes_back = last_row - n_back, depth_c + rehit_depth, True
-                    b_src[n_back], b_cur[n_back], b_other[n_back] = i, cur, oth
-                    b_leaving[n_back], b_sign[n_back] = lv, side
-                    n_back += 1
-                    sx_c, sy_c, sz_c = sx, sy, sz
-            else:
-                sx_c, sy_c, sz_c = sx, sy, sz
+            if facets is not None and leaves:  # off along the face's side normal (a wrong-side child mirrored)
+                ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
+                    ox, oy, oz, cx, cy, cz, sx, sy, sz, side * n_geo[i, 0], side * n_geo[i, 1], side * n_geo[i, 2], step
+                )  # fmt: skip
+            elif facets is not None:  # masked: back for a re-hit after one wavelength of its side's medium
+                if facets.over:  # the chain's end: its power emitted where it is
+                    _add(acc, k, m00, m01, m10, m11, t_body, t_body)
+                    continue
+                cur, oth, lv = _masked_side1(side, diel, cur_a[i], other_a[i], leaving_a[i])
+                tau, e, g = _to_next_facet1(media.alpha[cur], facets.wavelength)
+                if tau < 1.0:
+                    tc = temperature[cur]
+                    _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
+                    m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+                if not tau > A_ROUNDING:
+                    continue
+                row, depth_row, comes_back = last_row - n_back, depth_c + facets.rehit_depth, True
+                back.src[n_back], back.cur[n_back], back.other[n_back] = i, cur, oth
+                back.leaving[n_back], back.sign[n_back] = lv, side
+                n_back += 1
             # the child, at its row: p = k x s with k = -d
             od[row, 0], od[row, 1], od[row, 2] = cx, cy, cz
             os_[row, 0], os_[row, 1], os_[row, 2] = sx_c, sy_c, sz_c
@@ -683,8 +648,8 @@ def _scatter(
             if not comes_back:
                 n_out += 1
     if facets is not None:
-        counts[0] += drawn_off
-        counts[1], counts[2] = used, n_back
+        facets.counts[0] += drawn_off
+        facets.counts[1], facets.counts[2] = used, n_back
     return n_out
 
 
@@ -693,8 +658,20 @@ def gather(src, rows, dst):
     """Rows ``rows`` of wave ``src`` to rows 0, 1, ... of wave ``dst`` (the same wave when every
     ``rows[n] >= n``: in place). One call per wave: numba counts references to arrays handed to a
     helper, at a cost above a row's copy, so the arrays are unpacked once here."""
-    o, d, s, p, m, sid, depth, stack, top, last_t = src
-    o2, d2, s2, p2, m2, sid2, depth2, stack2, top2, last_t2 = dst
+    o, d, s, p, m, sid, depth, stack, top, last_t = (
+        src.o,
+        src.d,
+        src.s,
+        src.p,
+        src.m,
+        src.sid,
+        src.depth,
+        src.stack,
+        src.top,
+        src.last_t,
+    )
+    o2, d2, s2, p2, m2 = dst.o, dst.d, dst.s, dst.p, dst.m
+    sid2, depth2, stack2, top2, last_t2 = dst.sid, dst.depth, dst.stack, dst.top, dst.last_t
     for n in range(rows.shape[0]):
         c = rows[n]
         for a in range(3):
@@ -814,12 +791,18 @@ def settle(
     """
     pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
     kind, alpha, temperature = media.kind, media.alpha, media.temperature
-    b_src, b_cur, b_other, b_leaving, b_sign = back_side
-    r_code, r_ax, r_ay, r_orient = rough
-    over, t_end = chain_end
-    l_src, l_sign = leave_side
-    o, d, s, p, m, sid, k_depth, k_last = kids[0], kids[1], kids[2], kids[3], kids[4], kids[5], kids[6], kids[9]
-    u_roul, limits, cut = fate
+    b_src, b_cur, b_other, b_leaving, b_sign = (
+        back_side.src,
+        back_side.cur,
+        back_side.other,
+        back_side.leaving,
+        back_side.sign,
+    )
+    r_code, r_ax, r_ay, r_orient = rough.code, rough.alpha_x, rough.alpha_y, rough.orientation
+    over, t_end = chain_end.over, chain_end.t_end
+    l_src, l_sign = leave_side.src, leave_side.sign
+    o, d, s, p, m, sid, k_depth, k_last = kids.o, kids.d, kids.s, kids.p, kids.m, kids.sid, kids.depth, kids.last_t
+    u_roul, limits, cut = fate.u_roul, fate.limits, fate.cut
     roulette = u_roul.shape[0] > 0
     l_rows, b_rows = np.empty(src.shape[0], np.int64), np.empty(src.shape[0], np.int64)
     nl, nb = 0, 0
@@ -897,7 +880,7 @@ def settle(
         nb += 1
     gather(kids, l_rows[:nl], leave)
     gather(kids, b_rows[:nb], back)
-    b_o, b_depth = back[0], back[6]
+    b_o, b_depth = back.o, back.depth
     for j in range(nb):  # a re-hit starts at the hit point
         i = b_src[j]
         b_o[j, 0], b_o[j, 1], b_o[j, 2] = pos[i, 0], pos[i, 1], pos[i, 2]

@@ -22,7 +22,7 @@ from pmmw.constants import C0
 from pmmw.physics.roughness import GGX_CODE, MAX_REHITS, OTHER_CODE
 from pmmw.surface import kernels
 from pmmw.surface.media import Media
-from pmmw.surface.records import Hit, HitCode
+from pmmw.surface.records import BackSide, ChainEnd, Choice, Fate, Hit, HitCode, LeaveSide
 from pmmw.surface.tables import Pile, kernel_tables
 from pmmw.surface.wave import Wave
 
@@ -58,7 +58,7 @@ class Surfaces:
         off the surface [m] (n_f,) float64 (`intersect`'s ``face_offset``).
     limits : tuple (max_depth, threshold, roulette, t_lo, t_hi)
         Termination (`kernels.survive`).
-    choice : tuple (strategy code, split_depth)
+    choice : Choice or tuple (strategy code, split_depth)
         Branch choice (`kernels.STRATEGIES`).
     compiled : bool or None
         Smooth scenes interact in one pass of `kernels.scatter` (None, True); False sends them
@@ -94,10 +94,10 @@ class Surfaces:
         self.rough_scene = media.any_rough  # smooth scenes skip every roughness and bump step
         self.compiled = not self.rough_scene if compiled is None else bool(compiled and not self.rough_scene)
         self._faces = faces
-        self._limits, self._choice = limits, choice
+        self._limits, self._choice = limits, Choice(int(choice[0]), int(choice[1]))
         k0 = 2.0 * np.pi * frequency / C0
         self._media, self._films, self._rough, self._rough_models, self._layer_media = kernel_tables(media, k0)
-        self._rough_other = bool((self._rough[0] == OTHER_CODE).any())
+        self._rough_other = bool((self._rough.code == OTHER_CODE).any())
         self.count_facets = count_facets
         # a chain of re-hits at one point is one interaction, unless depth counts facet events
         self._rehit_depth = 0 if count_facets else -1
@@ -184,7 +184,7 @@ class Surfaces:
         """The uniforms of an interaction of ``n`` rays that `kernels.scatter` reads, drawn in one
         order by every caller: the branch choice (one per ray; none with ``split``), then Russian
         roulette (two per ray; none without roulette)."""
-        u_choose = self.rng.random(n) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
+        u_choose = self.rng.random(n) if self._choice.strategy != kernels.STRATEGIES["split"] else _NO_RANDOM
         return u_choose, self.rng.random(2 * n) if self._limits.roulette else _NO_RANDOM
 
     def _models(self, face_med):
@@ -260,19 +260,13 @@ class Surfaces:
         u_choose, u_roul = self._uniforms(nr)
         hit = Hit(np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
-        side = (
-            np.empty(2 * nr, np.int64),
-            np.empty(2 * nr, np.int64),
-            np.empty(2 * nr, np.int64),
-            np.empty(2 * nr, bool),
-            np.empty(2 * nr),
-        )
+        side = BackSide.empty(2 * nr)
         counts = np.zeros(3, np.int64)
         generator = self.rng.bit_generator
         state = generator.state
         u_leave = self.rng.random(2 * nr)
         settle = kernels.masked(
-            self._rough[0] == GGX_CODE,
+            self._rough.code == GGX_CODE,
             u1,
             u2,
             np.ascontiguousarray(n_geo),
@@ -329,7 +323,7 @@ class Surfaces:
         n_fac, u1, u2, tangent = n_mac, _NO_RANDOM, _NO_RANDOM, None
         for k, mdl in self._models(face_med).items():
             g = np.nonzero(face_med == k)[0]
-            if self._rough[0][k] == GGX_CODE:  # drawn in `kernels.scatter`
+            if self._rough.code[k] == GGX_CODE:  # drawn in `kernels.scatter`
                 if u1 is _NO_RANDOM:
                     u1, u2 = np.zeros(len(wv)), np.zeros(len(wv))
                 u1[g], u2[g] = self.rng.random((2, g.size))
@@ -478,7 +472,7 @@ class Surfaces:
             rk = rough[i]
             u[rk] = self.rng.random(np.count_nonzero(rk))
             if self._rough_other:  # models without compiled masking
-                r = np.flatnonzero(self._rough[0][face_med[i]] == OTHER_CODE)
+                r = np.flatnonzero(self._rough.code[face_med[i]] == OTHER_CODE)
                 fm, ir = face_med[i][r], i[r]
                 n_x = branch[r][:, None] * n_mac[ir]
                 p_leave = np.zeros(n)
@@ -488,10 +482,10 @@ class Surfaces:
         else:
             tangent = n_mac  # not read
         leave, back = Wave.empty(n, child.stack.shape[1]), Wave.empty(n, child.stack.shape[1])
-        side = (np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, bool), np.empty(n))
+        side = BackSide.empty(n)
         hit = Hit(pos, n_geo, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         t_face = self._media.temperature[face_med]
-        chain_end = (np.full(len(pos), rehit + 1 > MAX_REHITS), np.stack([t_face, t_face], axis=1))
+        chain_end = ChainEnd(np.full(len(pos), rehit + 1 > MAX_REHITS), np.stack([t_face, t_face], axis=1))
         nl, nb = kernels.settle(
             child.arrays(),
             i,
@@ -510,10 +504,10 @@ class Surfaces:
             leave.arrays(),
             back.arrays(),
             side,
-            (np.empty(n, np.int64), np.empty(n)),
+            LeaveSide.empty(n),
             True,
             self._rehit_depth,
-            (u_roul, self._limits, self.cut),
+            Fate(u_roul, self._limits, self.cut),
         )
         if not nb:
             return leave.head(nl), None
@@ -636,7 +630,7 @@ class Surfaces:
             np.full(nr, not a),
             _NO_CODE,
         )
-        u_choose = self.rng.random(nr) if self._choice[0] != kernels.STRATEGIES["split"] else _NO_RANDOM
+        u_choose = self.rng.random(nr) if self._choice.strategy != kernels.STRATEGIES["split"] else _NO_RANDOM
         kids = Wave.empty(2 * nr, w.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
         none = np.zeros(nr, np.int64)
@@ -663,19 +657,12 @@ class Surfaces:
         u, p_leave = np.zeros(count), _NO_RANDOM
         if model is not None:
             u = self.rng.random(count)
-            if self._rough[0][fm] == OTHER_CODE:
+            if self._rough.code[fm] == OTHER_CODE:
                 p_leave = model.masking(branch[:, None] * n_in[src], tangent[src], kids.d)
         t_end = np.array([pile.end_temperature(j, a), pile.end_temperature(j, not a)])
-        chain_end = (rehits + 1 > MAX_REHITS, np.broadcast_to(t_end, (nr, 2)).copy())
+        chain_end = ChainEnd(rehits + 1 > MAX_REHITS, np.broadcast_to(t_end, (nr, 2)).copy())
         leave, back = Wave.empty(count, w.stack.shape[1]), Wave.empty(count, w.stack.shape[1])
-        b_side = (
-            np.empty(count, np.int64),
-            np.empty(count, np.int64),
-            np.empty(count, np.int64),
-            np.empty(count, bool),
-            np.empty(count),
-        )
-        l_side = (np.empty(count, np.int64), np.empty(count))
+        b_side, l_side = BackSide.empty(count), LeaveSide.empty(count)
         nl, nb = kernels.settle(
             kids.arrays(),
             src,
@@ -697,16 +684,16 @@ class Surfaces:
             l_side,
             False,
             self._rehit_depth,
-            (_NO_RANDOM, self._limits, self.cut),
+            Fate(_NO_RANDOM, self._limits, self.cut),
         )
         exits, walk = [], []
         if nb:
-            i, sign = b_side[0][:nb], b_side[4][:nb]
+            i, sign = b_side.src[:nb], b_side.sign[:nb]
             walk.append((back.head(nb), np.full(nb, j), np.where(sign > 0, a, not a), rehits[i] + 1, rows[i]))
         leave = leave.head(nl)
         if not self.count_facets:
             leave.depth -= 1  # the walk is one interaction, counted where it leaves (`_layer_exit`)
-        i_all, sign_all = l_side[0][:nl], l_side[1][:nl]
+        i_all, sign_all = l_side.src[:nl], l_side.sign[:nl]
         for side in (a, not a):
             sel = np.flatnonzero((sign_all > 0) == (side == a))
             if not sel.size:

@@ -13,7 +13,7 @@ from pmmw.physics import fresnel
 from pmmw.physics.roughness import NOT_ROUGH, OTHER_CODE
 from pmmw.surface import kernels
 from pmmw.surface.media import DIELECTRIC, Media
-from pmmw.surface.records import MediaTable
+from pmmw.surface.records import Films, MediaTable, RoughTable
 
 __all__ = ["Pile", "kernel_tables", "surface_coefficients", "surface_response"]
 
@@ -24,10 +24,11 @@ def kernel_tables(media: Media, k0: float):
 
     Returns
     -------
-    media : tuple (kind, alpha, temperature, n1_real, has_coat, eps) of arrays, one entry per medium
-    films : tuple (start, count, eps, thickness, temperature, k0)
+    media : MediaTable
+        One entry per medium.
+    films : Films
         The coherent films of each medium (outermost first), flattened.
-    rough : tuple (code, alpha_x, alpha_y, orientation)
+    rough : RoughTable
         Each medium's roughness model for the masking test (`roughness.smith_g1` codes).
     models : list
         Each medium's roughness model (None: smooth).
@@ -61,7 +62,7 @@ def kernel_tables(media: Media, k0: float):
     )
     sizes = [0 if c is None else c.eps.size for c in coats]
     present = [c for c in coats if c is not None]
-    films = (
+    films = Films(
         np.cumsum([0] + sizes[:-1]).astype(np.int64),
         np.array(sizes, np.int64),
         np.concatenate([c.eps for c in present] + [np.ones(1)]).astype(complex),
@@ -70,7 +71,7 @@ def kernel_tables(media: Media, k0: float):
         float(k0),
     )
     # GGX and Beckmann are masked in the kernel; others (``OTHER_CODE``) by their array code
-    rough = (
+    rough = RoughTable(
         np.array([NOT_ROUGH if r is None else getattr(r, "code", OTHER_CODE) for r in models], np.int8),
         np.array([getattr(r, "ax", 1.0) for r in models], float),
         np.array([getattr(r, "ay", 1.0) for r in models], float),

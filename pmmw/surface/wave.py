@@ -45,19 +45,8 @@ class Wave:
 
     @staticmethod
     def empty(n, stack_size):
-        """Room for ``n`` rays (filled by `kernels.scatter`)."""
-        return Wave(
-            o=np.empty((n, 3)),
-            d=np.empty((n, 3)),
-            s=np.empty((n, 3)),
-            p=np.empty((n, 3)),
-            m=np.empty((n, 2, 2), complex),
-            sid=np.empty(n, np.int64),
-            depth=np.empty(n, np.int32),
-            stack=np.empty((n, stack_size), np.int16),
-            top=np.empty(n, np.int32),
-            last_t=np.empty(n),
-        )
+        """Room for ``n`` rays (filled by `kernels.scatter`), the fields as `WaveArrays.ROOM` states."""
+        return Wave(**WaveArrays.empty(n, stack=stack_size)._asdict())
 
     def head(self, n):
         """The first ``n`` rays (views)."""

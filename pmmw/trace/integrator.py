@@ -34,7 +34,7 @@ from scipy.ndimage import binary_dilation
 
 from pmmw.scene.camera import REPLICATES, pixel_samples
 from pmmw.surface import Surfaces, Wave
-from pmmw.surface.records import Faces, Hit, HitCode, Limits
+from pmmw.surface.records import Choice, Faces, Hit, HitCode, Limits
 from pmmw.trace import kernels
 from pmmw.trace.job import TraceJob
 
@@ -232,7 +232,12 @@ class Integrator:
         # through the rough-surface steps (the reference of tests/trace/test_compiled_tracer.py)
         self.roulette, self.threshold = limits.roulette, limits.threshold
         self.surfaces = Surfaces(
-            job.media, job.frequency, faces, limits, (kernels.STRATEGIES[st.strategy], int(st.split_depth)), compiled
+            job.media,
+            job.frequency,
+            faces,
+            limits,
+            Choice(kernels.STRATEGIES[st.strategy], int(st.split_depth)),
+            compiled,
         )
         self._faces, self._media = faces, self.surfaces.media_table
         self.compiled = self.surfaces.compiled

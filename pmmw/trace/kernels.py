@@ -61,7 +61,21 @@ from pmmw.surface.kernels import (  # noqa: F401  (the surfaces' kernels, re-exp
     tangents,
 )
 from pmmw.surface.media import DIELECTRIC
-from pmmw.surface.records import Faces, Hit, Limits, MediaTable, WaveArrays
+from pmmw.surface.records import (
+    BackSide,
+    ChainEnd,
+    Choice,
+    Faces,
+    Fate,
+    Films,
+    Hit,
+    LeaveSide,
+    Limits,
+    MediaTable,
+    RoughTable,
+    Settle,
+    WaveArrays,
+)
 from pmmw.trace.intersect import _plane_distance
 
 _jit = njit()
@@ -337,120 +351,31 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     _plane_distance(
         np.zeros((1, 3)), np.ones((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), np.zeros(1, np.int64), np.zeros(1)
     )
+    # every record from its type's `empty` (`pmmw.surface.records`), as the renderer makes them
     n = 1
-    wave = WaveArrays(
-        np.zeros((n, 3)),
-        np.zeros((n, 3)),
-        np.zeros((n, 3)),
-        np.zeros((n, 3)),
-        np.zeros((n, 2, 2), complex),
-        np.zeros(n, np.int64),
-        np.zeros(n, np.int32),
-        np.zeros((n, stack_size), np.int16),
-        np.zeros(n, np.int32),
-        np.zeros(n),
-    )
+    wave = WaveArrays.empty(n, zero=True, stack=stack_size)
     acc, cut = np.zeros((n, 4)), np.zeros((n, 2))
     t, prim = np.ones(n), np.full(n, -1, np.int64)
-    faces = Faces(np.zeros(1, np.int32), np.zeros((1, 3)), np.zeros(1))
-    media = MediaTable(
-        np.zeros(1, np.int8), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1, bool), np.ones(1, complex)
-    )
-    hit = Hit.empty(n)
-    empty = np.zeros(0)
+    faces, media, films = Faces.empty(1, zero=True), MediaTable.empty(1, zero=True), Films.empty(1, zero=True)
+    hit, limits, choice = Hit.empty(n), Limits.empty(), Choice.empty()
+    empty, ints = np.zeros(0), np.zeros(0, np.int64)
     arrive(wave, t, prim, (empty, empty), faces, media, acc, hit, empty, 1e-3)
     ambient_segments(wave, t, prim, 0.0, 1e3, np.zeros(n), np.zeros(n), np.zeros(n))
-    limits = Limits(32, 1e-3, True, 0.0, 300.0)
-    films = (np.zeros(1, np.int64), np.zeros(1, np.int64), np.ones(1, complex), np.zeros(1), np.zeros(1), 1.0)
     coefficients(
-        np.zeros(0, np.int64),
-        np.zeros(0, np.int64),
-        np.zeros(0, np.int64),
-        np.zeros(0, bool),
-        empty,
-        media,
-        films,
-        np.zeros((0, 4), complex),
-        np.zeros((0, 6)),
-        np.zeros(0, complex),
-        empty,
-    )
-    scatter(
-        np.zeros(0, np.int64),
-        wave,
-        hit,
-        films,
-        prim,
-        faces,
-        media,
-        (0, 0),
-        empty,
-        empty,
-        limits,
-        acc,
-        cut,
-        wave,
-        NO_SETTLE,
-    )
+        ints, ints, ints, np.zeros(0, bool), empty, media, films, np.zeros((0, 4), complex), np.zeros((0, 6)),
+        np.zeros(0, complex), empty,
+    )  # fmt: skip
+    for settle_ in (NO_SETTLE, at_point(ints, np.zeros(0, np.int8))) + ((Settle.empty(0, zero=True),) if rough else ()):
+        # smooth faces; the rough code's steps (``AT_POINT``); rough faces with compiled masking (``MASKED``)
+        scatter(ints, wave, hit, films, prim, faces, media, choice, empty, empty, limits, acc, cut, wave, settle_)
     survivors(wave, empty, limits, acc, cut, np.zeros(n, bool))
-    ints = np.zeros(0, np.int64)
     compact(wave, np.zeros(n, bool))
     if rough:
-        rough_table = (np.zeros(1, np.int8), np.ones(1), np.ones(1), np.zeros(1))
-        # rough faces with compiled masking (`Surfaces._scatter_masked`)
-        scatter(
-            np.zeros(0, np.int64),
-            wave,
-            hit,
-            films,
-            prim,
-            faces,
-            media,
-            (0, 0),
-            empty,
-            empty,
-            limits,
-            acc,
-            cut,
-            wave,
-            masked(
-                np.zeros(1, bool),
-                empty,
-                empty,
-                np.zeros((n, 3)),
-                np.zeros((n, 3)),
-                empty,
-                rough_table,
-                False,
-                1e-3,
-                -1,
-                (ints, ints, ints, np.zeros(0, bool), empty),
-                np.zeros(3, np.int64),
-            ),
-        )
         settle(
-            wave,
-            ints,
-            np.zeros(0, np.int8),
-            empty,
-            empty,
-            hit,
-            np.zeros((n, 3)),
-            np.zeros((n, 3)),
-            np.zeros(n),
-            (np.zeros(n, bool), np.zeros((n, 2))),
-            media,
-            rough_table,
-            1e-3,
-            acc,
-            wave,
-            wave,
-            (ints, ints, ints, np.zeros(0, bool), empty),
-            (ints, empty),
-            True,
-            -1,
-            (empty, limits, cut),
-        )
+            wave, ints, np.zeros(0, np.int8), empty, empty, hit, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
+            ChainEnd.empty(n, zero=True), media, RoughTable.empty(1, zero=True), 1e-3, acc, wave, wave,
+            BackSide.empty(0), LeaveSide.empty(0), True, -1, Fate.empty(0, zero=True),
+        )  # fmt: skip
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
     frozen = np.zeros(0)
     frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
@@ -488,8 +413,10 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     stderr(px4, px4, ints1, px4.copy())
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
-    # the sky (`Integrator._sky`)
-    sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
+    # the sky (`Integrator._sky`): a model's own arrays, or its temperatures broadcast from one value
+    for temps in (empty, frozen):
+        sky_emit(np.zeros(0, np.int64), wave, temps, temps, True, acc)
+    from pmmw.atmosphere.model import SKY_ELEVATIONS
     from pmmw.scene.sky import _sky_lookup
 
     _sky_lookup(
@@ -498,8 +425,8 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
         1.0,
         1.0,
         np.zeros(1, np.int64),
-        cells3 := np.array([0.0, 1.0]),
-        cells3[None],
+        SKY_ELEVATIONS,  # (read-only, as `sky` passes it)
+        np.zeros((1, SKY_ELEVATIONS.size)),
         0.0,
         empty,
         np.zeros(0, np.int64),

@@ -194,7 +194,7 @@ def test_rough_kernels_equal_the_models_array_code(monkeypatch):
         )
         isect = make_intersector(job.vertices, job.faces)
         fast = Integrator(job, isect)
-        codes = fast.surfaces._rough[0]
+        codes = fast.surfaces._rough.code
         assert ((codes == roughness.GGX_CODE) | (codes == roughness.BECKMANN_CODE)).any()
         assert not fast.surfaces._rough_other
         a = [fast.render_tile(t) for t in job.tiles()]
@@ -203,8 +203,8 @@ def test_rough_kernels_equal_the_models_array_code(monkeypatch):
             mp.setattr(roughness.GGX, "masking", roughness._Microfacet.masking)
             slow = Integrator(job, isect)
             sf = slow.surfaces
-            code = sf._rough[0]
-            sf._rough = (np.where(code != roughness.NOT_ROUGH, roughness.OTHER_CODE, code),) + sf._rough[1:]
+            code = sf._rough.code
+            sf._rough = sf._rough._replace(code=np.where(code != roughness.NOT_ROUGH, roughness.OTHER_CODE, code))
             sf._rough_other = True
             b = [slow.render_tile(t) for t in job.tiles()]
         for field in ("mean", "truncated"):
