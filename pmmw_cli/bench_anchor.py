@@ -193,4 +193,8 @@ def section(rows, machine: str, command: str) -> str:
             f"{span([mpath / r['pmmw_trace_s'] for r in rs])} | {span([r['trace_ratio'] for r in rs])} | "
             f"{span([r['command_ratio'] for r in rs])} |"
         )
+    lines.append(
+        "\nWhere the trace's time goes against Mitsuba's (profiles) and what design would reach its pace: "
+        "[benchmarks_anchor.md](benchmarks_anchor.md)."
+    )
     return "\n".join(lines) + "\n"
