@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Mitsuba's render, pmmw's trace and the compiled path loop (bench/prototype_path_loop.py, 2 threads),
-alternating on the speed anchor; one JSON line per round and ground.
+"""Mitsuba's render, pmmw's trace and the compiled path loop (bench/prototype_path_loop.py, 2 threads;
+on the smooth ground also its split tree with Jones matrices), alternating on the speed anchor; one
+JSON line per round and ground.
 
 usage: anchor_with_prototype.py MITSUBA_PYTHON DIR [ROUNDS]
 DIR holds the anchor (bench/anchor_landing.py DIR --write-only); run with pmmw's Python from the
@@ -21,7 +22,7 @@ from pmmw_cli import bench_anchor  # noqa: E402
 def prototype(d, ground):
     """The loop's seconds and segments [M] per kind (the second of two runs: the first compiles)."""
     cmd = [sys.executable, str(ROOT / "bench" / "prototype_path_loop.py"), str(d / "anchor_landing.yaml")]
-    cmd += ["--spp", "16", "--threads", "2", "--repeats", "2"] + (["--smooth"] if ground == "smooth" else [])
+    cmd += ["--spp", "16", "--threads", "2", "--repeats", "2"] + (["--smooth", "--split"] if ground == "smooth" else [])
     out = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, check=True).stdout
     res = {}
     for ln in out.splitlines():
@@ -42,6 +43,9 @@ def main():
             row["loop_s"], row["loop_segments_M"] = q["paths"]
             row["pmmw_ratio"] = m["render_s"] / p["trace_s"]
             row["loop_ratio"] = m["render_s"] / row["loop_s"]
+            if "split" in q:  # pmmw's split tree with Jones matrices in the loop (smooth faces only)
+                row["split_s"], row["split_segments_M"] = q["split"]
+                row["split_ratio"] = m["render_s"] / row["split_s"]
             print(json.dumps(row), flush=True)
 
 

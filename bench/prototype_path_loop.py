@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Prototype: each ray's whole path in one compiled loop that calls Embree per ray.
 
-usage: prototype_path_loop.py SCENARIO.yaml [--spp N] [--smooth] [--threads 1] [--repeats 2]
+usage: prototype_path_loop.py SCENARIO.yaml [--spp N] [--smooth] [--split] [--pmmw] [--set K=V]
+                              [--threads 1] [--repeats 2]
 
 What it measures, on pmmw's own scene, camera and face data (`pmmw.pipeline.make_job`):
 
@@ -18,10 +19,15 @@ What it measures, on pmmw's own scene, camera and face data (`pmmw.pipeline.make
   back); a rough face (GGX, Walter et al. 2007 eq. 33, 35) reflects about a drawn facet normal,
   weighted by the shadowing G1 of the outgoing direction (Smith); depth ``max_depth``.
 
-This is not pmmw's physics (no Jones matrices, no transmitted children, no splitting, no
-atmosphere, no media stack): it is the cost of the loop that such a design would run, the same
-work per segment as Mitsuba's path tracer (one path per sample), as a lower bound on what pmmw's
-physics would cost in it. Paths per second are comparable with Mitsuba's on the speed anchor.
+That is not pmmw's physics (no Jones matrices, no transmitted children, no splitting, no
+atmosphere, no media stack): it is the same work per segment as Mitsuba's path tracer (one path
+per sample). Paths per second are comparable with Mitsuba's on the speed anchor.
+
+* *split* (``--split``, smooth faces): pmmw's split tree in the same loop (`split_paths`): both
+  children of every dielectric interaction, Jones matrices, absorption and emission in media,
+  Russian roulette, max_depth; on the smooth anchor the same segments and image mean as pmmw;
+* *pmmw* (``--pmmw``): pmmw's own trace of every tile in this process (one worker), between the
+  loops, for a side-by-side ratio.
 """
 
 import argparse
@@ -141,7 +147,25 @@ def _fresnel(eps, cos_i):
 
 @njit(parallel=True)
 def paths(
-    scene, rf, ru, o, d, v0, normal, offset, face_med, kind, eps, temp, alpha_ggx, t_sky, max_depth, seed, out, segs
+    scene,
+    rf,
+    ru,
+    o,
+    d,
+    v0,
+    normal,
+    offset,
+    face_med,
+    kind,
+    eps,
+    temp,
+    alpha_ggx,
+    t_sky,
+    t_ground,
+    max_depth,
+    seed,
+    out,
+    segs,
 ):
     """Every ray's whole path in one loop (see the module's docstring); ``out`` (n, 2): (Ts, Tp) [K];
     ``segs`` (blocks,): segments intersected per block."""
@@ -157,9 +181,10 @@ def paths(
             for _depth in range(max_depth + 1):
                 f = _cast(scene, rf[b], ru[b], ox, oy, oz, dx, dy, dz)
                 count += 1
-                if f < 0:
-                    acc_s += ws * t_sky
-                    acc_p += wp * t_sky
+                if f < 0:  # the sky, or the ground's temperature below the horizon
+                    tsk = t_sky if dz >= 0.0 else t_ground
+                    acc_s += ws * tsk
+                    acc_p += wp * tsk
                     break
                 nx, ny, nz = normal[f, 0], normal[f, 1], normal[f, 2]
                 cos = dx * nx + dy * ny + dz * nz
@@ -223,6 +248,158 @@ def paths(
         segs[b] = count
 
 
+@njit(inline="always")
+def _fresnel_amp(eps_ratio, cos_i):
+    """Amplitude reflection coefficients (rs, rp) at an interface of relative permittivity
+    ``eps_ratio`` (far side over near side), and whether the power goes on (no total reflection)."""
+    sin2 = 1.0 - cos_i * cos_i
+    ct = np.sqrt(eps_ratio - sin2 + 0j)
+    rs = (cos_i - ct) / (cos_i + ct)
+    rp = (eps_ratio * cos_i - ct) / (eps_ratio * cos_i + ct)
+    return rs, rp
+
+
+@njit(parallel=True)
+def split_paths(
+    scene,
+    rf,
+    ru,
+    o,
+    d,
+    s0,
+    v0,
+    normal,
+    offset,
+    face_med,
+    kind,
+    eps,
+    temp,
+    alpha,
+    t_sky,
+    t_ground,
+    max_depth,
+    threshold,
+    seed,
+    out,
+    segs,
+):
+    """pmmw's split tree per camera ray in one loop, depth first on a small stack: every
+    interaction with a dielectric face splits into the reflected ray (followed at once) and the
+    transmitted one (pushed), each with its 2 x 2 complex Jones matrix, turned into the plane of
+    incidence and multiplied by the Fresnel amplitudes (transmitted: the amplitude of the power
+    left); in a medium, a segment attenuates by exp(-alpha t) and emits the rest at the medium's
+    temperature; below ``threshold`` Russian roulette; metal reflects all; depth ``max_depth`` ends
+    on the face's temperature. Smooth faces only. ``out`` (n, 2): (Ex2, Ey2) [K]."""
+    nb = rf.shape[0]
+    n = o.shape[0]
+    size = 2 * max_depth + 4
+    for b in prange(nb):
+        np.random.seed(seed + b)
+        count = 0
+        so = np.empty((size, 3))
+        sd = np.empty((size, 3))
+        ss = np.empty((size, 3))
+        sm = np.empty((size, 4), np.complex128)
+        sdep = np.empty(size, np.int64)
+        smed = np.empty(size, np.int64)
+        for i in range(b * n // nb, (b + 1) * n // nb):
+            ex2, ey2 = 0.0, 0.0
+            top = 0
+            for c in range(3):
+                so[0, c], sd[0, c], ss[0, c] = o[i, c], d[i, c], s0[i, c]
+            sm[0, 0], sm[0, 1], sm[0, 2], sm[0, 3] = 1.0, 0.0, 0.0, 1.0
+            sdep[0], smed[0] = 0, 0
+            top = 1
+            while top > 0:
+                top -= 1
+                ox, oy, oz = so[top, 0], so[top, 1], so[top, 2]
+                dx, dy, dz = sd[top, 0], sd[top, 1], sd[top, 2]
+                sx, sy, sz = ss[top, 0], ss[top, 1], ss[top, 2]
+                m00, m01, m10, m11 = sm[top, 0], sm[top, 1], sm[top, 2], sm[top, 3]
+                depth, med = sdep[top], smed[top]
+                while True:
+                    f = _cast(scene, rf[b], ru[b], ox, oy, oz, dx, dy, dz)
+                    count += 1
+                    wx = abs(m00) ** 2 + abs(m01) ** 2
+                    wy = abs(m10) ** 2 + abs(m11) ** 2
+                    if f < 0:
+                        if med == 0:
+                            tsk = t_sky if dz >= 0.0 else t_ground
+                            ex2 += wx * tsk
+                            ey2 += wy * tsk
+                        break
+                    nx, ny, nz = normal[f, 0], normal[f, 1], normal[f, 2]
+                    cos = dx * nx + dy * ny + dz * nz
+                    t = ((v0[f, 0] - ox) * nx + (v0[f, 1] - oy) * ny + (v0[f, 2] - oz) * nz) / cos
+                    px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+                    if cos > 0.0:
+                        nx, ny, nz, cos = -nx, -ny, -nz, -cos
+                    ci = -cos  # the cosine of incidence, > 0 (n against the ray)
+                    k = face_med[f]
+                    if med != 0:  # the segment through the medium
+                        att = np.exp(-alpha[med] * max(t, 0.0))
+                        ex2 += wx * (1.0 - att) * temp[med]
+                        ey2 += wy * (1.0 - att) * temp[med]
+                        g = np.sqrt(att)
+                        m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+                        wx, wy = wx * att, wy * att
+                        w = max(wx, wy)
+                        if w < threshold:  # Russian roulette
+                            if np.random.random() * threshold >= w:
+                                break
+                            g = np.sqrt(threshold / w)
+                            m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+                            wx, wy = wx * threshold / w, wy * threshold / w
+                    if depth >= max_depth:
+                        ex2 += wx * temp[k]
+                        ey2 += wy * temp[k]
+                        break
+                    # the plane of incidence: s' = d x n, the Jones matrix turned into (s', p')
+                    qx, qy, qz = dy * nz - dz * ny, dz * nx - dx * nz, dx * ny - dy * nx
+                    qn = np.sqrt(qx * qx + qy * qy + qz * qz)
+                    if qn > 1e-12:
+                        qx, qy, qz = qx / qn, qy / qn, qz / qn
+                        pxo, pyo, pzo = dy * sz - dz * sy, dz * sx - dx * sz, dx * sy - dy * sx
+                        c = sx * qx + sy * qy + sz * qz
+                        sn = pxo * qx + pyo * qy + pzo * qz
+                        m00, m01 = m00 * c + m01 * sn, -m00 * sn + m01 * c
+                        m10, m11 = m10 * c + m11 * sn, -m10 * sn + m11 * c
+                        sx, sy, sz = qx, qy, qz
+                    if kind[k] == 1:  # metal
+                        rs, rp = -1.0 + 0j, 1.0 + 0j
+                        other = -1
+                    else:
+                        other = k if med == 0 else 0
+                        e1 = 1.0 + 0j if med == 0 else eps[med]
+                        e2 = 1.0 + 0j if other == 0 else eps[other]
+                        rs, rp = _fresnel_amp(e2 / e1, ci)
+                    ts = np.sqrt(max(0.0, 1.0 - abs(rs) ** 2))
+                    tp = np.sqrt(max(0.0, 1.0 - abs(rp) ** 2))
+                    h = offset[f]
+                    if other >= 0 and (ts > 0.0 or tp > 0.0) and top < size:
+                        eta = np.sqrt(e1).real / np.sqrt(e2).real
+                        sin2t = eta * eta * (1.0 - ci * ci)
+                        if sin2t < 1.0:
+                            cost = np.sqrt(1.0 - sin2t)
+                            tdx = eta * dx + (eta * ci - cost) * nx
+                            tdy = eta * dy + (eta * ci - cost) * ny
+                            tdz = eta * dz + (eta * ci - cost) * nz
+                            so[top, 0], so[top, 1], so[top, 2] = px - h * nx, py - h * ny, pz - h * nz
+                            sd[top, 0], sd[top, 1], sd[top, 2] = tdx, tdy, tdz
+                            ss[top, 0], ss[top, 1], ss[top, 2] = sx, sy, sz
+                            sm[top, 0], sm[top, 1] = m00 * ts, m01 * tp
+                            sm[top, 2], sm[top, 3] = m10 * ts, m11 * tp
+                            sdep[top], smed[top] = depth + 1, other
+                            top += 1
+                    m00, m01, m10, m11 = m00 * rs, m01 * rp, m10 * rs, m11 * rp
+                    dx, dy, dz = dx + 2.0 * ci * nx, dy + 2.0 * ci * ny, dz + 2.0 * ci * nz
+                    ox, oy, oz = px + h * nx, py + h * ny, pz + h * nz
+                    depth += 1
+            out[i, 0] = ex2
+            out[i, 1] = ey2
+        segs[b] = count
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("scenario")
@@ -230,12 +407,15 @@ def main():
     ap.add_argument("--smooth", action="store_true", help="every face smooth")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--split", action="store_true", help="also pmmw's split tree with Jones matrices (smooth faces)")
+    ap.add_argument("--pmmw", action="store_true", help="also pmmw's own trace of every tile, in this process")
+    ap.add_argument("--set", action="append", default=[], help="scenario overrides, as pmmw render's")
     a = ap.parse_args()
     from pmmw.pipeline import make_job, resolve
     from pmmw.scene.camera import pixel_samples
     from pmmw.trace.intersect import EmbreeIntersector
 
-    res = resolve(a.scenario)
+    res = resolve(a.scenario, a.set)
     job = make_job(res, res.scenario.frequencies[0])
     cam, media = job.camera, job.media
     nk = len(media.eps)
@@ -250,6 +430,7 @@ def main():
     set_num_threads(a.threads)
     rf, ru = rayhit_buffers(get_num_threads())
     t_sky = float(job.sky.temperature)
+    t_ground = float(getattr(job.sky, "ground_temperature", t_sky))
     pixels = np.arange(cam.width * cam.height, dtype=np.int64)
     chunk = max(1, (1 << 16) // a.spp)  # pixels per wave: 65536 camera rays, as pmmw's tiles trace them
     v0 = np.ascontiguousarray(job.vertices[job.faces[:, 0]])
@@ -260,14 +441,34 @@ def main():
         f"rough alpha {alpha_ggx.tolist()}, {get_num_threads()} threads"
     )
 
+    integrator = None
+    if a.pmmw:
+        import dataclasses
+
+        from pmmw.trace import kernels
+        from pmmw.trace.integrator import Integrator
+
+        kernels.warm(job.settings.stack_size)
+        pjob = dataclasses.replace(job, settings=dataclasses.replace(job.settings, spp=a.spp))
+        integrator = Integrator(pjob, isect)
+        integrator.render_tile(pjob.tiles()[0])  # kernels loaded
+
     def run(which):
+        if which == "pmmw":
+            t = time.perf_counter()
+            tiles = [integrator.render_tile(tl) for tl in pjob.tiles()]
+            t_in = time.perf_counter() - t
+            mean = np.mean([tl.mean[..., :2].reshape(-1, 2).sum(0) for tl in tiles], axis=0) / (
+                cam.width * cam.height / len(tiles)
+            )
+            return 0.0, t_in, sum(tl.rays for tl in tiles), mean
         t_cam = t_in = 0.0
         segs_total = 0
         total = np.zeros(2)
         for p0 in range(0, pixels.size, chunk):
             t = time.perf_counter()
             u, v, pix = pixel_samples(cam.width, pixels[p0 : p0 + chunk], a.spp, job.settings.seed, total=a.spp)
-            o, d, _, _ = cam.rays(u, v, pix, job.settings.seed)
+            o, d, s0, _ = cam.rays(u, v, pix, job.settings.seed)
             t_cam += time.perf_counter() - t
             t = time.perf_counter()
             if which == "embreex":
@@ -277,10 +478,32 @@ def main():
                 prim = np.empty(len(o), np.int64)
                 direct(scene.ptr, rf, ru, o, d, prim)
                 segs_total += len(o)
+            elif which == "split":
+                out = np.empty((len(o), 2))
+                segs = np.zeros(rf.shape[0], np.int64)
+                split_paths(
+                    scene.ptr,
+                    rf,
+                    ru,
+                    o,
+                    d,
+                    s0,
+                    *args[:7],
+                    media.alpha.astype(float),
+                    t_sky,
+                    t_ground,
+                    job.settings.max_depth,
+                    float(job.settings.threshold),
+                    1 + p0,
+                    out,
+                    segs,
+                )
+                segs_total += int(segs.sum())
+                total += out.sum(axis=0)
             else:
                 out = np.empty((len(o), 2))
                 segs = np.zeros(rf.shape[0], np.int64)
-                paths(scene.ptr, rf, ru, o, d, *args, t_sky, job.settings.max_depth, 1 + p0, out, segs)
+                paths(scene.ptr, rf, ru, o, d, *args, t_sky, t_ground, job.settings.max_depth, 1 + p0, out, segs)
                 segs_total += int(segs.sum())
                 total += out.sum(axis=0)
             t_in += time.perf_counter() - t
@@ -294,10 +517,10 @@ def main():
     print(f"direct rtcIntersect1 agrees with embreex on {np.mean(prim == p_ref) * 100:.2f} % of 2000 camera rays")
     run("paths") if pixels.size <= chunk else None
     for rep in range(a.repeats):
-        for which in ("embreex", "direct", "paths"):
+        for which in ("embreex", "direct", "paths") + (("split",) if a.split else ()) + (("pmmw",) if a.pmmw else ()):
             t_cam, t_in, segs, mean = run(which)
             paths_n = pixels.size * a.spp
-            extra = f", mean (Ts, Tp) = ({mean[0]:.2f}, {mean[1]:.2f}) K" if which == "paths" else ""
+            extra = f", mean ({mean[0]:.2f}, {mean[1]:.2f}) K" if which in ("paths", "split", "pmmw") else ""
             print(
                 f"run {rep + 1} {which:8s}: {t_in:6.2f} s for {segs / 1e6:6.2f} M segments "
                 f"({t_in / segs * 1e9 * get_num_threads():5.0f} ns x thread each), {paths_n / t_in / 1e6:5.2f} M paths/s "
