@@ -130,8 +130,12 @@ def bench(
     with_scaling=False,
     render_times=(),
     skip_configs=(),
+    anchor=None,
+    anchor_rounds=3,
 ):
-    """Run the benchmark and write ``out_md`` and one plot per scenario beside it."""
+    """Run the benchmark and write ``out_md`` and one plot per scenario beside it. ``anchor``: the
+    Python of an environment with Mitsuba 3 (the ``bench`` extra): adds pmmw against Mitsuba on
+    the speed anchor, ``anchor_rounds`` alternating rounds (`pmmw_cli.bench_anchor`)."""
     workers = workers or default_workers()
     sections, all_rows = [], {}
     for path in scenarios:
@@ -186,7 +190,8 @@ def bench(
         "not depend on it.\n\n"
         "Physical optics (`pmmw po`: direct sum against octree, 1e3-1e6 facets x 1e2-1e5 directions) is "
         "measured by `pmmw bench --po` in [benchmarks_po.md](benchmarks_po.md). Paths per second against "
-        "Mitsuba 3 on the same scene (the speed anchor, run by hand): [benchmarks_anchor.md](benchmarks_anchor.md).\n"
+        "Mitsuba 3 on the same scene (the speed anchor): its section below (`--anchor`), and the history "
+        "in [benchmarks_anchor.md](benchmarks_anchor.md).\n"
     )
     if skip_configs:
         all_rows["skips"] = skips(skip_configs, workers=workers, cache_dir=cache_dir, ref_spp=ref_spp)
@@ -196,6 +201,11 @@ def bench(
     if with_scaling:
         res_px, spp = (128, 128), 4
         sections.append(_scaling_section(scaling(resolution=res_px, spp=spp, workers=workers), res_px, spp))
+    if anchor is not None:
+        from pmmw_cli import bench_anchor
+
+        all_rows["anchor"] = bench_anchor.run(anchor, rounds=anchor_rounds, workers=workers)
+        sections.append(bench_anchor.section(all_rows["anchor"], machine(), command or "pmmw bench"))
     write_text_atomic(out_md, header + "\n".join(sections))
     write_text_atomic(out_md.with_suffix(".json"), json.dumps(all_rows, indent=2, default=float))
     return all_rows

@@ -686,6 +686,14 @@ def bench(
     po: bool = typer.Option(
         False, "--po", metavar="", help="Instead: physical optics, direct sum against octree (docs/benchmarks_po.md)."
     ),
+    anchor: Optional[Path] = typer.Option(
+        None,
+        "--anchor",
+        metavar="PYTHON",
+        help="Also pmmw against Mitsuba 3 on the speed anchor, alternating: PYTHON of an environment "
+        "with the bench extra (DRJIT_LIBLLVM_PATH: libLLVM, default Debian's libllvm19).",
+    ),
+    anchor_rounds: int = typer.Option(3, "--anchor-rounds", min=1, help="Alternating rounds of --anchor."),
 ):
     """Run time against error for each scenario and sampling strategy (into out/bench/)."""
     if out is not None and write_docs:
@@ -725,6 +733,8 @@ def bench(
         with_scaling=with_scaling,
         render_times=tuple(render_times or ()),
         skip_configs=tuple(skip_configs or ()),
+        anchor=anchor,
+        anchor_rounds=anchor_rounds,
     )
 
 

@@ -26,7 +26,14 @@ LAYERS = (
     {"pipeline"},
     {"reflectance", "physical_optics", "sweeps", "sky_table", "filekinds"},
     {"api"},
-    {"pmmw_cli", "pmmw_cli.validation", "pmmw_cli.bench", "pmmw_cli.bench_po", "pmmw_cli.progress"},
+    {
+        "pmmw_cli",
+        "pmmw_cli.validation",
+        "pmmw_cli.bench",
+        "pmmw_cli.bench_anchor",
+        "pmmw_cli.bench_po",
+        "pmmw_cli.progress",
+    },
     {"pmmw_cli.cli"},
     {"pmmw_cli.__main__"},
 )
