@@ -42,8 +42,8 @@ test: install-test
 # formatting (line length 120, checked, `ruff format` applies it); mypy on
 # the pure-numerics modules ([tool.mypy])
 lint: install-test
-	$(BIN)/ruff check pmmw pmmw_cli tests examples scenes docs
-	$(BIN)/ruff format --check pmmw pmmw_cli tests examples scenes docs
+	$(BIN)/ruff check pmmw pmmw_cli tests examples scenes docs bench
+	$(BIN)/ruff format --check pmmw pmmw_cli tests examples scenes docs bench
 	$(BIN)/mypy
 
 # also the longest convergence renders of the shipped configs (about 2.5 minutes more)
