@@ -112,3 +112,19 @@ def test_a_sweep_passes_a_mapping_in_its_written_order():
     regions = {"runway": {"center": [0, 40, 0.02], "radius": 3}, "beacon": {"center": [0, -2.36, 0.41], "radius": 2}}
     scn = load_scenario(LANDING, overrides_of({"output.regions": regions}))
     assert list(scn.output.regions) == ["runway", "beacon"]
+
+
+@pytest.mark.parametrize("label", CASES)
+def test_the_background_regions_share_no_pixel_with_the_beacons(label):
+    """A background region that reaches over the beacon row's pixels would take part of the
+    target into its mean (from 1500 m a disc of 3 pixels at 40 m past the threshold did: a pixel
+    spans 7.5 m of runway in depth there). The control: the beacons box overlaps itself."""
+    from pmmw.pipeline import region_masks
+
+    scn = _scenario(label)
+    masks = region_masks(scn.output.regions, _camera(scn))
+    beacons = masks["beacons"]
+    assert (beacons & beacons).any()  # the control
+    for name, mask in masks.items():
+        if name != "beacons":
+            assert not (mask & beacons).any(), (label, name, int((mask & beacons).sum()))
