@@ -307,10 +307,25 @@ def dask_client(scheduler: str | None, cluster_file: Path | None, n_local: int):
                     thing.close(timeout=CLOSE_S)
 
 
+#: How long `scheduler_lost` waits for the scheduler's greeting after a connection closed under a
+#: result [s]: a scheduler that is there greets at once.
+LOST_PROBE_S = 2.0
+
+
 def scheduler_lost(client, error: BaseException | None = None) -> bool:
     """Has ``client`` lost its scheduler? Dask then cancels every future of the client
-    (``scheduler-connection-lost``) and tries to reconnect."""
-    return client.status != "running" or getattr(error, "reason", None) == "scheduler-connection-lost"
+    (``scheduler-connection-lost``) and tries to reconnect. A connection that closed under a
+    result (``error`` an `OSError`, as Dask's ``CommClosedError``) can come before the client has
+    noticed the loss: then the scheduler's address is asked (`probe_scheduler`, `LOST_PROBE_S`),
+    so that a dead scheduler is not blamed on the tile whose result was in flight."""
+    if client.status != "running" or getattr(error, "reason", None) == "scheduler-connection-lost":
+        return True
+    if isinstance(error, OSError):
+        try:
+            probe_scheduler(client.scheduler.address, timeout=LOST_PROBE_S)
+        except UserError:
+            return True
+    return False
 
 
 def cancel_quietly(client, futures) -> None:

@@ -121,12 +121,12 @@ def test_a_frequency_without_coefficients_is_refused_naming_the_key():
         ("{model: p838, coefficients: {95 GHz: {a: 1, b: 1}}}", "atmosphere.layers[0].attenuation", "power_law"),
         (
             "{model: power_law, coefficients: {95 GHz: {a: 0, b: 0.7}}}",
-            "atmosphere.layers[0].attenuation.coefficients.95 GHz.a",
+            'atmosphere.layers[0].attenuation.coefficients."95 GHz".a',
             "> 0",
         ),
         (
             "{model: power_law, coefficients: {95 GHz: {a: 1.06, b: 2.5}}}",
-            "atmosphere.layers[0].attenuation.coefficients.95 GHz.b",
+            'atmosphere.layers[0].attenuation.coefficients."95 GHz".b',
             "0 < b <= 2",
         ),
         (

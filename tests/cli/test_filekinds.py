@@ -26,7 +26,7 @@ def _expected_kind(path: Path) -> str:
         return STACK
     if name == "slurm":
         return CLUSTER
-    if name.endswith(("_sweep", "_trade", "_frequency", "_frequency_scaled")):
+    if name.endswith(("_sweep", "_trade", "_range", "_frequency", "_frequency_scaled")):
         return SWEEP
     return SCENARIO
 

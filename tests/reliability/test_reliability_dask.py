@@ -370,3 +370,33 @@ def test_scheduler_killed_mid_sweep_and_no_task_writes_after_exit(tmp_path):
         assert len(rows) == 4 and not any(",done," in r for r in rows), rows
     finally:
         _stop(run["worker"])
+
+
+def test_a_connection_closed_under_a_result_is_blamed_on_the_scheduler_only_when_it_is_gone(tmp_path):
+    """Under load, the scheduler's death can reach pmmw first as a ``CommClosedError`` while it
+    gathers a tile's result, before the client's status changes: `scheduler_lost` then asks the
+    address. A dead scheduler's address (nothing listens) is lost; a live scheduler's is not (the
+    control: the tile is blamed, as for any other failure); an error that is not the connection's
+    does not ask at all."""
+    from types import SimpleNamespace
+
+    from distributed.comm.core import CommClosedError
+
+    from pmmw.distributed import scheduler_lost
+
+    closed = _listen()
+    dead = f"tcp://127.0.0.1:{closed.getsockname()[1]}"
+    closed.close()
+    sched, live = _start_scheduler(tmp_path, dict(os.environ))
+    try:
+
+        def client(address):
+            return SimpleNamespace(status="running", scheduler=SimpleNamespace(address=address))
+
+        err = CommClosedError("in <TCP (closed) ConnectionPool.gather>: Stream is closed")
+        assert scheduler_lost(client(dead), err)
+        assert not scheduler_lost(client(live), err)  # the control
+        assert not scheduler_lost(client(dead), ValueError("a tile's own error"))
+        assert scheduler_lost(SimpleNamespace(status="closed", scheduler=None))
+    finally:
+        _stop(sched)
