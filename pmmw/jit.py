@@ -46,7 +46,7 @@ def njit(**options):
 
 def inline(**options):
     """`njit` for small helpers that numba inlines into their callers."""
-    return njit(inline="always", **options)
+    return njit(**options)
 
 
 def _digest() -> str:

@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from pmmw.jit import inline, njit
-from pmmw.physics import fresnel, multilayer, roughness
+from pmmw.physics import roughness
 from pmmw.scene import bump, camera
 from pmmw.surface.kernels import (  # noqa: F401  (the surfaces' kernels, re-exported for the integrator)
     _ENDED,
@@ -331,9 +331,6 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     scene's first render after an install then compiles only what it runs. Whatever is left out
     compiles (or loads) where it is first called, so leaving out too much costs time, never a
     wrong number."""
-    cos1, eps = np.array([0.5]), np.array([2.0 + 0.1j])
-    fresnel.interface(eps, eps * 2.0, cos1, with_q2=True)
-    multilayer.stack(np.array([[1.0, 2.0 + 0.1j, 3.0]]), np.array([[1e-3]]), cos1, 1e3)
     _plane_distance(
         np.zeros((1, 3)), np.ones((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), np.zeros(1, np.int64), np.zeros(1)
     )
@@ -452,9 +449,6 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
             (empty, limits, cut),
         )
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
-    frozen = np.zeros(0)
-    frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
-    emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), frozen, frozen)
     if rough:
         # rough faces and bump maps (`Surfaces._facets`, `_bumped`)
         v3 = np.zeros((n, 3))
@@ -490,6 +484,7 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
     # the sky (`Integrator._sky`)
     sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
+    from pmmw.atmosphere.model import SKY_ELEVATIONS  # read-only, as `AtmosphereSky.brightness` passes it
     from pmmw.scene.sky import _sky_lookup
 
     _sky_lookup(
@@ -498,8 +493,8 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
         1.0,
         1.0,
         np.zeros(1, np.int64),
-        cells3 := np.array([0.0, 1.0]),
-        cells3[None],
+        SKY_ELEVATIONS,
+        SKY_ELEVATIONS[None].copy(),
         0.0,
         empty,
         np.zeros(0, np.int64),
