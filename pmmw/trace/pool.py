@@ -41,6 +41,7 @@ from pmmw import interrupt, jit, timings
 from pmmw.errors import EnvironmentProblem, exception_text
 from pmmw.io.atomic import save_npz_atomic
 from pmmw.trace import kernels
+from pmmw.trace.compile import compile_kernels
 from pmmw.trace.integrator import Integrator, TileResult, prime
 from pmmw.trace.intersect import make_intersector
 from pmmw.trace.job import TraceJob
@@ -360,7 +361,10 @@ def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
             "compiling the tracer's kernels: once after an install or an update of pmmw, about a minute on 2 cores ..."
         )
     t0 = time.perf_counter()
-    kernels.warm(job.settings.stack_size, rough=job.media.any_rough)
+    if cold:  # in two processes at once (`compile.compile_kernels`)
+        compile_kernels(job.settings.stack_size, rough=job.media.any_rough)
+    else:
+        kernels.warm(job.settings.stack_size, rough=job.media.any_rough)
     if cold:  # the camera's, sky's and atmosphere's compiled code too, with this job's types: one pixel
         idx, x0, y0 = job.tiles()[0][:3]
         Integrator(job, make_intersector(job.vertices, job.faces, kind=kind)).render_tile((idx, x0, y0, x0 + 1, y0 + 1))

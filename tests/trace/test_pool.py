@@ -170,10 +170,12 @@ def test_a_smooth_scene_warms_only_what_it_runs(monkeypatch):
     has rough faces, bump maps or rough layers (the landing's first render after an install
     compiled in 49 s instead of 80 s, docs/benchmarks_command.md); the control: the rough
     cinderblocks ask for them. Either way the images are the kernels', whatever was warmed."""
+    from pmmw import jit
     from pmmw.trace import kernels
 
     asked = []
     monkeypatch.setattr(kernels, "warm", lambda stack_size=8, rough=True: asked.append(rough))
+    monkeypatch.setattr(jit, "is_cached", lambda rel: True)  # one `warm`, not the two processes' (`compile`)
     for cfg, rough in (("cinderblocks_35ghz.yaml", False), ("cinderblocks_rough_35ghz.yaml", True)):
         res = resolve(REPO / "configs" / cfg, ["imager.resolution=[8, 8]", "render.spp=1"])
         job = make_job(res, res.scenario.frequencies[0])
