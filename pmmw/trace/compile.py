@@ -10,11 +10,15 @@ them to numba's disk cache, while this process does the same with `PARENT`; then
 and finds its own compiled already. The kernels' code is numba's either way: the same machine
 code, the same numbers.
 
-The two groups were chosen from the measured compile times (each about half of the total). A
-kernel in neither group compiles in both processes (then in neither the child's time nor this
-one's is anything lost but the duplicate work); a name that no longer exists is skipped. Where
-``fork`` is not available (Windows, macOS's default), with one core, or where the child fails,
-the kernels compile here one after the other as before: slower, never wrong.
+The two groups were chosen from the measured compile times (each about half of the total), split
+where kernels share no compiled helpers (a helper both groups call would compile in both). A
+kernel in neither group compiles in both processes (duplicate work, nothing worse); a name that
+no longer exists is skipped. Where ``fork`` is not available (Windows, macOS's default), with one
+core, or where the child fails, the kernels compile here one after the other as before: slower,
+never wrong.
+
+``python -m pmmw.trace.compile`` compiles the smooth scenes' kernels ahead of a first render
+(``make``'s install step): that render then loads them, as later ones do.
 """
 
 from __future__ import annotations
@@ -123,3 +127,9 @@ def compile_kernels(stack_size: int = 8, rough: bool = True) -> None:
             child.terminate()
             child.join()
     kernels.warm(stack_size, rough=rough)  # loads the child's kernels from the cache (or compiles what it did not)
+
+
+if (
+    __name__ == "__main__"
+):  # ``python -m pmmw.trace.compile``: the smooth scenes' kernels ahead of a first render (make install)
+    compile_kernels(rough=False)
