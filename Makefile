@@ -16,12 +16,18 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip >/dev/null
 
+# the tracer's kernels for smooth scenes compiled once at install (numba's disk cache), so that the
+# first render does not (pmmw.trace.compile; docs/benchmarks_command.md)
+COMPILE = @echo "compiling the tracer's kernels: once, about half a minute on 2 cores ..." && $(BIN)/python -m pmmw.trace.compile
+
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -e .
+	$(COMPILE)
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -e '.[test]'
+	$(COMPILE)
 	touch $@ $(VENV)/.installed
 
 $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python

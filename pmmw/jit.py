@@ -46,7 +46,7 @@ def njit(**options):
 
 def inline(**options):
     """`njit` for small helpers that numba inlines into their callers."""
-    return njit(inline="always", **options)
+    return njit(**options)
 
 
 def _digest() -> str:
@@ -57,13 +57,15 @@ def _digest() -> str:
     return h.hexdigest()
 
 
-def is_cached(rel: str) -> bool:
-    """Whether the compiled code of the source ``rel`` (one of `SOURCES`) is cached on disk next to
-    it, so that loading it takes a second rather than compiling it (about a minute for the tracer's
-    kernels on 2 cores, once after an install or an update). False also where numba caches
-    elsewhere (a read-only install): the caller then says it may compile."""
+def is_cached(rel: str, function: str | None = None) -> bool:
+    """Whether the compiled code of the source ``rel`` (one of `SOURCES`; with ``function``, of
+    that function of it) is cached on disk next to it, so that loading it takes a second rather
+    than compiling it (about half a minute for the tracer's kernels on 2 cores, once after an
+    install or an update). False also where numba caches elsewhere (a read-only install): the
+    caller then says it may compile."""
     path = ROOT / rel
-    return any((path.parent / "__pycache__").glob(f"{path.stem}.*.nbi"))
+    pattern = f"{path.stem}.{function}-*.nbi" if function else f"{path.stem}.*.nbi"
+    return any((path.parent / "__pycache__").glob(pattern))
 
 
 def clear_stale_caches() -> bool:

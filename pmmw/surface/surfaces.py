@@ -40,8 +40,9 @@ def deposit(acc, sid, m, ta, tb=None):
     n = sid.size
     if n == 0:
         return
-    ta = np.ascontiguousarray(np.broadcast_to(np.asarray(ta, float), (n,)))
-    tb = ta if tb is None else np.ascontiguousarray(np.broadcast_to(np.asarray(tb, float), (n,)))
+    # always C-contiguous and writable: one compiled specialization whether or not they were broadcast
+    ta = np.require(np.broadcast_to(np.asarray(ta, float), (n,)), requirements="CW")
+    tb = ta if tb is None else np.require(np.broadcast_to(np.asarray(tb, float), (n,)), requirements="CW")
     kernels.emit(acc, np.ascontiguousarray(sid, np.int64), np.ascontiguousarray(m, complex), ta, tb)
 
 

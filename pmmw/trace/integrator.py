@@ -423,6 +423,7 @@ class Integrator:
         sky = self.job.sky
         ta, tb = sky.brightness(wave.d[rows], heights=wave.o[rows, 2])
         n = rows.size
-        ta = np.ascontiguousarray(np.broadcast_to(np.asarray(ta, float), (n,)))
-        tb = ta if sky.unpolarized else np.ascontiguousarray(np.broadcast_to(np.asarray(tb, float), (n,)))
+        # always C-contiguous and writable: one compiled specialization whether or not they were broadcast
+        ta = np.require(np.broadcast_to(np.asarray(ta, float), (n,)), requirements="CW")
+        tb = ta if sky.unpolarized else np.require(np.broadcast_to(np.asarray(tb, float), (n,)), requirements="CW")
         kernels.sky_emit(rows, wave.arrays(), ta, tb, not sky.unpolarized, self.acc)

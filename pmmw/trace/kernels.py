@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from pmmw.jit import inline, njit
-from pmmw.physics import fresnel, multilayer, roughness
+from pmmw.physics import roughness
 from pmmw.scene import bump, camera
 from pmmw.surface.kernels import (  # noqa: F401  (the surfaces' kernels, re-exported for the integrator)
     _ENDED,
@@ -345,9 +345,6 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     scene's first render after an install then compiles only what it runs. Whatever is left out
     compiles (or loads) where it is first called, so leaving out too much costs time, never a
     wrong number."""
-    cos1, eps = np.array([0.5]), np.array([2.0 + 0.1j])
-    fresnel.interface(eps, eps * 2.0, cos1, with_q2=True)
-    multilayer.stack(np.array([[1.0, 2.0 + 0.1j, 3.0]]), np.array([[1e-3]]), cos1, 1e3)
     _plane_distance(
         np.zeros((1, 3)), np.ones((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), np.zeros(1, np.int64), np.zeros(1)
     )
@@ -377,9 +374,6 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
             BackSide.empty(0), LeaveSide.empty(0), True, -1, Fate.empty(0, zero=True),
         )  # fmt: skip
     emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), empty, empty)
-    frozen = np.zeros(0)
-    frozen.setflags(write=False)  # temperatures broadcast from one value (`Integrator._emit`)
-    emit(acc, np.zeros(0, np.int64), np.zeros((0, 2, 2), complex), frozen, frozen)
     if rough:
         # rough faces and bump maps (`Surfaces._facets`, `_bumped`)
         v3 = np.zeros((n, 3))
@@ -413,10 +407,9 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     stderr(px4, px4, ints1, px4.copy())
     # camera samples (`Integrator._trace`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
-    # the sky (`Integrator._sky`): a model's own arrays, or its temperatures broadcast from one value
-    for temps in (empty, frozen):
-        sky_emit(np.zeros(0, np.int64), wave, temps, temps, True, acc)
-    from pmmw.atmosphere.model import SKY_ELEVATIONS
+    # the sky (`Integrator._sky`)
+    sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
+    from pmmw.atmosphere.model import SKY_ELEVATIONS  # read-only, as `AtmosphereSky.brightness` passes it
     from pmmw.scene.sky import _sky_lookup
 
     _sky_lookup(
@@ -425,8 +418,8 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
         1.0,
         1.0,
         np.zeros(1, np.int64),
-        SKY_ELEVATIONS,  # (read-only, as `sky` passes it)
-        np.zeros((1, SKY_ELEVATIONS.size)),
+        SKY_ELEVATIONS,
+        SKY_ELEVATIONS[None].copy(),
         0.0,
         empty,
         np.zeros(0, np.int64),

@@ -41,6 +41,7 @@ from pmmw import interrupt, jit, timings
 from pmmw.errors import EnvironmentProblem, exception_text
 from pmmw.io.atomic import save_npz_atomic
 from pmmw.trace import kernels
+from pmmw.trace.compile import compile_kernels
 from pmmw.trace.integrator import Integrator, TileResult, prime
 from pmmw.trace.intersect import make_intersector
 from pmmw.trace.job import TraceJob
@@ -349,18 +350,30 @@ def render_tiles(
     return [results[t[0]] for t in tiles]
 
 
+def kernels_to_compile(job: TraceJob) -> bool:
+    """Whether `prepare_kernels` compiles rather than loads: nothing cached yet, or a rough scene
+    after smooth ones only (a smooth scene leaves out the rough kernels, `settle` among them)."""
+    if not (jit.is_cached("trace/kernels.py") and jit.is_cached("surface/kernels.py")):
+        return True
+    return job.media.any_rough and not jit.is_cached("surface/kernels.py", "settle")
+
+
 def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
     """Compile (once after an install or an update) or load the tracer's kernels in this process,
     telling ``notify`` (a callable taking one line) before and after when they are not cached yet;
     then one pixel of the job is traced here, so that the camera's, sky's and atmosphere's compiled
     code is ready too and the first tile's time is its own. Returns the seconds it took."""
-    cold = not (jit.is_cached("trace/kernels.py") and jit.is_cached("surface/kernels.py"))
+    cold = kernels_to_compile(job)
     if cold and notify is not None:
         notify(
-            "compiling the tracer's kernels: once after an install or an update of pmmw, about a minute on 2 cores ..."
+            "compiling the tracer's kernels: once after an install or an update of pmmw, "
+            "about half a minute on 2 cores (more with rough surfaces) ..."
         )
     t0 = time.perf_counter()
-    kernels.warm(job.settings.stack_size, rough=job.media.any_rough)
+    if cold:  # in two processes at once (`compile.compile_kernels`)
+        compile_kernels(job.settings.stack_size, rough=job.media.any_rough)
+    else:
+        kernels.warm(job.settings.stack_size, rough=job.media.any_rough)
     if cold:  # the camera's, sky's and atmosphere's compiled code too, with this job's types: one pixel
         idx, x0, y0 = job.tiles()[0][:3]
         Integrator(job, make_intersector(job.vertices, job.faces, kind=kind)).render_tile((idx, x0, y0, x0 + 1, y0 + 1))

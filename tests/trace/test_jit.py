@@ -48,3 +48,17 @@ def test_every_module_with_compiled_code_is_watched():
         if p.name != "jit.py" and re.search(r"from pmmw\.jit import|numba\.njit", p.read_text())
     )
     assert found == sorted(jit.SOURCES)
+
+
+def test_is_cached_tells_one_function_of_a_file(tmp_path, monkeypatch):
+    # a smooth scene's first render caches `scatter` but not the rough surfaces' `settle`: a rough
+    # scene after it still compiles (`pool.prepare_kernels` says so). Control: `settle` cached.
+    cache = tmp_path / "surface" / "__pycache__"
+    cache.mkdir(parents=True)
+    monkeypatch.setattr(jit, "ROOT", tmp_path)
+    (cache / "kernels.scatter-358.py311.nbi").write_bytes(b"index")
+    (cache / "kernels.settle_x-9.py311.nbi").write_bytes(b"index")  # another function's name starts the same
+    assert jit.is_cached("surface/kernels.py")
+    assert not jit.is_cached("surface/kernels.py", "settle")
+    (cache / "kernels.settle-736.py311.nbi").write_bytes(b"index")
+    assert jit.is_cached("surface/kernels.py", "settle")

@@ -152,7 +152,7 @@ def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(mo
     monkeypatch.setattr(kernels, "warm", slow_warm)
     images = []
     for cached in (False, True):
-        monkeypatch.setattr(jit, "is_cached", lambda rel, cached=cached: cached)
+        monkeypatch.setattr(jit, "is_cached", lambda rel, function=None, cached=cached: cached)
         said, elapsed = [], []
         tiles = pool.render_tiles(job, workers=1, notify=said.append, progress=lambda d, t, r, e: elapsed.append(e))
         images.append([t.mean for t in tiles])
@@ -170,13 +170,33 @@ def test_a_smooth_scene_warms_only_what_it_runs(monkeypatch):
     has rough faces, bump maps or rough layers (the landing's first render after an install
     compiled in 49 s instead of 80 s, docs/benchmarks_command.md); the control: the rough
     cinderblocks ask for them. Either way the images are the kernels', whatever was warmed."""
+    from pmmw import jit
     from pmmw.trace import kernels
 
     asked = []
     monkeypatch.setattr(kernels, "warm", lambda stack_size=8, rough=True: asked.append(rough))
+    monkeypatch.setattr(
+        jit, "is_cached", lambda rel, function=None: True
+    )  # one `warm`, not the two processes' (`compile`)
     for cfg, rough in (("cinderblocks_35ghz.yaml", False), ("cinderblocks_rough_35ghz.yaml", True)):
         res = resolve(REPO / "configs" / cfg, ["imager.resolution=[8, 8]", "render.spp=1"])
         job = make_job(res, res.scenario.frequencies[0])
         assert job.media.any_rough is rough
         pool.prepare_kernels(job)
     assert asked == [False, True]
+
+
+def test_a_rough_scene_after_smooth_ones_compiles_and_says_so(monkeypatch):
+    """The rough surfaces' kernels are left out of a smooth scene's compile: the first rough scene
+    after smooth ones compiles them, so `prepare_kernels` says so (it was silent before). The
+    controls: with `settle` cached too, or for a smooth scene, nothing compiles."""
+    from pmmw import jit
+
+    jobs = {}
+    for cfg in ("cinderblocks_35ghz.yaml", "cinderblocks_rough_35ghz.yaml"):
+        res = resolve(REPO / "configs" / cfg, ["imager.resolution=[8, 8]", "render.spp=1"])
+        jobs[cfg] = make_job(res, res.scenario.frequencies[0])
+    for settle_cached in (False, True):
+        monkeypatch.setattr(jit, "is_cached", lambda rel, function=None, s=settle_cached: function is None or s)
+        assert pool.kernels_to_compile(jobs["cinderblocks_rough_35ghz.yaml"]) is not settle_cached
+        assert pool.kernels_to_compile(jobs["cinderblocks_35ghz.yaml"]) is False
