@@ -8,7 +8,8 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
 SCENARIO ?= configs/landing_95ghz.yaml
-PYTEST_ARGS ?=
+# two test processes, whole files each (a file's module fixtures are built once); PYTEST_ARGS= runs one
+PYTEST_ARGS ?= -n 2 --dist loadfile
 
 .PHONY: render test test-full lint docs install install-test install-docs clean blender-addon test-blender
 
@@ -68,7 +69,7 @@ $(BPY_VENV)/bin/python:
 	$(BPY_VENV)/bin/python -m pip install 'bpy==5.0.1'  # the version tested (pyproject's extra allows 4.2+)
 
 test-blender: install-test $(BPY_VENV)/bin/python
-	PMMW_BLENDER_PYTHON=$(abspath $(BPY_VENV))/bin/python $(BIN)/python -m pytest tests/blender/test_blender.py "tests/cli/test_docs_commands.py::test_the_cheap_documented_commands_run" $(PYTEST_ARGS)
+	PMMW_BLENDER_PYTHON=$(abspath $(BPY_VENV))/bin/python $(BIN)/python -m pytest tests/blender/test_blender.py "tests/cli/test_docs_commands.py::test_the_cheap_documented_commands_run"
 
 # the site (mkdocs.yml): guides, reference pages generated from the code, the examples run small
 # (PMMW_GALLERY=skip leaves them out, for a quick look); warnings (a broken link) fail it

@@ -69,11 +69,28 @@ COMMAND_OUTCOMES = {"po": "nothing written"}
 _outcome = RENDER_OUTCOME
 
 
-def outcome(text: str) -> None:
+class _Restore:
+    """Puts the outcome back as it was when left (`outcome` used as ``with``)."""
+
+    def __init__(self, previous: str):
+        self.previous = previous
+
+    def __enter__(self) -> _Restore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        global _outcome
+        _outcome = self.previous
+
+
+def outcome(text: str) -> _Restore:
     """Set what the line after ``interrupted:`` says of the command's outputs (e.g. ``pmmw po``:
-    ``nothing written``), as the command goes."""
+    ``nothing written``), as the command goes. As ``with outcome(text):`` the line goes back to
+    what it was after the block, so that a command run in the same process later (a notebook, a
+    test) does not inherit it."""
     global _outcome
-    _outcome = text
+    previous, _outcome = _outcome, text
+    return _Restore(previous)
 
 
 def report(stop: Interrupted) -> None:

@@ -623,16 +623,17 @@ def _po_run(
         force=force,
     )
     typer.echo(format_rows(res, fmt))
-    if out is not None or plot is not None:
-        interrupt.outcome(WRITING_OUTCOME.format(out=out if out is not None else plot.parent))
-    if out is not None:
-        written = write_run(res, out, "po", Path(mesh).name, *res.axes)
-        observation = f"theta `{theta or '0:180:1'}`, phi `{phi or 'the incidence phi'}` (degrees)"
-        written.append(write_report(out, Path(mesh).name, str(mesh), [("po", res)], observation, True))
-        for path in written:
-            typer.echo(f"wrote {path}", err=True)
-    if plot is not None:
-        write_plot(res, plot, Path(mesh).name)
+    if out is None and plot is None:
+        return
+    with interrupt.outcome(WRITING_OUTCOME.format(out=out if out is not None else plot.parent)):
+        if out is not None:
+            written = write_run(res, out, "po", Path(mesh).name, *res.axes)
+            observation = f"theta `{theta or '0:180:1'}`, phi `{phi or 'the incidence phi'}` (degrees)"
+            written.append(write_report(out, Path(mesh).name, str(mesh), [("po", res)], observation, True))
+            for path in written:
+                typer.echo(f"wrote {path}", err=True)
+        if plot is not None:
+            write_plot(res, plot, Path(mesh).name)
 
 
 def check_bench_target(target: Path) -> None:

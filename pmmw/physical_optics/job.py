@@ -139,7 +139,10 @@ def run_job(path: Path, out: Path | None = None, force: bool = False) -> list[Pa
     phis = _angles(job.observation.phi, f"{key}: observation.phi", False)
     tt, pp = command.grid(thetas, phis)
     out_dir = job.output.dir or Path.cwd() / "out" / job.name
-    with output_lock(out_dir, "--out" if out is not None else f"{key}: output.dir"):
+    with (
+        output_lock(out_dir, "--out" if out is not None else f"{key}: output.dir"),
+        interrupt.outcome(interrupt.COMMAND_OUTCOMES["po"]),  # what it says is back as it was after
+    ):
         return _run_locked(job, out_dir, thetas, phis, tt, pp, force)
 
 

@@ -3,6 +3,7 @@ closed form, the phase integral over a triangle by quadrature, the Fresnel refle
 half-space, reciprocity, and (tests/physical_optics/po_refs.py) the Mie series of spheres."""
 
 import math
+import unittest.mock
 
 import numpy as np
 import pytest
@@ -357,3 +358,28 @@ def test_octree_and_direct_agree_through_the_command(tmp_path):
         got[method] = np.array([[r["rcs_theta_m2"], r["rcs_phi_m2"]] for r in rows])
     peak = got["direct"].max()
     assert np.max(np.abs(got["octree"] - got["direct"])) < 2e-3 * peak
+
+
+def test_what_an_interrupt_says_after_po_is_back_to_the_next_commands(plate, tmp_path):
+    """`pmmw po --out` and a job say, while they write, which of their files are complete; after
+    they return, a command run in the same process (a notebook, a test) must not say it: an
+    interrupted render said "files already written in .../o are complete" of the po's folder.
+    The control: while po writes, the line is po's."""
+    from pmmw import interrupt
+    from pmmw.physical_optics import command
+
+    path, _, _ = plate
+    seen = []
+    original = command.write_run
+
+    def spy(*args, **kwargs):
+        seen.append(interrupt._outcome)
+        return original(*args, **kwargs)
+
+    before = interrupt._outcome
+    args = ["po", str(path), "--material", "metal", "--frequency", "95 GHz", "--incidence", "0,0"]
+    with unittest.mock.patch.object(command, "write_run", spy):
+        res = runner.invoke(app, [*args, "--theta", "0:2:1", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    assert seen and str(tmp_path / "o") in seen[0]  # the control
+    assert interrupt._outcome == before
