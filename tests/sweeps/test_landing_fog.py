@@ -19,6 +19,8 @@ from pmmw.sweeps.spec import SweepSpec, check_variants
 
 REPO = Path(__file__).resolve().parents[2]
 STUDY = REPO / "configs/landing_fog_range.yaml"
+#: the same study with a better imager (1.2 m, 1 K), out to 5000 m
+BETTER = REPO / "configs/landing_fog_better_range.yaml"
 
 
 def test_the_study_validates_with_its_regions_and_false_alarm():
@@ -30,6 +32,18 @@ def test_the_study_validates_with_its_regions_and_false_alarm():
     scn = load_scenario(spec.scenario)
     assert scn.output.false_alarm == 1e-3
     assert list(scn.output.regions) == ["beacons", "runway"]
+
+
+def test_the_better_imager_differs_only_in_its_aperture_noise_and_ranges():
+    """The better imager's study is the thesis imager's with 1.2 m and 1 K, out to 5000 m: the same
+    scenario, fogs and frequencies (so the two reports compare like with like)."""
+    base, better = load_sweep_file(STUDY), load_sweep_file(BETTER)
+    assert better.scenario == base.scenario and check_variants(better) == 5 * 4 * 2
+    g, b = dict(base.grid), dict(better.grid)
+    assert b["imager.aperture_diameter"] == ["1.2 m"] and b["imager.noise"] == ["1 K"]
+    for key in ("atmosphere.layers[0].liquid_water", "frequency"):
+        assert b[key] == g[key], key
+    assert b["imager.position"][:3] == [g["imager.position"][i] for i in (1, 3, 5)]  # 1000, 2000, 3000 m
 
 
 def _beacons() -> dict[str, np.ndarray]:
@@ -45,11 +59,11 @@ def _beacons() -> dict[str, np.ndarray]:
     return out
 
 
-@pytest.mark.parametrize("pose", range(6))
-def test_the_beacons_box_holds_the_row_at_every_range(pose):
+@pytest.mark.parametrize("study, pose", [(STUDY, i) for i in range(6)] + [(BETTER, i) for i in range(5)])
+def test_the_beacons_box_holds_the_row_at_every_range(study, pose):
     """The world box `beacons` projects onto a pixel box holding every vertex of the five threshold
     beacons and their reflections, and no other beacon; the runway's box is in view, clear of them."""
-    spec = load_sweep_file(STUDY)
+    spec = load_sweep_file(study)
     position = dict(spec.grid)["imager.position"][pose]
     params = next(p for p in variants(spec) if p["imager.position"] == position)
     scn = load_scenario(spec.scenario, overrides_of(params))
