@@ -401,7 +401,12 @@ def _render_resolved(res, quiet: bool, earlier_warnings=()):
         per_f.append((f, images["channels"], images["attrs"]))
         if scn.output.regions:
             regions[f"{f / 1e9:g} GHz"] = pipeline.region_stats(
-                scn, job.camera, images["sensor"], img, images["kernel"], noise_maps=images["noise_maps"]
+                scn,
+                job.camera,
+                images["sensor"],
+                img,
+                images["region_kernels"] or images["kernel"],
+                noise_maps=images["noise_maps"],
             )
     ds = _dataset(per_f, regions)
     warnings = list(dict.fromkeys([*earlier_warnings, *pipeline.collected_warnings()]))

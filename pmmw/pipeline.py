@@ -537,7 +537,7 @@ def region_stats(
     cam: Camera,
     sensor: Mapping[str, np.ndarray],
     img: Image | None = None,
-    kernel: np.ndarray | None = None,
+    kernel: np.ndarray | Mapping[str, np.ndarray | None] | None = None,
     ideal: Mapping[str, np.ndarray] | None = None,
     noise_maps: Mapping[str, np.ndarray] | None = None,
 ) -> dict:
@@ -569,6 +569,11 @@ def region_stats(
     ended on a guessed temperature (`TileResult.truncated`), for Ex2 and Ey2 (twice it for I).
     """
     masks = region_masks(scn.output.regions, cam)
+
+    def kernel_of(name: str) -> np.ndarray | None:
+        # one PSF for the image, or each region's own (`region_kernels`: a field-dependent beam)
+        return kernel.get(name) if isinstance(kernel, Mapping) else kernel
+
     chans = [c for c in REGION_CHANNELS if c in sensor]
     sigma = scn.imager.noise
     if noise_maps:
@@ -579,7 +584,11 @@ def region_stats(
     pfa = getattr(scn.output, "false_alarm", 1e-3)  # a bare record (tests, validation) has the default
     st = scn.render
     weights = {
-        name: ((blur_adjoint(m / m.sum(), kernel) if kernel is not None else m / m.sum()) if m.any() else None)
+        name: (
+            (blur_adjoint(m / m.sum(), kernel_of(name)) if kernel_of(name) is not None else m / m.sum())
+            if m.any()
+            else None
+        )
         for name, m in masks.items()
     }
     if img is not None:
@@ -623,7 +632,7 @@ def region_stats(
     # detection: the ideal image's region means (weights mask / N, no blur) and the target's
     # blurred footprint (`detection.footprint_norm`)
     ideal_w = {name: (m / m.sum() if m.any() else None) for name, m in masks.items()}
-    norms = {name: detection.footprint_norm(m, kernel) for name, m in masks.items() if m.any()}
+    norms = {name: detection.footprint_norm(m, kernel_of(name)) for name, m in masks.items() if m.any()}
     contrasts, verdicts = {}, {}
     for i, a in enumerate(names):
         for b_name in names[i + 1 :]:
@@ -635,7 +644,7 @@ def region_stats(
             for c in chans:
                 k = means[a][c] - means[b_name][c]
                 scale = (
-                    detection.effective_sigma(masks[a], kernel, noise_maps[c])
+                    detection.effective_sigma(masks[a], kernel_of(a), noise_maps[c])
                     if noise_maps
                     else detection.channel_sigma(sigma, c)
                 )  # I carries sqrt(2) sigma
@@ -643,7 +652,7 @@ def region_stats(
                 snr = snr_err = k_ideal = None
                 if dw_ideal is not None and ideal is not None:
                     k_ideal = float(np.sum(dw_ideal * ideal[c]))
-                    snr = detection.region_snr(k_ideal, masks[a], kernel, scale, norm=norms[a])
+                    snr = detection.region_snr(k_ideal, masks[a], kernel_of(a), scale, norm=norms[a])
                     e_ideal = mc_error(dw_ideal, c)
                     if snr is not None and e_ideal is not None:
                         snr_err = e_ideal * norms[a] / scale
@@ -880,7 +889,7 @@ def imager_model(
     ap = aperture_of(scn) if im.antenna is not None else None
     kernel = imager_kernel(scn, job.camera.pixel_angle, job.k0, kernels)
     spill = ap.spillover if ap is not None else 0.0
-    field = field_psf_of(scn, job) if ap is not None else None
+    field = field_psf_of(scn, job, kernels) if ap is not None else None
     sensor = apply_imager(
         ideal,
         pixel_angle=job.camera.pixel_angle,
@@ -898,16 +907,48 @@ def imager_model(
     return sensor, (None if kernel is None else kernel * (1.0 - spill))
 
 
-def field_psf_of(scn: ScenarioConfig, job: TraceJob) -> FieldPSF | None:
+def field_psf_of(scn: ScenarioConfig, job: TraceJob, cache: dict | None = None) -> FieldPSF | None:
     """The field-dependent blur (`imaging.antenna.FieldPSF`) of ``imager.antenna.off_axis:
-    projected``, else None (one PSF over the image)."""
+    projected``, else None (one PSF over the image); kept in ``cache`` (`Resolved.kernels`) with
+    the kernels it depends on, as `imager_kernel` keeps its own."""
     im = scn.imager
     if im.antenna is None or im.antenna.off_axis != "projected" or not im.aperture_diameter > 0.0:
         return None
     cam = job.camera
-    return FieldPSF(
-        job.camera.pixel_angle, job.k0, im.aperture_diameter, aperture_of(scn), cam.width, cam.height, cam.fov
+    aperture = aperture_of(scn)
+    key = (
+        "field",
+        float(cam.pixel_angle),
+        float(job.k0),
+        float(im.aperture_diameter),
+        aperture,
+        cam.width,
+        cam.height,
+        float(cam.fov),
     )
+    field = None if cache is None else cache.get(key)
+    if field is None:
+        field = FieldPSF(cam.pixel_angle, job.k0, im.aperture_diameter, aperture, cam.width, cam.height, cam.fov)
+        if cache is not None:
+            cache[key] = field
+    return field
+
+
+def region_kernels(
+    scn: ScenarioConfig, job: TraceJob, kernel: np.ndarray | None, cache: dict | None = None
+) -> dict[str, np.ndarray | None] | None:
+    """Each region's own PSF when the beam depends on the field (``imager.antenna.off_axis:
+    projected``): the beam at the centre of the region's pixels (`FieldPSF.kernel_at`), scaled as
+    ``kernel`` is (its sum: 1 - spillover); None when one PSF serves the whole image. A region's
+    detection (`region_stats`) then uses the beam its target is seen through."""
+    field = field_psf_of(scn, job, cache)
+    if field is None or kernel is None or not scn.output.regions:
+        return None
+    out: dict[str, np.ndarray | None] = {}
+    for name, mask in region_masks(scn.output.regions, job.camera).items():
+        rows, cols = np.nonzero(mask)
+        out[name] = field.kernel_at(rows.mean(), cols.mean()) * float(kernel.sum()) if rows.size else None
+    return out
 
 
 def imager_summary(scn: ScenarioConfig, job: TraceJob, noise_maps: dict | None = None) -> dict:
@@ -1377,11 +1418,13 @@ def frequency_images(
     scn: ScenarioConfig, f: float, job: TraceJob, img: Image, shash: str = "", kernels: dict | None = None
 ) -> dict:
     """The images of one frequency from its traced ``img``: ``ideal`` and ``sensor`` (Stokes and
-    polarization channels [K], float64), the PSF ``kernel``, and what the EXR holds: ``channels``
+    polarization channels [K], float64), the PSF ``kernel`` (and each region's, ``region_kernels``,
+    when the beam depends on the field), and what the EXR holds: ``channels``
     (float32: the sensor's, ``ideal.*``, ``aux.*``) with its header ``attrs``. ``kernels``: the
     PSF kernels made before (`Resolved.kernels`)."""
     ideal = stokes_images(img.mean)
     noise_maps = {}
+    kernels = {} if kernels is None else kernels  # the field-dependent beam is made once, for both uses
     sensor, kernel = imager_model(scn, job, ideal, noise_maps, kernels)
     if not all(np.isfinite(sensor[c]).all() for c in scn.output.channels):
         raise RuntimeError(f"non-finite pixels in the {f / 1e9:g} GHz image: a bug, please report it")
@@ -1410,6 +1453,7 @@ def frequency_images(
         "ideal": ideal,
         "sensor": sensor,
         "kernel": kernel,
+        "region_kernels": region_kernels(scn, job, kernel, kernels),
         "channels": channels,
         "attrs": attrs,
         "noise_maps": noise_maps or None,
@@ -1428,7 +1472,9 @@ def _finish_frequency(res, f, job, img, names, staged: Staging, shash, t_trace, 
     cam = job.camera
     with timings.phase("region statistics"):
         regions = (
-            region_stats(scn, cam, sensor, img, kernel, ideal, images["noise_maps"]) if scn.output.regions else None
+            region_stats(scn, cam, sensor, img, images["region_kernels"] or kernel, ideal, images["noise_maps"])
+            if scn.output.regions
+            else None
         )
     try:
         with timings.phase("EXR"):

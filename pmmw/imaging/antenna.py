@@ -368,6 +368,22 @@ class FieldPSF:
                 out[c] += w * blur(v, kern)
         return out
 
+    def kernel_at(self, row: float, col: float) -> FloatArray:
+        """The beam of the pixel at (``row``, ``col``) (fractional positions allowed): the node
+        kernels blended with the weights `blur_all` gives that pixel, each padded to the largest
+        one (unit sum). A region's detection uses the kernel at its centre (`pipeline.region_stats`)."""
+        eye_r, eye_c = np.eye(len(self.rows)), np.eye(len(self.cols))
+        wr = [float(np.interp(row, self.rows, eye_r[k])) if len(self.rows) > 1 else 1.0 for k in range(len(self.rows))]
+        wc = [float(np.interp(col, self.cols, eye_c[k])) if len(self.cols) > 1 else 1.0 for k in range(len(self.cols))]
+        r = max(k.shape[0] for k in self.kernels.values()) // 2
+        out = np.zeros((2 * r + 1, 2 * r + 1))
+        for (i, j), kern in self.kernels.items():
+            w = wr[list(self.rows).index(i)] * wc[list(self.cols).index(j)]
+            if w > 0.0:
+                q = kern.shape[0] // 2
+                out[r - q : r + q + 1, r - q : r + q + 1] += w * kern
+        return out / out.sum()
+
     def blur(self, img: FloatArray) -> FloatArray:
         """The sensor image (H, W) float64 of the ideal image ``img`` (H, W)."""
         return self.blur_all({"": img})[""]
