@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pmmw.jit import njit
+from pmmw.rng import hash_uniform1 as _hash_uniform1
 
 # R2 sequence: fractional parts of k / g and k / g^2, g the plastic number (root of x^3 = x + 1).
 _G = 1.32471795724474602596
@@ -172,28 +173,6 @@ def _rays_loop(u, v, keys, seed, position, x, y, k, half, width, height, radius,
         p[i, 0] = -(dy * sz - dz * sy)
         p[i, 1] = -(dz * sx - dx * sz)
         p[i, 2] = -(dx * sy - dy * sx)
-
-
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
-_MIX2 = np.uint64(0x94D049BB133111EB)
-_FNV = np.uint64(0x100000001B3)
-
-
-@njit(inline="always")
-def _splitmix64(x):
-    """The splitmix64 finalizer of one uint64 (a good integer hash; arithmetic wraps)."""
-    x = x + _GOLDEN
-    x = (x ^ (x >> np.uint64(30))) * _MIX1
-    x = (x ^ (x >> np.uint64(27))) * _MIX2
-    return x ^ (x >> np.uint64(31))
-
-
-@njit(inline="always")
-def _hash_uniform1(seed, key, stream):
-    """A uniform [0, 1) float from the hash of (seed, stream, key) (`hash_uniform` of one key)."""
-    h = _splitmix64(np.uint64(key) ^ _splitmix64(np.uint64(seed) * _FNV + np.uint64(stream)))
-    return float(h >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
 @njit()
