@@ -3,7 +3,7 @@ generator that other rays also draw from.
 
 A counter-based generator (Salmon et al. 2011) maps a key and a counter to a random number by a
 hash, so a number depends on nothing but what it is for. Here the hash is the splitmix64
-finalizer (Steele et al. 2014, fig. 1's ``mix64``: the constants ``0xBF58476D1CE4E5B9`` and
+finalizer (Steele et al. 2014, its ``mix64``: the constants ``0xBF58476D1CE4E5B9`` and
 ``0x94D049BB133111EB`` with shifts 30, 27, 31, after adding the golden gamma
 ``0x9E3779B97F4A7C15``); all arithmetic is modulo 2**64.
 

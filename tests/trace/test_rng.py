@@ -19,8 +19,8 @@ M64 = (1 << 64) - 1
 
 
 def _mix64(x: int) -> int:
-    """splitmix64's finalizer with plain Python integers, as Steele et al. 2014 print it (fig. 1,
-    ``mix64``, after the state's increment by the golden gamma), reduced mod 2**64 by hand."""
+    """splitmix64's finalizer with plain Python integers, as Steele et al. 2014 print it
+    (``mix64``, after the state's increment by the golden gamma), reduced mod 2**64 by hand."""
     x = (x + 0x9E3779B97F4A7C15) & M64
     x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & M64
     x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & M64
