@@ -1,8 +1,8 @@
 """Are two versions of the tracer's random streams the same estimator? Per-pixel tests over seeds.
 
 Re-keying the random numbers (`pmmw.rng`) changes every image bit for bit, so the change is
-proved as an estimator: the same small images of two shipped configs (smooth: landing_95ghz;
-rough: cinderblocks_rough_35ghz) rendered with ``SEEDS`` seeds by each version, and per pixel and
+proved as an estimator: the same small images of two shipped configs (smooth: landing_95ghz,
+as shipped and with the ``stochastic`` branch choice; rough: cinderblocks_rough_35ghz) rendered with ``SEEDS`` seeds by each version, and per pixel and
 channel (Ex2, Ey2, U, V):
 
 * the means: Welch's t-test of the two sets of per-seed values (each value a pixel mean of
@@ -31,11 +31,15 @@ from pathlib import Path
 
 import numpy as np
 
+SMALL = ["imager.resolution=[16, 12]"]
+#: label: (config, overrides); the landing's default (``split``) draws only for Russian roulette,
+#: its ``stochastic`` one for every branch choice too
 CONFIGS = {
-    "landing_95ghz": ["imager.resolution=[16, 12]"],
-    "cinderblocks_rough_35ghz": ["imager.resolution=[16, 12]"],
+    "landing_95ghz": ("landing_95ghz", SMALL),
+    "landing_95ghz_stochastic": ("landing_95ghz", [*SMALL, "render.strategy=stochastic"]),
+    "cinderblocks_rough_35ghz": ("cinderblocks_rough_35ghz", SMALL),
 }
-SEEDS = 16
+SEEDS = 32
 SPP = 16
 ALPHA = 0.01
 CONTROL = 1.02
@@ -47,11 +51,11 @@ def render(out):
     from pmmw.trace import pool
 
     arrays = {}
-    for name, overrides in CONFIGS.items():
+    for name, (config, overrides) in CONFIGS.items():
         imgs = []
         for seed in range(1, SEEDS + 1):
             res = resolve(
-                Path("configs") / f"{name}.yaml",
+                Path("configs") / f"{config}.yaml",
                 [*overrides, f"render.spp={SPP}", "render.target_error=null", f"render.seed={seed}"],
             )
             job = make_job(res, res.scenario.frequencies[0])

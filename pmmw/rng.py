@@ -106,7 +106,7 @@ def child_key1(key, branch):
 def uniform1(key, depth, purpose):
     """The uniform [0, 1) of the ray of key ``key`` (uint64) at ``depth`` for ``purpose``."""
     h = splitmix64(key ^ splitmix64((np.uint64(depth) << np.uint64(8)) | np.uint64(purpose)))
-    return float(h >> np.uint64(11)) * _TO_UNIT
+    return float(np.int64(h >> np.uint64(11))) * _TO_UNIT  # (signed: a faster conversion, exact below 2**53)
 
 
 @njit()
