@@ -19,16 +19,3 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "full" in item.keywords:
             item.add_marker(skip)
-
-
-@pytest.fixture(autouse=True)
-def _render_outcome():
-    """Each test starts with the interrupt line of a render, as each `pmmw` process does
-    (`interrupt.run`): tests invoke several commands in one process, and ``pmmw po`` sets its own
-    line (`interrupt.outcome`), which a later test's interrupted render then printed instead of
-    its ``--resume`` hint (tests/cli/test_cli.py after tests/physical_optics/test_po.py in one
-    worker)."""
-    from pmmw import interrupt
-
-    interrupt.outcome(interrupt.RENDER_OUTCOME)
-    yield
