@@ -28,6 +28,7 @@ SOURCES = (
     "physics/multilayer.py",
     "physics/roughness.py",
     "physical_optics/kernels.py",
+    "rng.py",
     "scene/bump.py",
     "scene/camera.py",
     "scene/sky.py",

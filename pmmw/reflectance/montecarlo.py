@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pmmw import rng
 from pmmw.physics.jones import basis_change
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jones
 from pmmw.reflectance.stack import Stack
@@ -27,7 +28,7 @@ from pmmw.surface.records import Choice, Faces, Hit, HitCode, Limits
 
 __all__ = ["monte_carlo", "stack_media"]
 
-# Paths are followed in chunks of this many rays (memory, not results: chunks have own seeds).
+# Paths are followed in chunks of this many rays (memory, not results: each sample has its own key, `pmmw.rng`).
 _CHUNK = 1 << 17
 # Facet interactions after which a path is ended and counted as lost (never reached in practice:
 # reported in the summary as ``lost``).
@@ -74,7 +75,7 @@ def monte_carlo(
     samples : int
         Incident rays.
     seed : int
-        Run seed; chunk c uses ``SeedSequence([seed, c])``.
+        Run seed; sample i draws its numbers from the key of (seed, i) (`pmmw.rng.ray_keys`).
     threshold : float
         Russian roulette below this path power (the larger of the two incident polarizations'
         powers, as the renderer's ``render.threshold``; survivors scaled up: unbiased).
@@ -101,9 +102,8 @@ def monte_carlo(
     h_in, v_in = _hv(k_in[None, :], np.array([phi_i + math.pi]))
     for c, start in enumerate(range(0, samples, _CHUNK)):
         n = min(_CHUNK, samples - start)
-        rng = np.random.default_rng(np.random.SeedSequence([int(seed), c]))
         acc, cut = np.zeros((n, 4)), np.zeros((n, 2))
-        surfaces.start(rng, acc, cut)
+        surfaces.start(acc, cut)
         m = np.zeros((n, 2, 2), complex)
         m[:, 0, 0] = m[:, 1, 1] = 1.0
         wave = Wave(
@@ -117,6 +117,7 @@ def monte_carlo(
             stack=np.zeros((n, _STACK), np.int16),
             top=np.zeros(n, np.int32),
             last_t=np.full(n, _T_ABSORBER),
+            key=rng.ray_keys(int(seed), np.arange(start, start + n)),  # the samples' random numbers
         )
         # every ray meets the substrate's face (medium 1) from the ambient side, as `kernels.arrive` leaves it
         hit = Hit(

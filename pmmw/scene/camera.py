@@ -17,6 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from pmmw.jit import njit
+from pmmw.rng import Purpose
+from pmmw.rng import hash_uniform1 as _hash_uniform1
+
+# the camera's streams of `pmmw.rng` (compile-time constants in the kernels)
+_PIXEL_U, _PIXEL_V, _LENS_R, _LENS_PHI = (
+    int(p) for p in (Purpose.PIXEL_U, Purpose.PIXEL_V, Purpose.LENS_R, Purpose.LENS_PHI)
+)
 
 # R2 sequence: fractional parts of k / g and k / g^2, g the plastic number (root of x^3 = x + 1).
 _G = 1.32471795724474602596
@@ -154,8 +161,8 @@ def _rays_loop(u, v, keys, seed, position, x, y, k, half, width, height, radius,
         if radius > 0.0:
             t = focus / (dx * k[0] + dy * k[1] + dz * k[2])
             fx, fy, fz = ox + t * dx, oy + t * dy, oz + t * dz
-            r = radius * math.sqrt(_hash_uniform1(seed, keys[i], 3))
-            phi = 2.0 * math.pi * _hash_uniform1(seed, keys[i], 4)
+            r = radius * math.sqrt(_hash_uniform1(seed, keys[i], _LENS_R))
+            phi = 2.0 * math.pi * _hash_uniform1(seed, keys[i], _LENS_PHI)
             ca, sa = r * math.cos(phi), r * math.sin(phi)
             ox, oy, oz = ox + ca * x[0] + sa * y[0], oy + ca * x[1] + sa * y[1], oz + ca * x[2] + sa * y[2]
             dx, dy, dz = fx - ox, fy - oy, fz - oz
@@ -172,28 +179,6 @@ def _rays_loop(u, v, keys, seed, position, x, y, k, half, width, height, radius,
         p[i, 0] = -(dy * sz - dz * sy)
         p[i, 1] = -(dz * sx - dx * sz)
         p[i, 2] = -(dx * sy - dy * sx)
-
-
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
-_MIX2 = np.uint64(0x94D049BB133111EB)
-_FNV = np.uint64(0x100000001B3)
-
-
-@njit(inline="always")
-def _splitmix64(x):
-    """The splitmix64 finalizer of one uint64 (a good integer hash; arithmetic wraps)."""
-    x = x + _GOLDEN
-    x = (x ^ (x >> np.uint64(30))) * _MIX1
-    x = (x ^ (x >> np.uint64(27))) * _MIX2
-    return x ^ (x >> np.uint64(31))
-
-
-@njit(inline="always")
-def _hash_uniform1(seed, key, stream):
-    """A uniform [0, 1) float from the hash of (seed, stream, key) (`hash_uniform` of one key)."""
-    h = _splitmix64(np.uint64(key) ^ _splitmix64(np.uint64(seed) * _FNV + np.uint64(stream)))
-    return float(h >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
 @njit()
@@ -225,8 +210,8 @@ def _pixel_samples(width, pixels, spp, seed, start, centre, alpha_u, alpha_v, u,
             s = start + b
             key = px * REPLICATES + s % REPLICATES
             k = float(s // REPLICATES)
-            u[i] = col + (_hash_uniform1(seed, key, 1) + (k + 0.5) * alpha_u) % 1.0
-            v[i] = row + (_hash_uniform1(seed, key, 2) + (k + 0.5) * alpha_v) % 1.0
+            u[i] = col + (_hash_uniform1(seed, key, _PIXEL_U) + (k + 0.5) * alpha_u) % 1.0
+            v[i] = row + (_hash_uniform1(seed, key, _PIXEL_V) + (k + 0.5) * alpha_v) % 1.0
 
 
 def pixel_samples(width: int, pixels, spp: int, seed: int, start: int = 0, total: int | None = None):

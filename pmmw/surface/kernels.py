@@ -37,6 +37,7 @@ import numpy as np
 
 from pmmw.jit import inline, njit
 from pmmw.physics import fresnel, multilayer, roughness
+from pmmw.rng import child_key1
 from pmmw.surface.media import BLACKBODY, DIELECTRIC, METAL, OPAQUE, THIN
 from pmmw.surface.records import Facets, HitCode, Settle
 
@@ -385,12 +386,13 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
         power emitted at the face's temperature, the ray goes on with none about the macro
         normal). Each child then leaves (terminated by `survive` with ``u_roul`` as with
         ``FINISH``, then off the surface as `settle` sends it: rows 0, 1, ... of ``out``) unless
-        the next of ``u_leave`` (one per child of a rough face, in order) is at or above its
+        its ``u_leave`` (two per row, the reflected child's first) is at or above its
         Smith masking probability (`roughness.smith_g1`); a masked child emits its power at the
         face's temperature if ``over`` (the chain's end), else it crosses one ``wavelength`` of
         its side's medium and comes back for a re-hit (depth changed by ``rehit_depth``): rows
         ``len(out) - 1``, ``len(out) - 2``, ... of ``out``, its row, media and branch in
-        ``back`` as `settle` fills them; ``counts`` as `Facets` says.
+        ``back`` as `settle` fills them; ``counts`` as `Facets` says. Each child's ``key`` is
+        its parent's hashed with its branch (`pmmw.rng.child_key1`).
     """
     return _scatter(
         rows,
@@ -515,6 +517,7 @@ def _scatter(
     pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving  # fmt: skip
     oo, od, os_, op, om = out.o, out.d, out.s, out.p, out.m
     osid, odepth, ostack, otop, olast = out.sid, out.depth, out.stack, out.top, out.last_t
+    key, okey = wave.key, out.key
     buf_eps, buf_d = _film_buffers(films)
     roulette, cap, last_row = u_roul.shape[0] > 0, stack.shape[1], oo.shape[0] - 1
     if facets is not None:
@@ -523,7 +526,7 @@ def _scatter(
     # The loop body calls no helper that takes arrays: numba counts references to an array
     # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
     # than all of an interaction's arithmetic. Helpers here take and return scalars.
-    n_out, n_back, used, drawn_off = 0, 0, 0, 0
+    n_out, n_back, drawn_off = 0, 0, 0
     for j in range(rows.shape[0]):
         i = rows[j]
         k, fm = sid[i], fm_a[i]
@@ -594,8 +597,7 @@ def _scatter(
                     (side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz), (cx, cy, cz),
                     rough.code[fm], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
                 )  # fmt: skip
-                leaves = not facets.u_leave[used] >= g1  # (NaN: leaves, as the masking test reads)
-                used += 1
+                leaves = not facets.u_leave[2 * j + br] >= g1  # (NaN: leaves, as the masking test reads)
             if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
                 g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
                 if g < 0.0:
@@ -639,6 +641,7 @@ def _scatter(
                 _off_surface(oo, od, os_, op, row, gx, gy, gz, step)
             om[row, 0, 0], om[row, 0, 1], om[row, 1, 0], om[row, 1, 1] = m00, m01, m10, m11
             osid[row], odepth[row], otop[row], olast[row] = k, depth_row, top_c, t_body
+            okey[row] = child_key1(key[i], br)
             for c in range(cap):
                 ostack[row, c] = stack[i, c]
             if top_c > tp_i:
@@ -649,7 +652,7 @@ def _scatter(
                 n_out += 1
     if facets is not None:
         facets.counts[0] += drawn_off
-        facets.counts[1], facets.counts[2] = used, n_back
+        facets.counts[2] = n_back
     return n_out
 
 
@@ -658,7 +661,7 @@ def gather(src, rows, dst):
     """Rows ``rows`` of wave ``src`` to rows 0, 1, ... of wave ``dst`` (the same wave when every
     ``rows[n] >= n``: in place). One call per wave: numba counts references to arrays handed to a
     helper, at a cost above a row's copy, so the arrays are unpacked once here."""
-    o, d, s, p, m, sid, depth, stack, top, last_t = (
+    o, d, s, p, m, sid, depth, stack, top, last_t, key = (
         src.o,
         src.d,
         src.s,
@@ -669,15 +672,16 @@ def gather(src, rows, dst):
         src.stack,
         src.top,
         src.last_t,
+        src.key,
     )
     o2, d2, s2, p2, m2 = dst.o, dst.d, dst.s, dst.p, dst.m
-    sid2, depth2, stack2, top2, last_t2 = dst.sid, dst.depth, dst.stack, dst.top, dst.last_t
+    sid2, depth2, stack2, top2, last_t2, key2 = dst.sid, dst.depth, dst.stack, dst.top, dst.last_t, dst.key
     for n in range(rows.shape[0]):
         c = rows[n]
         for a in range(3):
             o2[n, a], d2[n, a], s2[n, a], p2[n, a] = o[c, a], d[c, a], s[c, a], p[c, a]
         m2[n, 0, 0], m2[n, 0, 1], m2[n, 1, 0], m2[n, 1, 1] = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
-        sid2[n], depth2[n], top2[n], last_t2[n] = sid[c], depth[c], top[c], last_t[c]
+        sid2[n], depth2[n], top2[n], last_t2[n], key2[n] = sid[c], depth[c], top[c], last_t[c], key[c]
         for a in range(stack.shape[1]):
             stack2[n, a] = stack[c, a]
 

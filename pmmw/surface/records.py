@@ -71,6 +71,7 @@ def _room(cls, n: int = 0, zero: bool = False, **sizes):
 
 
 _F8, _C16, _I8, _I4, _I2, _I1, _B = np.float64, np.complex128, np.int64, np.int32, np.int16, np.int8, np.bool_
+_U8 = np.uint64
 _ROW = ("n",)
 _ROW3 = ("n", 3)
 
@@ -88,6 +89,7 @@ class WaveArrays(NamedTuple):
     stack: np.ndarray
     top: np.ndarray
     last_t: np.ndarray
+    key: np.ndarray
 
     ROOM = (
         (_ROW3, _F8),
@@ -100,6 +102,7 @@ class WaveArrays(NamedTuple):
         (("n", "stack"), _I2),
         (_ROW, _I4),
         (_ROW, _F8),
+        (_ROW, _U8),
     )
     empty = classmethod(_room)
 
@@ -264,10 +267,10 @@ class Facets(NamedTuple):
     """A rough face's interaction in `kernels.scatter` (``MASKED``): per row, whether the GGX
     facet is drawn there (``draw``, per medium) from uniforms ``u1``, ``u2``; the face normal
     ``n_geo`` and macro normal ``n_mac`` facing the incident side; the masking uniforms
-    ``u_leave`` (one per child of a rough face, in order); the media's ``rough`` table; the chain's
+    ``u_leave`` (two per row: its reflected and transmitted child, `pmmw.rng.Purpose`); the media's ``rough`` table; the chain's
     end ``over``; the way a masked child crosses to the next facet, one ``wavelength`` [m]; the
     depth change of a re-hit ``rehit_depth``; ``back`` filled for the children that come back;
-    ``counts`` (3,) receives (draws of weight other than 1, uniforms of ``u_leave`` used,
+    ``counts`` (3,) receives (draws of weight other than 1, unused (0),
     children that came back)."""
 
     draw: np.ndarray

@@ -18,8 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from pmmw import rng
 from pmmw.constants import C0
 from pmmw.physics.roughness import GGX_CODE, MAX_REHITS, OTHER_CODE
+from pmmw.rng import Purpose
 from pmmw.surface import kernels
 from pmmw.surface.media import Media
 from pmmw.surface.records import BackSide, ChainEnd, Choice, Fate, Hit, HitCode, LeaveSide
@@ -103,18 +105,18 @@ class Surfaces:
         # a chain of re-hits at one point is one interaction, unless depth counts facet events
         self._rehit_depth = 0 if count_facets else -1
         self.events = self.fallbacks = 0
-        self.rng = self.acc = self.cut = None
+        self.acc = self.cut = None
 
     @property
     def media_table(self):
         """The media as the kernels take them (`kernel_tables`' first entry; `kernels.arrive`)."""
         return self._media
 
-    def start(self, rng, acc, cut):
-        """Where the interactions of the next waves draw random numbers (``numpy.random.Generator``)
-        and deposit emission: per-sample sums ``acc`` (samples, 4) and truncation sums ``cut``
-        (samples, 2), float64 (`kernels.emit`, `kernels.survive`)."""
-        self.rng, self.acc, self.cut = rng, acc, cut
+    def start(self, acc, cut):
+        """Where the interactions of the next waves deposit emission: per-sample sums ``acc``
+        (samples, 4) and truncation sums ``cut`` (samples, 2), float64 (`kernels.emit`,
+        `kernels.survive`). Their random numbers come from the rays' keys (`pmmw.rng`)."""
+        self.acc, self.cut = acc, cut
 
     def interact(self, wave: Wave, hit, prim, rows):
         """The interactions of rays ``rows`` of ``wave`` with the faces they hit.
@@ -138,7 +140,7 @@ class Surfaces:
         """
         if self.compiled:
             self.events += rows.size
-            u_choose, u_roul = self._uniforms(rows.size)
+            u_choose, u_roul = self._uniforms(wave.key[rows], wave.depth[rows])
             kids = Wave.empty(2 * rows.size, wave.stack.shape[1])
             count = kernels.scatter(
                 rows,
@@ -181,12 +183,16 @@ class Surfaces:
         )
         return kids + [w for w in (self._terminate(part) for part in walked) if len(w)]
 
-    def _uniforms(self, n):
-        """The uniforms of an interaction of ``n`` rays that `kernels.scatter` reads, drawn in one
-        order by every caller: the branch choice (one per ray; none with ``split``), then Russian
-        roulette (two per ray; none without roulette)."""
-        u_choose = self.rng.random(n) if self._choice.strategy != kernels.STRATEGIES["split"] else _NO_RANDOM
-        return u_choose, self.rng.random(2 * n) if self._limits.roulette else _NO_RANDOM
+    def _uniforms(self, key, depth):
+        """The uniforms of an interaction of the rays of keys ``key`` at depths ``depth`` that
+        `kernels.scatter` reads: the branch choice (one per ray; none with ``split``) and Russian
+        roulette (two per ray, the reflected child's first; none without roulette)."""
+        u_choose = _NO_RANDOM
+        if self._choice.strategy != kernels.STRATEGIES["split"]:
+            u_choose = rng.uniforms(key, depth, Purpose.BRANCH_CHOICE)
+        if not self._limits.roulette:
+            return u_choose, _NO_RANDOM
+        return u_choose, rng.uniforms(key, depth, Purpose.ROULETTE_REFLECTED, Purpose.ROULETTE_TRANSMITTED).ravel()
 
     def _models(self, face_med):
         """The roughness models of the media in ``face_med``, {medium: model}, in ascending order
@@ -250,22 +256,18 @@ class Surfaces:
         """`_interact`'s step in one pass of `kernels.scatter` (``MASKED``). Returns the children
         that leave and, for those that come back, the arguments of their re-hit (or None).
 
-        The uniforms are drawn in the order of `_scatter_settle`'s steps (facets per material,
-        branch choice, Russian roulette of the children that leave, then one per child of a rough
-        face for its masking), so both give the same image for the same seed: the masking's are
-        drawn for every possible child (two per ray) and the generator is then set back to just
-        after the ones the kernel used. The children that leave are terminated here (`survive`)."""
+        The uniforms are those of `_scatter_settle`'s steps, keyed by the rays (`pmmw.rng`: facets,
+        branch choice, Russian roulette and masking of each child), so both give the same image
+        for the same seed. The children that leave are terminated here (`survive`)."""
         nr = len(wv)
         n_mac = np.ascontiguousarray(n_mac, dtype=np.float64)
         n_fac, u1, u2 = self._draws(wv, n_mac, face_med)
-        u_choose, u_roul = self._uniforms(nr)
+        u_choose, u_roul = self._uniforms(wv.key, wv.depth)
         hit = Hit(np.ascontiguousarray(pos), n_fac, _NO_RANDOM, cur, face_med, other, leaving, _NO_CODE)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         side = BackSide.empty(2 * nr)
         counts = np.zeros(3, np.int64)
-        generator = self.rng.bit_generator
-        state = generator.state
-        u_leave = self.rng.random(2 * nr)
+        u_leave = _masking_uniforms(wv).ravel()
         settle = kernels.masked(
             self._rough.code == GGX_CODE,
             u1,
@@ -297,8 +299,6 @@ class Surfaces:
             kids.arrays(),
             settle,
         )
-        generator.state = state
-        generator.advance(int(counts[1]))
         self.fallbacks += int(counts[0])
         nb = int(counts[2])
         if not nb:
@@ -327,7 +327,7 @@ class Surfaces:
             if self._rough.code[k] == GGX_CODE:  # drawn in `kernels.scatter`
                 if u1 is _NO_RANDOM:
                     u1, u2 = np.zeros(len(wv)), np.zeros(len(wv))
-                u1[g], u2[g] = self.rng.random((2, g.size))
+                u1[g], u2[g] = rng.uniforms(wv.key[g], wv.depth[g], Purpose.FACET_U1, Purpose.FACET_U2).T
                 continue
             if tangent is None:
                 tangent, n_fac = _tangents(n_mac), n_mac.copy()
@@ -348,7 +348,7 @@ class Surfaces:
         # points for the masking test
         hit = Hit(np.ascontiguousarray(pos), np.ascontiguousarray(n_fac), cos1, cur, face_med, other, leaving, _NO_CODE)
         rows = np.arange(nr)
-        u_choose, u_roul = self._uniforms(nr)
+        u_choose, u_roul = self._uniforms(wv.key, wv.depth)
         kids = Wave.empty(2 * nr, wv.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
         count = kernels.scatter(
@@ -385,6 +385,7 @@ class Surfaces:
             leaving,
             rehit,
             u_roul,
+            _masking_uniforms(wv),
         )
 
     def _facets(self, wv: Wave, n_mac, face_med):
@@ -419,8 +420,8 @@ class Surfaces:
         0, degenerate input only) emits its power at ``t_surface`` and goes on with none, keeping
         the macro normal.
         """
-        u = self.rng.random((2, rows.size))
-        m, w = model.sample_normals(n, tangent, -wv.d[rows], u[0], u[1])
+        u = rng.uniforms(wv.key[rows], wv.depth[rows], Purpose.FACET_U1, Purpose.FACET_U2)
+        m, w = model.sample_normals(n, tangent, -wv.d[rows], u[:, 0], u[:, 1])
         self.fallbacks += int(np.count_nonzero(w != 1.0))
         lost = w <= 0.0
         if lost.any():
@@ -450,6 +451,7 @@ class Surfaces:
         leaving,
         rehit,
         u_roul,
+        u_mask,
     ):
         """Send children off the surface, or back onto it.
 
@@ -464,14 +466,15 @@ class Surfaces:
         a metal-like body swallows what it transmits, a clear one lets it walk on. A child on the wrong side of the *geometric*
         face (a bump map's tilt) is mirrored through the face's plane, keeping its power.
         ``branch`` (per child) is +1 for reflected children (incident side), -1 for transmitted
-        ones (far side); ``i`` their rows in the interaction's arrays. The masking probability
+        ones (far side); ``i`` their rows in the interaction's arrays; ``u_mask`` (rows, 2) the
+        masking uniforms of each row's reflected and transmitted child (`_masking_uniforms`). The masking probability
         comes from each face's model; the rest is one pass of `kernels.settle`.
         """
         n = len(child)
         u, p_leave = np.zeros(n), _NO_RANDOM
         if rough is not None:
             rk = rough[i]
-            u[rk] = self.rng.random(np.count_nonzero(rk))
+            u[rk] = u_mask[i[rk], (branch[rk] < 0).astype(np.int64)]
             if self._rough_other:  # models without compiled masking
                 r = np.flatnonzero(self._rough.code[face_med[i]] == OTHER_CODE)
                 fm, ir = face_med[i][r], i[r]
@@ -631,7 +634,7 @@ class Surfaces:
             np.full(nr, not a),
             _NO_CODE,
         )
-        u_choose = self.rng.random(nr) if self._choice.strategy != kernels.STRATEGIES["split"] else _NO_RANDOM
+        u_choose, _ = self._uniforms(w.key, w.depth)
         kids = Wave.empty(2 * nr, w.stack.shape[1])
         src, branch = np.empty(2 * nr, np.int64), np.empty(2 * nr, np.int8)
         none = np.zeros(nr, np.int64)
@@ -657,7 +660,7 @@ class Surfaces:
         model = self._rough_models[fm]
         u, p_leave = np.zeros(count), _NO_RANDOM
         if model is not None:
-            u = self.rng.random(count)
+            u = _masking_uniforms(w)[src, (branch < 0).astype(np.int64)]
             if self._rough.code[fm] == OTHER_CODE:
                 p_leave = model.masking(branch[:, None] * n_in[src], tangent[src], kids.d)
         t_end = np.array([pile.end_temperature(j, a), pile.end_temperature(j, not a)])
@@ -754,10 +757,16 @@ class Surfaces:
         the others' power is emitted at the last object's temperature or, by Russian roulette,
         dropped with the survivors scaled up). Returns a boolean mask."""
         n = len(wv)
-        u = self.rng.random(n) if self._limits.roulette else _NO_RANDOM
+        u = rng.uniforms(wv.key, wv.depth, Purpose.SURVIVAL) if self._limits.roulette else _NO_RANDOM
         keep = np.empty(n, bool)
         kernels.survivors(wv.arrays(), u, self._limits, self.acc, self.cut, keep)
         return keep
+
+
+def _masking_uniforms(wv: Wave):
+    """The masking uniforms of the children of the rays of ``wv``, (n, 2): the reflected child's,
+    the transmitted one's (`pmmw.rng`)."""
+    return rng.uniforms(wv.key, wv.depth, Purpose.MASKING_REFLECTED, Purpose.MASKING_TRANSMITTED)
 
 
 def _merge_walk(parts):

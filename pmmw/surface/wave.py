@@ -14,9 +14,10 @@ class Wave:
     bases ``s``, ``p`` (n, 3) float64; Jones matrices ``m`` (n, 2, 2) complex128 (`pmmw.physics.jones`);
     the sample each ray adds to ``sid`` (n,) int64; interactions so far ``depth`` (n,) int32; the
     medium stack ``stack`` (n, stack_size) int16 with its top ``top`` (n,) int32; the temperature
-    a path ended here takes ``last_t`` (n,) float64 [K]."""
+    a path ended here takes ``last_t`` (n,) float64 [K]; the key of its random numbers ``key`` (n,)
+    uint64 (`pmmw.rng`)."""
 
-    __slots__ = ("o", "d", "s", "p", "m", "sid", "depth", "stack", "top", "last_t")
+    __slots__ = ("o", "d", "s", "p", "m", "sid", "depth", "stack", "top", "last_t", "key")
 
     def __init__(self, **kw):
         for k, v in kw.items():

@@ -39,7 +39,7 @@ log = logging.getLogger("pmmw")
 
 #: The kernels the forked process compiles, as (module, attribute) that `kernels.warm` reads
 #: them from: a segment's arrival, the survivors and the wave's compaction, emission, the sky,
-#: the camera, the intersector's distances, a tile's sums, the atmosphere's cell walk; for rough
+#: the camera and the rays' random numbers, the intersector's distances, a tile's sums, the atmosphere's cell walk; for rough
 #: scenes the tangents, the rough coating walk and the way off a surface.
 CHILD = (
     ("pmmw.trace.kernels", "arrive"),
@@ -57,6 +57,9 @@ CHILD = (
     ("pmmw.trace.kernels", "off_surface"),
     ("pmmw.scene.camera", "_pixel_samples"),
     ("pmmw.scene.camera", "_rays_loop"),
+    ("pmmw.rng", "_ray_keys"),
+    ("pmmw.rng", "_child_keys"),
+    ("pmmw.rng", "_uniforms"),
     ("pmmw.scene.sky", "_sky_lookup"),
     ("pmmw.atmosphere.model", "_path_loop"),
 )

@@ -32,6 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import binary_dilation
 
+from pmmw import rng
+from pmmw.rng import Branch, Purpose
 from pmmw.scene.camera import REPLICATES, pixel_samples
 from pmmw.surface import Surfaces, Wave
 from pmmw.surface.records import Choice, Faces, Hit, HitCode, Limits
@@ -266,7 +268,6 @@ class Integrator:
         cols, rows = np.meshgrid(np.arange(x0, x1), np.arange(y0, y1))
         pixels = (rows * cam.width + cols).ravel().astype(np.int64)
         npx = pixels.size
-        self.rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([st.seed, index])))
         self.rays = 0
         self.t_isect = 0.0
         adaptive = st.target_error is not None and st.spp > st.min_spp
@@ -341,11 +342,12 @@ class Integrator:
         self.cut = np.zeros((n, 2))
         self.first_t = np.full(n, np.inf)
         self.first_m = np.full(n, -1.0)
-        self.surfaces.start(self.rng, self.acc, self.cut)
+        self.surfaces.start(self.acc, self.cut)
         sample_no = np.tile(np.arange(start, start + nb, dtype=np.int64), pixels.size)
+        ident = pix * st.spp + sample_no
         # the pixel's polarization basis (s, p): the imager's x projected perpendicular to the
         # ray and y completing it (jones.py), so M starts as the identity (eq. 2.11b)
-        origins, d, s, p = cam.rays(u, v, pix * st.spp + sample_no, st.seed)
+        origins, d, s, p = cam.rays(u, v, ident, st.seed)
         m = np.zeros((n, 2, 2), complex)
         m[:, 0, 0] = m[:, 1, 1] = 1.0
         wave = Wave(
@@ -359,6 +361,7 @@ class Integrator:
             stack=np.zeros((n, st.stack_size), np.int16),
             top=np.zeros(n, np.int32),
             last_t=np.full(n, np.nan),
+            key=rng.ray_keys(st.seed, ident),  # each ray's random numbers (`pmmw.rng`)
         )
         first = True
         while wave is not None and len(wave) > 0:
@@ -408,11 +411,14 @@ class Integrator:
         # Russian roulette where a segment's absorption left a ray below the threshold: it is
         # played before the interaction, which the ended rays (about half of those that would
         # interact, in the shipped scenes) then skip
-        u = self.rng.random(n) if self.roulette else _NO_RANDOM
+        u = rng.uniforms(wave.key, wave.depth, Purpose.ARRIVAL_ROULETTE) if self.roulette else _NO_RANDOM
         kernels.arrive(arrays, t, prim, atm, self._faces, self._media, self.acc, hit, u, self.threshold)
         rows = np.flatnonzero(hit.code == HitCode.INTERACTS)
         passing = np.flatnonzero(hit.code == HitCode.PASSED)
-        out = [wave.take(passing)] if passing.size else []
+        out = []
+        if passing.size:  # a new key: the next face's arrival draws its own numbers
+            out = [wave.take(passing)]
+            out[0].key = rng.child_keys(out[0].key, Branch.PASSED)
         if not rows.size:
             return Wave.concat(out)
         return Wave.concat(out + self.surfaces.interact(wave, hit, prim, rows))

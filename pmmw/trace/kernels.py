@@ -25,6 +25,7 @@ import math
 
 import numpy as np
 
+from pmmw import rng
 from pmmw.jit import inline, njit
 from pmmw.physics import roughness
 from pmmw.scene import bump, camera
@@ -405,8 +406,10 @@ def warm(stack_size: int = 8, rough: bool = True) -> None:
     )
     tile_means(px4, px4, px4, np.zeros((1, 2, 4)), ints1 + 1, px4.copy(), px4.copy(), px4.copy())
     stderr(px4, px4, ints1, px4.copy())
-    # camera samples (`Integrator._trace`)
+    # camera samples and the rays' random numbers (`Integrator._trace`, `pmmw.rng`)
     camera.pixel_samples(2, np.zeros(1, np.int64), 2, 0)
+    keys = rng.ray_keys(0, ints1)
+    rng.uniforms(rng.child_keys(keys, rng.Branch.PASSED), np.zeros(1, np.int32), rng.Purpose.SURVIVAL)
     # the sky (`Integrator._sky`)
     sky_emit(np.zeros(0, np.int64), wave, empty, empty, True, acc)
     from pmmw.atmosphere.model import SKY_ELEVATIONS  # read-only, as `AtmosphereSky.brightness` passes it

@@ -3,9 +3,8 @@
 Each worker builds the Embree scene once and then renders whole tiles, one at a time, that the
 parent sends it over a pipe, two ahead (the next tile waits in the pipe while it renders, so a
 worker does not wait for the parent between tiles). A forked worker writes a finished tile's
-arrays into memory it shares with the parent (`_Slots`) and sends the rest through the pipe. Tiles are fixed by the job (not by the worker count) and each tile
-seeds its own random stream from (run seed, tile index), so images are identical whatever
-``--workers`` is.
+arrays into memory it shares with the parent (`_Slots`) and sends the rest through the pipe. Each ray's random numbers come from its own key (`pmmw.rng`), so
+images are identical whatever ``--workers`` and ``render.tile`` are.
 
 Finished tiles are saved atomically to ``tile_dir`` as they arrive; with ``resume`` the tiles
 already there are checked and loaded instead of re-rendered, so an interrupted render loses
@@ -167,8 +166,8 @@ def _by_cost(job: TraceJob, tiles: list) -> list:
     (the cinderblocks: one idle for the last 40-60 ms of 0.47 s in index order). The estimate:
     each triangle's screen bounding box from the pinhole (the part in front of the imager: a
     triangle reaching behind it is cut at a plane just in front), counted per tile on the grid of
-    ``render.tile`` (a summed-area table). It orders the work only: each tile's random numbers
-    depend on its index alone.
+    ``render.tile`` (a summed-area table). It orders the work only: each ray's random numbers
+    depend on the ray alone (`pmmw.rng`).
     """
     cam, ts = job.camera, job.settings.tile
     nx, ny = -(-cam.width // ts), -(-cam.height // ts)

@@ -475,6 +475,7 @@ def test_sky_emission_kernel_equals_the_jones_algebra():
         stack=np.zeros((n, 8), np.int16),
         top=np.zeros(n, np.int32),
         last_t=np.zeros(n),
+        key=np.zeros(n, np.uint64),
     )
     rows = np.arange(0, n, 1)[rng.random(n) < 0.7]
     rows = np.union1d(rows, [0])
@@ -527,6 +528,7 @@ def test_crossing_a_rough_coating_layer_is_beer_lambert():
         np.zeros((n, 8), np.int16),
         np.zeros(n, np.int32),
         np.zeros(n),
+        np.zeros(n, np.uint64),
     )
     acc = np.zeros((n, 4))
     alpha, thickness, temp = 50.0, 2e-3, 300.0
