@@ -634,6 +634,7 @@ def region_stats(
     ideal_w = {name: (m / m.sum() if m.any() else None) for name, m in masks.items()}
     norms = {name: detection.footprint_norm(m, kernel_of(name)) for name, m in masks.items() if m.any()}
     contrasts, verdicts = {}, {}
+    unsettled = []  # (pair, channel, standard error [K]) of contrasts whose seeds would differ by more than `limit`
     for i, a in enumerate(names):
         for b_name in names[i + 1 :]:
             wa, wb = weights[a], weights[b_name]
@@ -668,15 +669,19 @@ def region_stats(
                     "pd": None if snr is None else detection.probability_of_detection(snr, pfa),
                 }
                 if err is not None and 2.0 * err > limit * (np.sqrt(2.0) if c == "I" else 1.0):
-                    warn(
-                        f"output.regions: the contrast {a} - {b_name} in {c} has a Monte Carlo standard error "
-                        f"of {err:.3g} K: seeds will differ by more than {limit:.3g} K; raise render.spp "
-                        "or set render.target_error"
-                    )
+                    unsettled.append((f"{a} - {b_name}", c, err))
             contrasts[f"{a} - {b_name}"] = pair
             verdicts[f"{a} - {b_name}"] = detection.contrast_verdict(
                 f"{a} - {b_name}", {c: (v["snr"], v["snr_stderr"], v["ideal_K"]) for c, v in pair.items()}
             )
+    if unsettled:  # one line for all of them: each its pair, channel and standard error
+        in_i = " (in I, sqrt(2) times that)" if any(c == "I" for _, c, _ in unsettled) else ""
+        listed = "; ".join(f"{pair} in {c}: {err:.3g} K" for pair, c, err in unsettled)
+        warn(
+            f"output.regions: seeds will differ by more than {limit:.3g} K{in_i} in {len(unsettled)} "
+            f"contrast{'s' if len(unsettled) > 1 else ''} by their Monte Carlo standard errors ({listed}); "
+            "raise render.spp or set render.target_error"
+        )
     return {
         "criterion": detection.CRITERION,
         "channel": report_channel(scn),

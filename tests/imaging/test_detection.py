@@ -316,3 +316,24 @@ def test_the_sweep_table_and_report_give_snr_and_detectable(folder, tmp_path):
     assert detection.CRITERION in report
     assert "- block - ground (Ey2): detectable at imager.noise = 1 K; not at 200 K" in report
     assert (out / "plot_block_ground.png").stat().st_size > 5_000 and "plot_block_ground.png" in report
+
+
+def test_contrasts_a_seed_would_change_are_one_warning_naming_each(tmp_path):
+    """When region contrasts' Monte Carlo errors exceed what tells them apart (a tenth of the
+    noise), the render says so once, naming each pair, channel and standard error, instead of a
+    line per contrast (a shipped config with less noise printed nine). The control: with noise
+    100 times larger the same render says nothing of it."""
+    import pmmw
+    from tests.scenes import tiny_scenario
+
+    regions = "output: {regions: {block: {box: [9, 5, 15, 11]}, ground: {box: [0, 12, 24, 16]}}}"
+    scn = pmmw.Scenario.load(tiny_scenario(tmp_path, regions))
+
+    def lines(noise):
+        ds = pmmw.render(scn.set({"imager.noise": noise}))
+        return [w for w in ds.attrs["warnings"].splitlines() if "Monte Carlo standard error" in w]
+
+    (line,) = lines("0.001 K")
+    assert line.startswith("output.regions: seeds will differ by more than 0.0001 K"), line
+    assert all(f"block - ground in {c}: " in line for c in ("Ex2", "Ey2", "I")), line
+    assert lines("100 K") == []  # the control
