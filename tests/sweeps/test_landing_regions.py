@@ -118,13 +118,29 @@ def test_a_sweep_passes_a_mapping_in_its_written_order():
 def test_the_background_regions_share_no_pixel_with_the_beacons(label):
     """A background region that reaches over the beacon row's pixels would take part of the
     target into its mean (from 1500 m a disc of 3 pixels at 40 m past the threshold did: a pixel
-    spans 7.5 m of runway in depth there). The control: the beacons box overlaps itself."""
+    spans 7.5 m of runway in depth there). The control: that old disc, at 2000 m, is found to share
+    pixels with the row."""
     from pmmw.pipeline import region_masks
 
     scn = _scenario(label)
     masks = region_masks(scn.output.regions, _camera(scn))
     beacons = masks["beacons"]
-    assert (beacons & beacons).any()  # the control
+    assert (beacons & beacons).any()  # the row's box is not empty (else nothing could overlap it)
     for name, mask in masks.items():
         if name != "beacons":
             assert not (mask & beacons).any(), (label, name, int((mask & beacons).sum()))
+
+
+def test_the_overlap_check_finds_the_old_runway_disc_at_2000_m():
+    """The control of `test_the_background_regions_share_no_pixel_with_the_beacons`: the runway
+    disc the trade used before (3 pixels at 40 m past the threshold) overlaps the row's box at
+    2000 m, and the check above would have said so."""
+    from pmmw.pipeline import region_masks
+
+    spec = load_sweep_file(TRADE)
+    pose = dict(spec.grid)["imager.position"][spec.names["imager.position"].index("2000 m")]
+    params = next(p for p in variants(spec) if p["imager.position"] == pose)
+    regions = dict(params["output.regions"], runway={"center": [0, 40, 0.02], "radius": 3})
+    old = load_scenario(REPO / "configs" / spec.scenario.name, overrides_of({**params, "output.regions": regions}))
+    masks = region_masks(old.output.regions, _camera(old))
+    assert (masks["runway"] & masks["beacons"]).any()
