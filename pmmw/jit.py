@@ -46,7 +46,9 @@ def njit(**options):
 
 
 def inline(**options):
-    """`njit` for small helpers that numba inlines into their callers."""
+    """`njit` for small helpers called from other compiled code. LLVM inlines them where it pays;
+    numba's own inlining (``inline="always"``) re-typed and re-lowered a helper at every call site
+    and took about half of the first compile (docs/benchmarks_command.md), so pmmw does not use it."""
     return njit(**options)
 
 

@@ -28,7 +28,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from pmmw.jit import njit
+from pmmw.jit import inline, njit
 
 __all__ = [
     "Branch",
@@ -76,7 +76,7 @@ class Branch(IntEnum):
     PASSED = 2  #: crossed a face without interacting (`kernels.arrive`'s ``PASSED``)
 
 
-@njit(inline="always")
+@inline()
 def splitmix64(x):
     """The splitmix64 finalizer of one uint64 (Steele et al. 2014; arithmetic wraps mod 2**64)."""
     x = x + GOLDEN
@@ -85,24 +85,24 @@ def splitmix64(x):
     return x ^ (x >> np.uint64(31))
 
 
-@njit(inline="always")
+@inline()
 def _key1(seed, ident, stream):
     return splitmix64(np.uint64(ident) ^ splitmix64(np.uint64(seed) * _FNV + np.uint64(stream)))
 
 
-@njit(inline="always")
+@inline()
 def hash_uniform1(seed, key, stream):
     """A uniform [0, 1) float from the hash of (seed, stream, key): the camera's streams."""
     return float(_key1(seed, key, stream) >> np.uint64(11)) * _TO_UNIT
 
 
-@njit(inline="always")
+@inline()
 def child_key1(key, branch):
     """The key of a child of the ray of key ``key`` (uint64) along ``branch`` (`Branch`)."""
     return splitmix64(key ^ splitmix64(_BRANCH_TAG | np.uint64(branch)))
 
 
-@njit(inline="always")
+@inline()
 def uniform1(key, depth, purpose):
     """The uniform [0, 1) of the ray of key ``key`` (uint64) at ``depth`` for ``purpose``."""
     h = splitmix64(key ^ splitmix64((np.uint64(depth) << np.uint64(8)) | np.uint64(purpose)))

@@ -85,7 +85,7 @@ import numpy.typing as npt
 
 from pmmw.atmosphere import itu
 from pmmw.atmosphere.itu import NP_M_PER_DB_KM, PROFILES
-from pmmw.jit import njit
+from pmmw.jit import inline, njit
 
 if TYPE_CHECKING:  # scipy.interpolate is imported where it is used: ~0.3 s a command need not pay
     from scipy.interpolate import CubicSpline
@@ -802,7 +802,7 @@ class _Column:
     emission: CubicSpline
 
 
-@njit(inline="always")
+@inline()
 def _depth_in(z, k, edges, depth):
     """Cumulative vertical optical depth at height z inside cell k (edges[k] <= z <= edges[k+1]),
     linear between the cell's edges as `numpy.interp` (which numba runs as an array routine, at
