@@ -37,6 +37,7 @@ import difflib
 import math
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Iterable, Literal, Optional
@@ -397,7 +398,7 @@ def _pydantic_errors(ex: ValidationError, file, base_key: str) -> list[UserError
     return out
 
 
-def _wording(er: dict, loc: list) -> str | None:
+def _wording(er: Mapping[str, Any], loc: list) -> str | None:
     """The material entry's own messages: the keys of an entry or a coating layer, what a layer
     looks like, the kinds; None: the common wording."""
     typ = er["type"]
