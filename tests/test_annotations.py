@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # Hinted beyond mypy's list (their public signatures are held to the same rule; mypy does not
 # check their bodies yet).
-HINTED = ("pmmw/api.py", "pmmw/pipeline.py")
+HINTED = ("pmmw/pipeline.py",)
 
 NUMBA_DECORATORS = {"njit", "inline", "jit", "vectorize", "guvectorize"}
 
