@@ -1654,9 +1654,9 @@ def validate(
             for i, mid in enumerate(media.ids)
         }
     im = scn.imager
-    pixel = SimpleNamespace(pixel_angle=2.0 * np.arctan(np.tan(im.fov / 2.0) / im.resolution[0]))
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)  # the render's (make_job)
     imager = {
-        f"{f / 1e9:g} GHz": imager_summary(scn, SimpleNamespace(k0=2.0 * np.pi * f / C0, camera=pixel))
+        f"{f / 1e9:g} GHz": imager_summary(scn, SimpleNamespace(k0=2.0 * np.pi * f / C0, camera=cam))
         for f in scn.frequencies
     }
     if any(imager.values()):  # NETD and the beam, as the render's report states them
