@@ -40,10 +40,10 @@ import functools
 import inspect
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal, ParamSpec, TypeVar, overload
 
 import numpy as np
 
@@ -55,6 +55,7 @@ if TYPE_CHECKING:
     import xarray as xr
 
     from pmmw.config.schema import ScenarioConfig
+    from pmmw.pipeline import Resolved
 
 __all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "load", "regions"]
 
@@ -62,18 +63,22 @@ __all__ = ["Scenario", "render", "validate", "sky", "brdf", "po", "sweep", "load
 # -- arguments ----------------------------------------------------------------------------------
 
 
-def _api(name: str):
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _api(name: str) -> Callable[[Callable[_P, _R]], Callable[_P, _R]]:
     """The checks every public function shares: its arguments bound to its signature (an unknown,
     missing, extra or repeated one is a `UserError` naming it), numpy values turned into Python
     ones, a name too long for the file system a `UserError` naming the file, and an error naming
     a command-line option (``--incidence``) reworded to name the argument."""
     where = f"pmmw.{name}"
 
-    def wrap(fn):
+    def wrap(fn: Callable[_P, _R]) -> Callable[_P, _R]:
         sig = inspect.signature(fn)
 
         @functools.wraps(fn)
-        def call(*args, **kwargs):
+        def call(*args: _P.args, **kwargs: _P.kwargs) -> _R:
             try:
                 bound = sig.bind(*args, **kwargs)
             except TypeError:
@@ -98,7 +103,7 @@ def _api(name: str):
     return wrap
 
 
-def _binding_error(where: str, sig: inspect.Signature, args, kwargs) -> UserError:
+def _binding_error(where: str, sig: inspect.Signature, args: tuple, kwargs: dict[str, Any]) -> UserError:
     """What is wrong with calling ``where`` with these arguments, naming the argument."""
     params = {n: p for n, p in sig.parameters.items() if n not in ("cls", "self")}
     named = [n for n, p in params.items() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
@@ -149,11 +154,15 @@ def _named(e: UserError, where: str) -> UserError:
     return e
 
 
-def _kind(v) -> str:
+def _kind(v: object) -> str:
     return f"{type(v).__name__} {v!r}" if not isinstance(v, (str, Path)) else repr(v)
 
 
-def _integer(where, name, v, lo, optional=True):
+@overload
+def _integer(where: str, name: str, v: object, lo: int, optional: Literal[False]) -> int: ...
+@overload
+def _integer(where: str, name: str, v: object, lo: int, optional: bool = True) -> int | None: ...
+def _integer(where: str, name: str, v: object, lo: int, optional: bool = True) -> int | None:
     """A whole number >= lo (numpy integers were made Python ones), or None if ``optional``."""
     if v is None and optional:
         return None
@@ -162,7 +171,11 @@ def _integer(where, name, v, lo, optional=True):
     return v
 
 
-def _number(where, name, v, optional=False):
+@overload
+def _number(where: str, name: str, v: object, optional: Literal[False] = False) -> float: ...
+@overload
+def _number(where: str, name: str, v: object, optional: bool) -> float | None: ...
+def _number(where: str, name: str, v: object, optional: bool = False) -> float | None:
     """A finite real number, or None if ``optional``."""
     if v is None and optional:
         return None
@@ -171,13 +184,19 @@ def _number(where, name, v, optional=False):
     return v
 
 
-def _flag(where, name, v):
+def _flag(where: str, name: str, v: object) -> bool:
     if not isinstance(v, bool):
         raise UserError(f"expected True or False, got {_kind(v)}", where, name)
     return v
 
 
-def _text(where, name, v, optional=True, choices=None):
+@overload
+def _text(where: str, name: str, v: object, optional: Literal[False], choices: Sequence[str] | None = None) -> str: ...
+@overload
+def _text(
+    where: str, name: str, v: object, optional: bool = True, choices: Sequence[str] | None = None
+) -> str | None: ...
+def _text(where: str, name: str, v: object, optional: bool = True, choices: Sequence[str] | None = None) -> str | None:
     """A str (one of ``choices`` when given), or None if ``optional``."""
     if v is None and optional:
         return None
@@ -188,7 +207,11 @@ def _text(where, name, v, optional=True, choices=None):
     return v
 
 
-def _quantity(where, name, v, optional=False):
+@overload
+def _quantity(where: str, name: str, v: object, optional: Literal[False] = False) -> str | float: ...
+@overload
+def _quantity(where: str, name: str, v: object, optional: bool) -> str | float | None: ...
+def _quantity(where: str, name: str, v: object, optional: bool = False) -> str | float | None:
     """A quantity as the command line takes it: a str with a unit ('95 GHz') or a number [SI]."""
     if v is None and optional:
         return None
@@ -197,7 +220,11 @@ def _quantity(where, name, v, optional=False):
     return v
 
 
-def _path(where, name, v, optional=False):
+@overload
+def _path(where: str, name: str, v: object, optional: Literal[False] = False) -> Path: ...
+@overload
+def _path(where: str, name: str, v: object, optional: bool) -> Path | None: ...
+def _path(where: str, name: str, v: object, optional: bool = False) -> Path | None:
     """A str or os.PathLike naming a file or folder (not empty, not too long), as a Path."""
     if v is None and optional:
         return None
@@ -239,7 +266,7 @@ class Scenario:
 
     @classmethod
     @_api("Scenario.from_dict")
-    def from_dict(cls, data: dict, base_dir: str | os.PathLike[str] = ".") -> Scenario:
+    def from_dict(cls, data: Mapping, base_dir: str | os.PathLike[str] = ".") -> Scenario:
         """A scenario from a mapping as the YAML would hold it; relative paths (meshes, sky
         texture) resolve against ``base_dir``."""
         where = "pmmw.Scenario.from_dict"
@@ -294,7 +321,7 @@ class Scenario:
 ScenarioLike = Scenario | Mapping | str | os.PathLike
 
 
-def _scenario(s, where: str, name: str = "scenario") -> Scenario:
+def _scenario(s: object, where: str, name: str = "scenario") -> Scenario:
     """A `Scenario` of a Scenario, a mapping or a path (the argument ``name`` of ``where``)."""
     if isinstance(s, Scenario):
         return s
@@ -364,7 +391,7 @@ def render(
         _integer(where, "seed", seed, 0),
     )
     out, quiet = _path(where, "out", out, optional=True), _flag(where, "quiet", quiet)
-    cli = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed)) if v is not None}
+    cli: dict[str, Any] = {k: v for k, v in (("spp", spp), ("workers", workers), ("seed", seed)) if v is not None}
     if out is not None:
         import json
 
@@ -385,7 +412,7 @@ def render(
     return _render_resolved(res, quiet)
 
 
-def _render_resolved(res, quiet: bool, earlier_warnings=()):
+def _render_resolved(res: Resolved, quiet: bool, earlier_warnings: Iterable[str] = ()) -> xr.Dataset:
     """`render` in memory of a resolved scenario (`pipeline.Resolved`)."""
     from pmmw import pipeline
 
@@ -397,6 +424,7 @@ def _render_resolved(res, quiet: bool, earlier_warnings=()):
     per_f, regions = [], {}
     for f in scn.frequencies:
         job, img, _ = pipeline.trace_frequency(res, f, workers=n, quiet=quiet)
+        assert job is not None and img is not None  # None only for a shard
         images = pipeline.frequency_images(scn, f, job, img, shash, res.kernels)
         per_f.append((f, images["channels"], images["attrs"]))
         if scn.output.regions:
@@ -414,7 +442,7 @@ def _render_resolved(res, quiet: bool, earlier_warnings=()):
     return ds
 
 
-def _dataset(per_f, regions):
+def _dataset(per_f: list[tuple[float, dict[str, np.ndarray], dict]], regions: dict) -> xr.Dataset:
     """An xarray.Dataset of [(frequency [Hz], channels {name: (H, W)}, EXR header)].
 
     The image coordinates are the pixel centres' angles from the viewing direction [deg]: ``x``
@@ -552,7 +580,17 @@ class LoadedScene:
         return _loaded_render(self, pose, frequency, materials, values, spp, workers, seed, quiet)
 
 
-def _loaded_render(loaded, pose, frequency, materials, values, spp, workers, seed, quiet):
+def _loaded_render(
+    loaded: LoadedScene,
+    pose: dict | None,
+    frequency: str | float | list | None,
+    materials: dict | None,
+    values: dict | None,
+    spp: int | None,
+    workers: int | None,
+    seed: int | None,
+    quiet: bool,
+) -> xr.Dataset:
     from pmmw import pipeline
     from pmmw.config import load_scenario
 
@@ -648,7 +686,7 @@ _BRDF_QUANTITIES = ("frequency", "wavelength")
 _BRDF_COMPLEX = ("n", "eps")
 
 
-def _complex(where, name, v):
+def _complex(where: str, name: str, v: object) -> str | float | list[float] | None:
     """A complex number as the command line takes it ('0.23+3.46j', a number, [re, im]); a Python
     complex as [re, im]."""
     if v is None or isinstance(v, str) or (isinstance(v, (int, float)) and not isinstance(v, bool)):
@@ -736,7 +774,7 @@ def brdf(*, method: str = "mc", out: str | os.PathLike[str] | None = None, **opt
     return out_ds
 
 
-def _angles(where, name, v, many: bool):
+def _angles(where: str, name: str, v: object, many: bool) -> str | None:
     """Angles [deg] as ``pmmw po`` takes them: a str ('0:180:1', '30,0'), a number or, where
     ``many``, a list of numbers."""
     if v is None or isinstance(v, str):
@@ -764,7 +802,7 @@ def po(
     *,
     frequency: str | float,
     material: str | None = None,
-    eps: str | None = None,
+    eps: str | complex | Sequence[float] | None = None,
     incidence: str | Sequence[float] = "0,0",
     polarization: str = "theta",
     theta: str | float | None = None,
@@ -779,8 +817,9 @@ def po(
     the run's summary (backscatter, peak, lit facets) as attributes.
 
     ``incidence`` is '30,0' or ``[30, 0]`` [deg]; ``theta`` 'START:STOP:STEP' or one angle; ``phi``
-    'P1,P2', 'START:STOP:STEP', one angle or a list [deg]. ``force`` solves past the memory check,
-    as ``--force``.
+    'P1,P2', 'START:STOP:STEP', one angle or a list [deg]. ``eps`` (instead of ``material``) is a
+    relative permittivity: '5.5+0.5j', a number, a complex or ``[re, im]``. ``force`` solves past
+    the memory check, as ``--force``.
     """
     import xarray as xr
 
@@ -791,10 +830,10 @@ def po(
     mesh = _path(where, "mesh", mesh)
     frequency = parse_frequency(_quantity(where, "frequency", frequency), f"{where}: frequency")
     material, eps = _text(where, "material", material), _complex(where, "eps", eps)
-    given, incidence = incidence, _angles(where, "incidence", incidence, many=True)
-    if incidence is None or len(incidence.split(",")) != 2:
+    angles = _angles(where, "incidence", incidence, many=True)
+    if angles is None or len(angles.split(",")) != 2:
         raise UserError(
-            f"expected two angles [theta, phi] in degrees, e.g. '30,0' or [30, 0], got {_kind(given)}",
+            f"expected two angles [theta, phi] in degrees, e.g. '30,0' or [30, 0], got {_kind(incidence)}",
             where,
             "incidence",
         )
@@ -811,7 +850,7 @@ def po(
         material=material,
         eps=eps,
         frequency=frequency,
-        incidence=incidence,
+        incidence=angles,
         polarization=polarization,
         theta=theta,
         phi=phi,
@@ -820,6 +859,7 @@ def po(
         method=method,
         force=force,
     )
+    assert res.axes is not None  # a quick run's grid
     thetas, phis = res.axes
     shape = (phis.size, thetas.size)
     summary = {k: v for k, v in res.summary.items() if not isinstance(v, dict)}

@@ -81,7 +81,7 @@ class Resolved:
 
 
 def resolve(
-    path: str | Path | None,
+    path: str | Path,
     overrides: Sequence[str] = (),
     cli: dict | None = None,
     data: dict | None = None,
@@ -145,7 +145,7 @@ def variant_check() -> Callable[[Any], None]:
     """
     dbs: dict[str, MaterialDB] = {}
 
-    def check(scn) -> None:
+    def check(scn: ScenarioConfig) -> None:
         k = json.dumps(scenario_to_display(scn).get("materials") or {}, sort_keys=True, default=str)
         if k not in dbs:
             dbs[k] = material_database(scn)
@@ -262,7 +262,9 @@ def make_job(res: Resolved, f: float) -> TraceJob:
     footprint = 1.0
     if r.target_error is not None and im.aperture_diameter > 0.0:
         # adaptive sampling to the error left after the imager's blur (Integrator.render_tile)
-        footprint = error_footprint(imager_kernel(scn, cam.pixel_angle, 2.0 * np.pi * f / C0, res.kernels))
+        kernel = imager_kernel(scn, cam.pixel_angle, 2.0 * np.pi * f / C0, res.kernels)
+        assert kernel is not None  # an aperture has one
+        footprint = error_footprint(kernel)
     settings = RenderSettings(
         spp=r.spp,
         max_depth=r.max_depth,
@@ -296,6 +298,7 @@ def make_job(res: Resolved, f: float) -> TraceJob:
 def atmosphere_summary(job: TraceJob) -> dict:
     """What the layered atmosphere does to this scene (Murakowski 2014 reports path losses so)."""
     atm, cam = job.atmosphere, job.camera
+    assert atm is not None  # asked of a layered atmosphere only
     target = np.asarray(cam.position) + cam.k * _target_distance(job)
     dist = float(np.linalg.norm(target - cam.position))
     return {
@@ -307,7 +310,7 @@ def atmosphere_summary(job: TraceJob) -> dict:
     }
 
 
-def _target_distance(job) -> float:
+def _target_distance(job: TraceJob) -> float:
     """Distance along the optical axis to the scene (first hit of the central ray), or 1 km."""
     from pmmw.trace.intersect import make_intersector
 
@@ -366,14 +369,15 @@ def region_shapes(regions: Mapping[str, Region], cam: Camera) -> dict[str, tuple
     """The named regions (`output.regions`) in image coordinates [px] (x right, y down, pixel k
     spanning [k, k + 1)): ``("box", x0, y0, x1, y1)`` or ``("circle", u, v, radius)``, None for a
     centre behind the imager."""
-    shapes = {}
+    shapes: dict[str, tuple | None] = {}
     focal = cam.width / 2.0 / np.tan(cam.fov / 2.0)  # [px] the pinhole's focal length
     for name, r in regions.items():
         if r.box is not None:
             shapes[name] = ("box", *(float(x) for x in r.box))
             continue
-        if getattr(r, "bounds", None) is not None:  # the rectangle the world box's corners project into
-            lo, hi = (np.asarray(c, float) for c in r.bounds)
+        bounds = getattr(r, "bounds", None)
+        if bounds is not None:  # the rectangle the world box's corners project into
+            lo, hi = (np.asarray(c, float) for c in bounds)
             corners = np.array(
                 [[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
             )
@@ -585,7 +589,7 @@ def region_stats(
     st = scn.render
     weights = {
         name: (
-            (blur_adjoint(m / m.sum(), kernel_of(name)) if kernel_of(name) is not None else m / m.sum())
+            (blur_adjoint(m / m.sum(), kern) if (kern := kernel_of(name)) is not None else m / m.sum())
             if m.any()
             else None
         )
@@ -639,7 +643,8 @@ def region_stats(
         for b_name in names[i + 1 :]:
             wa, wb = weights[a], weights[b_name]
             dw = None if wa is None or wb is None else wa - wb
-            dw_ideal = None if dw is None else ideal_w[a] - ideal_w[b_name]
+            ia, ib = ideal_w[a], ideal_w[b_name]  # None where the weights are (an empty region)
+            dw_ideal = None if ia is None or ib is None else ia - ib
             _, tb = bound(dw)
             pair = {}
             for c in chans:
@@ -720,19 +725,22 @@ def band_frequencies(f: float, bandwidth: float, n: int) -> list[float]:
 
 def average_images(imgs: Sequence[Image]) -> Image:
     """Mean of images rendered at the sub-band frequencies (independent samples)."""
+    from typing import cast
+
     from pmmw.trace.pool import Image
 
+    # sum() starts from 0, and 0 + an array is the array: the sums of arrays are arrays
     n = len(imgs)
     return Image(
-        sum(i.mean for i in imgs) / n,
+        cast(np.ndarray, sum(i.mean for i in imgs)) / n,
         np.sqrt(sum(i.stderr**2 for i in imgs)) / n,
         imgs[len(imgs) // 2].depth,
         imgs[len(imgs) // 2].material,
-        sum(i.samples for i in imgs).astype(np.int32),
+        cast(np.ndarray, sum(i.samples for i in imgs)).astype(np.int32),
         sum(i.rays for i in imgs),
         sum(i.t_isect for i in imgs),
-        sum(i.truncated for i in imgs) / n,
-        sum(i.replicate_diff for i in imgs) / n,
+        cast(np.ndarray, sum(i.truncated for i in imgs)) / n,
+        cast(np.ndarray, sum(i.replicate_diff for i in imgs)) / n,
     )
 
 
@@ -814,10 +822,17 @@ def receiver_of(scn: ScenarioConfig) -> Receiver | None:
     rx, im = scn.imager.receiver, scn.imager
     if rx is None:
         return None
-    t_rec = rx.noise_temperature if rx.noise_temperature is not None else noise_temperature(rx.noise_figure)
+    # the schema's Receiver gives exactly one of noise_temperature and noise_figure, and one of
+    # integration_time and frame_rate
+    if rx.noise_temperature is not None:
+        t_rec = rx.noise_temperature
+    else:
+        assert rx.noise_figure is not None
+        t_rec = noise_temperature(rx.noise_figure)
     if rx.integration_time is not None:
         tau = rx.integration_time
     else:
+        assert rx.frame_rate is not None
         per = rx.pixels_per_receiver or -(-im.resolution[0] * im.resolution[1] // rx.receivers)
         tau = dwell_time(rx.frame_rate, per)
     return Receiver(
@@ -842,7 +857,9 @@ def aperture_of(scn: ScenarioConfig) -> Aperture | None:
     spill = (
         a.spillover
         if a.spillover is not None
-        else (gaussian_feed_spillover(a.edge_taper) if a.illumination == "gaussian" else 0.0)
+        else (
+            gaussian_feed_spillover(a.edge_taper) if a.illumination == "gaussian" and a.edge_taper is not None else 0.0
+        )
     )
     return Aperture(
         kind=a.illumination,
@@ -921,6 +938,7 @@ def field_psf_of(scn: ScenarioConfig, job: TraceJob, cache: dict | None = None) 
         return None
     cam = job.camera
     aperture = aperture_of(scn)
+    assert aperture is not None  # an aperture diameter > 0 has one
     key = (
         "field",
         float(cam.pixel_angle),
@@ -956,7 +974,7 @@ def region_kernels(
     return out
 
 
-def imager_summary(scn: ScenarioConfig, job: TraceJob, noise_maps: dict | None = None) -> dict:
+def imager_summary(scn: ScenarioConfig, job: TraceJob | SimpleNamespace, noise_maps: dict | None = None) -> dict:
     """What a report states about the imager: ``receiver`` (NETD, per-pixel noise range:
     `imaging.receiver.Receiver.summary`) and ``beam`` (`imaging.antenna.beam_report`), each when
     the imager has it."""
@@ -986,7 +1004,7 @@ def imager_summary(scn: ScenarioConfig, job: TraceJob, noise_maps: dict | None =
     return out
 
 
-def _stem(scn, f: float) -> str:
+def _stem(scn: ScenarioConfig, f: float) -> str:
     return scn.name if len(scn.frequencies) == 1 else f"{scn.name}_{f / 1e9:g}GHz"
 
 
@@ -1030,7 +1048,7 @@ def output_names(scn: ScenarioConfig, f: float) -> dict:
     }
 
 
-def _imager_words(scn) -> str:
+def _imager_words(scn: ScenarioConfig) -> str:
     im = scn.imager
     parts = ([f"{im.aperture_diameter:g} m aperture"] if im.aperture_diameter > 0 else []) + (
         [f"{im.noise:g} K noise"] if im.noise > 0 else []
@@ -1104,7 +1122,7 @@ def estimate_resources(scn: ScenarioConfig, triangles: int, workers: int) -> dic
     }
 
 
-def _sky_texture_bytes(scn) -> float:
+def _sky_texture_bytes(scn: ScenarioConfig) -> float:
     """Memory of the scenario's sky texture in the parent [bytes], from its header: the float64
     maps of one sub-band's sky and the next one's being read (shared with forked workers)."""
     if scn.sky.model != "texture" or not scn.sky.file:
@@ -1166,7 +1184,7 @@ def other_tile_folders(tile_root: Path, scn: ScenarioConfig, shash: str) -> list
     return [(d, rec) for d, rec in own_folders(tile_root) if rec.get("name") == scn.name and rec["hash"] != shash]
 
 
-def _differences(a, b, prefix="") -> list[str]:
+def _differences(a: object, b: object, prefix: str = "") -> list[str]:
     """Dotted keys whose values differ between two display dicts, as ``key: old -> new``."""
     out = []
     if isinstance(a, dict) and isinstance(b, dict):
@@ -1208,7 +1226,7 @@ def remove_stale_tiles(tile_root: Path, out_dir: Path, scn: ScenarioConfig, shas
 
 
 def render(
-    path: str | Path | None,
+    path: str | Path,
     overrides: Sequence[str] = (),
     *,
     out: str | Path | None = None,
@@ -1378,7 +1396,7 @@ def _render_and_commit(
             except OSError as e:  # saving tiles: disk full, quota, a folder gone read-only
                 raise os_problem(e, tile_root, "save the finished tiles") from None
             tile_dirs += dirs
-            if img is None:
+            if job is None or img is None:  # a shard (both None)
                 continue
             t_trace = time.perf_counter() - t1
             staged = staging.enter_context(Staging(out_dir))
@@ -1428,7 +1446,7 @@ def frequency_images(
     (float32: the sensor's, ``ideal.*``, ``aux.*``) with its header ``attrs``. ``kernels``: the
     PSF kernels made before (`Resolved.kernels`)."""
     ideal = stokes_images(img.mean)
-    noise_maps = {}
+    noise_maps: dict[str, np.ndarray] = {}
     kernels = {} if kernels is None else kernels  # the field-dependent beam is made once, for both uses
     sensor, kernel = imager_model(scn, job, ideal, noise_maps, kernels)
     if not all(np.isfinite(sensor[c]).all() for c in scn.output.channels):
@@ -1465,7 +1483,17 @@ def frequency_images(
     }
 
 
-def _finish_frequency(res, f, job, img, names, staged: Staging, shash, t_trace, n_workers) -> dict:
+def _finish_frequency(
+    res: Resolved,
+    f: float,
+    job: TraceJob,
+    img: Image,
+    names: dict,
+    staged: Staging,
+    shash: str,
+    t_trace: float,
+    n_workers: int,
+) -> dict:
     """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
     frequency's report entry (the caller adds the report and commits them together)."""
     scn = res.scenario
@@ -1544,6 +1572,7 @@ def write_previews(
             title=label.format(c),
         )
     if names["regions_preview"]:
+        assert regions is not None  # a regions preview is named for a scenario with regions
         c = regions["channel"]
         first = next(iter(regions["verdicts"].values()), None)
         write_regions_figure(
@@ -1566,7 +1595,7 @@ def write_previews(
 
 
 def validate(
-    path: str | Path | None,
+    path: str | Path,
     overrides: Sequence[str] = (),
     data: dict | None = None,
     values: dict | None = None,
@@ -1588,7 +1617,7 @@ def validate(
             "bounds_m": [[round(float(x), 4) for x in v.min(axis=0)], [round(float(x), 4) for x in v.max(axis=0)]],
             "file_up_axis": file_up_axis(entry.mesh, entry.up_axis),
         }
-    out = {
+    out: dict[str, Any] = {
         "scenario": scenario_to_display(scn),
         "geometry": {
             "triangles": int(geom.faces.shape[0]),
@@ -1625,9 +1654,9 @@ def validate(
             for i, mid in enumerate(media.ids)
         }
     im = scn.imager
-    pixel = SimpleNamespace(pixel_angle=2.0 * np.arctan(np.tan(im.fov / 2.0) / im.resolution[0]))
+    cam = Camera.look_at(im.position, im.look_at, im.up, im.fov, im.resolution)  # the render's (make_job)
     imager = {
-        f"{f / 1e9:g} GHz": imager_summary(scn, SimpleNamespace(k0=2.0 * np.pi * f / C0, camera=pixel))
+        f"{f / 1e9:g} GHz": imager_summary(scn, SimpleNamespace(k0=2.0 * np.pi * f / C0, camera=cam))
         for f in scn.frequencies
     }
     if any(imager.values()):  # NETD and the beam, as the render's report states them

@@ -7,10 +7,19 @@ import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import overload
 
 import numpy as np
 
-from pmmw.config.schema import _FREQUENCY_SUFFIX, _NAME_MARKS, ScenarioConfig
+from pmmw.config.schema import (
+    _FREQUENCY_SUFFIX,
+    _NAME_MARKS,
+    Antenna,
+    AtmosphereConfig,
+    Receiver,
+    Region,
+    ScenarioConfig,
+)
 from pmmw.errors import UserError, UserErrors
 from pmmw.io.inputs import check_input_path
 from pmmw.io.records import key_path, problem, validate
@@ -30,7 +39,7 @@ def default_name(path: Path) -> str:
 
 
 def load_scenario(
-    path: str | Path | None,
+    path: str | Path,
     overrides: Sequence[str] = (),
     *,
     cli: dict | None = None,
@@ -113,6 +122,10 @@ def load_scenario(
         raise UserErrors(list(getattr(e, "errors", [e]))) from None
 
 
+@overload
+def plain(value: dict) -> dict: ...
+@overload
+def plain(value: object) -> object: ...
 def plain(value: object) -> object:
     """A copy of ``value`` with numpy scalars and arrays as the Python numbers, booleans and
     lists they hold (in mappings, lists and tuples too): a value from numpy stands wherever its
@@ -129,18 +142,18 @@ def plain(value: object) -> object:
     return copy.deepcopy(value)
 
 
-def _split_key(key: str) -> list:
+def _split_key(key: str) -> list[str | int]:
     """``scene[0].material`` or ``scene.0.material`` -> ['scene', 0, 'material']; a segment in double
     quotes is one key, dots included, as pmmw's messages print it: ``materials."murakowski2014.water".
     temperature`` -> ['materials', 'murakowski2014.water', 'temperature']."""
-    parts = []
+    parts: list[str | int] = []
     for quoted, part in _segments(key):
         if quoted:
             parts.append(part)
             continue
         if not part:
             raise ValueError("empty key segment")
-        idx = []
+        idx: list[int] = []
         m = _INDEX.match(part)
         while m:
             idx.insert(0, int(m.group(2)))
@@ -177,7 +190,7 @@ def _segments(key: str) -> list[tuple[bool, str]]:
             return out
 
 
-def _file_resolution(raw: dict):
+def _file_resolution(raw: dict) -> list[int] | None:
     """The scenario file's own ``imager.resolution`` (before overrides), when it is two whole numbers."""
     res = raw.get("imager", {}).get("resolution") if isinstance(raw.get("imager"), dict) else None
     if (
@@ -305,12 +318,13 @@ def _allowed(loc: list, names: list[str]) -> list[str]:
     return names
 
 
-def _region_display(r) -> dict:
+def _region_display(r: Region) -> dict:
     """A region as the resolved scenario shows it (its pixel values scaled to the image)."""
     if r.box is not None:
         return {"box": list(r.box)}
     if r.bounds is not None:
         return {"bounds": [[_qty(v, "m") for v in corner] for corner in r.bounds]}
+    assert r.center is not None  # Region's validator: exactly one of center, box, bounds
     radius = {"px": round(r.radius, 4), "m": _qty(r.radius, "m"), "rad": _qty(math.degrees(r.radius), "deg")}
     return {"center": [_qty(v, "m") for v in r.center], "radius": radius[r.radius_unit]}
 
@@ -320,7 +334,7 @@ def _qty(value: float, unit: str, scale: float = 1.0) -> str:
     return f"{value / scale:.12g} {unit}"
 
 
-def _receiver_display(rx) -> dict:
+def _receiver_display(rx: Receiver) -> dict:
     """``imager.receiver`` with its units, only the keys given (the choices exclude each other)."""
     out = {
         "noise_temperature": None if rx.noise_temperature is None else _qty(rx.noise_temperature, "K"),
@@ -337,7 +351,7 @@ def _receiver_display(rx) -> dict:
     return {k: v for k, v in out.items() if v is not None}
 
 
-def _antenna_display(a) -> dict:
+def _antenna_display(a: Antenna) -> dict:
     """``imager.antenna`` with its units."""
     return {
         "illumination": a.illumination,
@@ -346,6 +360,16 @@ def _antenna_display(a) -> dict:
         **({"spillover": a.spillover} if a.spillover is not None else {}),
         "spillover_temperature": _qty(a.spillover_temperature, "K"),
         **({"off_axis": a.off_axis} if a.off_axis != "fixed" else {}),
+    }
+
+
+def _uniform_display(atm: AtmosphereConfig) -> dict:
+    """``atmosphere`` of ``model: uniform`` with its units."""
+    assert atm.loss is not None and atm.temperature is not None  # AtmosphereConfig's validator sets both
+    return {
+        "model": "uniform",
+        "loss": _qty(atm.loss * 1e3 * 10 / math.log(10), "dB/km"),  # [Np/m] of power -> dB/km
+        "temperature": _qty(atm.temperature, "K"),
     }
 
 
@@ -378,7 +402,8 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
         scene.append(
             {
                 "mesh": str(e.mesh),
-                **({"material": e.material} if e.material is not None else {"materials": dict(e.materials)}),
+                # exactly one of the two is given (SceneEntry's validator)
+                **({"material": e.material} if e.materials is None else {"materials": dict(e.materials)}),
                 "transform": {
                     "translate": [_qty(v, "m") for v in t.translate],
                     "rotate_deg": list(t.rotate_deg),
@@ -407,11 +432,7 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
         "atmosphere": "none"
         if atm is None
         else (
-            {
-                "model": "uniform",
-                "loss": _qty(atm.loss * 1e3 * 10 / math.log(10), "dB/km"),  # [Np/m] of power -> dB/km
-                "temperature": _qty(atm.temperature, "K"),
-            }
+            _uniform_display(atm)
             if atm.model == "uniform"
             else {
                 "model": "layered",

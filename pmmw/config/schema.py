@@ -21,7 +21,7 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, Literal, Optional, Union
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Optional, Union, get_args
 
 from pydantic import (
     BaseModel,
@@ -114,7 +114,7 @@ def _integer(value):
     return value
 
 
-def _input_path(value, info: ValidationInfo) -> Path:
+def _input_path(value: object, info: ValidationInfo) -> Path:
     if not isinstance(value, (str, Path)):
         raise ConfigValueError(f"expected a file path, got {value!r}")
     if not str(value).strip():
@@ -406,7 +406,7 @@ class SceneEntry(_Model):
 
     @field_validator("mesh", mode="before")
     @classmethod
-    def _mesh(cls, v, info: ValidationInfo):
+    def _mesh(cls, v: object, info: ValidationInfo) -> Path:
         p = _input_path(v, info)
         suffix = format_suffix(p)
         if not suffix:
@@ -422,14 +422,15 @@ class SceneEntry(_Model):
         return self
 
 
-PROFILES = (
+Profile = Literal[
     "standard",
     "low_latitude",
     "mid_latitude_summer",
     "mid_latitude_winter",
     "high_latitude_summer",
     "high_latitude_winter",
-)
+]
+PROFILES: tuple[str, ...] = get_args(Profile)
 
 
 POWER_LAW_B_MAX = 2.0  # [-] largest exponent b: every ITU-R P.838-3 exponent (0.63-1.70 at 1-1000 GHz) fits
@@ -597,7 +598,7 @@ class AtmosphereConfig(_Model):
     ``temperature`` along every path (Murakowski 2014's Blender setting, sec. 2.2.9)."""
 
     model: Literal["layered", "uniform"] = "layered"
-    profile: Literal[PROFILES] = "standard"
+    profile: Profile = "standard"
     ground_temperature: Annotated[Optional[float], Quantity("temperature")] = None
     humidity: Annotated[Optional[float], Quantity("density")] = None  # water-vapour density at the ground [kg/m^3]
     ground_altitude: Length = 0.0
@@ -664,7 +665,7 @@ class AtmosphereConfig(_Model):
         return tuple(out)
 
 
-def _positive_temperature(t, hint: str = ""):
+def _positive_temperature(t: float, hint: str = "") -> float:
     """``t`` [K] within `TEMPERATURE_RANGE` (the rule of every temperature key; module docstring)."""
     if not t > TEMPERATURE_RANGE[0]:
         raise ConfigValueError(f"temperature must be > 0 K, got {t:g} K{hint}")
@@ -680,7 +681,7 @@ class Sky(_Model):
 
     @field_validator("temperature", "ground_temperature")
     @classmethod
-    def _t(cls, t, info: ValidationInfo):
+    def _t(cls, t: Optional[float], info: ValidationInfo) -> Optional[float]:
         hint = (
             " (a sky that emits nothing: give the cosmic background, 2.7 K)" if info.field_name == "temperature" else ""
         )
@@ -699,7 +700,7 @@ class Sky(_Model):
 
     @field_validator("file", mode="before")
     @classmethod
-    def _file(cls, v, info: ValidationInfo):
+    def _file(cls, v: object, info: ValidationInfo) -> Optional[Path]:
         return None if v is None else _input_path(v, info)
 
     @field_validator("zenith_opacity", mode="before")

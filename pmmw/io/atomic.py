@@ -15,6 +15,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 def _fsync_path(path: Path, *, directory: bool = False) -> None:
@@ -76,7 +77,7 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
     return write_bytes_atomic(path, text.encode("utf-8"))
 
 
-def save_npz_atomic(path: str | os.PathLike, *, durable: bool = True, **arrays) -> Path:
+def save_npz_atomic(path: str | os.PathLike, *, durable: bool = True, **arrays: ArrayLike) -> Path:
     """``np.savez`` (uncompressed) of the keyword arrays to ``path`` atomically.
 
     The file is written through an open file object, so numpy never appends ``.npz`` to the
@@ -84,5 +85,5 @@ def save_npz_atomic(path: str | os.PathLike, *, durable: bool = True, **arrays) 
     """
     with atomic_path(path, durable) as tmp:
         with open(tmp, "wb") as f:
-            np.savez(f, **arrays)
+            np.savez(f, allow_pickle=True, **arrays)  # numpy's default, named: no array can take its place
     return Path(path)

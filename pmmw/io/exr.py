@@ -18,7 +18,7 @@ float as a 32-bit float, so doubles are set through `ImageSpec.from_xml` (see `_
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
@@ -46,7 +46,7 @@ MAX_IMAGE_PIXELS = 1 << 27
 READ_BYTES_PER_SAMPLE = 8
 
 
-def _oiio_error(obj=None) -> str:
+def _oiio_error(obj: oiio.ImageInput | oiio.ImageOutput | None = None) -> str:
     """The pending error text of an OIIO object and of the library (reading clears them), on one
     line (OpenImageIO's own texts run over several: "... Possible corrupt input?\n If ...")."""
     msgs = [obj.geterror() if obj is not None else "", oiio.geterror()]
@@ -66,7 +66,7 @@ def _set_double(spec: oiio.ImageSpec, name: str, value: float) -> None:
         raise RuntimeError(f"could not set EXR header attribute {name!r} = {value!r}")
 
 
-def _set_attribute(spec: oiio.ImageSpec, name: str, value) -> None:
+def _set_attribute(spec: oiio.ImageSpec, name: str, value: object) -> None:
     if isinstance(value, np.generic):
         value = value.item()
     elif isinstance(value, np.ndarray):
@@ -150,7 +150,7 @@ def write_exr(
             raise RuntimeError(f"cannot write {path}: {_oiio_error(out)}")
 
 
-def _open_image(path: Path, key) -> "oiio.ImageInput":
+def _open_image(path: Path, key: str | None) -> oiio.ImageInput:
     """An open OIIO reader of ``path`` (its header read, no pixel); `UserError` when the file is
     missing or not an image."""
     if not path.is_file():
@@ -177,7 +177,9 @@ def image_size(path: str | os.PathLike, *, key: str | None = None) -> tuple[int,
         inp.close()
 
 
-def _check_size(spec, path: Path, key, names, bytes_per_pixel: float) -> None:
+def _check_size(
+    spec: oiio.ImageSpec, path: Path, key: str | None, names: list[str] | None, bytes_per_pixel: float
+) -> None:
     """Refuse an image beyond `MAX_IMAGE_SIDE` / `MAX_IMAGE_PIXELS`, or one whose reading (and
     the caller's ``bytes_per_pixel``) needs more memory than is available, from its header."""
     w, h = spec.width, spec.height * max(spec.depth, 1)
@@ -201,7 +203,11 @@ def _check_size(spec, path: Path, key, names, bytes_per_pixel: float) -> None:
 
 
 def read_exr(
-    path: str | os.PathLike, *, key: str | None = None, channels=None, bytes_per_pixel: float = 0.0
+    path: str | os.PathLike,
+    *,
+    key: str | None = None,
+    channels: Iterable[str] | None = None,
+    bytes_per_pixel: float = 0.0,
 ) -> tuple[dict[str, np.ndarray], dict]:
     """Read the channels and the header attributes of an image file (OpenEXR or any OIIO format).
 

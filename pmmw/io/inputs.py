@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import errno
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
 from pmmw.errors import UserError
@@ -23,7 +24,7 @@ PATH_MAX = 4096  # [bytes] of a whole path (Linux)
 SHOWN = 120  # [characters] of a path in a message: more is cut in the middle
 
 
-def shown(path, limit: int = SHOWN) -> str:
+def shown(path: object, limit: int = SHOWN) -> str:
     """``path`` as text, its middle cut to ``... (N characters) ...`` when longer than ``limit``."""
     text = os.fspath(path) if isinstance(path, (str, os.PathLike)) else str(path)
     if isinstance(text, bytes):
@@ -34,7 +35,7 @@ def shown(path, limit: int = SHOWN) -> str:
     return f"{text[:keep]}...({len(text):,} characters)...{text[-keep:]}"
 
 
-def path_problem(path) -> str | None:
+def path_problem(path: str | os.PathLike[str]) -> str | None:
     """Why ``path`` is too long for any file system to look up, or None."""
     text = os.fspath(path)
     whole = len(os.fsencode(text))
@@ -47,14 +48,14 @@ def path_problem(path) -> str | None:
     return None
 
 
-def check_input_path(path, *, key: str | None = None) -> None:
+def check_input_path(path: str | os.PathLike[str], *, key: str | None = None) -> None:
     """Raise a `UserError` naming ``path`` (shortened) when it is too long to look up."""
     why = path_problem(path)
     if why:
         raise UserError(why, file=shown(path), key=key)
 
 
-def name_too_long(e: BaseException, path=None) -> UserError | None:
+def name_too_long(e: BaseException, path: str | os.PathLike[str] | None = None) -> UserError | None:
     """The `UserError` for an OSError of a name too long (ENAMETOOLONG), else None."""
     if not isinstance(e, OSError) or e.errno != errno.ENAMETOOLONG:
         return None
@@ -65,7 +66,7 @@ def name_too_long(e: BaseException, path=None) -> UserError | None:
     )
 
 
-def format_suffix(path) -> str:
+def format_suffix(path: str | os.PathLike[str]) -> str:
     """The lower-case extension that tells ``path``'s format: its own name's, else (a symbolic
     link with an extension-less name) its target's; ``""`` when neither has one."""
     p = Path(path)
@@ -77,7 +78,7 @@ def format_suffix(path) -> str:
         return ""
 
 
-def no_extension(path, what: str, known) -> str:
+def no_extension(path: str | os.PathLike[str], what: str, known: Iterable[str]) -> str:
     """The message for a file whose name (and link target) has no extension."""
     p = Path(path)
     target = ""

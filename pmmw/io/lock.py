@@ -176,7 +176,9 @@ class FolderLock:
         The folder is held by a live run (exit status 2: choose another folder or wait).
     """
 
-    def __init__(self, folder, *, mode: str = "write", command: str | None = None, what: str = "--out"):
+    def __init__(
+        self, folder: str | os.PathLike[str], *, mode: str = "write", command: str | None = None, what: str = "--out"
+    ) -> None:
         if mode not in ("write", "shard"):
             raise ValueError(f"mode {mode!r}")
         self.folder = Path(folder)
@@ -190,7 +192,7 @@ class FolderLock:
         )
         self.path = self.folder / name
         self._stop = threading.Event()
-        self._thread = None
+        self._thread: threading.Thread | None = None
         self._pid = os.getpid()
 
     # -- taking and giving back -----------------------------------------------------------------
@@ -208,7 +210,7 @@ class FolderLock:
         self._thread.start()
         return self
 
-    def _refuse(self, rec) -> UserError:
+    def _refuse(self, rec: dict | None) -> UserError:
         return UserError(
             f"the folder is in use by {describe(rec)}; wait for it to finish or choose another output folder",
             self.folder,
@@ -300,11 +302,11 @@ class FolderLock:
     def __enter__(self) -> FolderLock:
         return self.acquire()
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.release()
 
 
-def output_lock(folder, what: str = "--out", mode: str = "write") -> FolderLock:
+def output_lock(folder: str | os.PathLike[str], what: str = "--out", mode: str = "write") -> FolderLock:
     """`FolderLock` of ``folder``, which is created first (an `OSError` becomes one line)."""
     folder = Path(folder)
     try:

@@ -27,7 +27,7 @@ import difflib
 import json
 import re
 import typing
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
@@ -42,7 +42,7 @@ HIDDEN_FIELDS = frozenset({"source_file", "key"})
 Location = list[Any]
 Relocate = Callable[[Location], Location]
 Allowed = Callable[[Location, list[str]], list[str]]
-Wording = Callable[[dict, Location], "str | None"]
+Wording = Callable[[Mapping[str, Any], Location], "str | None"]
 
 
 _PLAIN_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -125,7 +125,7 @@ def check_keys(
 
 
 def problem(
-    err: dict,
+    err: Mapping[str, Any],
     file: Any,
     model: type[BaseModel],
     *,

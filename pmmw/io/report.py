@@ -16,6 +16,7 @@ import math
 import os
 from collections.abc import Mapping
 from pathlib import Path, PurePath
+from typing import Any
 
 import numpy as np
 import yaml
@@ -42,7 +43,7 @@ def _plain(value):
     return str(value)
 
 
-def _num(x, fmt: str = ".2f") -> str:
+def _num(x: Any, fmt: str = ".2f") -> str:
     if x is None:
         return "-"
     try:
@@ -58,7 +59,7 @@ def _md_link(target: str) -> str:
     return f"<{target}>" if any(c in target for c in " ()<>") else target
 
 
-def _pm(x) -> str:
+def _pm(x: object) -> str:
     """A standard error for a ``value ± error`` cell."""
     return "n/a" if x is None else _num(x, ".2g")
 
@@ -76,7 +77,7 @@ def _snr_cell(contrast: Mapping) -> str:
     )
 
 
-def _cell(text) -> str:
+def _cell(text: object) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 

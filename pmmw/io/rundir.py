@@ -22,6 +22,7 @@ import os
 import secrets
 import shutil
 import socket
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from pmmw.errors import EnvironmentProblem, UserError
@@ -40,9 +41,9 @@ _CAUSES = {
 }
 
 
-def os_problem(e: OSError, path, doing: str) -> EnvironmentProblem:
+def os_problem(e: OSError, path: str | Path, doing: str) -> EnvironmentProblem:
     """An `OSError` as one line: ``PATH: cannot DOING: CAUSE``."""
-    cause = _CAUSES.get(e.errno) or e.strerror or str(e)
+    cause = (_CAUSES.get(e.errno) if e.errno is not None else None) or e.strerror or str(e)
     return EnvironmentProblem(f"cannot {doing}: {cause}", file=e.filename or path)
 
 
@@ -136,8 +137,8 @@ def _report_owner(path: Path) -> str | None:
 
 def check_outputs(
     out_dir: Path,
-    outputs,
-    inputs,
+    outputs: Iterable[str],
+    inputs: Iterable[str | os.PathLike[str]],
     *,
     key: str = "output.dir",
     disk_bytes: int = 0,
@@ -268,7 +269,7 @@ class Staging:
     nothing in ``out_dir`` changes.
     """
 
-    def __init__(self, out_dir: Path):
+    def __init__(self, out_dir: Path) -> None:
         self.out_dir = Path(out_dir)
         self.tag = f"{STAGING_PREFIX}{os.getpid()}-{secrets.token_hex(4)}-{socket.gethostname()}"
         self.root = self.out_dir / self.tag
@@ -290,21 +291,26 @@ class Staging:
         self._folder(Path("."))
         return self
 
-    def path(self, rel: str) -> Path:
+    def path(self, rel: str | Path) -> Path:
         """Where to write the output ``rel`` now (its staging folder is created)."""
-        rel = Path(rel)
-        return self._folder(rel.parent) / rel.name
+        p = Path(rel)
+        return self._folder(p.parent) / p.name
 
-    def commit(self, files, last=(), check=None) -> None:
+    def commit(
+        self,
+        files: Iterable[str | Path],
+        last: Iterable[str | Path] = (),
+        check: Callable[[], object] | None = None,
+    ) -> None:
         """Move ``files``, then ``last``, from their staging folders onto their destinations, all
         or none: the files they replace are kept aside until every move succeeded, and put back
         if one fails. ``check``, called first, may refuse the commit (`io.lock.FolderLock.check`)."""
         if check is not None:
             check()
-        done = []  # (destination, the replaced file kept aside or None)
+        done: list[tuple[Path, Path | None]] = []  # (destination, the replaced file kept aside or None)
         try:
-            for rel in [*files, *last]:
-                rel = Path(rel)
+            for name in [*files, *last]:
+                rel = Path(name)
                 dest, staged = self.out_dir / rel, self.path(rel)
                 old = None
                 if os.path.lexists(dest) and not dest.is_dir():
@@ -326,7 +332,7 @@ class Staging:
                     pass
             raise os_problem(e, e.filename or self.out_dir, "write") from None
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         for folder in self._folders:
             shutil.rmtree(folder, ignore_errors=True)
 

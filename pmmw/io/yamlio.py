@@ -15,7 +15,9 @@ arbitrary objects; on top of it:
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -59,12 +61,12 @@ class _TooLarge(Exception):
     pass
 
 
-def _expanded_size(root) -> int:
+def _expanded_size(root: yaml.Node) -> int:
     """Nodes of the document with every alias expanded, without expanding it (memoized on the
     shared nodes); raises `_TooLarge` past the limits."""
     sizes: dict[int, int] = {}
 
-    def size(node, depth: int) -> int:
+    def size(node: yaml.Node, depth: int) -> int:
         if depth > MAX_DEPTH:
             raise _TooLarge(f"nested deeper than {MAX_DEPTH} levels")
         got = sizes.get(id(node))
@@ -86,7 +88,7 @@ def _expanded_size(root) -> int:
     return size(root, 0)
 
 
-def load_yaml(text: str, file=None, key: str | None = None):
+def load_yaml(text: str, file: str | Path | None = None, key: str | None = None) -> Any:
     """Parse one YAML document.
 
     Parameters
@@ -125,7 +127,7 @@ def load_yaml(text: str, file=None, key: str | None = None):
         loader.dispose()
 
 
-def read_yaml(path, what: str = "YAML file"):
+def read_yaml(path: str | os.PathLike[str], what: str = "YAML file") -> Any:
     """`load_yaml` of a file; an unreadable file is a `UserError` naming it."""
     path = Path(path)
     try:

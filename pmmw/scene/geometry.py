@@ -30,11 +30,14 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 import re
 import struct
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
 from urllib.parse import unquote
 
 import numpy as np
@@ -44,6 +47,9 @@ from pmmw.constants import DEGENERATE_REL
 from pmmw.errors import UserError, UserErrors, warn
 from pmmw.io.inputs import format_suffix, no_extension
 from pmmw.memory import check_fits, release_freed_memory
+
+if TYPE_CHECKING:
+    from pmmw.config.schema import SceneEntry, Transform
 
 MESH_FORMATS = {".glb": "gltf", ".gltf": "gltf", ".obj": "obj", ".ply": "ply", ".stl": "stl"}
 _FORMAT_NAMES = {"gltf": "glTF", "obj": "OBJ", "ply": "PLY", "stl": "STL"}
@@ -142,7 +148,7 @@ class SceneGeometry:
 # -- loading ----------------------------------------------------------------------------------
 
 
-def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh.Trimesh]]:
+def load_entry_mesh(path: str | os.PathLike[str], up_axis: str | None = None) -> list[tuple[str, trimesh.Trimesh]]:
     """Read a mesh file into (mesh material name, mesh) parts, in the world frame (Z up).
 
     A glTF/GLB scene is flattened with its node transforms; each part's name is its glTF
@@ -195,7 +201,7 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
             release_freed_memory()  # the reader's text and lists: ~400 B a triangle of an OBJ, else resident
 
 
-def _parts(path: Path, fmt: str, scene, up_axis) -> list[tuple[str, trimesh.Trimesh]]:
+def _parts(path: Path, fmt: str, scene: trimesh.Scene, up_axis: str | None) -> list[tuple[str, trimesh.Trimesh]]:
     """`load_entry_mesh`'s parts of a scene trimesh has read."""
     rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis, fmt) == "y" else None
     parts = []
@@ -238,7 +244,7 @@ GROUND_COVER = 0.5  # [-]
 GROUND_MARGIN = 2.0  # [-]
 
 
-def _end_flat_area(parts, axis: int, lo: np.ndarray, hi: np.ndarray) -> float:
+def _end_flat_area(parts: list[tuple[str, trimesh.Trimesh]], axis: int, lo: np.ndarray, hi: np.ndarray) -> float:
     """The larger of the areas of flat faces lying at the lowest and at the highest coordinate
     along ``axis`` (within 1e-4 of the scene's size) with their normals along it [m^2]."""
     tol = 1e-4 * float((hi - lo).max())
@@ -253,7 +259,7 @@ def _end_flat_area(parts, axis: int, lo: np.ndarray, hi: np.ndarray) -> float:
     return max(area.values())
 
 
-def _warn_if_z_up(path: Path, parts) -> None:
+def _warn_if_z_up(path: Path, parts: list[tuple[str, trimesh.Trimesh]]) -> None:
     """glTF is Y-up by specification, but exporters that write their own Z-up coordinates as they
     are (trimesh among them) make an upright object lie down and a flat scene stand on its edge.
     A file that states its up axis (``asset.extras.up_axis``) is read so, without a warning; one
@@ -305,7 +311,7 @@ def _warn_if_z_up(path: Path, parts) -> None:
         )
 
 
-def asset_files(mesh_path) -> list[Path]:
+def asset_files(mesh_path: str | os.PathLike[str]) -> list[Path]:
     """The mesh file and every external file it names, for hashing what a render was made from.
 
     glTF/GLB: ``buffers[].uri`` and ``images[].uri`` that are not ``data:`` URIs, URL-decoded
@@ -345,7 +351,7 @@ def asset_files(mesh_path) -> list[Path]:
     return list(dict.fromkeys(files))
 
 
-def file_up_axis(path, up_axis: str | None = None, fmt: str | None = None) -> str:
+def file_up_axis(path: str | os.PathLike[str], up_axis: str | None = None, fmt: str | None = None) -> str:
     """The up axis a mesh file is read with: the entry's ``up_axis``; else, for glTF, what the
     file states (``asset.extras.up_axis``) or Y (its specification); Z for every other format."""
     if up_axis:
@@ -551,7 +557,7 @@ def _named_files(path: Path, keywords: set, whole_words: bool) -> list[Path]:
     return _named_in(path.parent, _statements(path, keywords), whole_words)
 
 
-def _named_in(folder: Path, lines, whole_words: bool) -> list[Path]:
+def _named_in(folder: Path, lines: Iterable[str], whole_words: bool) -> list[Path]:
     """Existing files in ``folder`` named by statements ``lines`` (``keyword rest...``). A
     statement's rest of line is one file name if such a file exists (names with spaces);
     otherwise each word (``whole_words``: ``mtllib a.mtl b.mtl``) or the last word (texture
@@ -617,14 +623,16 @@ def _read_obj(path: Path) -> trimesh.Scene:
     )
 
 
-def _load_scene(file_obj, **kwargs) -> trimesh.Scene:
+def _load_scene(file_obj: str | Path | IO[bytes], **kwargs: Any) -> trimesh.Scene:
     """`trimesh.load_scene` (trimesh >= 4.5), or ``trimesh.load(force="scene")`` before it."""
     if hasattr(trimesh, "load_scene"):
         return trimesh.load_scene(file_obj, **kwargs)
-    return trimesh.load(file_obj, force="scene", **kwargs)
+    scene = trimesh.load(file_obj, force="scene", **kwargs)
+    assert isinstance(scene, trimesh.Scene)  # what force="scene" returns
+    return scene
 
 
-def _material_name(geom: trimesh.Trimesh, geom_name: str, fmt: str) -> str:
+def _material_name(geom: trimesh.Trimesh, geom_name: object, fmt: str) -> str:
     material = getattr(geom.visual, "material", None)
     name = getattr(material, "name", None)
     if name:
@@ -635,7 +643,7 @@ def _material_name(geom: trimesh.Trimesh, geom_name: str, fmt: str) -> str:
 # -- building ---------------------------------------------------------------------------------
 
 
-def entry_transform(transform) -> tuple[np.ndarray, np.ndarray]:
+def entry_transform(transform: Transform | None) -> tuple[np.ndarray, np.ndarray]:
     """The affine map of a scene entry's ``transform``: x_world = A @ x + t.
 
     Order: scale, then rotate (``rotate_deg``: XYZ extrinsic, i.e. about the world X axis first,
@@ -681,7 +689,7 @@ def _closed_and_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[bool, f
     return closed, float(merged.volume) if closed else float("nan")
 
 
-def build_geometry(entries, scenario_file=None) -> SceneGeometry:
+def build_geometry(entries: Iterable[SceneEntry], scenario_file: str | Path | None = None) -> SceneGeometry:
     """Load, transform and check every scene entry; concatenate into one `SceneGeometry`.
 
     Parameters
@@ -702,8 +710,12 @@ def build_geometry(entries, scenario_file=None) -> SceneGeometry:
     """
     errors: list[UserError] = []
     material_ids: list[str] = []
-    objects, watertight = [], []
-    verts, faces, mats, objs = [], [], [], []
+    objects: list[str] = []
+    watertight: list[bool] = []
+    verts: list[np.ndarray] = []
+    faces: list[np.ndarray] = []
+    mats: list[np.ndarray] = []
+    objs: list[np.ndarray] = []
     n_verts = 0
     for i, entry in enumerate(entries):
         key = getattr(entry, "key", None) or f"scene[{i}]"
@@ -729,7 +741,11 @@ def build_geometry(entries, scenario_file=None) -> SceneGeometry:
             f = np.ascontiguousarray(f[:, ::-1])
             warn(f"{label}: the mesh is inside out (negative volume); its faces were turned outward")
         material = getattr(entry, "material", None)
-        ids = [material] * len(names) if material is not None else [entry.materials[n] for n in names]
+        if material is not None:
+            ids = [material] * len(names)
+        else:
+            assert entry.materials is not None  # _build_entry refuses an entry with neither
+            ids = [entry.materials[n] for n in names]
         index = []
         for mid in ids:
             if mid not in material_ids:
@@ -767,7 +783,9 @@ def build_geometry(entries, scenario_file=None) -> SceneGeometry:
     )
 
 
-def _build_entry(entry, key: str, scenario_file):
+def _build_entry(
+    entry: SceneEntry, key: str, scenario_file: str | Path | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """One entry's vertices (V, 3) [m] in the world frame, faces (F, 3), the index of each face's
     mesh part (F,) and the parts' mesh material names."""
     mesh_path = Path(entry.mesh)
@@ -803,18 +821,18 @@ def _build_entry(entry, key: str, scenario_file):
     det = float(np.linalg.det(a))
     if not np.isfinite(det) or abs(det) < 1e-300:
         raise UserError("the transform is singular (a zero scale?)", file=scenario_file, key=f"{key}.transform")
-    verts, faces, part = [], [], []
+    verts, faces, part_of = [], [], []
     off = 0
     for i, (_, mesh) in enumerate(parts):
         verts.append(np.asarray(mesh.vertices, dtype=np.float64))
         faces.append(np.asarray(mesh.faces, dtype=np.int64) + off)
-        part.append(np.full(len(mesh.faces), i))
+        part_of.append(np.full(len(mesh.faces), i))
         off += len(mesh.vertices)
     v = np.concatenate(verts) @ a.T + t
     f = np.concatenate(faces)
     if det < 0.0:  # a mirroring transform would turn the winding inward
         f = f[:, ::-1]
-    part = np.concatenate(part)
+    part = np.concatenate(part_of)
 
     _, ok = _face_normals(v, f)
     if not ok.all():
@@ -860,5 +878,5 @@ def _unmapped_names(mesh_path: Path, have: list[str], missing: list[str]) -> str
     return text + ' (see docs/scenes.md, "Material names")'
 
 
-def _quoted(names) -> str:
+def _quoted(names: Iterable[str]) -> str:
     return ", ".join(repr(n) for n in names)

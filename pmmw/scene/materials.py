@@ -37,9 +37,10 @@ import difflib
 import math
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Iterable, Literal, Optional
+from typing import TYPE_CHECKING, Annotated, Any, Iterable, Literal, Optional, get_args
 
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, StrictStr, ValidationError
@@ -52,7 +53,13 @@ from pmmw.scene.bump import make_bump
 from pmmw.scene.dielectric import make_dielectric
 from pmmw.units import parse_quantity
 
-KINDS = ("dielectric", "metal", "blackbody", "opaque", "thin")
+if TYPE_CHECKING:
+    from pmmw.physics.roughness import MicrofacetModel
+    from pmmw.scene.bump import BumpMap
+    from pmmw.scene.dielectric import DielectricModel
+
+Kind = Literal["dielectric", "metal", "blackbody", "opaque", "thin"]
+KINDS: tuple[str, ...] = get_args(Kind)
 _NO_EPS_KINDS = ("metal", "blackbody")
 # lower_snake_case, optionally in one named set: ``water``, ``murakowski2014.water``
 _ID_RE = re.compile(r"^(?:[a-z][a-z0-9]*\.)?[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
@@ -101,7 +108,7 @@ class CoatingLayer:
     material: str
     thickness: float
     temperature: float | None
-    roughness: object = None
+    roughness: MicrofacetModel | None = None
 
 
 @dataclass(frozen=True)
@@ -145,9 +152,9 @@ class Material:
     temperature: float | None
     coating: tuple[CoatingLayer, ...] = ()
     thickness: float | None = None
-    roughness: object = None
-    bump: object = None
-    model: object = None
+    roughness: MicrofacetModel | None = None
+    bump: BumpMap | None = None
+    model: DielectricModel | None = None
     source: str = ""
     origin: str = ""
 
@@ -157,8 +164,15 @@ class Material:
 
     def model_temperature(self, temperature: float | None = None) -> float:
         """The temperature [K] a model is evaluated at: the one asked, else the material's, else
-        the model's reference temperature."""
-        return next(t for t in (temperature, self.temperature, self.model.spec.t_ref) if t is not None)
+        the model's reference temperature. ValueError for a material without a model when neither
+        temperature is given."""
+        if temperature is not None:
+            return temperature
+        if self.temperature is not None:
+            return self.temperature
+        if self.model is None:
+            raise ValueError(f"material {self.id!r} has no model (and so no reference temperature)")
+        return self.model.spec.t_ref
 
     def eps_at(self, f: float, temperature: float | None = None) -> complex:
         """Relative permittivity at frequency `f` [Hz].
@@ -230,7 +244,7 @@ class Material:
 _PLAIN_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
-def _join(base: str | None, *parts) -> str:
+def _join(base: str | None, *parts: object) -> str:
     """Dotted key path (`pmmw.io.records.key_path`): ``_join("materials", "runway", "eps", "95 GHz", 1)``
     -> ``materials.runway.eps."95 GHz"[1]``."""
     return key_path(parts, base)
@@ -244,7 +258,7 @@ def _join(base: str | None, *parts) -> str:
 class _Problems(ValueError):
     """Problems found inside one field, each with a key path relative to that field."""
 
-    def __init__(self, problems: list[tuple[tuple, str]]):
+    def __init__(self, problems: list[tuple[tuple, str]]) -> None:
         super().__init__("; ".join(m for _, m in problems))
         self.problems = problems
 
@@ -273,7 +287,7 @@ def _length(value):
     return d
 
 
-def _number(x) -> float:
+def _number(x: object) -> float:
     """A finite real number; YAML 1.1 reads ``7e-3`` (no dot) as a string, so accept those."""
     if isinstance(x, bool):
         raise ValueError
@@ -288,7 +302,7 @@ def _number(x) -> float:
     return v
 
 
-def _eps_pair(value, path: tuple, problems: list) -> complex | None:
+def _eps_pair(value: object, path: tuple, problems: list) -> complex | None:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         problems.append((path, f"expected [eps', eps''] (two numbers), got {value!r}"))
         return None
@@ -369,7 +383,7 @@ class _EntryIn(BaseModel):
     name: Optional[StrictStr] = None
     eps: _Eps = None
     temperature: _Temperature = None
-    kind: Optional[Literal[KINDS]] = None  # type: ignore[valid-type]
+    kind: Optional[Kind] = None
     source: Optional[StrictStr] = None
     coating: Optional[list[_LayerIn]] = None
     thickness: _Length = None
@@ -379,12 +393,12 @@ class _EntryIn(BaseModel):
     same_as: Optional[StrictStr] = None  # another id whose fields this entry takes (resolved by _same_as)
 
 
-def _suggest(word: str, choices: Iterable[str], n: int = 5) -> str:
+def _suggest(word: object, choices: Iterable[str], n: int = 5) -> str:
     close = difflib.get_close_matches(str(word), list(choices), n=n, cutoff=0.6)
     return f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
 
 
-def _pydantic_errors(ex: ValidationError, file, base_key: str) -> list[UserError]:
+def _pydantic_errors(ex: ValidationError, file: str | Path, base_key: str) -> list[UserError]:
     """pydantic's problems with one entry, in `pmmw.io.records`' wording but for the entry's own
     messages (`_wording`); a field's several problems (`_Problems`) each with its own key."""
     out = []
@@ -397,7 +411,7 @@ def _pydantic_errors(ex: ValidationError, file, base_key: str) -> list[UserError
     return out
 
 
-def _wording(er: dict, loc: list) -> str | None:
+def _wording(er: Mapping[str, Any], loc: list) -> str | None:
     """The material entry's own messages: the keys of an entry or a coating layer, what a layer
     looks like, the kinds; None: the common wording."""
     typ = er["type"]
@@ -422,7 +436,7 @@ def _wording(er: dict, loc: list) -> str | None:
     return None
 
 
-def _parse_entry(mid, raw, file, base_key: str) -> tuple[dict | None, list[UserError]]:
+def _parse_entry(mid: str, raw: object, file: str | Path, base_key: str) -> tuple[dict | None, list[UserError]]:
     """Validate one raw entry -> the fields it sets (SI values), or None and the errors."""
     if raw is None:
         raw = {}
@@ -533,7 +547,7 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
     return mat, []
 
 
-def _check_id(mid, file, base_key: str) -> list[UserError]:
+def _check_id(mid: object, file: str | Path, base_key: str) -> list[UserError]:
     if not isinstance(mid, str):
         return [UserError(f"a material id must be a string, got {mid!r}", file, base_key)]
     if not _ID_RE.match(mid):
@@ -548,7 +562,9 @@ def _check_id(mid, file, base_key: str) -> list[UserError]:
     return []
 
 
-def _same_as(mid: str, fields: dict, known: dict[str, dict], file, base_key: str) -> tuple[dict | None, list]:
+def _same_as(
+    mid: str, fields: dict, known: dict[str, dict], file: str | Path, base_key: str
+) -> tuple[dict | None, list[UserError]]:
     """The fields of an entry with ``same_as: OTHER``: OTHER's fields, then the entry's own on top
     (e.g. a `name`, a `temperature`); the source says where the values come from. `known` maps ids
     to their resolved fields. Entries without ``same_as`` are returned as they are."""
@@ -577,7 +593,7 @@ def _raise(errors: list[UserError]) -> None:
         raise UserErrors(errors)
 
 
-def _read_yaml(path: Path):
+def _read_yaml(path: Path) -> Any:
     return read_yaml(path, "material database file")
 
 
@@ -594,7 +610,7 @@ def default_materials_dir() -> Path:
     return Path(__file__).resolve().parents[2] / "materials"
 
 
-def _database_files(paths) -> list[Path]:
+def _database_files(paths: str | os.PathLike[str] | Iterable[str | os.PathLike[str]] | None) -> list[Path]:
     if paths is None:
         d = default_materials_dir()
         if not d.is_dir():
@@ -634,7 +650,7 @@ class MaterialDB:
     ``db.with_overrides(scenario_materials, file=scenario_path)``, then ``db.get(id)``.
     """
 
-    def __init__(self, materials: dict[str, Material], fields: dict[str, dict], keys: dict[str, str]):
+    def __init__(self, materials: dict[str, Material], fields: dict[str, dict], keys: dict[str, str]) -> None:
         self._materials = dict(materials)
         self._fields = {k: dict(v) for k, v in fields.items()}  # validated SI fields, for overrides
         self._keys = dict(keys)  # id -> key path of the entry in its origin file
@@ -642,7 +658,7 @@ class MaterialDB:
     # -- construction ------------------------------------------------------------------------
 
     @classmethod
-    def load(cls, paths=None) -> "MaterialDB":
+    def load(cls, paths: str | os.PathLike[str] | Iterable[str | os.PathLike[str]] | None = None) -> MaterialDB:
         """Read and validate database files.
 
         Parameters
@@ -688,7 +704,7 @@ class MaterialDB:
                     continue
                 where[mid] = path
                 f, errs = _parse_entry(mid, raw, path, base_key)
-                if errs:
+                if f is None:  # None exactly when there are errors (so too below)
                     errors += errs
                     continue
                 fields[mid], keys[mid] = f, base_key
@@ -710,14 +726,14 @@ class MaterialDB:
             for mid in ready:
                 pending.discard(mid)
                 f, errs = _same_as(mid, fields[mid], fields, where[mid], keys[mid])
-                if errs:
+                if f is None:
                     errors += errs
                     del fields[mid]
                 else:
                     fields[mid] = f
         for mid in list(fields):
             mat, errs = _build(mid, fields[mid], str(where[mid]), keys[mid])
-            if errs:
+            if mat is None:
                 errors += errs
                 del fields[mid]
                 continue
@@ -728,7 +744,7 @@ class MaterialDB:
         _raise(errors)
         return db
 
-    def with_overrides(self, raw: dict | None, *, file, key_prefix: str = "materials") -> "MaterialDB":
+    def with_overrides(self, raw: dict | None, *, file: str | Path, key_prefix: str = "materials") -> MaterialDB:
         """A new database with a scenario's ``materials:`` map applied.
 
         An existing id with some fields replaces just those fields (a given ``eps`` replaces
@@ -763,10 +779,11 @@ class MaterialDB:
                 errors += id_errors
                 continue
             new, errs = _parse_entry(mid, entry, file, base_key)
-            whole = not errs and new.get("same_as") is not None  # a same_as entry replaces the whole entry
-            if whole:
+            # None exactly when there are errors (so too below); a same_as entry replaces the whole entry
+            whole = new is not None and new.get("same_as") is not None
+            if new is not None and whole:
                 new, errs = _same_as(mid, new, fields, file, base_key)
-            if errs:
+            if new is None:
                 errors += errs
                 continue
             if whole:
@@ -790,7 +807,7 @@ class MaterialDB:
                     )
                 new = merged
             mat, errs = _build(mid, new, str(file), base_key)
-            if errs:
+            if mat is None:
                 errors += errs
                 continue
             materials[mid], fields[mid], keys[mid] = mat, new, base_key
@@ -801,7 +818,7 @@ class MaterialDB:
 
     # -- queries -------------------------------------------------------------------------------
 
-    def get(self, mid: str, *, file=None, key=None) -> Material:
+    def get(self, mid: str, *, file: str | Path | None = None, key: str | None = None) -> Material:
         """The material `mid`; an unknown id is a UserError (at `file`, `key`) with close matches."""
         try:
             return self._materials[mid]
@@ -827,7 +844,7 @@ class MaterialDB:
         """Every id, in load order (files by name, entries in file order; new overrides last)."""
         return list(self._materials)
 
-    def __contains__(self, mid) -> bool:
+    def __contains__(self, mid: object) -> bool:
         return mid in self._materials
 
     def __len__(self) -> int:
@@ -936,7 +953,7 @@ def format_material_table(db: MaterialDB, f: float | None = None) -> str:
     for r in rows:
         lines.append("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + "  " + r[4])
     lines.insert(1, "  ".join("-" * w for w in widths) + "  " + "-" * 6)
-    if any_clamped:
+    if any_clamped and f is not None:  # only a frequency clamps
         lines.append(
             f"* {_fmt_f(f)} is outside the entry's stated range (a table's nearest value, a model "
             "extrapolated or interpolated): `pmmw materials show ID` says which"
@@ -1001,7 +1018,11 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
 
 
 def plot_materials(
-    db: MaterialDB, ids: list[str], path, temperature: float | None = None, f_range=(10e9, 1000e9)
+    db: MaterialDB,
+    ids: list[str],
+    path: str | os.PathLike[str],
+    temperature: float | None = None,
+    f_range: tuple[float, float] = (10e9, 1000e9),
 ) -> Path:
     """eps' and eps'' of materials against frequency [GHz] (log axes), 35-300 GHz shaded: a model
     as a curve (at ``temperature`` [K], else the material's), a table as its points (circles)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +24,7 @@ MAX_ANIMATIONS = 12  # GIFs per sweep (one per combination of the keys not side 
 FRAME_MS = 600  # display time of one animation frame [ms]
 
 
-def _numeric(values) -> list[float] | None:
+def _numeric(values: Iterable[object]) -> list[float] | None:
     """Plot positions of a grid key's values (numbers or numbers with a unit), or None."""
     out = []
     for v in values:
@@ -43,7 +44,7 @@ def _pair_channel(snr_col: str) -> tuple[str, str]:
     return pair, chan
 
 
-def _finite(v) -> bool:
+def _finite(v: object) -> bool:
     return isinstance(v, float) and math.isfinite(v)
 
 
@@ -185,7 +186,7 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
     written = []
     for col in snr_cols:
         pair, chan = _pair_channel(col)
-        groups = {}
+        groups: dict[str, list[dict]] = {}
         for r in table:
             if r["status"] == "done" and _finite(r.get(col)):
                 groups.setdefault(", ".join(str(r[k]) for k in line_keys), []).append(r)
@@ -239,7 +240,7 @@ def _plots(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -
     return written
 
 
-def _limits_against(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]):
+def _limits_against(out: Path, spec: SweepSpec, table: list[dict], snr_cols: list[str]) -> tuple[list[str], list[Path]]:
     """With two numeric axes or more: each contrast's detection limit along the first (a detection
     range) against the second (the fog's liquid water, the aperture), one line per value of the
     other keys, as a table in report.md and a plot (``limits_PAIR.png``). A limit beyond the
@@ -374,7 +375,7 @@ def _axis_label(spec: SweepSpec, key: str) -> str:
     return f"{key} [{units.pop()}]" if len(units) == 1 and "" not in units else key
 
 
-def _other_keys(spec: SweepSpec, used) -> list[str]:
+def _other_keys(spec: SweepSpec, used: Iterable[str]) -> list[str]:
     """The keys with more than one value that are neither in ``used`` nor side by side with one
     of them (what the lines, panels or sequences of a figure are per)."""
     zipped = zipped_keys(spec)

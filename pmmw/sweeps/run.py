@@ -322,13 +322,13 @@ class _Log:
     """Progress of a sweep (`io.progress.StatusLine`): variants done/total, rays per second of the
     variants rendered, time left."""
 
-    def __init__(self, total: int, quiet: bool):
+    def __init__(self, total: int, quiet: bool) -> None:
         self.total = total
         self.line = None if quiet else StatusLine()
         self.t0 = time.perf_counter()
-        self.skipped = None
+        self.skipped: int | None = None
 
-    def update(self, rows: dict):
+    def update(self, rows: dict) -> None:
         if self.skipped is None:  # the first call: variants already done (--resume) or refused
             self.skipped = len(rows)
         if self.line is None:
@@ -345,7 +345,7 @@ class _Log:
         )
 
 
-def _row(spec, out: Path, name: str, params: dict, result: dict) -> dict:
+def _row(spec: SweepSpec, out: Path, name: str, params: dict, result: dict) -> dict:
     row = {
         "variant": name,
         **{k: _label(spec, k, v) for k, v in params.items()},

@@ -9,8 +9,10 @@ from __future__ import annotations
 import itertools
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import yaml
 
@@ -18,6 +20,9 @@ from pmmw.config.load import _split_key
 from pmmw.errors import UserError, UserErrors
 from pmmw.io.records import check_keys, raise_all
 from pmmw.io.yamlio import load_yaml, read_yaml
+
+if TYPE_CHECKING:
+    from pmmw.config.schema import ScenarioConfig
 
 MAX_VARIANTS = 10_000
 _LINSPACE = re.compile(r"^\s*linspace\(\s*([^,]+?)\s*,\s*([^,]+?)\s*,\s*(\d+)\s*\)\s*$")
@@ -63,7 +68,7 @@ def linspace(text: str, where: str) -> list | None:
     return [f"{v:.10g} {ua}" if ua else float(f"{v:.12g}") for v in values]
 
 
-def grid_values(value, where: str) -> list:
+def grid_values(value: object, where: str) -> list:
     """A grid entry's values: a YAML list, a linspace string, or one value."""
     if isinstance(value, str):
         lin = linspace(value, where)
@@ -184,7 +189,7 @@ def variants(spec: SweepSpec) -> list[dict]:
     return [{k: c[k] for k in order} for c in combos]
 
 
-def _yaml_value(v) -> str:
+def _yaml_value(v: object) -> str:
     # mappings in their written order: output.regions' order names each pair "a - b" (a the target)
     return yaml.safe_dump(v, default_flow_style=True, width=10_000, sort_keys=False).strip().removesuffix("...").strip()
 
@@ -193,7 +198,7 @@ def overrides_of(params: dict) -> list[str]:
     return [f"{k}={_yaml_value(v)}" for k, v in params.items()]
 
 
-def _label(spec: SweepSpec, key: str, value):
+def _label(spec: SweepSpec, key: str, value: object) -> object:
     """A value as the table shows it: its name from ``names``, or itself (YAML for lists)."""
     if key in spec.names:
         return spec.names[key][[_yaml_value(v) for v in dict(spec.grid)[key]].index(_yaml_value(value))]
@@ -222,7 +227,7 @@ def _grid_key_of(key: str | None, grid_keys: list[str]) -> str | None:
     return None
 
 
-def check_variants(spec: SweepSpec, check=None) -> int:
+def check_variants(spec: SweepSpec, check: Callable[[ScenarioConfig], object] | None = None) -> int:
     """Check every variant's scenario (the scenario file with the variant's values) against the
     scenario schema, before anything is rendered; returns the number of variants.
 

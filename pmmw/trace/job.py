@@ -8,6 +8,7 @@ workers (inherited on fork). Media are numbered: 0 is the ambient medium (air, o
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from pmmw.surface.media import (  # noqa: F401  (the media and their builders li
     split_coating,
     stack_media,
 )
+
+if TYPE_CHECKING:
+    from pmmw.atmosphere.model import AtmosphereModel
 
 
 @dataclass(frozen=True)
@@ -82,7 +86,7 @@ class TraceJob:
     sky: object
     frequency: float
     settings: RenderSettings = field(default_factory=RenderSettings)
-    atmosphere: object = None  # AtmosphereModel: attenuation and emission along ambient paths
+    atmosphere: AtmosphereModel | None = None  # attenuation and emission along ambient paths
 
     @property
     def k0(self) -> float:

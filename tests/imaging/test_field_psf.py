@@ -147,6 +147,26 @@ def test_scenario_hash_unchanged_by_the_default(tmp_path):
     assert scenario_hash(resolve(cfg, ["imager.antenna.off_axis=projected"]).scenario) != base
 
 
+def test_validate_states_the_corner_beam():
+    """``pmmw validate`` states the projected beam at the image corner as the render's report does
+    (it failed with AttributeError: the camera it passed had only a pixel angle). The corner
+    pixel's field angle against the pinhole's closed form, arctan of the corner pixel centre's
+    distance on the unit-distance image plane (1e-9: rounding)."""
+    from pmmw.pipeline import validate
+
+    cfg = Path(__file__).resolve().parents[2] / "configs" / "cwd_design_94ghz.yaml"
+    out = validate(cfg, ["imager.antenna.off_axis=projected"])
+    (beam,) = [v["beam"] for v in out["imager"].values()]
+    w, h, fov = 36, 60, np.radians(14.5)  # the scenario's imager
+    half = np.tan(fov / 2.0)
+    x, y = (w - 1) / w * half, (h - 1) / w * half  # the corner pixel's centre [unit distance]
+    want = np.degrees(np.arctan(np.hypot(x, y)))
+    assert beam["off_axis"]["corner_field_angle_deg"] == pytest.approx(want, rel=1e-9)
+    # the control: the default (fixed) beam states no corner
+    (fixed,) = [v["beam"] for v in validate(cfg, [])["imager"].values()]
+    assert "off_axis" not in fixed
+
+
 def test_every_node_has_its_own_beam():
     # FieldPSF computes a quarter of its kernels and mirrors the rest: each must be the kernel of
     # its own node's field angle and azimuth (rounding of the mirrored angles: 1e-12 of the peak)

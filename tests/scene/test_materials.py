@@ -186,6 +186,18 @@ def test_interpolated_values_lie_between_the_table_values(f_ghz):
     assert 2.49 - 1e-12 <= e.real <= 5.5 + 1e-12 and 0.068 - 1e-12 <= e.imag <= 0.5 + 1e-12
 
 
+def test_model_temperature_of_a_table_material():
+    """The temperature asked, else the material's own: a table (no model) has no reference
+    temperature, which is an error only when neither is given (it was an AttributeError on
+    None even with a temperature given)."""
+    m = Material("x", "x", "dielectric", (35e9, 95e9), (5.5 + 0.5j, 2.49 + 0.068j), None)
+    assert m.model_temperature(250.0) == 250.0  # exact: the value given is returned
+    warm = Material("y", "y", "dielectric", (35e9,), (5.5 + 0.5j,), 300.0)
+    assert warm.model_temperature() == 300.0
+    with pytest.raises(ValueError, match="has no model"):
+        m.model_temperature()
+
+
 def test_frequency_independent_eps(db):
     d2 = db.with_overrides({"foam": {"eps": [1.05, "1e-3"], "temperature": "290 K"}}, file=SCN)
     foam = d2.get("foam")
