@@ -35,15 +35,28 @@ import struct
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import unquote
 
 import numpy as np
-import trimesh
 
 from pmmw.constants import DEGENERATE_REL
 from pmmw.errors import UserError, UserErrors, warn
 from pmmw.io.inputs import format_suffix, no_extension
 from pmmw.memory import check_fits, release_freed_memory
+
+if TYPE_CHECKING:
+    import trimesh
+
+
+def _trimesh():
+    """trimesh, imported when a mesh is first read: with the SciPy modules it imports (spatial,
+    optimize, special, ndimage) about 0.4 s on 2 cores, which `import pmmw.pipeline` and a
+    scenario's validation without its meshes need not pay."""
+    import trimesh
+
+    return trimesh
+
 
 MESH_FORMATS = {".glb": "gltf", ".gltf": "gltf", ".obj": "obj", ".ply": "ply", ".stl": "stl"}
 _FORMAT_NAMES = {"gltf": "glTF", "obj": "OBJ", "ply": "PLY", "stl": "STL"}
@@ -203,7 +216,7 @@ def _parts(path: Path, fmt: str, scene, up_axis) -> list[tuple[str, trimesh.Trim
     for node in sorted(scene.graph.nodes_geometry):
         transform, geom_name = scene.graph[node]
         geom = scene.geometry[geom_name]
-        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+        if not isinstance(geom, _trimesh().Trimesh) or len(geom.faces) == 0:
             continue  # points, lines and empty primitives carry no surface
         vertices = np.asarray(geom.vertices, dtype=np.float64)
         faces = np.asarray(geom.faces, dtype=np.int64)
@@ -212,7 +225,7 @@ def _parts(path: Path, fmt: str, scene, up_axis) -> list[tuple[str, trimesh.Trim
                 f"faces name vertices past the mesh's {len(vertices)} vertices (a truncated file?)", file=path
             )
         with _quiet():  # a NaN vertex is reported below, not as numpy's warning
-            mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+            mesh = _trimesh().Trimesh(vertices=vertices, faces=faces, process=False)
             mesh.apply_transform(transform)  # flips the winding itself for mirroring transforms
             if rotate is not None:
                 mesh.vertices = mesh.vertices @ rotate.T
@@ -611,7 +624,7 @@ def _read_obj(path: Path) -> trimesh.Scene:
     if names:
         text = f"mtllib {_OBJ_NAMES_MTL}\n" + text
         library = "".join(f"newmtl {n}\n" for n in names).encode()
-        resolver = trimesh.resolvers.ZipResolver({_OBJ_NAMES_MTL: io.BytesIO(library)})
+        resolver = _trimesh().resolvers.ZipResolver({_OBJ_NAMES_MTL: io.BytesIO(library)})
     return _load_scene(
         io.BytesIO(text.encode()), file_type="obj", resolver=resolver, process=False, group_material=True
     )
@@ -619,6 +632,7 @@ def _read_obj(path: Path) -> trimesh.Scene:
 
 def _load_scene(file_obj, **kwargs) -> trimesh.Scene:
     """`trimesh.load_scene` (trimesh >= 4.5), or ``trimesh.load(force="scene")`` before it."""
+    trimesh = _trimesh()
     if hasattr(trimesh, "load_scene"):
         return trimesh.load_scene(file_obj, **kwargs)
     return trimesh.load(file_obj, force="scene", **kwargs)
@@ -675,7 +689,7 @@ def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, 
 
 def _closed_and_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[bool, float]:
     """Watertightness after merging vertices by position, and the signed volume [m^3]."""
-    merged = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    merged = _trimesh().Trimesh(vertices=vertices, faces=faces, process=False)
     merged.merge_vertices()
     closed = bool(merged.is_watertight)
     return closed, float(merged.volume) if closed else float("nan")
