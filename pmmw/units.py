@@ -265,7 +265,9 @@ def parse_quantity(
     return _checked(float(q.to(target).magnitude), value, kind, noun, file, key)
 
 
-def _checked(out: float, value: object, kind: str, noun: str, file=None, key=None) -> float:
+def _checked(
+    out: float, value: object, kind: str, noun: str, file: str | Path | None = None, key: str | None = None
+) -> float:
     """``out``, the parsed ``value`` in its unit, if it is finite and in the kind's range."""
     if not math.isfinite(out):
         raise UserError(f"{value!r} is not a finite {noun}", file, key)

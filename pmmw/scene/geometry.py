@@ -35,7 +35,7 @@ import struct
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 from urllib.parse import unquote
 
 import numpy as np
@@ -44,6 +44,7 @@ from pmmw.constants import DEGENERATE_REL
 from pmmw.errors import UserError, UserErrors, warn
 from pmmw.io.inputs import format_suffix, no_extension
 from pmmw.memory import check_fits, release_freed_memory
+from pmmw.scene import glb
 
 if TYPE_CHECKING:
     import trimesh
@@ -206,6 +207,61 @@ def load_entry_mesh(path, up_axis: str | None = None) -> list[tuple[str, trimesh
         del scene
         if size >= _RELEASE_BYTES:
             release_freed_memory()  # the reader's text and lists: ~400 B a triangle of an OBJ, else resident
+
+
+class _Part:
+    """A part read without trimesh (`glb.read_glb`): what `_build_entry` and `_warn_if_z_up` use of
+    a ``trimesh.Trimesh``, by trimesh's formulas (its ``face_normals``, ``area_faces``)."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        self.vertices, self.faces = vertices, faces
+
+    @property
+    def area_faces(self) -> np.ndarray:
+        return np.linalg.norm(self._crosses(), axis=1) / 2.0
+
+    @property
+    def face_normals(self) -> np.ndarray:
+        c = self._crosses()
+        n = np.linalg.norm(c, axis=1)
+        return np.divide(c, n[:, None], out=np.zeros_like(c), where=n[:, None] > 0.0)
+
+    def _crosses(self) -> np.ndarray:
+        vectors = np.diff(self.vertices[self.faces], axis=1)
+        return np.cross(vectors[:, 0], vectors[:, 1])
+
+
+def _entry_parts(path, up_axis: str | None = None) -> list[tuple[str, Any]]:
+    """`load_entry_mesh`'s parts, read without trimesh where `glb.read_glb` reads the file (the
+    same names, vertices and faces to the bit), by `load_entry_mesh` otherwise. Each part has
+    ``vertices``, ``faces``, ``face_normals`` and ``area_faces``; the same checks and errors."""
+    path = Path(path)
+    fmt = _mesh_format(path)
+    if fmt != "gltf" or up_axis not in (None, "y", "z"):
+        return load_entry_mesh(path, up_axis)
+    _check_file(path, fmt)
+    _check_load_memory(path, fmt)
+    try:
+        read = glb.read_glb(path.read_bytes()) if format_suffix(path) == ".glb" else None
+    except OSError:
+        read = None
+    if not read:  # trimesh reads it, or says what is wrong with it
+        return load_entry_mesh(path, up_axis)
+    rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis, fmt) == "y" else None
+    parts = []
+    for _, material, vertices, faces, matrix in read:
+        with _quiet():
+            vertices, faces = glb.place(vertices, faces, matrix)
+            if rotate is not None:
+                vertices = vertices @ rotate.T
+        parts.append((material, _Part(vertices, faces)))
+    n_not_finite = sum(int((~np.isfinite(m.vertices)).any(axis=1).sum()) for _, m in parts)
+    if n_not_finite:
+        what = "1 vertex is" if n_not_finite == 1 else f"{n_not_finite} vertices are"
+        raise UserError(f"{what} not finite (NaN or infinite coordinates)", file=path)
+    if up_axis is None:
+        _warn_if_z_up(path, parts)
+    return parts
 
 
 def _parts(path: Path, fmt: str, scene, up_axis) -> list[tuple[str, trimesh.Trimesh]]:
@@ -688,11 +744,9 @@ def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, 
 
 
 def _closed_and_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[bool, float]:
-    """Watertightness after merging vertices by position, and the signed volume [m^3]."""
-    merged = _trimesh().Trimesh(vertices=vertices, faces=faces, process=False)
-    merged.merge_vertices()
-    closed = bool(merged.is_watertight)
-    return closed, float(merged.volume) if closed else float("nan")
+    """Watertightness after merging vertices by position, and the signed volume [m^3]: trimesh's,
+    without importing it (`glb.closed_and_volume`)."""
+    return glb.closed_and_volume(vertices, faces)
 
 
 def build_geometry(entries, scenario_file=None) -> SceneGeometry:
@@ -800,7 +854,7 @@ def _build_entry(entry, key: str, scenario_file):
         raise UserError(f"mesh file not found: {mesh_path}", file=scenario_file, key=f"{key}.mesh")
 
     try:
-        parts = load_entry_mesh(mesh_path, getattr(entry, "up_axis", None))
+        parts = _entry_parts(mesh_path, getattr(entry, "up_axis", None))
     except UserError as e:
         raise UserError(f"{e.file or mesh_path}: {e.message}", file=scenario_file, key=f"{key}.mesh") from None
     names = [name for name, _ in parts]
