@@ -26,9 +26,10 @@ LATER = (
     "pmmw.physical_optics.solver",
     "pmmw.reflectance.montecarlo",
 )
-#: Imported when used on the render's way too, but not by importing it: a mesh's reader (trimesh,
-#: with scipy.spatial, scipy.optimize, scipy.special, scipy.ndimage), pint for units outside
-#: `pmmw.units._EXACT`, and scipy.special, scipy.ndimage for the imager model and adaptive sampling.
+#: Imported where used, not by importing the render's modules: trimesh (with scipy.spatial,
+#: scipy.optimize, scipy.special, scipy.ndimage) for a mesh other than the usual GLB
+#: (`pmmw.scene.glb`), pint for units outside `pmmw.units._EXACT`, and scipy.special,
+#: scipy.ndimage for the imager model and adaptive sampling, after the first ray.
 WHEN_USED = ("trimesh", "pint", "scipy.special", "scipy.ndimage", "scipy.spatial", "scipy.optimize")
 
 
@@ -70,8 +71,20 @@ main()
 """
 
 
-def _at_first_ray(scenario, out, names=LATER) -> set:
-    run = [sys.executable, "-c", _AT_FIRST_RAY, "render", str(scenario), "--out", str(out), "-q", "--workers", "1"]
+def _at_first_ray(scenario, out, names=LATER, *args) -> set:
+    run = [
+        sys.executable,
+        "-c",
+        _AT_FIRST_RAY,
+        "render",
+        str(scenario),
+        "--out",
+        str(out),
+        "-q",
+        "--workers",
+        "1",
+        *args,
+    ]
     res = subprocess.run(run, capture_output=True, text=True, cwd=ROOT)
     assert res.returncode == 0 and res.stdout, res.stderr
     return {m for m in names if m in res.stdout.split()}
@@ -80,14 +93,17 @@ def _at_first_ray(scenario, out, names=LATER) -> set:
 def test_a_render_traces_its_first_ray_without_them(tmp_path):
     """What `pmmw render` has imported when its first ray is traced: none of `LATER`, and pint not
     for a scenario in the usual units; the control, a scenario with a unit pint alone reads
-    (``1.5 metre``), has imported pint by then."""
+    (``1.5 metre``), has imported pint by then. A scene of GLB meshes (the landing, made small)
+    has imported none of `WHEN_USED`; the control, the OBJ meshes of the first, trimesh."""
     from tests.scenes import tiny_scenario
 
     scn = tiny_scenario(tmp_path)
     assert _at_first_ray(scn, tmp_path / "a") == set()
-    assert _at_first_ray(scn, tmp_path / "b", ("pint",)) == set()
+    assert _at_first_ray(scn, tmp_path / "b", ("pint", "trimesh")) == {"trimesh"}
     scn.write_text(scn.read_text().replace("[0, 0, 1.5]", "[0, 0, 1.5 metre]"))
     assert _at_first_ray(scn, tmp_path / "c", ("pint",)) == {"pint"}
+    landing = ROOT / "configs" / "landing_95ghz.yaml"
+    assert _at_first_ray(landing, tmp_path / "d", WHEN_USED, "--set", "imager.resolution=[16, 16]") == set()
 
 
 def test_control_the_check_sees_a_module_that_imports_them():
