@@ -89,10 +89,13 @@ def resolve(
 ) -> Resolved:
     """Load and check the scenario and every asset it names; raise `UserErrors` on problems.
     ``data``, ``values``: a scenario mapping and typed overrides (`config.load_scenario`)."""
-    scn = load_scenario(path, list(overrides), cli=cli, data=data, values=values)
-    db = material_database(scn)
-    check_material_ids(scn.scene, db, scn.source_file)
-    geom = build_geometry(scn.scene, scenario_file=scn.source_file)
+    with timings.phase("scenario"):
+        scn = load_scenario(path, list(overrides), cli=cli, data=data, values=values)
+    with timings.phase("materials"):
+        db = material_database(scn)
+        check_material_ids(scn.scene, db, scn.source_file)
+    with timings.phase("meshes"):
+        geom = build_geometry(scn.scene, scenario_file=scn.source_file)
     refracting = {m for m in geom.material_ids if db.get(m).kind == "dielectric"}
     for obj, tight in zip(geom.objects, geom.object_watertight):
         mats = {
@@ -280,15 +283,19 @@ def make_job(res: Resolved, f: float) -> TraceJob:
         error_footprint=footprint,
         atmosphere_tolerance=r.atmosphere_tolerance,
     )
-    atm = atmosphere_model(scn, f)
+    with timings.phase("atmosphere"):
+        atm = atmosphere_model(scn, f)
+        sky = make_sky(scn.sky, f, atmosphere_model=atm)
+    with timings.phase("media"):
+        media = build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere)
     return TraceJob(
         vertices=geom.vertices,
         faces=geom.faces,
         face_normals=geom.face_normals,
         face_medium=(geom.face_material + 1).astype(np.int32),
-        media=build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere),
+        media=media,
         camera=cam,
-        sky=make_sky(scn.sky, f, atmosphere_model=atm),
+        sky=sky,
         frequency=f,
         settings=settings,
         atmosphere=atm,

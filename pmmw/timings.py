@@ -12,7 +12,7 @@ import contextlib
 import os
 import time
 
-__all__ = ["AFTER_TRACE", "clear", "lines", "mark", "phase", "process_start", "recorded"]
+__all__ = ["AFTER_TRACE", "add", "clear", "lines", "mark", "phase", "process_start", "recorded"]
 
 #: The phases of a render after its trace: what the image costs beyond its rays.
 AFTER_TRACE = ("imager model", "region statistics", "EXR", "previews", "report")
@@ -59,6 +59,11 @@ def mark(step: str) -> None:
         _MARKS.append((step, _since_start()))
 
 
+def add(step: str, seconds: float) -> None:
+    """Add ``seconds`` [s] to ``step`` (a phase timed elsewhere: in a worker process)."""
+    _PHASES[step] = _PHASES.get(step, 0.0) + seconds
+
+
 @contextlib.contextmanager
 def phase(step: str):
     """Add the seconds the ``with`` block takes to ``step``."""
@@ -66,7 +71,7 @@ def phase(step: str):
     try:
         yield
     finally:
-        _PHASES[step] = _PHASES.get(step, 0.0) + time.perf_counter() - t0
+        add(step, time.perf_counter() - t0)
 
 
 def recorded() -> tuple[list[tuple[str, float]], dict[str, float]]:

@@ -2,7 +2,10 @@
 
 Inside pmmw every quantity is SI: [Hz], [m], [rad], [K], [Np/m] for power attenuation, [kg/m^3].
 pint parses the strings; this module only knows which unit each kind of quantity has and what a
-bare number means for it.
+bare number means for it. The usual units (``GHz``, ``m``, ``deg``, ``K``, ``g/m3``, ``dB/km``...,
+`_EXACT`) are converted here by pint's own factor, to the same float, without pint: importing
+pint and building its registry takes about 0.3 s of every command's start on 2 cores, and a
+scenario written in those units never needs it.
 
 A unit is accepted for a kind when its pint *root units* are the kind's, not merely its
 dimensionality: pint counts the radian as dimensionless, so by dimensionality ``0.5 rad``,
@@ -36,7 +39,7 @@ from typing import TYPE_CHECKING
 
 from pmmw.errors import UserError
 
-if TYPE_CHECKING:  # the type checker's view of the pint imported below without Dask
+if TYPE_CHECKING:  # the type checker's view of the pint that `ureg` imports without Dask
     from pathlib import Path
 
     import pint
@@ -58,8 +61,6 @@ def _import_pint() -> ModuleType:
     return pint
 
 
-pint = _import_pint()  # noqa: F811  (the module the type checker sees above)
-
 # private names for the multiplicative level units of attenuation (see the module docstring)
 _NEPER = "pmmw_power_neper"
 _DECIBEL = "pmmw_power_decibel"
@@ -68,7 +69,8 @@ _NEPER_PER_DB = math.log(10.0) / 10.0  # power: 1 dB = ln(10)/10 Np
 
 @lru_cache(maxsize=1)
 def ureg() -> pint.UnitRegistry:
-    reg: pint.UnitRegistry = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    """pint's unit registry with pmmw's level units, made (and pint imported) on first use."""
+    reg: pint.UnitRegistry = _import_pint().UnitRegistry(autoconvert_offset_to_baseunit=True)
     reg.define(f"{_NEPER} = [pmmw_power_level]")
     reg.define(f"{_DECIBEL} = {_NEPER_PER_DB!r} * {_NEPER}")
     return reg
@@ -102,6 +104,26 @@ _KINDS: dict[str, tuple[str, str | None, str, str]] = {
     "rate": ("m/s", "mm/h", "'10 mm/h'", "rain rate"),
     "attenuation": (f"{_NEPER}/m", f"{_DECIBEL}/km", "'0.9 dB/km' or '0.2 Np/km'", "attenuation"),
     "time": ("s", "s", "'10 ms' or '2 us'", "duration"),
+}
+
+_DEG = 0.017453292519943295  # pint's degree in radians (pi / 180)
+_MM_PER_H = 2.7777777777777776e-07  # pint's mm/h in m/s
+_DB_PER_KM = 0.0002302585092994046  # this registry's dB/km in Np/m (ln(10)/10 / 1000, as pint rounds it)
+
+#: kind -> {unit as written (``""``: a bare number): its factor to the kind's internal unit}, for
+#: the units that pint converts by one multiplication (no offset): ``parse_quantity`` multiplies
+#: by the factor itself, which is pint's own to the bit (tests/config/test_units.py compares each
+#: factor and the values parsed both ways), so pint is imported only for the other units.
+_EXACT: dict[str, dict[str, float]] = {
+    "frequency": {"Hz": 1.0, "kHz": 1e3, "MHz": 1e6, "GHz": 1e9, "THz": 1e12},
+    "length": {"": 1.0, "nm": 1e-9, "um": 1e-6, "mm": 1e-3, "cm": 1e-2, "m": 1.0, "km": 1e3},
+    "angle": {"": _DEG, "deg": _DEG, "rad": 1.0, "mrad": 1e-3},
+    "temperature": {"": 1.0, "K": 1.0},
+    "temperature_difference": {"": 1.0, "K": 1.0, "mK": 1e-3},
+    "density": {"": 1e-3, "g/m3": 1e-3, "kg/m3": 1.0},
+    "rate": {"": _MM_PER_H, "mm/h": _MM_PER_H, "m/s": 1.0},
+    "attenuation": {"": _DB_PER_KM, "dB/km": _DB_PER_KM, "dB/m": 0.23025850929940458, "Np/km": 1e-3, "Np/m": 1.0},
+    "time": {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6},
 }
 
 # units a misspelt one is compared with, case-insensitively ('95 Ghz' -> did you mean 'GHz'?)
@@ -180,8 +202,6 @@ def parse_quantity(
         internal, bare_unit, example, noun = _KINDS[kind]
     except KeyError:  # programming error, not user error
         raise ValueError(f"unknown quantity kind {kind!r}") from None
-    reg = ureg()
-    target = reg.Unit(_unit_text(unit, kind)) if unit is not None else reg.Unit(internal)
 
     def fail(why: str) -> UserError:
         return UserError(f"{value!r} {why}; expected e.g. {example}", file, key)
@@ -197,6 +217,13 @@ def parse_quantity(
         number, text = float(m.group(1)), m.group(2)
     else:
         number, text = float(value), ""
+    factor = _EXACT[kind].get(text) if unit is None else None
+    if factor is not None:
+        if not math.isfinite(number):
+            raise UserError(f"{value!r} is not a finite {noun}", file, key)
+        return _checked(number * factor, value, kind, noun, file, key)
+    reg = ureg()
+    target = reg.Unit(_unit_text(unit, kind)) if unit is not None else reg.Unit(internal)
     if not text:
         if bare_unit is None and number != 0.0:  # zero is zero in any unit
             raise UserError(f"a bare number is ambiguous for {_a(noun)}: give a unit, e.g. {example}", file, key)
@@ -235,7 +262,13 @@ def parse_quantity(
             file,
             key,
         )
-    out = float(q.to(target).magnitude)
+    return _checked(float(q.to(target).magnitude), value, kind, noun, file, key)
+
+
+def _checked(
+    out: float, value: object, kind: str, noun: str, file: str | Path | None = None, key: str | None = None
+) -> float:
+    """``out``, the parsed ``value`` in its unit, if it is finite and in the kind's range."""
     if not math.isfinite(out):
         raise UserError(f"{value!r} is not a finite {noun}", file, key)
     if kind == "temperature" and not 0.0 <= out <= TEMPERATURE_MAX:

@@ -122,9 +122,10 @@ def render(
         "--timings",
         metavar="",
         help="Print where the time went at the end: when the command started, the "
-        "pipeline was imported, the outputs checked, the kernels loaded and the "
-        "first tile sent (seconds after the process started), then each phase "
-        "(resolve, trace, imager model, region statistics, EXR, previews, report).",
+        "pipeline was imported, the outputs checked, the kernels loaded, the "
+        "first tile sent and its first ray traced (seconds after the process started), then each phase "
+        "(scenario, materials, meshes, atmosphere, kernels, the worker's Embree scene, "
+        "trace, imager model, region statistics, EXR, previews, report).",
     ),
 ):
     """Render a scenario to an EXR polarization stack and a report."""

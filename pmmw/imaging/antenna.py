@@ -43,7 +43,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import j0
 
 from pmmw.imaging.imager import PSF_ENERGY_TAIL, FloatArray, _airy_encircled_energy, blur
 
@@ -95,13 +94,15 @@ class Aperture:
 
     def field(self, u: np.typing.ArrayLike) -> np.ndarray:
         """F(u) [-] (module docstring) at ``u`` = k a sin(theta) (ndarray)."""
+        from scipy import special  # imported when the imager is modelled, after the trace
+
         u = np.asarray(u, dtype=float)
         flat = u.ravel()
         rho, w = self._nodes(float(flat.max(initial=0.0)))
         fw = illumination(rho, self.kind, self.edge_taper_db, self.blockage) * rho * w
         out = np.empty_like(flat)
         for s in range(0, flat.size, 4096):  # rows of (4096, nodes): bounded memory
-            out[s : s + 4096] = j0(np.outer(flat[s : s + 4096], rho)) @ fw
+            out[s : s + 4096] = special.j0(np.outer(flat[s : s + 4096], rho)) @ fw
         return out.reshape(u.shape)
 
     def power(self, u: np.typing.ArrayLike) -> np.ndarray:

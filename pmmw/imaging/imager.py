@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-from scipy.special import j1
 
 if TYPE_CHECKING:
     from pmmw.imaging.antenna import FieldPSF
@@ -44,6 +43,8 @@ def airy(theta: FloatArray, k0: float, radius: float) -> FloatArray:
     radius : float
         Aperture radius a [m].
     """
+    from scipy.special import j1  # imported when the imager is modelled, after the trace
+
     x = k0 * radius * np.sin(np.abs(theta))
     out = np.ones_like(x)
     nz = x > 1e-12
@@ -53,7 +54,7 @@ def airy(theta: FloatArray, k0: float, radius: float) -> FloatArray:
 
 def _airy_encircled_energy(x):
     """Fraction of Airy energy within k a sin(th) = x (Rayleigh: 1 - J0^2 - J1^2)."""
-    from scipy.special import j0
+    from scipy.special import j0, j1
 
     return 1.0 - j0(x) ** 2 - j1(x) ** 2
 

@@ -138,7 +138,6 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 import numpy.typing as npt
-from scipy import special
 
 from pmmw.errors import UserError, UserErrors
 from pmmw.jit import inline, njit
@@ -344,6 +343,8 @@ def _ggx_a_up(c, s2, alpha2):
 
 def _beckmann_a_up(c, s2, alpha2):
     """Beckmann projected area for c >= 0 (Smith, closed form)."""
+    from scipy import special  # where used: not imported before a render's first ray
+
     sa = np.sqrt(alpha2 * s2)  # alpha sin(theta)
     with np.errstate(divide="ignore", invalid="ignore"):
         a = np.where(sa > 0.0, c / np.where(sa > 0.0, sa, 1.0), np.inf)
@@ -357,6 +358,8 @@ def _phong_a_up(e, c, s2):
     ``A = c (1 - I_x((e+2)/2, 1/2)/2) + K sin^(e+2)(theta)``, ``x = sin^2(theta)`` (module
     docstring); e may be an array.
     """
+    from scipy import special
+
     e = np.asarray(e, dtype=np.float64)
     ib = special.betainc(0.5 * (e + 2.0), 0.5, np.clip(s2, 0.0, 1.0))
     log_k = np.log(e + 2.0) + special.betaln(0.5, 0.5 * (e + 3.0)) - np.log(2.0 * np.pi * (e + 1.0))
@@ -772,6 +775,8 @@ class _ASProjectedArea:
         the exponent is small, and Gauss-Legendre converges to 1e-6 with 48 nodes per piece
         even for ex/ey = 1e5.
         """
+        from scipy import special
+
         x, wq = np.polynomial.legendre.leggauss(self._N_QUAD)
         s = np.sqrt(np.clip(1.0 - c * c, 0.0, 1.0))
         root = math.sqrt((self.ex + 2.0) * (self.ey + 2.0))

@@ -23,6 +23,10 @@ Broken files. A mesh that is empty, truncated, corrupt, unreadable, names an ext
 missing, or has non-finite vertices is a `UserError` saying what is wrong, never a traceback or a
 numpy warning: light checks (STL length, GLB header, glTF JSON and the files it names) run before
 trimesh, and whatever trimesh still trips on is reported with its exception.
+
+Reading. trimesh reads every format; a render builds its scene (`build_geometry`) from the usual
+GLB without it (`pmmw.scene.glb`: the same parts to the bit, and trimesh's closedness and volume by
+its own operations), since importing trimesh takes about 0.4 s of a render's start.
 """
 
 from __future__ import annotations
@@ -34,19 +38,32 @@ import os
 import re
 import struct
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 from urllib.parse import unquote
 
 import numpy as np
-import trimesh
 
 from pmmw.constants import DEGENERATE_REL
 from pmmw.errors import UserError, UserErrors, warn
 from pmmw.io.inputs import format_suffix, no_extension
 from pmmw.memory import check_fits, release_freed_memory
+from pmmw.scene import glb
+
+if TYPE_CHECKING:
+    import trimesh
+
+
+def _trimesh():
+    """trimesh, imported when a mesh is first read: with the SciPy modules it imports (spatial,
+    optimize, special, ndimage) about 0.4 s on 2 cores, which `import pmmw.pipeline` and a
+    scenario's validation without its meshes need not pay."""
+    import trimesh
+
+    return trimesh
+
 
 if TYPE_CHECKING:
     from pmmw.config.schema import SceneEntry, Transform
@@ -201,6 +218,62 @@ def load_entry_mesh(path: str | os.PathLike[str], up_axis: str | None = None) ->
             release_freed_memory()  # the reader's text and lists: ~400 B a triangle of an OBJ, else resident
 
 
+class _Part:
+    """A part read without trimesh (`glb.read_glb`): what `_build_entry` and `_warn_if_z_up` use of
+    a ``trimesh.Trimesh``: vertices (V, 3) float64 [m], faces (F, 3) int64, and each face's unit
+    normal (zero where degenerate) and area [m^2] from the cross product of its edges, as trimesh's."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        self.vertices, self.faces = vertices, faces
+
+    @property
+    def area_faces(self) -> np.ndarray:
+        return np.linalg.norm(self._crosses(), axis=1) / 2.0
+
+    @property
+    def face_normals(self) -> np.ndarray:
+        c = self._crosses()
+        n = np.linalg.norm(c, axis=1)
+        return np.divide(c, n[:, None], out=np.zeros_like(c), where=n[:, None] > 0.0)
+
+    def _crosses(self) -> np.ndarray:
+        vectors = np.diff(self.vertices[self.faces], axis=1)
+        return np.cross(vectors[:, 0], vectors[:, 1])
+
+
+def _entry_parts(path: str | os.PathLike[str], up_axis: str | None = None) -> list[tuple[str, Any]]:
+    """`load_entry_mesh`'s parts, read without trimesh where `glb.read_glb` reads the file (the
+    same names, vertices and faces to the bit), by `load_entry_mesh` otherwise. Each part has
+    ``vertices``, ``faces``, ``face_normals`` and ``area_faces``; the same checks and errors."""
+    path = Path(path)
+    fmt = _mesh_format(path)
+    if fmt != "gltf" or up_axis not in (None, "y", "z"):
+        return load_entry_mesh(path, up_axis)
+    _check_file(path, fmt)
+    _check_load_memory(path, fmt)
+    try:
+        read = glb.read_glb(path.read_bytes()) if format_suffix(path) == ".glb" else None
+    except OSError:
+        read = None
+    if not read:  # trimesh reads it, or says what is wrong with it
+        return load_entry_mesh(path, up_axis)
+    rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis, fmt) == "y" else None
+    parts = []
+    for _, material, vertices, faces, matrix in read:
+        with _quiet():
+            vertices, faces = glb.place(vertices, faces, matrix)
+            if rotate is not None:
+                vertices = vertices @ rotate.T
+        parts.append((material, _Part(vertices, faces)))
+    n_not_finite = sum(int((~np.isfinite(m.vertices)).any(axis=1).sum()) for _, m in parts)
+    if n_not_finite:
+        what = "1 vertex is" if n_not_finite == 1 else f"{n_not_finite} vertices are"
+        raise UserError(f"{what} not finite (NaN or infinite coordinates)", file=path)
+    if up_axis is None:
+        _warn_if_z_up(path, parts)
+    return parts
+
+
 def _parts(path: Path, fmt: str, scene: trimesh.Scene, up_axis: str | None) -> list[tuple[str, trimesh.Trimesh]]:
     """`load_entry_mesh`'s parts of a scene trimesh has read."""
     rotate = Y_UP_TO_Z_UP if file_up_axis(path, up_axis, fmt) == "y" else None
@@ -209,7 +282,7 @@ def _parts(path: Path, fmt: str, scene: trimesh.Scene, up_axis: str | None) -> l
     for node in sorted(scene.graph.nodes_geometry):
         transform, geom_name = scene.graph[node]
         geom = scene.geometry[geom_name]
-        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+        if not isinstance(geom, _trimesh().Trimesh) or len(geom.faces) == 0:
             continue  # points, lines and empty primitives carry no surface
         vertices = np.asarray(geom.vertices, dtype=np.float64)
         faces = np.asarray(geom.faces, dtype=np.int64)
@@ -218,7 +291,7 @@ def _parts(path: Path, fmt: str, scene: trimesh.Scene, up_axis: str | None) -> l
                 f"faces name vertices past the mesh's {len(vertices)} vertices (a truncated file?)", file=path
             )
         with _quiet():  # a NaN vertex is reported below, not as numpy's warning
-            mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+            mesh = _trimesh().Trimesh(vertices=vertices, faces=faces, process=False)
             mesh.apply_transform(transform)  # flips the winding itself for mirroring transforms
             if rotate is not None:
                 mesh.vertices = mesh.vertices @ rotate.T
@@ -244,7 +317,9 @@ GROUND_COVER = 0.5  # [-]
 GROUND_MARGIN = 2.0  # [-]
 
 
-def _end_flat_area(parts: list[tuple[str, trimesh.Trimesh]], axis: int, lo: np.ndarray, hi: np.ndarray) -> float:
+def _end_flat_area(
+    parts: Sequence[tuple[str, trimesh.Trimesh | _Part]], axis: int, lo: np.ndarray, hi: np.ndarray
+) -> float:
     """The larger of the areas of flat faces lying at the lowest and at the highest coordinate
     along ``axis`` (within 1e-4 of the scene's size) with their normals along it [m^2]."""
     tol = 1e-4 * float((hi - lo).max())
@@ -259,7 +334,7 @@ def _end_flat_area(parts: list[tuple[str, trimesh.Trimesh]], axis: int, lo: np.n
     return max(area.values())
 
 
-def _warn_if_z_up(path: Path, parts: list[tuple[str, trimesh.Trimesh]]) -> None:
+def _warn_if_z_up(path: Path, parts: Sequence[tuple[str, trimesh.Trimesh | _Part]]) -> None:
     """glTF is Y-up by specification, but exporters that write their own Z-up coordinates as they
     are (trimesh among them) make an upright object lie down and a flat scene stand on its edge.
     A file that states its up axis (``asset.extras.up_axis``) is read so, without a warning; one
@@ -617,7 +692,7 @@ def _read_obj(path: Path) -> trimesh.Scene:
     if names:
         text = f"mtllib {_OBJ_NAMES_MTL}\n" + text
         library = "".join(f"newmtl {n}\n" for n in names).encode()
-        resolver = trimesh.resolvers.ZipResolver({_OBJ_NAMES_MTL: io.BytesIO(library)})
+        resolver = _trimesh().resolvers.ZipResolver({_OBJ_NAMES_MTL: io.BytesIO(library)})
     return _load_scene(
         io.BytesIO(text.encode()), file_type="obj", resolver=resolver, process=False, group_material=True
     )
@@ -625,6 +700,7 @@ def _read_obj(path: Path) -> trimesh.Scene:
 
 def _load_scene(file_obj: str | Path | IO[bytes], **kwargs: Any) -> trimesh.Scene:
     """`trimesh.load_scene` (trimesh >= 4.5), or ``trimesh.load(force="scene")`` before it."""
+    trimesh = _trimesh()
     if hasattr(trimesh, "load_scene"):
         return trimesh.load_scene(file_obj, **kwargs)
     scene = trimesh.load(file_obj, force="scene", **kwargs)
@@ -682,11 +758,9 @@ def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, 
 
 
 def _closed_and_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[bool, float]:
-    """Watertightness after merging vertices by position, and the signed volume [m^3]."""
-    merged = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
-    merged.merge_vertices()
-    closed = bool(merged.is_watertight)
-    return closed, float(merged.volume) if closed else float("nan")
+    """Watertightness after merging vertices by position, and the signed volume [m^3]: trimesh's,
+    without importing it (`glb.closed_and_volume`)."""
+    return glb.closed_and_volume(vertices, faces)
 
 
 def build_geometry(entries: Iterable[SceneEntry], scenario_file: str | Path | None = None) -> SceneGeometry:
@@ -804,7 +878,7 @@ def _build_entry(
         raise UserError(f"mesh file not found: {mesh_path}", file=scenario_file, key=f"{key}.mesh")
 
     try:
-        parts = load_entry_mesh(mesh_path, getattr(entry, "up_axis", None))
+        parts = _entry_parts(mesh_path, getattr(entry, "up_axis", None))
     except UserError as e:
         raise UserError(f"{e.file or mesh_path}: {e.message}", file=scenario_file, key=f"{key}.mesh") from None
     names = [name for name, _ in parts]

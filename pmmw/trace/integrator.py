@@ -30,7 +30,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import binary_dilation
 
 from pmmw import rng
 from pmmw.rng import Branch, Purpose
@@ -313,6 +312,8 @@ class Integrator:
             need[active[np.max(err[:, :2], axis=1) > st.target_error * st.error_footprint]] = True
             # a pixel that a small object covers in part may miss it with every one of its first
             # samples (zero variance): its neighbours that did see the edge keep it sampling
+            from scipy.ndimage import binary_dilation  # adaptive sampling only: not imported before a first ray
+
             grown = binary_dilation(need.reshape(h, w), structure=_NEIGHBOURS).ravel()
             active = active[grown[active]]
             batch = done  # double the samples of the pixels that still need them

@@ -88,10 +88,17 @@ def _reuse_freed_memory():
         mallopt(ctypes.c_int(param), ctypes.c_int(value))
 
 
-def _init_worker(job: TraceJob, kind: str):
+#: `timings`' phase of a worker's set-up before its first tile (its Embree scene: the BVH).
+WORKER_SETUP = "worker's scene (Embree)"
+
+
+def _init_worker(job: TraceJob, kind: str) -> float:
+    """Make this process's `Integrator` (its Embree scene); returns the seconds it took."""
     global _WORKER
+    t0 = time.perf_counter()
     _reuse_freed_memory()
     _WORKER = Integrator(job, make_intersector(job.vertices, job.faces, kind=kind))
+    return time.perf_counter() - t0
 
 
 def _render(tile) -> TileResult:
@@ -316,7 +323,8 @@ def render_tiles(
     workers = default_workers() if workers is None else max(1, int(workers))
     workers = min(workers, max(1, len(todo)))
     if todo and client is None:
-        prepare_kernels(job, notify, intersector)
+        with timings.phase("kernels"):
+            prepare_kernels(job, notify, intersector)
         timings.mark("kernels loaded")
     start = time.perf_counter()
     rays = sum(r.rays for r in results.values())
@@ -340,8 +348,9 @@ def render_tiles(
                 f"{len(tiles)} tiles done{kept})"
             ) from None
     elif todo and workers == 1:
-        _init_worker(job, intersector)
         timings.mark("first tile sent")
+        timings.add(WORKER_SETUP, _init_worker(job, intersector))
+        timings.mark("first ray")
         for t in todo:
             _collect(_render(t))
     elif todo:
@@ -455,11 +464,13 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
     ctx = mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
     forked = ctx.get_start_method() == "fork"
     if forked:  # the kernels are compiled or loaded here already (`prepare_kernels`): every worker inherits them
-        prime(job)
+        with timings.phase("sky tables"):
+            prime(job)
     pixels = max((x1 - x0) * (y1 - y0) for _, x0, y0, x1, y1 in todo)
     queue = deque(_by_cost(job, todo))
     deaths = dict.fromkeys((t[0] for t in todo), 0)
     idle_deaths = 0
+    ready_seen = False
     live: list[_Worker] = []
     retired: list[_Worker] = []
 
@@ -490,7 +501,11 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                     status, value = reply
                     if status == "error":
                         raise value[0] from _WorkerTraceback(value[1])
-                    if value is not None:  # a tile (None: the worker is ready)
+                    if isinstance(value, float):  # the worker is ready: its set-up's seconds
+                        if not ready_seen:  # the first worker's: the one that traces the first ray
+                            timings.add(WORKER_SETUP, value)
+                            ready_seen = True
+                    else:  # a tile
                         w.tiles.popleft()
                         k = w.slot_of.popleft()
                         collect(value if w.slots is None else w.slots.take(k, value))
@@ -530,6 +545,7 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                         w.conn.send((w.tiles[-1], w.slot_of[-1]))
                     except OSError:  # it died just now: its sentinel says so next
                         break
+                    timings.mark("first ray")  # a ready worker traces it at once
                 if not w.tiles:  # nothing left for it: EOF ends it
                     live.remove(w)
                     w.conn.close()

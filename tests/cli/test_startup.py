@@ -9,12 +9,31 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 
-#: Modules not needed before a render's first ray (each ~0.1-0.5 s to import on 2 cores).
-#: (scipy.ndimage, scipy.spatial, scipy.optimize come with trimesh, which reads the meshes.)
-LATER = ("matplotlib", "xarray", "dask", "jinja2", "scipy.signal", "scipy.stats", "scipy.interpolate")
+#: Modules not needed before a render's first ray (each ~0.1-0.5 s to import on 2 cores), and the
+#: other commands' stacks (the API's Datasets, sweeps, physical optics, reflectance).
+LATER = (
+    "matplotlib",
+    "matplotlib.pyplot",
+    "xarray",
+    "zarr",
+    "dask",
+    "jinja2",
+    "scipy.signal",
+    "scipy.stats",
+    "scipy.interpolate",
+    "pmmw.api",
+    "pmmw.sweeps.run",
+    "pmmw.physical_optics.solver",
+    "pmmw.reflectance.montecarlo",
+)
+#: Imported where used, not by importing the render's modules: trimesh (with scipy.spatial,
+#: scipy.optimize, scipy.special, scipy.ndimage) for a mesh other than the usual GLB
+#: (`pmmw.scene.glb`), pint for units outside `pmmw.units._EXACT`, and scipy.special,
+#: scipy.ndimage for the imager model and adaptive sampling, after the first ray.
+WHEN_USED = ("trimesh", "pint", "scipy.special", "scipy.ndimage", "scipy.spatial", "scipy.optimize")
 
 
-def _loaded(code: str) -> set:
+def _loaded(code: str, names=LATER) -> set:
     out = subprocess.run(
         [sys.executable, "-c", "import sys\n" + code + "\nprint(' '.join(sorted(sys.modules)))"],
         capture_output=True,
@@ -22,7 +41,7 @@ def _loaded(code: str) -> set:
         check=True,
         cwd=ROOT,
     ).stdout.split()
-    return {m for m in LATER if m in out}
+    return {m for m in names if m in out}
 
 
 def test_the_command_line_and_the_pipeline_import_none_of_them():
@@ -30,6 +49,69 @@ def test_the_command_line_and_the_pipeline_import_none_of_them():
     # everything `pmmw render` imports before it traces: the pipeline, the scenario's schema and
     # its atmosphere, the scene loader, the tracer and its process pool
     assert _loaded("import pmmw.pipeline, pmmw.trace.pool, pmmw.atmosphere.model, pmmw.scene.geometry") == set()
+    # nor these, which a render imports where it uses them
+    code = "import pmmw_cli.cli, pmmw.pipeline, pmmw.trace.pool, pmmw.atmosphere.model, pmmw.scene.geometry"
+    assert _loaded(code, WHEN_USED) == set()
+
+
+#: `python -c` of a render (`pmmw render ARGV`) that prints the modules imported when its first
+#: ray is traced (`pmmw.timings`' mark "first ray") and stops there.
+_AT_FIRST_RAY = """import os, sys
+from pmmw import timings
+mark = timings.mark
+def stop_at_first_ray(step):
+    mark(step)
+    if step == "first ray":
+        print(" ".join(sorted(sys.modules)), flush=True)
+        os._exit(0)
+timings.mark = stop_at_first_ray
+from pmmw_cli.__main__ import main
+sys.argv = ["pmmw", *sys.argv[1:]]
+main()
+"""
+
+
+def _at_first_ray(scenario, out, names=LATER, *args) -> set:
+    run = [
+        sys.executable,
+        "-c",
+        _AT_FIRST_RAY,
+        "render",
+        str(scenario),
+        "--out",
+        str(out),
+        "-q",
+        "--workers",
+        "1",
+        *args,
+    ]
+    res = subprocess.run(run, capture_output=True, text=True, cwd=ROOT)
+    assert res.returncode == 0 and res.stdout, res.stderr
+    return {m for m in names if m in res.stdout.split()}
+
+
+def test_a_render_traces_its_first_ray_without_them(tmp_path):
+    """What `pmmw render` has imported when its first ray is traced: none of `LATER`, and pint not
+    for a scenario in the usual units; the control, a scenario with a unit pint alone reads
+    (``1.5 metre``), has imported pint by then. A scene of GLB meshes (the landing, made small)
+    has imported none of `WHEN_USED`; the control, the OBJ meshes of the first, trimesh."""
+    from tests.scenes import tiny_scenario
+
+    scn = tiny_scenario(tmp_path)
+    assert _at_first_ray(scn, tmp_path / "a") == set()
+    assert _at_first_ray(scn, tmp_path / "b", ("pint", "trimesh")) == {"trimesh"}
+    scn.write_text(scn.read_text().replace("[0, 0, 1.5]", "[0, 0, 1.5 metre]"))
+    assert _at_first_ray(scn, tmp_path / "c", ("pint",)) == {"pint"}
+    landing = ROOT / "configs" / "landing_95ghz.yaml"
+    assert _at_first_ray(landing, tmp_path / "d", WHEN_USED, "--set", "imager.resolution=[16, 16]") == set()
+
+
+def test_control_the_check_sees_a_module_that_imports_them():
+    # the same checks where they are imported: the API's functions, the Datasets' and figures'
+    # libraries (pmmw imports each inside the function that uses it), the examples' shapes (trimesh)
+    assert "pmmw.api" in _loaded("import pmmw\npmmw.render")
+    assert {"xarray", "zarr", "dask", "matplotlib.pyplot"} <= _loaded("import xarray, zarr, dask, matplotlib.pyplot")
+    assert {"trimesh", "scipy.special"} <= _loaded("import pmmw.scene.shapes", WHEN_USED)
 
 
 def test_control_each_comes_when_used():
@@ -67,12 +149,15 @@ def test_render_timings_prints_the_steps_and_phases(tmp_path):
         "outputs checked",
         "kernels loaded",
         "first tile sent",
+        "first ray",
         "done",
     ]
     times = [t for _, t in moments]
     assert times == sorted(times) and 0.0 < times[0]
     phases = {line.rsplit(None, 2)[0].strip() for line in lines if " at " not in line}
-    assert {"resolve", "trace", "imager model", "EXR", "previews", "report", "after the trace, together"} <= phases
+    # the steps before the first ray (the worker's scene: a one-worker render builds it here) and after the trace
+    before = {"scenario", "materials", "meshes", "resolve", "atmosphere", "media", "kernels", "worker's scene (Embree)"}
+    assert before | {"trace", "imager model", "EXR", "previews", "report", "after the trace, together"} <= phases
     res = subprocess.run([*run, str(tmp_path / "b")], capture_output=True, text=True, cwd=ROOT)
     assert res.returncode == 0 and "timings:" not in res.stderr
 

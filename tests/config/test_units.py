@@ -21,6 +21,7 @@ import pytest
 from pydantic import BaseModel
 from typer.testing import CliRunner
 
+from pmmw import units as units_mod
 from pmmw.config import load_scenario
 from pmmw.config.schema import Quantity, ScenarioConfig
 from pmmw.errors import UserError
@@ -585,8 +586,48 @@ def test_units_import_without_dask_and_dask_still_imports_after():
 
     code = (
         "import sys\nimport pmmw.units as u\n"
-        "print('dask' in sys.modules, 'jinja2' in sys.modules, u.parse_quantity('95 GHz', 'frequency'))\n"
+        "print('dask' in sys.modules, 'jinja2' in sys.modules, u.parse_quantity('95 gigahertz', 'frequency'))\n"
         "import dask.array\nprint('dask' in sys.modules)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "False", "95000000000.0", "True"]
+
+
+# numbers of every magnitude and sign, with digits that no factor divides evenly
+_VALUES = (0.0, -0.0, 1.0, 95.0, 0.8, 0.1, 1 / 3, -273.15, 1e-300, 6.02214076e23, 123456.789, 7e-7, 2.5, 1e308)
+
+
+@pytest.mark.parametrize("kind", sorted(units_mod._EXACT))
+def test_units_parsed_without_pint_are_pints_to_the_bit(kind):
+    """The usual units are converted without importing pint (`pmmw.units._EXACT`): each factor is
+    pint's, and every value parsed so is the float pint's own conversion gives (exact equality:
+    both are one multiplication by the same factor; a factor off by one bit fails)."""
+    reg = units_mod.ureg()
+    internal, bare = units_mod._KINDS[kind][:2]
+    for text, factor in units_mod._EXACT[kind].items():
+        source = reg.Unit(bare) if text == "" else reg.parse_units(units_mod._unit_text(text, kind))
+        assert factor == reg.get_root_units(source)[0] / reg.get_root_units(reg.Unit(internal))[0], text
+        for v in _VALUES:
+            expected = float(reg.Quantity(v, source).to(internal).magnitude)
+            try:
+                got = parse_quantity(f"{v!r} {text}" if text else v, kind)
+            except UserError:  # out of the kind's range (1e308 km, a negative temperature): pint's value too
+                with pytest.raises(UserError):
+                    units_mod._checked(expected, v, kind, kind)
+                continue
+            assert got == expected and math.copysign(1.0, got) == math.copysign(1.0, expected), (text, v)
+
+
+def test_the_usual_units_need_no_pint():
+    # a scenario in the usual units is parsed without importing pint; the control, a unit outside
+    # the table, imports it
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\nfrom pmmw.units import parse_quantity as p\n"
+        "p('95 GHz', 'frequency'), p('10 deg', 'angle'), p('15 g/m3', 'density'), p(288, 'temperature')\n"
+        "print('pint' in sys.modules)\np('0.5 inch', 'length')\nprint('pint' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "True"]
