@@ -37,7 +37,15 @@ from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf
 from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature
 from pmmw.io.exr import write_exr
 from pmmw.io.lock import FolderLock
-from pmmw.io.preview import write_depth_figure, write_figure, write_material_figure, write_regions_figure
+from pmmw.io.preview import (
+    region_colour_names,
+    write_depth_figure,
+    write_figure,
+    write_material_figure,
+    write_preview,
+    write_regions_figure,
+    write_regions_png,
+)
 from pmmw.io.progress import StatusLine, say
 from pmmw.io.report import write_report
 from pmmw.io.rundir import Staging, check_outputs, made_by_pmmw, os_problem, remove_stale_staging
@@ -991,14 +999,13 @@ def _stem(scn, f: float) -> str:
 
 
 def preview_channels(scn: ScenarioConfig) -> tuple[str, ...]:
-    """The channels a render draws a preview of: with ``output.previews: true`` (the default, or
-    ``all``) every channel of ``output.channels``, a PNG preview per channel as the product
-    promises; with ``quick`` I alone (the first channel listed where I is not), the image a person
-    reads first and the one `pmmw sweep`'s contact sheet and the Blender add-on show; none with
-    ``false``. Drawing each figure takes about 0.1 s, more than the imager model of a 500 x 500
-    image (docs/benchmarks_command.md): ``quick`` is for the warm command's speed."""
+    """The channels a render writes a plain preview of (`io.preview.write_preview`): with
+    ``output.previews: true`` (the default, or ``all``, or ``figures``) every channel of
+    ``output.channels``, a PNG preview per channel as the product promises; with ``quick`` I alone
+    (the first channel listed where I is not), the image a person reads first and the one
+    `pmmw sweep`'s contact sheet and the Blender add-on show; none with ``false``."""
     chans, on = scn.output.channels, scn.output.previews
-    if on is True or on == "all":
+    if on is True or on in ("all", "figures"):
         return tuple(chans)
     if not on:
         return ()
@@ -1006,24 +1013,29 @@ def preview_channels(scn: ScenarioConfig) -> tuple[str, ...]:
 
 
 def output_names(scn: ScenarioConfig, f: float) -> dict:
-    """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``,
-    ``previews`` and ``side_by_side`` (channel -> PNG: `preview_channels`; the ideal image beside
-    the sensor's with ``output.previews: true``), ``aux_previews`` (``depth``, ``material`` -> PNG,
-    when ``output.aux`` asks for them), ``regions_preview`` (``regions`` -> PNG: the sensor image
-    with ``output.regions`` outlined, when there are regions), ``reports`` (JSON, Markdown)."""
+    """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``;
+    ``previews`` (channel -> the plain PNG: `preview_channels`); ``regions_preview`` (``regions``
+    -> PNG: the sensor image with ``output.regions`` outlined, when there are regions and any
+    preview); with ``output.previews: figures`` also the matplotlib figures: ``figures`` (channel
+    -> the channel with its colour bar), ``side_by_side`` (channel -> the ideal image beside the
+    sensor's, when the imager changes something), ``aux_previews`` (``depth``, ``material`` ->
+    PNG, when ``output.aux`` asks for them), the regions preview then naming the regions;
+    ``reports`` (JSON, Markdown)."""
     stem = _stem(scn, f)
     chans = scn.output.channels
-    side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
-    if (scn.imager.aperture_diameter <= 0 and scn.imager.noise <= 0) or scn.output.previews not in (True, "all"):
-        side = ()  # the sensor image is the ideal one: no pair to compare; or not asked for
-    suffix = "" if len(scn.frequencies) == 1 else f"_{f / 1e9:g}GHz"
     on = scn.output.previews
+    figures = on == "figures"
+    side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
+    if scn.imager.aperture_diameter <= 0 and scn.imager.noise <= 0:
+        side = ()  # the sensor image is the ideal one: no pair to compare
+    suffix = "" if len(scn.frequencies) == 1 else f"_{f / 1e9:g}GHz"
     return {
         "exr": f"{stem}.exr",
         "previews": {c: f"previews/{stem}_{c}.png" for c in preview_channels(scn)},
-        "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
+        "figures": {c: f"previews/{stem}_{c}_figure.png" for c in chans} if figures else {},
+        "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if figures else {},
         "aux_previews": {a: f"previews/{stem}_{a}.png" for a in ("depth", "material") if a in scn.output.aux}
-        if on
+        if figures
         else {},
         "regions_preview": {"regions": f"previews/{stem}_regions.png"} if on and scn.output.regions else {},
         "reports": [f"report{suffix}.json", f"report{suffix}.md"],
@@ -1042,6 +1054,7 @@ def _all_outputs(names: dict) -> list[str]:
     return [
         names["exr"],
         *names["previews"].values(),
+        *names["figures"].values(),
         *names["side_by_side"].values(),
         *names["aux_previews"].values(),
         *names["regions_preview"].values(),
@@ -1498,6 +1511,7 @@ def _finish_frequency(res, f, job, img, names, staged: Staging, shash, t_trace, 
     return {
         "truncation": truncation_summary(img, scn),
         **({"imager": summary} if summary else {}),
+        **({"figures": dict(names["figures"])} if names["figures"] else {}),
         **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
         **({"regions": regions} if regions else {}),
         **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
@@ -1506,6 +1520,11 @@ def _finish_frequency(res, f, job, img, names, staged: Staging, shash, t_trace, 
         "channels": stats,
         "previews": {**names["previews"], **{f"aux.{a}": rel for a, rel in names["aux_previews"].items()}},
         **({"regions_preview": names["regions_preview"]["regions"]} if names["regions_preview"] else {}),
+        **(
+            {"regions_outlines": region_colour_names(scn.output.regions)}
+            if names["regions_preview"] and scn.output.previews != "figures"
+            else {}
+        ),
         "rays": img.rays,
         "timing": {
             "trace_s": round(t_trace, 3),
@@ -1530,28 +1549,34 @@ def write_previews(
     ideal: Mapping[str, np.ndarray],
     regions: dict | None,
 ) -> dict:
-    """Draw the previews ``names`` asks for (`output_names`) of one frequency's images at
-    ``path_of(relative name)``. Returns {channel: (low, high)}: the temperatures [K] shown as
-    black and white in each channel's own preview."""
-    shown = {}
+    """Write the previews ``names`` asks for (`output_names`) of one frequency's images at
+    ``path_of(relative name)``: the plain PNGs (`io.preview.write_preview`, the regions
+    outlined by `io.preview.write_regions_png`) and, with ``output.previews: figures``, the
+    matplotlib figures. Returns {channel: (low, high)}: the temperatures [K] shown as black and
+    white in each channel's plain preview."""
+    shown = {c: write_preview(path_of(rel), sensor[c]) for c, rel in names["previews"].items()}
     label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
-    for c, rel in names["previews"].items():
-        shown[c] = write_figure(path_of(rel), [(None, sensor[c])], title=label.format(c))
+    if names["regions_preview"]:
+        c = regions["channel"]
+        rel = names["regions_preview"]["regions"]
+        if scn.output.previews == "figures":
+            first = next(iter(regions["verdicts"].values()), None)
+            write_regions_figure(
+                path_of(rel),
+                sensor[c],
+                region_shapes(scn.output.regions, job.camera),
+                title=label.format(f"{c}, regions"),
+                caption=first,
+            )
+        else:
+            write_regions_png(path_of(rel), sensor[c], region_masks(scn.output.regions, job.camera))
+    for c, rel in names["figures"].items():
+        write_figure(path_of(rel), [(None, sensor[c])], title=label.format(c))
     for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
         write_figure(
             path_of(rel),
             [("ideal (before the imager)", ideal[c]), (f"sensor ({_imager_words(scn)})", sensor[c])],
             title=label.format(c),
-        )
-    if names["regions_preview"]:
-        c = regions["channel"]
-        first = next(iter(regions["verdicts"].values()), None)
-        write_regions_figure(
-            path_of(names["regions_preview"]["regions"]),
-            sensor[c],
-            region_shapes(scn.output.regions, job.camera),
-            title=label.format(f"{c}, regions"),
-            caption=first,
         )
     if "depth" in names["aux_previews"]:
         write_depth_figure(path_of(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))

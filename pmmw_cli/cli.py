@@ -117,6 +117,13 @@ def render(
     cluster: Optional[Path] = typer.Option(
         None, "--cluster", metavar="FILE.yaml", help="With dask: a dask-jobqueue cluster file (as for pmmw sweep)."
     ),
+    figures: bool = typer.Option(
+        False,
+        "--figures",
+        metavar="",
+        help="Also draw the annotated figures (colour bars, the ideal image beside the sensor's, the "
+        "regions named, depth, material): output.previews=figures.",
+    ),
     show_timings: bool = typer.Option(
         False,
         "--timings",
@@ -139,7 +146,7 @@ def render(
     with memory.overridable("--force", force):  # --force also reads a mesh or sky texture past the memory check
         run(
             scenario,
-            set_ or [],
+            [*(set_ or []), *(["output.previews=figures"] if figures else [])],
             out=out,
             spp=spp,
             workers=workers,

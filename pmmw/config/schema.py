@@ -853,9 +853,11 @@ class OutputConfig(_Model):
     # file's imager.resolution, before --set): on another resolution they scale with the image
     regions_resolution: Optional[tuple[int, int]] = None
     channels: tuple[str, ...] = CHANNELS
-    # True (or "all"): every channel's preview and the ideal image beside the sensor's; "quick": only
-    # the previews a render is read by, I and the regions (`pipeline.output_names`); False: none
-    previews: Union[Literal["all", "quick"], bool] = True
+    # True (or "all"): every channel's plain preview and the regions'; "quick": only the previews a
+    # render is read by, I and the regions; "figures": those of True and the annotated matplotlib
+    # figures (colour bars, the ideal image beside the sensor's, the regions named, depth, material:
+    # `pipeline.output_names`); False: none
+    previews: Union[Literal["all", "quick", "figures"], bool] = True
     aux: tuple[str, ...] = ()
     false_alarm: float = Field(1e-3, gt=0.0, lt=0.5)  # per target-sized test: the regions' probability of detection
 
@@ -881,11 +883,11 @@ class OutputConfig(_Model):
     @field_validator("previews", mode="before")
     @classmethod
     def _previews(cls, v):
-        if isinstance(v, bool) or v in ("all", "quick"):
+        if isinstance(v, bool) or v in ("all", "quick", "figures"):
             return v
         raise ConfigValueError(
-            f"expected true or all (every channel's, and the ideal image beside the sensor's), "
-            f"quick (the image of I and the regions) or false, got {v!r}"
+            f"expected true or all (every channel's plain preview and the regions'), quick (the image of I "
+            f"and the regions), figures (those of true and the annotated figures) or false, got {v!r}"
         )
 
     @field_validator("aux", mode="before")

@@ -332,10 +332,11 @@ def test_the_readme_lists_exactly_the_required_keys():
 
 
 def test_depth_and_material_previews_with_their_legends(tmp_path):
-    """`output.aux: [depth, material]` gives two more previews, listed in the report: depth on a
-    scale in metres, materials in distinct colours with the database ids in a legend."""
+    """`output.aux: [depth, material]` with ``--figures`` gives two more figures, listed in the
+    report: depth on a scale in metres, materials in distinct colours with the database ids in a
+    legend."""
     scn = _scene(tmp_path, extra="output: {aux: [depth, material]}")
-    res = _run("render", scn, "--out", tmp_path / "o", "--workers", "1", "-q")
+    res = _run("render", scn, "--out", tmp_path / "o", "--workers", "1", "-q", "--figures")
     assert res.exit_code == 0, res.output
     prev = tmp_path / "o" / "previews"
     assert (prev / "tiny_depth.png").stat().st_size > 5_000 and (prev / "tiny_material.png").stat().st_size > 5_000

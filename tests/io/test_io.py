@@ -269,9 +269,26 @@ def test_preview_png_written_and_readable(tmp_path):
     assert _leftovers(tmp_path) == []
 
 
-def test_write_png_rejects_colour_arrays(tmp_path):
-    with pytest.raises(ValueError):
-        write_png(tmp_path / "x.png", np.zeros((2, 2, 3), np.uint8))
+def test_write_png_takes_grey_and_rgb_and_names_pmmw(tmp_path):
+    """Grey (H, W) and colour (H, W, 3) arrays, pixels as given; RGBA or 1-D refused. The PNG's
+    Software text names pmmw, so a later render may replace it (`made_by_pmmw`); the same pixels
+    written by OpenImageIO without it are the user's (the control)."""
+    from pmmw.io.rundir import made_by_pmmw
+
+    rgb = np.arange(2 * 3 * 3, dtype=np.uint8).reshape(2, 3, 3)
+    write_png(tmp_path / "c.png", rgb)
+    inp = oiio.ImageInput.open(str(tmp_path / "c.png"))
+    assert np.array_equal(inp.read_image(oiio.UINT8), rgb)
+    inp.close()
+    assert made_by_pmmw(tmp_path / "c.png")
+    out = oiio.ImageOutput.create("png")
+    out.open(str(tmp_path / "user.png"), oiio.ImageSpec(3, 2, 3, oiio.UINT8))
+    out.write_image(rgb)
+    out.close()
+    assert not made_by_pmmw(tmp_path / "user.png")
+    for bad in (np.zeros((2, 2, 4), np.uint8), np.zeros(4, np.uint8)):
+        with pytest.raises(ValueError):
+            write_png(tmp_path / "x.png", bad)
 
 
 # ---------------------------------------------------------------- report
