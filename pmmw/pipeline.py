@@ -33,7 +33,7 @@ from pmmw.imaging.antenna import (
     gaussian_feed_spillover,
     pixel_field_angles,
 )
-from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
+from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel, self_adjoint
 from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature
 from pmmw.io.exr import write_exr
 from pmmw.io.lock import FolderLock
@@ -499,7 +499,7 @@ def view_preview(scn: ScenarioConfig, geom: SceneGeometry, path: Path) -> Path:
 def region_masks(regions: Mapping[str, Region], cam: Camera) -> dict[str, np.ndarray]:
     """Boolean (H, W) masks of the named regions (`output.regions`) on the image."""
     h, w = cam.height, cam.width
-    yy, xx = np.mgrid[0:h, 0:w]
+    yy, xx = np.ogrid[0:h, 0:w]  # (H, 1) and (1, W): each comparison broadcast to (H, W) once
     masks = {}
     for name, shape in region_shapes(regions, cam).items():
         if shape is None:
@@ -591,20 +591,30 @@ def region_stats(
     limit = region_limit(sigma)
     pfa = getattr(scn.output, "false_alarm", 1e-3)  # a bare record (tests, validation) has the default
     st = scn.render
+    # each region's blurred footprint (`detection.footprint`), and its weights on the ideal image:
+    # blur^T(mask / N), which is footprint / N where the blur is its own adjoint (`blur_adjoint`)
+    footprints = {name: detection.footprint(m, kernel_of(name)) for name, m in masks.items() if m.any()}
     weights = {
         name: (
-            (blur_adjoint(m / m.sum(), kernel_of(name)) if kernel_of(name) is not None else m / m.sum())
-            if m.any()
-            else None
+            (
+                footprints[name] / m.sum()
+                if self_adjoint(kernel_of(name), m.shape)
+                else blur_adjoint(m / m.sum(), kernel_of(name))
+            )
+            if kernel_of(name) is not None
+            else m / m.sum()
         )
+        if m.any()
+        else None
         for name, m in masks.items()
     }
     if img is not None:
         d = img.replicate_diff
         var_maps = {"Ex2": d[..., 0] ** 2 / 4.0, "Ey2": d[..., 1] ** 2 / 4.0, "I": (d[..., 0] + d[..., 1]) ** 2 / 4.0}
+        two_everywhere = bool((img.samples >= 2).all())  # then no weight needs the check below
 
     def mc_error(w, c):
-        if img is None or w is None or (img.samples[w != 0.0] < 2).any():
+        if img is None or w is None or (not two_everywhere and (img.samples[w != 0.0] < 2).any()):
             return None
         return float(np.sqrt(np.sum(w * w * var_maps[c])))
 
@@ -640,7 +650,7 @@ def region_stats(
     # detection: the ideal image's region means (weights mask / N, no blur) and the target's
     # blurred footprint (`detection.footprint_norm`)
     ideal_w = {name: (m / m.sum() if m.any() else None) for name, m in masks.items()}
-    norms = {name: detection.footprint_norm(m, kernel_of(name)) for name, m in masks.items() if m.any()}
+    norms = {name: float(np.sqrt(np.sum(np.square(fp)))) for name, fp in footprints.items()}  # footprint_norm
     contrasts, verdicts = {}, {}
     unsettled = []  # (pair, channel, standard error [K]) of contrasts whose seeds would differ by more than `limit`
     for i, a in enumerate(names):
