@@ -195,7 +195,7 @@ _MULTIPLIERS: list = []
 def _dct_multiplier(kernel: FloatArray, h: int, w: int) -> FloatArray | None:
     """The multiplier of a mirror-symmetric kernel in the orthonormal DCT-II basis of an (h, w)
     image (`blur`): its 2h x 2w periodic wrap's Fourier transform, real and even, which is the
-    DCT-I of the wrap's first quadrant (Martucci 1994, Table I); None for a kernel that is not
+    DCT-I of the wrap's first quadrant (Martucci 1994: symmetric convolution); None for a kernel that is not
     mirror-symmetric. Kept for the next image blurred with the same kernel (compared entry by
     entry: cheaper than hashing it), as a render blurs four channels and each region with one.
     Returns (h, w) float64 or None."""
