@@ -1344,9 +1344,10 @@ def render(
         )
         if written and not keep_tiles:  # only once every output is in place: until then tiles resume
             if deletable(tile_root, out_dir):
-                for d in tile_dirs:
-                    remove_folder(d, out_dir)
-                remove_root_if_empty(tile_root, out_dir)
+                with timings.phase("tiles removed"):
+                    for d in tile_dirs:
+                        remove_folder(d, out_dir)
+                    remove_root_if_empty(tile_root, out_dir)
             else:
                 say(
                     f"tiles kept in {tile_root}: it links out of the output folder, and pmmw never deletes "
@@ -1423,6 +1424,7 @@ def _render_and_commit(
                     write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
                 except OSError as e:
                     raise os_problem(e, out_dir, "write the report") from None
+            with timings.phase("outputs moved into place"):
                 staged.commit(_all_outputs(names[r["frequency_hz"]])[: -len(reports)], last=reports, check=lock.check)
             say(
                 f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
@@ -1506,25 +1508,30 @@ def _finish_frequency(res, f, job, img, names, staged: Staging, shash, t_trace, 
         )
     try:
         with timings.phase("EXR"):
-            write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
+            write_exr(
+                staged.path(names["exr"]), images["channels"], images["attrs"], compression=scn.output.compression
+            )
         with timings.phase("previews"):
             shown = write_previews(scn, f, job, img, names, staged.path, sensor, ideal, regions)
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
-    stats = {}
-    for c in scn.output.channels:
-        chan = sensor[c]
-        stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
-        if c in shown:
-            stats[c].update(display_low=shown[c][0], display_high=shown[c][1])
+    with timings.phase("channel statistics"):
+        stats = {}
+        for c in scn.output.channels:
+            chan = sensor[c]
+            stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
+            if c in shown:
+                stats[c].update(display_low=shown[c][0], display_high=shown[c][1])
+        truncation = truncation_summary(img, scn)
+        atmosphere = atmosphere_summary(job) if job.atmosphere is not None else None
     t_total = time.perf_counter() - t1 + t_trace
     return {
-        "truncation": truncation_summary(img, scn),
+        "truncation": truncation,
         **({"imager": summary} if summary else {}),
         **({"figures": dict(names["figures"])} if names["figures"] else {}),
         **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
         **({"regions": regions} if regions else {}),
-        **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
+        **({"atmosphere": atmosphere} if atmosphere is not None else {}),
         "frequency_hz": f,
         "output_exr": str(staged.out_dir / names["exr"]),
         "channels": stats,

@@ -131,7 +131,8 @@ def render(
         help="Print where the time went at the end: when the command started, the "
         "pipeline was imported, the outputs checked, the kernels loaded and the "
         "first tile sent (seconds after the process started), then each phase "
-        "(resolve, trace, imager model, region statistics, EXR, previews, report).",
+        "(resolve, trace, then each step after it: imager model, region statistics, EXR, previews, "
+        "channel statistics, report, outputs moved into place, tiles removed, and their sum).",
     ),
 ):
     """Render a scenario to an EXR polarization stack and a report."""

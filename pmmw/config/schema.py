@@ -859,6 +859,10 @@ class OutputConfig(_Model):
     # `pipeline.output_names`); False: none
     previews: Union[Literal["all", "quick", "figures"], bool] = True
     aux: tuple[str, ...] = ()
+    # the EXR's compression: none (the default: written in a tenth of zip's time, the landing's
+    # 12.0 MB in 0.06 s against 9.5 MB in 0.5 s on 2 cores; Monte Carlo noise leaves deflate little)
+    # or zip (OpenEXR's ZIP, 16 scanlines a block)
+    compression: Literal["none", "zip"] = "none"
     false_alarm: float = Field(1e-3, gt=0.0, lt=0.5)  # per target-sized test: the regions' probability of detection
 
     @field_validator("false_alarm", mode="before")
