@@ -35,6 +35,7 @@ from pmmw.imaging.antenna import (
 )
 from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel, self_adjoint
 from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature
+from pmmw.io.atomic import synced_together
 from pmmw.io.exr import write_exr
 from pmmw.io.lock import FolderLock
 from pmmw.io.preview import (
@@ -612,6 +613,7 @@ def region_stats(
         d = img.replicate_diff
         var_maps = {"Ex2": d[..., 0] ** 2 / 4.0, "Ey2": d[..., 1] ** 2 / 4.0, "I": (d[..., 0] + d[..., 1]) ** 2 / 4.0}
         two_everywhere = bool((img.samples >= 2).all())  # then no weight needs the check below
+        frac_map, bound_map = (np.ascontiguousarray(img.truncated[..., i]) for i in (0, 1))  # summed often
 
     def mc_error(w, c):
         if img is None or w is None or (not two_everywhere and (img.samples[w != 0.0] < 2).any()):
@@ -622,7 +624,7 @@ def region_stats(
         if img is None or w is None:
             return None, None
         aw = np.abs(w)
-        return float(np.sum(aw * img.truncated[..., 0])), float(np.sum(aw * img.truncated[..., 1]))
+        return float(np.sum(aw * frac_map)), float(np.sum(aw * bound_map))
 
     ended = f"render.max_depth {st.max_depth}" + (
         " and render.threshold with termination: temperature" if st.termination == "temperature" else ""
@@ -1421,7 +1423,8 @@ def _render_and_commit(
             reports = names[r["frequency_hz"]]["reports"]
             with timings.phase("report"):
                 try:
-                    write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
+                    with synced_together():
+                        write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
                 except OSError as e:
                     raise os_problem(e, out_dir, "write the report") from None
             with timings.phase("outputs moved into place"):
@@ -1507,12 +1510,13 @@ def _finish_frequency(res, f, job, img, names, staged: Staging, shash, t_trace, 
             else None
         )
     try:
-        with timings.phase("EXR"):
-            write_exr(
-                staged.path(names["exr"]), images["channels"], images["attrs"], compression=scn.output.compression
-            )
-        with timings.phase("previews"):
-            shown = write_previews(scn, f, job, img, names, staged.path, sensor, ideal, regions)
+        with synced_together():  # each file's fsync at the end, all at once
+            with timings.phase("EXR"):
+                write_exr(
+                    staged.path(names["exr"]), images["channels"], images["attrs"], compression=scn.output.compression
+                )
+            with timings.phase("previews"):
+                shown = write_previews(scn, f, job, img, names, staged.path, sensor, ideal, regions)
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
     with timings.phase("channel statistics"):

@@ -22,6 +22,7 @@ AFTER_TRACE = (
     "previews",
     "channel statistics",
     "report",
+    "outputs flushed to disk",
     "outputs moved into place",
     "tiles removed",
 )

@@ -132,7 +132,8 @@ def render(
         "pipeline was imported, the outputs checked, the kernels loaded and the "
         "first tile sent (seconds after the process started), then each phase "
         "(resolve, trace, then each step after it: imager model, region statistics, EXR, previews, "
-        "channel statistics, report, outputs moved into place, tiles removed, and their sum).",
+        "channel statistics, report, outputs flushed to disk, outputs moved into place, tiles removed, "
+        "and their sum).",
     ),
 ):
     """Render a scenario to an EXR polarization stack and a report."""

@@ -96,12 +96,15 @@ def _psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_rad
     sub = int(np.clip(np.ceil(5.0 * pixel_angle / core), 3, 15)) | 1
     offs = (np.arange(sub) + 0.5) / sub - 0.5
     # one quadrant (pixels 0..r from the centre), mirrored: the pattern depends on |theta| alone,
-    # and the sub-samples of pixel -i are those of pixel i mirrored
+    # and the sub-samples of pixel -i are those of pixel i mirrored; within the quadrant the
+    # sub-samples' pattern is symmetric about its diagonal (hypot(x, y) = hypot(y, x)): half of it
     grid = np.arange(0, r + 1, dtype=float)
     gx = (grid[:, None] + offs[None, :]).ravel() * pixel_angle
-    tx, ty = np.meshgrid(gx, gx)
-    theta = np.hypot(tx, ty)
-    quadrant = airy(theta, k0, a).reshape(r + 1, sub, r + 1, sub).mean(axis=(1, 3))
+    iu, ju = np.triu_indices(gx.size)
+    fine = np.empty((gx.size, gx.size))
+    fine[iu, ju] = airy(np.hypot(gx[iu], gx[ju]), k0, a)
+    fine[ju, iu] = fine[iu, ju]
+    quadrant = fine.reshape(r + 1, sub, r + 1, sub).mean(axis=(1, 3))
     half = np.concatenate([quadrant[:0:-1], quadrant], axis=0)
     val = np.concatenate([half[:, :0:-1], half], axis=1)
     return val / val.sum()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
@@ -335,3 +336,29 @@ def test_report_minimal_and_basename(tmp_path):
     assert json_path.name == "report_35GHz.json" and md_path.name == "report_35GHz.md"
     assert json.loads(json_path.read_text()) == {"name": "bare"}
     assert md_path.read_text().startswith("# bare")
+
+
+def test_synced_together_flushes_each_file_once_at_the_end(tmp_path, monkeypatch):
+    """Inside `synced_together` an atomic write leaves out its fsyncs; at the block's end each
+    file is fsync'ed once and each folder once. The control: the same write outside the block
+    fsyncs its file and folder at once; a block left by an exception fsyncs nothing."""
+    calls = []
+    monkeypatch.setattr(atomic, "_fsync_path", lambda p, directory=False: calls.append((Path(p), directory)))
+    with atomic.synced_together():
+        atomic.write_text_atomic(tmp_path / "a.txt", "a")
+        with atomic.synced_together():  # inside another: the outer block's
+            atomic.write_text_atomic(tmp_path / "sub" / "b.txt", "b")
+        atomic.write_text_atomic(tmp_path / "c.txt", "c")
+        assert calls == []
+    files = sorted(str(p) for p, d in calls if not d)
+    assert files == sorted(str(tmp_path / n) for n in ("a.txt", "sub/b.txt", "c.txt"))
+    assert sorted(str(p) for p, d in calls if d) == sorted([str(tmp_path), str(tmp_path / "sub")])
+    assert (tmp_path / "sub" / "b.txt").read_text() == "b"
+    calls.clear()
+    atomic.write_text_atomic(tmp_path / "d.txt", "d")
+    assert len(calls) == 2 and calls[1] == (tmp_path, True)
+    calls.clear()
+    with pytest.raises(RuntimeError), atomic.synced_together():
+        atomic.write_text_atomic(tmp_path / "e.txt", "e")
+        raise RuntimeError("stop")
+    assert calls == []
