@@ -44,7 +44,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import j0
+from scipy.special import j0, j1
 
 from pmmw.imaging.imager import PSF_ENERGY_TAIL, FloatArray, _airy_encircled_energy, blur
 
@@ -105,8 +105,14 @@ class Aperture:
         return rho, 0.5 * (1.0 - b) * w
 
     def field(self, u: np.typing.ArrayLike) -> np.ndarray:
-        """F(u) [-] (module docstring) at ``u`` = k a sin(theta) (ndarray)."""
+        """F(u) [-] (module docstring) at ``u`` = k a sin(theta) (ndarray): for the uniform
+        aperture without blockage its closed form J1(u) / u (1/2 at u = 0), else the quadrature."""
         u = np.asarray(u, dtype=float)
+        if self.kind == "uniform" and self.blockage == 0.0:
+            out = np.full(u.shape, 0.5)
+            nz = np.abs(u) > 1e-8  # J1(u) / u = 1/2 - u^2 / 16 + ...: 1/2 to 4e-18 below
+            out[nz] = j1(u[nz]) / u[nz]
+            return out
         flat = u.ravel()
         rho, w = self._nodes(float(flat.max(initial=0.0)))
         fw = illumination(rho, self.kind, self.edge_taper_db, self.blockage) * rho * w

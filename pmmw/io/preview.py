@@ -53,7 +53,9 @@ def display_range(img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, flo
     if not 0.0 <= clip_fraction < 0.5:
         raise ValueError(f"clip_fraction must lie in [0, 0.5), got {clip_fraction}")
     t = np.asarray(img, dtype=np.float64).ravel()
-    t = t[np.isfinite(t)]
+    finite = np.isfinite(t)
+    if not finite.all():
+        t = t[finite]
     n = t.size
     if n == 0:
         return float("nan"), float("nan")
@@ -72,6 +74,12 @@ def scale_to_u8(img, low: float, high: float) -> np.ndarray:
     hotter ones 255.
     """
     t = np.asarray(img, dtype=np.float64)
+    if np.isfinite(low) and np.isfinite(high) and high > low and np.isfinite(t).all():
+        # floor, clip to [0, 255], then to uint8 in three passes: for finite pixels clipping first
+        # and truncating after is the same (both give 0 below 0 and 255 at and above 255)
+        out = (t - low) * (256.0 / (high - low))
+        np.clip(out, 0.0, 255.0, out=out)
+        return out.astype(np.uint8)
     if np.isfinite(low) and np.isfinite(high) and high > low:
         with np.errstate(invalid="ignore", over="ignore"):
             out = np.floor((t - low) * (256.0 / (high - low)))
