@@ -615,10 +615,15 @@ def region_stats(
         two_everywhere = bool((img.samples >= 2).all())  # then no weight needs the check below
         frac_map, bound_map = (np.ascontiguousarray(img.truncated[..., i]) for i in (0, 1))  # summed often
 
-    def mc_error(w, c):
-        if img is None or w is None or (not two_everywhere and (img.samples[w != 0.0] < 2).any()):
+    def mc_error(w, c, at=None):
+        # at: w holds only the pixels at these (rows, columns), every other pixel's weight being 0
+        if img is None or w is None:
             return None
-        return float(np.sqrt(np.sum(w * w * var_maps[c])))
+        samples = img.samples if at is None else img.samples[at]
+        if not two_everywhere and (samples[w != 0.0] < 2).any():
+            return None
+        var = var_maps[c] if at is None else var_maps[c][at]
+        return float(np.sqrt(np.sum(w * w * var)))
 
     def bound(w):
         if img is None or w is None:
@@ -659,7 +664,10 @@ def region_stats(
         for b_name in names[i + 1 :]:
             wa, wb = weights[a], weights[b_name]
             dw = None if wa is None or wb is None else wa - wb
-            dw_ideal = None if dw is None else ideal_w[a] - ideal_w[b_name]
+            dw_ideal = at = None
+            if dw is not None:  # the ideal contrast's weights, on the two regions' pixels alone
+                at = np.nonzero(masks[a] | masks[b_name])
+                dw_ideal = ideal_w[a][at] - ideal_w[b_name][at]
             _, tb = bound(dw)
             pair = {}
             for c in chans:
@@ -672,9 +680,9 @@ def region_stats(
                 err = mc_error(dw, c)
                 snr = snr_err = k_ideal = None
                 if dw_ideal is not None and ideal is not None:
-                    k_ideal = float(np.sum(dw_ideal * ideal[c]))
+                    k_ideal = float(np.sum(dw_ideal * np.asarray(ideal[c])[at]))
                     snr = detection.region_snr(k_ideal, masks[a], kernel_of(a), scale, norm=norms[a])
-                    e_ideal = mc_error(dw_ideal, c)
+                    e_ideal = mc_error(dw_ideal, c, at)
                     if snr is not None and e_ideal is not None:
                         snr_err = e_ideal * norms[a] / scale
                 pair[c] = {
