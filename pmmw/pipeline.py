@@ -33,11 +33,20 @@ from pmmw.imaging.antenna import (
     gaussian_feed_spillover,
     pixel_field_angles,
 )
-from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel
+from pmmw.imaging.imager import apply_imager, blur_adjoint, error_footprint, psf_kernel, self_adjoint
 from pmmw.imaging.receiver import Receiver, dwell_time, noise_temperature
+from pmmw.io.atomic import synced_together
 from pmmw.io.exr import write_exr
 from pmmw.io.lock import FolderLock
-from pmmw.io.preview import write_depth_figure, write_figure, write_material_figure, write_regions_figure
+from pmmw.io.preview import (
+    region_colour_names,
+    write_depth_figure,
+    write_figure,
+    write_material_figure,
+    write_preview,
+    write_regions_figure,
+    write_regions_png,
+)
 from pmmw.io.progress import StatusLine, say
 from pmmw.io.report import write_report
 from pmmw.io.rundir import Staging, check_outputs, made_by_pmmw, os_problem, remove_stale_staging
@@ -502,7 +511,7 @@ def view_preview(scn: ScenarioConfig, geom: SceneGeometry, path: Path) -> Path:
 def region_masks(regions: Mapping[str, Region], cam: Camera) -> dict[str, np.ndarray]:
     """Boolean (H, W) masks of the named regions (`output.regions`) on the image."""
     h, w = cam.height, cam.width
-    yy, xx = np.mgrid[0:h, 0:w]
+    yy, xx = np.ogrid[0:h, 0:w]  # (H, 1) and (1, W): each comparison broadcast to (H, W) once
     masks = {}
     for name, shape in region_shapes(regions, cam).items():
         if shape is None:
@@ -594,28 +603,40 @@ def region_stats(
     limit = region_limit(sigma)
     pfa = getattr(scn.output, "false_alarm", 1e-3)  # a bare record (tests, validation) has the default
     st = scn.render
+    # each region's blurred footprint (`detection.footprint`), and its weights on the ideal image:
+    # blur^T(mask / N), which is footprint / N where the blur is its own adjoint (`blur_adjoint`)
+    footprints = {name: detection.footprint(m, kernel_of(name)) for name, m in masks.items() if m.any()}
     weights = {
         name: (
-            (blur_adjoint(m / m.sum(), kern) if (kern := kernel_of(name)) is not None else m / m.sum())
-            if m.any()
-            else None
+            (footprints[name] / m.sum() if self_adjoint(kern, m.shape) else blur_adjoint(m / m.sum(), kern))
+            if (kern := kernel_of(name)) is not None
+            else m / m.sum()
         )
+        if m.any()
+        else None
         for name, m in masks.items()
     }
     if img is not None:
         d = img.replicate_diff
         var_maps = {"Ex2": d[..., 0] ** 2 / 4.0, "Ey2": d[..., 1] ** 2 / 4.0, "I": (d[..., 0] + d[..., 1]) ** 2 / 4.0}
+        two_everywhere = bool((img.samples >= 2).all())  # then no weight needs the check below
+        frac_map, bound_map = (np.ascontiguousarray(img.truncated[..., i]) for i in (0, 1))  # summed often
 
-    def mc_error(w, c):
-        if img is None or w is None or (img.samples[w != 0.0] < 2).any():
+    def mc_error(w, c, at=None):
+        # at: w holds only the pixels at these (rows, columns), every other pixel's weight being 0
+        if img is None or w is None:
             return None
-        return float(np.sqrt(np.sum(w * w * var_maps[c])))
+        samples = img.samples if at is None else img.samples[at]
+        if not two_everywhere and (samples[w != 0.0] < 2).any():
+            return None
+        var = var_maps[c] if at is None else var_maps[c][at]
+        return float(np.sqrt(np.sum(w * w * var)))
 
     def bound(w):
         if img is None or w is None:
             return None, None
         aw = np.abs(w)
-        return float(np.sum(aw * img.truncated[..., 0])), float(np.sum(aw * img.truncated[..., 1]))
+        return float(np.sum(aw * frac_map)), float(np.sum(aw * bound_map))
 
     ended = f"render.max_depth {st.max_depth}" + (
         " and render.threshold with termination: temperature" if st.termination == "temperature" else ""
@@ -643,15 +664,19 @@ def region_stats(
     # detection: the ideal image's region means (weights mask / N, no blur) and the target's
     # blurred footprint (`detection.footprint_norm`)
     ideal_w = {name: (m / m.sum() if m.any() else None) for name, m in masks.items()}
-    norms = {name: detection.footprint_norm(m, kernel_of(name)) for name, m in masks.items() if m.any()}
+    norms = {name: float(np.sqrt(np.sum(np.square(fp)))) for name, fp in footprints.items()}  # footprint_norm
     contrasts, verdicts = {}, {}
     unsettled = []  # (pair, channel, standard error [K]) of contrasts whose seeds would differ by more than `limit`
     for i, a in enumerate(names):
         for b_name in names[i + 1 :]:
             wa, wb = weights[a], weights[b_name]
             dw = None if wa is None or wb is None else wa - wb
-            ia, ib = ideal_w[a], ideal_w[b_name]  # None where the weights are (an empty region)
-            dw_ideal = None if ia is None or ib is None else ia - ib
+            dw_ideal = at = None
+            if dw is not None:  # the ideal contrast's weights, on the two regions' pixels alone
+                at = np.nonzero(masks[a] | masks[b_name])
+                ia, ib = ideal_w[a], ideal_w[b_name]
+                assert ia is not None and ib is not None  # both regions have pixels, as their weights say
+                dw_ideal = ia[at] - ib[at]
             _, tb = bound(dw)
             pair = {}
             for c in chans:
@@ -664,9 +689,9 @@ def region_stats(
                 err = mc_error(dw, c)
                 snr = snr_err = k_ideal = None
                 if dw_ideal is not None and ideal is not None:
-                    k_ideal = float(np.sum(dw_ideal * ideal[c]))
+                    k_ideal = float(np.sum(dw_ideal * np.asarray(ideal[c])[at]))
                     snr = detection.region_snr(k_ideal, masks[a], kernel_of(a), scale, norm=norms[a])
-                    e_ideal = mc_error(dw_ideal, c)
+                    e_ideal = mc_error(dw_ideal, c, at)
                     if snr is not None and e_ideal is not None:
                         snr_err = e_ideal * norms[a] / scale
                 pair[c] = {
@@ -1016,14 +1041,13 @@ def _stem(scn: ScenarioConfig, f: float) -> str:
 
 
 def preview_channels(scn: ScenarioConfig) -> tuple[str, ...]:
-    """The channels a render draws a preview of: with ``output.previews: true`` (the default, or
-    ``all``) every channel of ``output.channels``, a PNG preview per channel as the product
-    promises; with ``quick`` I alone (the first channel listed where I is not), the image a person
-    reads first and the one `pmmw sweep`'s contact sheet and the Blender add-on show; none with
-    ``false``. Drawing each figure takes about 0.1 s, more than the imager model of a 500 x 500
-    image (docs/benchmarks_command.md): ``quick`` is for the warm command's speed."""
+    """The channels a render writes a plain preview of (`io.preview.write_preview`): with
+    ``output.previews: true`` (the default, or ``all``, or ``figures``) every channel of
+    ``output.channels``, a PNG preview per channel as the product promises; with ``quick`` I alone
+    (the first channel listed where I is not), the image a person reads first and the one
+    `pmmw sweep`'s contact sheet and the Blender add-on show; none with ``false``."""
     chans, on = scn.output.channels, scn.output.previews
-    if on is True or on == "all":
+    if on is True or on in ("all", "figures"):
         return tuple(chans)
     if not on:
         return ()
@@ -1031,24 +1055,29 @@ def preview_channels(scn: ScenarioConfig) -> tuple[str, ...]:
 
 
 def output_names(scn: ScenarioConfig, f: float) -> dict:
-    """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``,
-    ``previews`` and ``side_by_side`` (channel -> PNG: `preview_channels`; the ideal image beside
-    the sensor's with ``output.previews: true``), ``aux_previews`` (``depth``, ``material`` -> PNG,
-    when ``output.aux`` asks for them), ``regions_preview`` (``regions`` -> PNG: the sensor image
-    with ``output.regions`` outlined, when there are regions), ``reports`` (JSON, Markdown)."""
+    """The files a render writes for frequency f [Hz], relative to the output folder: ``exr``;
+    ``previews`` (channel -> the plain PNG: `preview_channels`); ``regions_preview`` (``regions``
+    -> PNG: the sensor image with ``output.regions`` outlined, when there are regions and any
+    preview); with ``output.previews: figures`` also the matplotlib figures: ``figures`` (channel
+    -> the channel with its colour bar), ``side_by_side`` (channel -> the ideal image beside the
+    sensor's, when the imager changes something), ``aux_previews`` (``depth``, ``material`` ->
+    PNG, when ``output.aux`` asks for them), the regions preview then naming the regions;
+    ``reports`` (JSON, Markdown)."""
     stem = _stem(scn, f)
     chans = scn.output.channels
-    side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
-    if (scn.imager.aperture_diameter <= 0 and scn.imager.noise <= 0) or scn.output.previews not in (True, "all"):
-        side = ()  # the sensor image is the ideal one: no pair to compare; or not asked for
-    suffix = "" if len(scn.frequencies) == 1 else f"_{f / 1e9:g}GHz"
     on = scn.output.previews
+    figures = on == "figures"
+    side = ("Ex2", "Ey2") if "Ex2" in chans else chans[:1]
+    if scn.imager.aperture_diameter <= 0 and scn.imager.noise <= 0:
+        side = ()  # the sensor image is the ideal one: no pair to compare
+    suffix = "" if len(scn.frequencies) == 1 else f"_{f / 1e9:g}GHz"
     return {
         "exr": f"{stem}.exr",
         "previews": {c: f"previews/{stem}_{c}.png" for c in preview_channels(scn)},
-        "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if on else {},
+        "figures": {c: f"previews/{stem}_{c}_figure.png" for c in chans} if figures else {},
+        "side_by_side": {c: f"previews/{stem}_{c}_ideal_sensor.png" for c in side} if figures else {},
         "aux_previews": {a: f"previews/{stem}_{a}.png" for a in ("depth", "material") if a in scn.output.aux}
-        if on
+        if figures
         else {},
         "regions_preview": {"regions": f"previews/{stem}_regions.png"} if on and scn.output.regions else {},
         "reports": [f"report{suffix}.json", f"report{suffix}.md"],
@@ -1067,6 +1096,7 @@ def _all_outputs(names: dict) -> list[str]:
     return [
         names["exr"],
         *names["previews"].values(),
+        *names["figures"].values(),
         *names["side_by_side"].values(),
         *names["aux_previews"].values(),
         *names["regions_preview"].values(),
@@ -1346,9 +1376,10 @@ def render(
         )
         if written and not keep_tiles:  # only once every output is in place: until then tiles resume
             if deletable(tile_root, out_dir):
-                for d in tile_dirs:
-                    remove_folder(d, out_dir)
-                remove_root_if_empty(tile_root, out_dir)
+                with timings.phase("tiles removed"):
+                    for d in tile_dirs:
+                        remove_folder(d, out_dir)
+                    remove_root_if_empty(tile_root, out_dir)
             else:
                 say(
                     f"tiles kept in {tile_root}: it links out of the output folder, and pmmw never deletes "
@@ -1422,9 +1453,11 @@ def _render_and_commit(
             reports = names[r["frequency_hz"]]["reports"]
             with timings.phase("report"):
                 try:
-                    write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
+                    with synced_together():
+                        write_report(staged.root, report, r["previews"], basename=Path(reports[0]).stem)
                 except OSError as e:
                     raise os_problem(e, out_dir, "write the report") from None
+            with timings.phase("outputs moved into place"):
                 staged.commit(_all_outputs(names[r["frequency_hz"]])[: -len(reports)], last=reports, check=lock.check)
             say(
                 f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
@@ -1517,30 +1550,42 @@ def _finish_frequency(
             else None
         )
     try:
-        with timings.phase("EXR"):
-            write_exr(staged.path(names["exr"]), images["channels"], images["attrs"])
-        with timings.phase("previews"):
-            shown = write_previews(scn, f, job, img, names, staged.path, sensor, ideal, regions)
+        with synced_together():  # each file's fsync at the end, all at once
+            with timings.phase("EXR"):
+                write_exr(
+                    staged.path(names["exr"]), images["channels"], images["attrs"], compression=scn.output.compression
+                )
+            with timings.phase("previews"):
+                shown = write_previews(scn, f, job, img, names, staged.path, sensor, ideal, regions)
     except OSError as e:
         raise os_problem(e, staged.out_dir, "write the image") from None
-    stats = {}
-    for c in scn.output.channels:
-        chan = sensor[c]
-        stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
-        if c in shown:
-            stats[c].update(display_low=shown[c][0], display_high=shown[c][1])
+    with timings.phase("channel statistics"):
+        stats = {}
+        for c in scn.output.channels:
+            chan = sensor[c]
+            stats[c] = {"min": float(np.min(chan)), "mean": float(np.mean(chan)), "max": float(np.max(chan))}
+            if c in shown:
+                stats[c].update(display_low=shown[c][0], display_high=shown[c][1])
+        truncation = truncation_summary(img, scn)
+        atmosphere = atmosphere_summary(job) if job.atmosphere is not None else None
     t_total = time.perf_counter() - t1 + t_trace
     return {
-        "truncation": truncation_summary(img, scn),
+        "truncation": truncation,
         **({"imager": summary} if summary else {}),
+        **({"figures": dict(names["figures"])} if names["figures"] else {}),
         **({"side_by_side": dict(names["side_by_side"])} if names["side_by_side"] else {}),
         **({"regions": regions} if regions else {}),
-        **({"atmosphere": atmosphere_summary(job)} if job.atmosphere is not None else {}),
+        **({"atmosphere": atmosphere} if atmosphere is not None else {}),
         "frequency_hz": f,
         "output_exr": str(staged.out_dir / names["exr"]),
         "channels": stats,
         "previews": {**names["previews"], **{f"aux.{a}": rel for a, rel in names["aux_previews"].items()}},
         **({"regions_preview": names["regions_preview"]["regions"]} if names["regions_preview"] else {}),
+        **(
+            {"regions_outlines": region_colour_names(scn.output.regions)}
+            if names["regions_preview"] and scn.output.previews != "figures"
+            else {}
+        ),
         "rays": img.rays,
         "timing": {
             "trace_s": round(t_trace, 3),
@@ -1565,29 +1610,35 @@ def write_previews(
     ideal: Mapping[str, np.ndarray],
     regions: dict | None,
 ) -> dict:
-    """Draw the previews ``names`` asks for (`output_names`) of one frequency's images at
-    ``path_of(relative name)``. Returns {channel: (low, high)}: the temperatures [K] shown as
-    black and white in each channel's own preview."""
-    shown = {}
+    """Write the previews ``names`` asks for (`output_names`) of one frequency's images at
+    ``path_of(relative name)``: the plain PNGs (`io.preview.write_preview`, the regions
+    outlined by `io.preview.write_regions_png`) and, with ``output.previews: figures``, the
+    matplotlib figures. Returns {channel: (low, high)}: the temperatures [K] shown as black and
+    white in each channel's plain preview."""
+    shown = {c: write_preview(path_of(rel), sensor[c]) for c, rel in names["previews"].items()}
     label = f"{_stem(scn, f)}: {{}}, {f / 1e9:g} GHz"
-    for c, rel in names["previews"].items():
-        shown[c] = write_figure(path_of(rel), [(None, sensor[c])], title=label.format(c))
+    if names["regions_preview"]:
+        assert regions is not None  # a regions preview is named for a scenario with regions
+        c = regions["channel"]
+        rel = names["regions_preview"]["regions"]
+        if scn.output.previews == "figures":
+            first = next(iter(regions["verdicts"].values()), None)
+            write_regions_figure(
+                path_of(rel),
+                sensor[c],
+                region_shapes(scn.output.regions, job.camera),
+                title=label.format(f"{c}, regions"),
+                caption=first,
+            )
+        else:
+            write_regions_png(path_of(rel), sensor[c], region_masks(scn.output.regions, job.camera))
+    for c, rel in names["figures"].items():
+        write_figure(path_of(rel), [(None, sensor[c])], title=label.format(c))
     for c, rel in names["side_by_side"].items():  # each on its own range: the ideal's structure readable
         write_figure(
             path_of(rel),
             [("ideal (before the imager)", ideal[c]), (f"sensor ({_imager_words(scn)})", sensor[c])],
             title=label.format(c),
-        )
-    if names["regions_preview"]:
-        assert regions is not None  # a regions preview is named for a scenario with regions
-        c = regions["channel"]
-        first = next(iter(regions["verdicts"].values()), None)
-        write_regions_figure(
-            path_of(names["regions_preview"]["regions"]),
-            sensor[c],
-            region_shapes(scn.output.regions, job.camera),
-            title=label.format(f"{c}, regions"),
-            caption=first,
         )
     if "depth" in names["aux_previews"]:
         write_depth_figure(path_of(names["aux_previews"]["depth"]), img.depth, title=label.format("depth"))

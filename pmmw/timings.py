@@ -15,7 +15,17 @@ import time
 __all__ = ["AFTER_TRACE", "add", "clear", "lines", "mark", "phase", "process_start", "recorded"]
 
 #: The phases of a render after its trace: what the image costs beyond its rays.
-AFTER_TRACE = ("imager model", "region statistics", "EXR", "previews", "report")
+AFTER_TRACE = (
+    "imager model",
+    "region statistics",
+    "EXR",
+    "previews",
+    "channel statistics",
+    "report",
+    "outputs flushed to disk",
+    "outputs moved into place",
+    "tiles removed",
+)
 
 _MARKS: list[tuple[str, float]] = []  # (step, seconds since the process started)
 _PHASES: dict[str, float] = {}  # step -> seconds, summed over repeats (one per frequency)

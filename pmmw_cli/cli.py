@@ -117,6 +117,13 @@ def render(
     cluster: Optional[Path] = typer.Option(
         None, "--cluster", metavar="FILE.yaml", help="With dask: a dask-jobqueue cluster file (as for pmmw sweep)."
     ),
+    figures: bool = typer.Option(
+        False,
+        "--figures",
+        metavar="",
+        help="Also draw the annotated figures (colour bars, the ideal image beside the sensor's, the "
+        "regions named, depth, material): output.previews=figures.",
+    ),
     show_timings: bool = typer.Option(
         False,
         "--timings",
@@ -125,7 +132,9 @@ def render(
         "pipeline was imported, the outputs checked, the kernels loaded, the "
         "first tile sent and its first ray traced (seconds after the process started), then each phase "
         "(scenario, materials, meshes, atmosphere, kernels, the worker's Embree scene, "
-        "trace, imager model, region statistics, EXR, previews, report).",
+        "trace, then each step after it: imager model, region statistics, EXR, previews, "
+        "channel statistics, report, outputs flushed to disk, outputs moved into place, tiles removed, "
+        "and their sum).",
     ),
 ):
     """Render a scenario to an EXR polarization stack and a report."""
@@ -140,7 +149,7 @@ def render(
     with memory.overridable("--force", force):  # --force also reads a mesh or sky texture past the memory check
         run(
             scenario,
-            set_ or [],
+            [*(set_ or []), *(["output.previews=figures"] if figures else [])],
             out=out,
             spp=spp,
             workers=workers,

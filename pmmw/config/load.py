@@ -486,6 +486,7 @@ def scenario_to_display(scn: ScenarioConfig) -> dict:
             "channels": list(scn.output.channels),
             "previews": scn.output.previews,
             "aux": list(scn.output.aux),
+            **({"compression": scn.output.compression} if scn.output.compression != "none" else {}),
             **({"false_alarm": scn.output.false_alarm} if scn.output.false_alarm != 1e-3 else {}),
             **(
                 {"regions": {n: _region_display(r) for n, r in scn.output.regions.items()}}

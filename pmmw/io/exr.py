@@ -97,7 +97,11 @@ def _set_attribute(spec: oiio.ImageSpec, name: str, value: object) -> None:
 
 
 def write_exr(
-    path: str | os.PathLike, channels: Mapping[str, np.ndarray], attrs: Mapping[str, object] | None = None
+    path: str | os.PathLike,
+    channels: Mapping[str, np.ndarray],
+    attrs: Mapping[str, object] | None = None,
+    *,
+    compression: str = "zip",
 ) -> None:
     """Write float32 channels and header attributes to an OpenEXR file, atomically.
 
@@ -107,9 +111,12 @@ def write_exr(
         Destination; the format is OpenEXR whatever the suffix. Parent directories are created.
     channels : mapping of str to ndarray, each shape (H, W)
         Channel name -> image, e.g. ``I``, ``Ex2``, ``ideal.I``, ``aux.depth``; all the same
-        shape; converted to float32 and written in the given order with zip compression.
+        shape; converted to float32 and written in the given order.
     attrs : mapping of str to str, int, float or list, optional
         Header attributes (see the module docstring for how each type is stored).
+    compression : {"zip", "none"}
+        OpenEXR's ZIP (16 scanlines a block) or none (several times faster to write; a render's
+        default, ``output.compression``). The Blender add-on reads both.
 
     Raises
     ------
@@ -135,7 +142,9 @@ def write_exr(
     spec.channelnames = tuple(names)
     for key, value in (attrs or {}).items():
         _set_attribute(spec, key, value)
-    spec.attribute("compression", "zip")
+    if compression not in ("zip", "none"):
+        raise ValueError(f"write_exr: compression must be zip or none, got {compression!r}")
+    spec.attribute("compression", compression)
     spec.attribute(CHANNEL_ORDER_ATTR, oiio.TypeDesc(f"string[{len(names)}]"), tuple(names))
 
     with atomic_path(path) as tmp:

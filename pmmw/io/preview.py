@@ -2,6 +2,12 @@
 
 Display scaling (Murakowski 2014 sec. 3.2 footnote): the coldest and hottest 1/256 of the pixels clip to
 black and white, and the range between is mapped linearly onto 256 grey levels.
+
+Two kinds: the plain previews a render writes by default (`write_preview`, `write_regions_png`:
+one pixel per image pixel, written by OpenImageIO in milliseconds, their range stated in the
+report), and the figures a person reads alone (`write_figure` and the others: a colour bar in
+kelvin, a title, the regions named; matplotlib, about 0.3 s each with its import shared), which
+``output.previews: figures`` and ``pmmw view`` draw.
 """
 
 from __future__ import annotations
@@ -21,7 +27,7 @@ CLIP_FRACTION = 1.0 / 256.0
 #: Grey level of an image without contrast (a constant image).
 MID_GREY = 128
 
-#: PNG options of the figures: zlib level 1 writes a render's previews 1.7x faster than
+#: PNG options of the figures (matplotlib): zlib level 1 writes a render's previews 1.7x faster than
 #: matplotlib's default and, on these noisy images, 45 % smaller (landing: 1.4 MB against 2.5 MB).
 #: The ``Software`` text names pmmw: a render replaces only files it recognises as its own
 #: (`io.rundir.made_by_pmmw`).
@@ -47,7 +53,9 @@ def display_range(img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, flo
     if not 0.0 <= clip_fraction < 0.5:
         raise ValueError(f"clip_fraction must lie in [0, 0.5), got {clip_fraction}")
     t = np.asarray(img, dtype=np.float64).ravel()
-    t = t[np.isfinite(t)]
+    finite = np.isfinite(t)
+    if not finite.all():
+        t = t[finite]
     n = t.size
     if n == 0:
         return float("nan"), float("nan")
@@ -66,6 +74,12 @@ def scale_to_u8(img, low: float, high: float) -> np.ndarray:
     hotter ones 255.
     """
     t = np.asarray(img, dtype=np.float64)
+    if np.isfinite(low) and np.isfinite(high) and high > low and np.isfinite(t).all():
+        # floor, clip to [0, 255], then to uint8 in three passes: for finite pixels clipping first
+        # and truncating after is the same (both give 0 below 0 and 255 at and above 255)
+        out = (t - low) * (256.0 / (high - low))
+        np.clip(out, 0.0, 255.0, out=out)
+        return out.astype(np.uint8)
     if np.isfinite(low) and np.isfinite(high) and high > low:
         with np.errstate(invalid="ignore", over="ignore"):
             out = np.floor((t - low) * (256.0 / (high - low)))
@@ -96,33 +110,96 @@ def display_scale(img, clip_fraction: float = CLIP_FRACTION) -> np.ndarray:
     return scale_to_u8(img, low, high)
 
 
+#: zlib level of the plain previews (`write_png`): 0 stores the pixels as they are. A sensor
+#: image's noise leaves deflate little to take (the landing's 500 x 500 Ey2: 205 kB at level 1
+#: against 251 kB stored) for 20 times the time (12 ms against 0.6 ms a channel).
+PNG_COMPRESSION = 0
+
+
 def write_png(path: str | os.PathLike, img_u8: np.ndarray) -> None:
-    """Write a grey (H, W) uint8 image as PNG, atomically; RuntimeError if OIIO fails."""
+    """Write a grey (H, W) or colour (H, W, 3) uint8 image as PNG, atomically, without
+    matplotlib; its ``Software`` text names pmmw (`io.rundir.made_by_pmmw`). RuntimeError if OIIO
+    fails."""
     img = np.ascontiguousarray(img_u8, dtype=np.uint8)
-    if img.ndim != 2:
-        raise ValueError(f"write_png: expected an (H, W) image, got shape {img.shape}")
-    spec = oiio.ImageSpec(img.shape[1], img.shape[0], 1, oiio.UINT8)
-    spec.channelnames = ("Y",)
+    if img.ndim == 2:
+        img = img[:, :, np.newaxis]  # (H, W, 1): OIIO's binding misreads a 2-D array's strides
+    if img.ndim != 3 or img.shape[2] not in (1, 3):
+        raise ValueError(f"write_png: expected an (H, W) or (H, W, 3) image, got shape {np.shape(img_u8)}")
+    spec = oiio.ImageSpec(img.shape[1], img.shape[0], img.shape[2], oiio.UINT8)
+    spec.channelnames = ("Y",) if img.shape[2] == 1 else ("R", "G", "B")
+    spec.attribute("Software", f"pmmw {__version__}")
+    spec.attribute("png:compressionLevel", PNG_COMPRESSION)
+    spec.attribute("png:filter", 8)  # libpng's PNG_FILTER_NONE: no per-row filter search
     with atomic_path(path) as tmp:
         out = oiio.ImageOutput.create("png")
         if out is None:
             raise RuntimeError(f"OpenImageIO has no PNG writer: {oiio.geterror()}")
         if not out.open(str(tmp), spec):
             raise RuntimeError(f"cannot open {path} for writing: {out.geterror() or oiio.geterror()}")
-        # (H, W, 1): OIIO's binding misreads a 2-D array's strides (it scrambles the pixels)
-        ok = out.write_image(img[:, :, np.newaxis])
+        ok = out.write_image(img)
         closed = out.close()
         if not (ok and closed):
             raise RuntimeError(f"cannot write {path}: {out.geterror() or oiio.geterror()}")
 
 
 def write_preview(path: str | os.PathLike, img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
-    """Write the display-scaled PNG preview of a temperature image [K].
+    """Write the display-scaled PNG preview of a temperature image [K]: one grey pixel per
+    image pixel (row 0 at the top), without matplotlib.
 
-    Returns the (low, high) temperatures [K] shown as black and white.
+    Returns the (low, high) temperatures [K] shown as black and white (`display_range`).
     """
     low, high = display_range(img, clip_fraction)
     write_png(path, scale_to_u8(img, low, high))
+    return low, high
+
+
+REGION_COLOURS = ("#ff3b30", "#34c759", "#0a84ff", "#ffcc00", "#ff2dfc", "#00e5ff")  # outlines on grey
+#: The outlines' colours in words, for a report's legend (`REGION_COLOURS` in turn).
+REGION_COLOUR_NAMES = ("red", "green", "blue", "yellow", "magenta", "cyan")
+
+
+def region_colour_names(names) -> dict[str, str]:
+    """Region name -> the colour word of its outline (`write_regions_png`, `write_regions_figure`)."""
+    return {name: REGION_COLOUR_NAMES[k % len(REGION_COLOUR_NAMES)] for k, name in enumerate(names)}
+
+
+def write_regions_png(path: str | os.PathLike, img, masks, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+    """The display-scaled image (`write_preview`'s grey) with each region outlined in its own
+    colour (`REGION_COLOURS` in the order of ``masks``): the ring of pixels just outside the
+    region's own pixels (the pixels its statistics average, left as they are), without matplotlib.
+    The names are not drawn: `region_colour_names` gives each one's colour for the legend.
+
+    Parameters
+    ----------
+    img : (H, W) array
+        Temperatures [K].
+    masks : dict of str -> (H, W) bool array
+        Region name -> its pixels (`pipeline.region_masks`).
+
+    Returns
+    -------
+    (low, high) : the temperatures [K] shown as black and white (`display_range`).
+    """
+    low, high = display_range(img, clip_fraction)
+    grey = scale_to_u8(img, low, high)
+    rgb = np.repeat(grey[:, :, np.newaxis], 3, axis=2)
+    for k, m in enumerate(masks.values()):
+        m = np.asarray(m, dtype=bool)
+        if not m.any():
+            continue
+        ring = np.zeros_like(m)  # the 8 neighbours of the region, less the region
+        ring[1:, :] |= m[:-1, :]
+        ring[:-1, :] |= m[1:, :]
+        ring[:, 1:] |= m[:, :-1]
+        ring[:, :-1] |= m[:, 1:]
+        ring[1:, 1:] |= m[:-1, :-1]
+        ring[:-1, :-1] |= m[1:, 1:]
+        ring[1:, :-1] |= m[:-1, 1:]
+        ring[:-1, 1:] |= m[1:, :-1]
+        ring &= ~m
+        colour = REGION_COLOURS[k % len(REGION_COLOURS)]
+        rgb[ring] = [int(colour[i : i + 2], 16) for i in (1, 3, 5)]
+    write_png(path, rgb)
     return low, high
 
 
@@ -184,9 +261,6 @@ def write_figure(
 def panel_ranges(imgs, clip_fraction: float = CLIP_FRACTION) -> list[tuple[float, float]]:
     """The display range [K] of each image of a figure (`usable_range` of each on its own)."""
     return [usable_range(np.asarray(img, dtype=np.float64), clip_fraction) for img in imgs]
-
-
-REGION_COLOURS = ("#ff3b30", "#34c759", "#0a84ff", "#ffcc00", "#ff2dfc", "#00e5ff")  # outlines on grey
 
 
 def write_regions_figure(

@@ -6,7 +6,9 @@ Expected report keys (any may be absent): ``name``, ``version``, ``frequency_hz`
 as plain data), ``atmosphere`` (`pipeline.atmosphere_summary`: dB/km at the ground, zenith opacity
 and sky, path loss to the target), ``regions`` (`pipeline.region_stats`: the detection criterion,
 each contrast's verdict in words, region means and contrasts), ``regions_preview`` (the PNG with the
-regions outlined), ``side_by_side`` {channel: PNG}. Other keys go into the JSON only.
+regions outlined), ``regions_outlines`` {region: colour word} (the legend of a regions preview
+that does not name them), ``figures`` {channel: PNG} (each with its colour bar), ``side_by_side``
+{channel: PNG}. Other keys go into the JSON only.
 """
 
 from __future__ import annotations
@@ -152,10 +154,17 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
             ]
         if report.get("regions_preview"):
             rel = str(report["regions_preview"])
+            outlines = report.get("regions_outlines") or {}
+            legend = (
+                ", outlined on the pixels just outside each: "
+                + ", ".join(f"{_cell(name)} {colour}" for name, colour in outlines.items())
+                if outlines
+                else ""
+            )
             lines += [
                 f"![regions]({_md_link(rel)})",
                 "",
-                f"The regions on the sensor image ({regions.get('channel', 'Ey2')}).",
+                f"The regions on the sensor image ({regions.get('channel', 'Ey2')}{legend}).",
                 "",
             ]
 
@@ -188,6 +197,17 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
             lines += [f"### {name}", "", f"![{name}]({_md_link(str(rel))})", ""]
             if _range(stats) != "-":
                 lines += [f"black {_num(stats.get('display_low'))} K, white {_num(stats.get('display_high'))} K", ""]
+
+    if report.get("figures"):
+        lines += [
+            "## Figures",
+            "",
+            "Each channel with its colour bar in kelvin (`output.previews: figures`), on the display "
+            "range of its preview.",
+            "",
+        ]
+        for name, rel in report["figures"].items():
+            lines += [f"### {name}", "", f"![{name}]({_md_link(str(rel))})", ""]
 
     if report.get("side_by_side"):
         lines += [

@@ -186,3 +186,21 @@ def test_marks_once_and_phases_add_up():
     assert any(line.startswith("after the trace, together") for line in timings.lines())
     timings.clear()
     assert timings.recorded() == ([], {})
+
+
+def test_a_default_render_draws_no_figure(tmp_path):
+    """A whole render with the default previews (plain PNGs, `io.preview.write_preview`) imports
+    no matplotlib, nor scipy.signal or scipy.stats (the imager model's FFTs and the report's
+    detection probability need neither); the same render with ``output.previews: figures``
+    imports matplotlib (the control)."""
+    from tests.scenes import tiny_scenario
+
+    scn = tiny_scenario(tmp_path)
+
+    def code(sets, out):
+        return (
+            f"from pmmw.pipeline import render\nrender({str(scn)!r}, {sets!r}, out={str(out)!r}, workers=1, quiet=True)"
+        )
+
+    assert _loaded(code([], tmp_path / "a")) == set()
+    assert _loaded(code(["output.previews=figures"], tmp_path / "b")) == {"matplotlib"}

@@ -31,6 +31,19 @@ def test_uniform_aperture_is_the_airy_pattern():
     assert ap.taper_efficiency() == pytest.approx(1.0, abs=1e-12)
 
 
+def test_the_uniform_aperture_s_closed_form_is_its_quadrature():
+    """`Aperture.field` takes the uniform aperture's closed form J1(u) / u; the Hankel quadrature
+    it takes for every other aperture, run for a blockage of 1e-9 (its central hole removes
+    1e-18 / 2 of the integral), gives the same field to rounding: 1e-12 (the quadrature of this
+    smooth integrand is exact to rounding, as above). The control: a 1 % blockage changes the
+    field by more."""
+    u = np.concatenate([[0.0, 1e-9], U])
+    closed = Aperture().field(u)
+    assert closed[0] == 0.5 and closed[1:] == pytest.approx(j1(u[1:]) / u[1:], rel=1e-14)
+    assert Aperture(blockage=1e-9).field(u) == pytest.approx(closed, abs=1e-12)
+    assert np.abs(Aperture(blockage=0.1).field(u) - closed).max() > 1e-3
+
+
 def test_parabolic_taper_matches_its_closed_form_and_silver_table():
     # f = 1 - rho^2 (no pedestal): F(u) = 2 J2(u) / u^2, normalized 8 J2(u) / u^2
     ap = Aperture("parabolic", edge_taper_db=400.0)

@@ -249,22 +249,39 @@ def _png(path):
     return px
 
 
-def test_the_regions_preview_outlines_and_names_each_region(folder, tmp_path):
-    """previews/tiny_regions.png: the grey sensor image with each region outlined in its own
-    colour: pixels of each region's colour (within 40 levels per channel: antialiasing) are there,
-    at least 50 of each (a 2-pixel circle scaled to 480 px wide is about 250 px of outline), and
-    none in a render without regions. Listed in report.json and report.md."""
+def test_the_regions_preview_outlines_each_region(folder, tmp_path):
+    """previews/tiny_regions.png by default: the plain grey sensor image, one pixel per image
+    pixel, with each region outlined in its own colour on the ring of pixels just outside it: the
+    ground box's pixels x 0-5, y 12-15 (`output.regions`) leave the ring x = 6 (y 11-15) and
+    y = 11 (x 0-6), exactly green, the box's own pixels grey; the legend in the report. With
+    ``--figures`` the matplotlib figure names them: each region's colour (within 40 levels per
+    channel: antialiasing) on at least 50 pixels (a 2-pixel circle scaled to 480 px wide is about
+    250 px of outline). None in a render without regions, or without previews (the controls)."""
     from pmmw.io.preview import REGION_COLOURS
 
+    def rgb(colour):
+        return np.array([int(colour[i : i + 2], 16) for i in (1, 3, 5)])
+
     _render(folder, tmp_path / "a")
-    path = tmp_path / "a" / "previews" / "tiny_regions.png"
-    px = _png(path)[..., :3].astype(int)
-    for colour in REGION_COLOURS[:3]:
-        rgb = np.array([int(colour[i : i + 2], 16) for i in (1, 3, 5)])
-        assert (np.abs(px - rgb).max(axis=-1) <= 40).sum() >= 50, colour
+    px = _png(tmp_path / "a" / "previews" / "tiny_regions.png").astype(int)
+    assert px.shape == (16, 24, 3)
+    ring = [(y, 6) for y in range(11, 16)] + [(11, x) for x in range(0, 7)]
+    assert all((px[y, x] == rgb(REGION_COLOURS[1])).all() for y, x in ring)
+    inside = px[12:16, 0:6]
+    assert (inside[..., 0] == inside[..., 1]).all() and (inside[..., 1] == inside[..., 2]).all()
+    for colour in REGION_COLOURS[:3]:  # the block's ring too (at least 8 pixels around one), and the mirror's
+        assert (px == rgb(colour)).all(axis=-1).sum() >= 8, colour
     rep = json.loads((tmp_path / "a" / "report.json").read_text())
     assert rep["regions_preview"] == "previews/tiny_regions.png"
-    assert "(previews/tiny_regions.png)" in (tmp_path / "a" / "report.md").read_text()
+    assert rep["regions_outlines"] == {"block": "red", "ground": "green", "mirror": "blue"}
+    md = (tmp_path / "a" / "report.md").read_text()
+    assert "(previews/tiny_regions.png)" in md and "block red, ground green, mirror blue" in md
+    _render(folder, tmp_path / "f", "--figures")
+    px = _png(tmp_path / "f" / "previews" / "tiny_regions.png")[..., :3].astype(int)
+    assert px.shape[1] >= 480
+    for colour in REGION_COLOURS[:3]:
+        assert (np.abs(px - rgb(colour)).max(axis=-1) <= 40).sum() >= 50, colour
+    assert "regions_outlines" not in json.loads((tmp_path / "f" / "report.json").read_text())
     # no regions, or no previews: no regions preview
     _render(folder, tmp_path / "b", "--set", "output.regions={}")
     assert not (tmp_path / "b" / "previews" / "tiny_regions.png").exists()

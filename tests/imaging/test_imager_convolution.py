@@ -63,3 +63,48 @@ def test_a_kept_kernel_spectrum_gives_the_same_numbers():
             a = rng.normal(size=(30, 30))
             assert np.array_equal(fftconvolve(a, k), signal.fftconvolve(a, k, mode="same"))
     assert not np.array_equal(fftconvolve(a, k2), signal.fftconvolve(a, k1, mode="same"))
+
+
+def _padded_reference(img, k):
+    """The blur as the imager model defines it, by SciPy: the image mirrored about its edges by the
+    kernel's radius (numpy's symmetric padding), convolved, the centre cut out."""
+    r = k.shape[0] // 2
+    h, w = img.shape
+    return signal.fftconvolve(np.pad(img, r, mode="symmetric"), k, mode="same")[r : r + h, r : r + w]
+
+
+@pytest.mark.parametrize("image_shape", [(40, 37), (16, 24), (7, 60), (1, 5), (3, 4)])
+def test_a_mirror_symmetric_kernel_blurs_as_scipy_does_on_the_mirrored_image(image_shape):
+    """`blur` of a mirror-symmetric kernel (the Airy PSF) takes the DCT path (`mirror_symmetric`),
+    the kernel up to 4 times wider than the image (its wrap onto the mirrored image's period);
+    against SciPy's convolution of the padded image. Tolerance 1e-10 K on 300 K images: both are
+    FFTs of at most a few hundred points, whose round-off is about eps x log2(n) x 300 K, 1e-12 K.
+    The control: the same kernel shifted by one pixel (no longer symmetric: the padded FFT path)
+    agrees with its own reference and differs from the symmetric one by far more."""
+    from pmmw.imaging.imager import mirror_symmetric, psf_kernel
+
+    rng = np.random.default_rng(11)
+    img = rng.normal(300.0, 20.0, image_shape)
+    k = psf_kernel(1e-3, 2 * np.pi * 35e9 / 3e8, 0.3)  # 1 mrad pixels: the Airy core about 3 px
+    k = k[k.shape[0] // 2 - 12 : k.shape[0] // 2 + 13, k.shape[1] // 2 - 12 : k.shape[1] // 2 + 13]  # 25 x 25
+    k /= k.sum()
+    assert mirror_symmetric(k)
+    np.testing.assert_allclose(blur(img, k), _padded_reference(img, k), rtol=0, atol=1e-10)
+    shifted = np.zeros_like(k)
+    shifted[:, 1:] = k[:, :-1]
+    assert not mirror_symmetric(shifted)
+    np.testing.assert_allclose(blur(img, shifted), _padded_reference(img, shifted), rtol=0, atol=1e-10)
+    if image_shape[1] > 1:
+        assert np.abs(blur(img, shifted) - _padded_reference(img, k)).max() > 1e-3
+
+
+def test_the_landing_s_kernel_wider_than_its_image():
+    """The landing's Airy kernel (0.6 m at 95 GHz, 10 deg over 500 px: 513 x 513, the 256 px
+    radius cap) on a 120 x 90 image, wrapped more than twice onto the mirrored image; tolerance as
+    above, the sums being of a 513-point kernel: 1e-9 K."""
+    from pmmw.imaging.imager import psf_kernel
+
+    k = psf_kernel(np.radians(10.0) / 500, 2 * np.pi * 95e9 / 299_792_458.0, 0.6)
+    assert k.shape == (513, 513)
+    img = np.random.default_rng(2).normal(250.0, 30.0, (90, 120))
+    np.testing.assert_allclose(blur(img, k), _padded_reference(img, k), rtol=0, atol=1e-9)

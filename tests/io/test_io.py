@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
@@ -269,9 +270,26 @@ def test_preview_png_written_and_readable(tmp_path):
     assert _leftovers(tmp_path) == []
 
 
-def test_write_png_rejects_colour_arrays(tmp_path):
-    with pytest.raises(ValueError):
-        write_png(tmp_path / "x.png", np.zeros((2, 2, 3), np.uint8))
+def test_write_png_takes_grey_and_rgb_and_names_pmmw(tmp_path):
+    """Grey (H, W) and colour (H, W, 3) arrays, pixels as given; RGBA or 1-D refused. The PNG's
+    Software text names pmmw, so a later render may replace it (`made_by_pmmw`); the same pixels
+    written by OpenImageIO without it are the user's (the control)."""
+    from pmmw.io.rundir import made_by_pmmw
+
+    rgb = np.arange(2 * 3 * 3, dtype=np.uint8).reshape(2, 3, 3)
+    write_png(tmp_path / "c.png", rgb)
+    inp = oiio.ImageInput.open(str(tmp_path / "c.png"))
+    assert np.array_equal(inp.read_image(oiio.UINT8), rgb)
+    inp.close()
+    assert made_by_pmmw(tmp_path / "c.png")
+    out = oiio.ImageOutput.create("png")
+    out.open(str(tmp_path / "user.png"), oiio.ImageSpec(3, 2, 3, oiio.UINT8))
+    out.write_image(rgb)
+    out.close()
+    assert not made_by_pmmw(tmp_path / "user.png")
+    for bad in (np.zeros((2, 2, 4), np.uint8), np.zeros(4, np.uint8)):
+        with pytest.raises(ValueError):
+            write_png(tmp_path / "x.png", bad)
 
 
 # ---------------------------------------------------------------- report
@@ -318,3 +336,29 @@ def test_report_minimal_and_basename(tmp_path):
     assert json_path.name == "report_35GHz.json" and md_path.name == "report_35GHz.md"
     assert json.loads(json_path.read_text()) == {"name": "bare"}
     assert md_path.read_text().startswith("# bare")
+
+
+def test_synced_together_flushes_each_file_once_at_the_end(tmp_path, monkeypatch):
+    """Inside `synced_together` an atomic write leaves out its fsyncs; at the block's end each
+    file is fsync'ed once and each folder once. The control: the same write outside the block
+    fsyncs its file and folder at once; a block left by an exception fsyncs nothing."""
+    calls = []
+    monkeypatch.setattr(atomic, "_fsync_path", lambda p, directory=False: calls.append((Path(p), directory)))
+    with atomic.synced_together():
+        atomic.write_text_atomic(tmp_path / "a.txt", "a")
+        with atomic.synced_together():  # inside another: the outer block's
+            atomic.write_text_atomic(tmp_path / "sub" / "b.txt", "b")
+        atomic.write_text_atomic(tmp_path / "c.txt", "c")
+        assert calls == []
+    files = sorted(str(p) for p, d in calls if not d)
+    assert files == sorted(str(tmp_path / n) for n in ("a.txt", "sub/b.txt", "c.txt"))
+    assert sorted(str(p) for p, d in calls if d) == sorted([str(tmp_path), str(tmp_path / "sub")])
+    assert (tmp_path / "sub" / "b.txt").read_text() == "b"
+    calls.clear()
+    atomic.write_text_atomic(tmp_path / "d.txt", "d")
+    assert len(calls) == 2 and calls[1] == (tmp_path, True)
+    calls.clear()
+    with pytest.raises(RuntimeError), atomic.synced_together():
+        atomic.write_text_atomic(tmp_path / "e.txt", "e")
+        raise RuntimeError("stop")
+    assert calls == []

@@ -292,7 +292,7 @@ def test_a_full_disk_leaves_the_previous_outputs_whole_and_the_tiles_for_resume(
     def full(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", str(out / "previews" / "x.png"))
 
-    monkeypatch.setattr(pipeline, "write_figure", full)
+    monkeypatch.setattr(pipeline, "write_preview", full)
     res = _run("render", scn, "--out", out, "--seed", "7")
     assert res.exit_code == 1
     _one_error_line(res, "no space left on the device")
@@ -300,7 +300,7 @@ def test_a_full_disk_leaves_the_previous_outputs_whole_and_the_tiles_for_resume(
     assert now == old
     assert not list(out.glob(".pmmw-staging-*"))
     assert list((out / ".pmmw-tiles").rglob("tile_*.npz"))
-    monkeypatch.setattr(pipeline, "write_figure", preview.write_figure)
+    monkeypatch.setattr(pipeline, "write_preview", preview.write_preview)
     from pmmw.trace.integrator import Integrator
 
     def no_tracing(self, tile):
