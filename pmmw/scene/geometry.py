@@ -223,7 +223,7 @@ class _Part:
     a ``trimesh.Trimesh``: vertices (V, 3) float64 [m], faces (F, 3) int64, and each face's unit
     normal (zero where degenerate) and area [m^2] from the cross product of its edges, as trimesh's."""
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray) -> None:
         self.vertices, self.faces = vertices, faces
 
     @property
