@@ -371,14 +371,14 @@ class _Progress:
         if self.line is not None:
             self.line.say(f"{self.label}: {text}")
 
-    def __call__(self, done: int, total: int, rays: float, elapsed: float) -> None:
+    def __call__(self, done: int, total: int, rays: float, elapsed: float, left: float | None = None) -> None:
+        """Show ``done`` of ``total`` tiles, the rays per second over ``elapsed`` [s] and the
+        seconds ``left`` the pool estimates (`trace.pool._Pace`; None: not known yet)."""
         if self.line is None:
             return
         rate = rays / elapsed if elapsed > 0 else 0.0
-        left = elapsed / done * (total - done) if done else 0.0
-        self.line.show(
-            f"{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {left:5.0f} s left", elapsed, done == total
-        )
+        when = "   ... s left" if left is None else f"{left:5.0f} s left"
+        self.line.show(f"{self.label}: tiles {done}/{total}  {rate / 1e6:.2f} Mrays/s  {when}", elapsed, done == total)
 
 
 def region_shapes(regions: Mapping[str, Region], cam: Camera) -> dict[str, tuple | None]:

@@ -292,7 +292,9 @@ def render_tiles(
         Processes; default all cores. 1 renders in this process.
     tile_dir : Path, optional
         Where finished tiles are saved (and, with ``resume``, loaded from).
-    progress : callable(done, total, rays, elapsed), optional
+    progress : callable(done, total, rays, elapsed, left), optional
+        Told after each tile: tiles done (reused ones included) and in all, rays traced, seconds
+        since the tiles were sent, and the seconds left (`_Pace`; None while unknown).
     counts : dict, optional
         Filled with ``reused`` (tiles loaded from ``tile_dir``) and ``rendered``.
     client : dask.distributed.Client, optional
@@ -328,15 +330,18 @@ def render_tiles(
         timings.mark("kernels loaded")
     start = time.perf_counter()
     rays = sum(r.rays for r in results.values())
+    pace = _Pace(len(todo), workers)
 
-    def _collect(r: TileResult):
+    def _collect(r: TileResult, seconds: float | None = None):
         nonlocal rays
         results[r.index] = r
         rays += r.rays
         if tile_dir is not None:
             _save_tile(tile_dir, r)
+        elapsed = time.perf_counter() - start
+        pace.add(seconds, elapsed)
         if progress is not None:
-            progress(len(results), len(tiles), rays, time.perf_counter() - start)
+            progress(len(results), len(tiles), rays, elapsed, pace.left())
 
     if todo and client is not None:
         try:
@@ -352,7 +357,9 @@ def render_tiles(
         timings.add(WORKER_SETUP, _init_worker(job, intersector))
         timings.mark("first ray")
         for t in todo:
-            _collect(_render(t))
+            t0 = time.perf_counter()
+            r = _render(t)
+            _collect(r, time.perf_counter() - t0)
     elif todo:
         _render_on_workers(job, intersector, todo, workers, _collect)
     return [results[t[0]] for t in tiles]
@@ -391,6 +398,43 @@ def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
     return took
 
 
+class _Pace:
+    """The time left of a render, from the tiles' own durations: the mean seconds a worker took
+    per tile so far, times the tiles left, over the workers rendering them. Unlike the elapsed
+    time per tile done, it leaves out the workers' start-up (their Embree scenes, the sky tables),
+    which made the estimate at the first tile several times too long. Tiles go out costliest
+    first (`_by_cost`), so the early estimate errs long. Without durations (tiles rendered on a
+    Dask cluster): the elapsed time per tile done since the first one came back."""
+
+    def __init__(self, todo: int, workers: int) -> None:
+        self.todo, self.workers = todo, max(1, workers)
+        self.done = 0
+        self.busy = 0.0  # summed seconds of the tiles with a duration
+        self.timed = 0
+        self.first = None  # elapsed when the first tile came back [s]
+
+    def add(self, seconds: float | None, elapsed: float) -> None:
+        """One tile done, ``seconds`` a worker spent on it (None: unknown), at ``elapsed``."""
+        self.done += 1
+        if self.first is None:
+            self.first = elapsed
+        self.last = elapsed
+        if seconds is not None and seconds >= 0.0:
+            self.busy += seconds
+            self.timed += 1
+
+    def left(self) -> float | None:
+        """Seconds left [s], or None when nothing tells yet (one tile back, no duration)."""
+        remaining = self.todo - self.done
+        if remaining <= 0:
+            return 0.0
+        if self.timed:
+            return self.busy / self.timed * remaining / min(self.workers, remaining)
+        if self.done >= 2:
+            return (self.last - self.first) / (self.done - 1) * remaining
+        return None
+
+
 class _Worker:
     """A worker process, the parent's end of its pipe, the tiles sent to it and not yet returned
     (the first is the one it renders) with the slot each one's arrays will come back in, and
@@ -402,6 +446,7 @@ class _Worker:
         self.slots = slots
         self.tiles = deque()
         self.slot_of = deque()
+        self.free_at = time.perf_counter()  # when it last said it was ready or sent a tile [s]
 
     def free_slot(self) -> int:
         return min(set(range(_IN_FLIGHT)) - set(self.slot_of))
@@ -501,14 +546,16 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                     status, value = reply
                     if status == "error":
                         raise value[0] from _WorkerTraceback(value[1])
+                    now = time.perf_counter()
                     if isinstance(value, float):  # the worker is ready: its set-up's seconds
                         if not ready_seen:  # the first worker's: the one that traces the first ray
                             timings.add(WORKER_SETUP, value)
                             ready_seen = True
-                    else:  # a tile
+                    else:  # a tile: rendered since the worker was ready or sent its last one
                         w.tiles.popleft()
                         k = w.slot_of.popleft()
-                        collect(value if w.slots is None else w.slots.take(k, value))
+                        collect(value if w.slots is None else w.slots.take(k, value), now - w.free_at)
+                    w.free_at = now
                 if reply is None or w.process.sentinel in ready:
                     live.remove(w)
                     w.process.join()

@@ -154,7 +154,9 @@ def test_a_first_run_says_the_kernels_are_compiling_and_times_the_tiles_after(mo
     for cached in (False, True):
         monkeypatch.setattr(jit, "is_cached", lambda rel, function=None, cached=cached: cached)
         said, elapsed = [], []
-        tiles = pool.render_tiles(job, workers=1, notify=said.append, progress=lambda d, t, r, e: elapsed.append(e))
+        tiles = pool.render_tiles(
+            job, workers=1, notify=said.append, progress=lambda d, t, r, e, left: elapsed.append(e)
+        )
         images.append([t.mean for t in tiles])
         if cached:
             assert said == []
@@ -200,3 +202,52 @@ def test_a_rough_scene_after_smooth_ones_compiles_and_says_so(monkeypatch):
         monkeypatch.setattr(jit, "is_cached", lambda rel, function=None, s=settle_cached: function is None or s)
         assert pool.kernels_to_compile(jobs["cinderblocks_rough_35ghz.yaml"]) is not settle_cached
         assert pool.kernels_to_compile(jobs["cinderblocks_35ghz.yaml"]) is False
+
+
+def test_time_left_from_the_tiles_own_durations():
+    """`_Pace`: the mean seconds per tile times the tiles left over the workers; the workers'
+    number caps at the tiles left; without durations (Dask) the pace since the first tile back,
+    None after one tile. Exact arithmetic, so equality to 1e-12."""
+    p = pool._Pace(todo=10, workers=2)
+    p.add(0.4, elapsed=5.0)  # the first tile came back 5 s in: 4.6 s of it was the workers' start-up
+    assert p.left() == pytest.approx(0.4 * 9 / 2, rel=1e-12)
+    p.add(0.2, elapsed=5.1)
+    assert p.left() == pytest.approx(0.3 * 8 / 2, rel=1e-12)
+    for _ in range(7):
+        p.add(0.3, elapsed=6.0)
+    assert p.left() == pytest.approx(0.3 * 1 / 1, rel=1e-12)  # one tile left: one worker renders it
+    p.add(0.3, elapsed=6.2)
+    assert p.left() == 0.0
+    dask = pool._Pace(todo=5, workers=4)
+    dask.add(None, elapsed=3.0)
+    assert dask.left() is None
+    dask.add(None, elapsed=3.5)
+    assert dask.left() == pytest.approx(0.5 * 3, rel=1e-12)
+
+
+def test_the_first_estimate_leaves_out_the_workers_start_up(monkeypatch):
+    """The workers' start-up (their Embree scenes) stood in for by 2 s of waiting in each: the
+    first tile comes back after it, and the estimate then made from the elapsed time (as before,
+    the control) exceeds 2 s x the tiles left, while the tiles' own durations (a few ms each for
+    8 x 8 pixels at 1 spp; even 100 times slower, under 1 s for the 3 tiles on 2 workers) give
+    an estimate below 2 s."""
+    import time
+
+    res = resolve(
+        REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[16, 16]", "render.tile=8", "render.spp=1"]
+    )
+    job = make_job(res, res.scenario.frequencies[0])
+    real_init = pool._init_worker
+
+    def slow_init(job, kind):
+        time.sleep(2.0)
+        return real_init(job, kind)
+
+    monkeypatch.setattr(pool, "_init_worker", slow_init)
+    calls = []
+    pool.render_tiles(job, workers=2, progress=lambda d, t, r, e, left: calls.append((d, t, e, left)))
+    done, total, elapsed, left = calls[0]
+    assert done == 1 and total == 4
+    assert elapsed / done * (total - done) > 2.0 * (total - done)  # the control: start-up counted in
+    assert left is not None and left < 2.0, calls[0]
+    assert calls[-1][3] == 0.0
