@@ -352,7 +352,7 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
 
     What the surface does to a ray (its response, as pbrt's BxDF: the facet drawn, `_facet1`;
     the local basis and the interface's coefficients, `_response1`; each child's direction and
-    amplitudes, `_child1`; its masking, `_masking1`) is apart from the integrator's bookkeeping
+    amplitudes, `_child1`; its masking, `_leaves1`) is apart from the integrator's bookkeeping
     in `_scatter` (the emission deposited, the branch choice, termination and Russian roulette,
     the child's row, offset and medium stack, a masked child's way back).
 
@@ -467,7 +467,50 @@ def _child1(br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2, n1, 
     return cx / norm, cy / norm, cz / norm, _amplitude(ts, Ts), _amplitude(tp, Tp)
 
 
+@_inline
+def _leaves1(side, mx, my, mz, tx, ty, tz, cx, cy, cz, code, ax, ay, orient, u):
+    """Whether a child of direction c leaves a rough face's microsurface: unless ``u`` (uniform)
+    is at or above Smith's masking probability G1 = (c . m') / A(c) (Heitz 2014; the model
+    ``code`` of widths ``ax``, ``ay``, `roughness.smith_g1`) about the macro normal m' =
+    ``side`` m of the child's side (m facing the incident side, tangent t). A NaN G1 lets it
+    leave, as the array code's masking test reads."""
+    g1 = roughness.smith_g1((side * mx, side * my, side * mz), (tx, ty, tz), (cx, cy, cz), code, ax, ay, orient)
+    return not u >= g1
+
+
+@_inline
+def _rough_normal(facets, i, fm, nx, ny, nz, dx, dy, dz):
+    """The normal a ray of direction d meets on a rough face (`Facets`, row ``i``, medium
+    ``fm``): the GGX facet drawn about the macro normal (`_facet1`) where the face's model has a
+    compiled draw, else the normal n it had (weight 1); and the tangent of the face's masking
+    frame (`_tangent1`; zeros on a smooth face). Returns (nx, ny, nz, w, tx, ty, tz)."""
+    rough, n_mac = facets.rough, facets.n_mac
+    tx, ty, tz, w = 0.0, 0.0, 0.0, 1.0
+    if rough.code[fm] != roughness.NOT_ROUGH:
+        tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
+    if facets.draw[fm]:
+        nx, ny, nz, w = _facet1(
+            nx, ny, nz, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, dx, dy, dz,
+            facets.u1[i], facets.u2[i], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
+        )  # fmt: skip
+    return nx, ny, nz, w, tx, ty, tz
+
+
 # -- the integrator's bookkeeping ---------------------------------------------------------------
+
+
+@_inline
+def _absorbed(acc, k, ml00, ml01, ml10, ml11, As, Ap, t_abs, sink, Ts, Tp, t_body):
+    """Deposit in ``acc[k]`` the emission of what an interface (or its films) absorbs, the
+    fractions (As, Ap) of the s and p columns of the ray's Jones matrix (``ml``, in the local
+    basis) emitting at ``t_abs`` (Murakowski 2014 eq. 2.36: emissivity = absorptivity), and with
+    ``sink`` (a blackbody or an opaque body) what it swallows, (Ts, Tp), at ``t_body`` [K]."""
+    if As > A_ROUNDING or Ap > A_ROUNDING:
+        ea, eb = math.sqrt(As), math.sqrt(Ap)
+        _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_abs, t_abs)
+    if sink:
+        ea, eb = math.sqrt(Ts), math.sqrt(Tp)
+        _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_body, t_body)
 
 
 @_inline
@@ -484,172 +527,187 @@ def _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u):
     return False, True, 1.0, 1.0 / math.sqrt(1.0 - p_r)
 
 
+@_inline
+def _branches1(choice, trans, depth, ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u):
+    """Which children a ray makes (`Choice`): the reflected one, and the transmitted one where the
+    face transmits (``trans``); with ``stochastic``, or ``hybrid`` from ``split_depth`` on, one of
+    them drawn by power with uniform ``u`` (`_choose1`). Returns (keep_r, keep_t, gain_r, gain_t),
+    the gains the drawn child's amplitudes are scaled by (unbiased: 1 / sqrt(its probability))."""
+    if choice.strategy != 0 and trans and (choice.strategy == 1 or depth >= choice.split_depth):
+        return _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u)
+    return True, trans, 1.0, 1.0
+
+
+@_inline
+def _side1(br, diel, leaving, top):
+    """The side a child is on, +1 (reflected: the incident side) or -1 (transmitted: beyond the
+    face), and the top of its medium stack: a refracted child leaving the body pops its medium,
+    one entering it pushes it (a thin sheet's transmitted child keeps the stack)."""
+    if br == 0:
+        return 1.0, top
+    if diel:
+        return -1.0, (top - 1 if leaving else top + 1)
+    return -1.0, top
+
+
+@_inline
+def _terminate1(acc, cut, k, m00, m01, m10, m11, depth, u, limits, t_last):
+    """`survive` of one child on the entries of its Jones matrix: (goes on, m00, m01, m10, m11),
+    the entries scaled up after Russian roulette (Pharr et al. 2016 sec. 13.7), the path ended
+    on ``t_last`` by `_end` where `_fate` says so."""
+    g = _fate(m00, m01, m10, m11, depth, u, limits)
+    if g < 0.0:
+        _end(acc, cut, k, m00, m01, m10, m11, t_last, limits.t_lo, limits.t_hi)
+    if g <= 0.0:
+        return False, m00, m01, m10, m11
+    if g != 1.0:
+        return True, m00 * g, m01 * g, m10 * g, m11 * g
+    return True, m00, m01, m10, m11
+
+
+@_inline
+def _leave1(acc, cut, k, m, depth, u, limits, t_last, o, c, s, g, step):
+    """A child that leaves the surface: terminated (`_terminate1`), then moved off it by ``step``
+    [m] along the normal g of its side (`_off_surface1`: a child on the wrong side, a bump's
+    tilt, first mirrored through the face's plane). Returns (goes on, m, o, c, s), the Jones
+    entries ``m`` (m00, m01, m10, m11) and the origin, direction and basis vector s as 3-tuples."""
+    on, m00, m01, m10, m11 = _terminate1(acc, cut, k, m[0], m[1], m[2], m[3], depth, u, limits, t_last)
+    ox, oy, oz, cx, cy, cz, sx, sy, sz, _ = _off_surface1(
+        o[0], o[1], o[2], c[0], c[1], c[2], s[0], s[1], s[2], g[0], g[1], g[2], step
+    )
+    return on, (m00, m01, m10, m11), (ox, oy, oz), (cx, cy, cz), (sx, sy, sz)
+
+
+@_inline
+def _masked1(acc, k, m00, m01, m10, m11, over, t_over, side, diel, cur, other, leaving, media, wavelength):
+    """A masked child of a rough face (its side ``side``, `_masked_side1`): at the re-hit chain's
+    end (``over``) its power is emitted at ``t_over`` [K] and it ends; else it crosses one
+    ``wavelength`` [m] of its side's medium to the next facet (Heitz et al. 2016's walk on the
+    microsurface), emitting what that medium absorbs at its temperature (Murakowski 2014 eq.
+    2.37, 2.38). Returns (comes back, cur, other, leaving, m00, m01, m10, m11): the media of its
+    side seen from there and its Jones entries after the crossing; False when nothing is left
+    beyond rounding."""
+    if over:
+        _add(acc, k, m00, m01, m10, m11, t_over, t_over)
+        return False, cur, other, leaving, m00, m01, m10, m11
+    cur, other, leaving = _masked_side1(side, diel, cur, other, leaving)
+    tau, e, g = _to_next_facet1(media.alpha[cur], wavelength)
+    if tau < 1.0:
+        tc = media.temperature[cur]
+        _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
+        m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
+    return tau > A_ROUNDING, cur, other, leaving, m00, m01, m10, m11
+
+
+@_inline
+def _put_child(out, row, o, c, s, m, k, depth, t_last, key, stack, i, stack_top, top, pushed):
+    """Write a child to row ``row`` of the wave ``out``: origin, direction and basis vector s
+    (3-tuples; p = k x s with k = -c), Jones entries ``m`` (m00, m01, m10, m11), sample ``k``,
+    ``depth``, the temperature of its last object ``t_last``, its ``key``, and its medium stack:
+    its parent's (row ``i`` of ``stack``, whose top is ``stack_top``) with ``pushed`` on top
+    where its ``top`` rose above that (a refracted child entering a body, `_side1`)."""
+    out.d[row, 0], out.d[row, 1], out.d[row, 2] = c
+    out.s[row, 0], out.s[row, 1], out.s[row, 2] = s
+    out.p[row, 0], out.p[row, 1], out.p[row, 2] = _k_cross(c[0], c[1], c[2], s[0], s[1], s[2])
+    out.o[row, 0], out.o[row, 1], out.o[row, 2] = o
+    out.m[row, 0, 0], out.m[row, 0, 1], out.m[row, 1, 0], out.m[row, 1, 1] = m
+    out.sid[row], out.depth[row], out.top[row], out.last_t[row], out.key[row] = k, depth, top, t_last, key
+    ostack = out.stack
+    for a in range(stack.shape[1]):
+        ostack[row, a] = stack[i, a]
+    if top > stack_top:
+        ostack[row, top] = pushed
+
+
 @_jit
-def _scatter(
-    rows,
-    wave,
-    hit,
-    films,
-    prim,
-    faces,
-    media,
-    choice,
-    u_choose,
-    u_roul,
-    limits,
-    acc,
-    cut,
-    out,
-    mode,
-    src,
-    branch,
-    facets,
-):
+def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, mode, src,
+             branch, facets):  # fmt: skip
     """`scatter` with its ``settle`` unpacked: ``facets`` is None but with ``MASKED``, so that
     numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
-    6 % of an interaction as run-time branches). The integrator's bookkeeping of each ray's
-    interaction around the surface's response (`_facet1`, `_response1`, `_coated1`/`_bare1`,
-    `_child1`, `roughness.smith_g1`): the emission of what the interface absorbs or a sink
-    swallows (eq. 2.36), the branch choice (`_choose1`), and each child's fate (termination, a
-    masked child's way back, its row, offset and medium stack)."""
+    6 % of an interaction as run-time branches). For each ray, the surface's response (the
+    normal met `_rough_normal`, the local basis `_response1`, the coefficients
+    `_coefficients1`, each child's direction and amplitudes `_child1` and masking `_leaves1`)
+    and the integrator's bookkeeping around it: the emission of what the interface absorbs or a
+    sink swallows (`_absorbed`), the branch choice (`_branches1`), and each child's fate:
+    termination, roulette and the way off the surface (`_leave1`) or a masked child's way back
+    (`_masked1`), its side, medium stack and row (`_side1`, `_put_child`). The helpers take and
+    return scalars but for the sums, the tables and the rows written."""
     finish = mode == FINISH
     d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top  # fmt: skip
-    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving  # fmt: skip
-    oo, od, os_, op, om = out.o, out.d, out.s, out.p, out.m
-    osid, odepth, ostack, otop, olast = out.sid, out.depth, out.stack, out.top, out.last_t
-    key, okey = wave.key, out.key
+    pos, n_in, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
     buf_eps, buf_d = _film_buffers(films)
-    roulette, cap, last_row = u_roul.shape[0] > 0, stack.shape[1], oo.shape[0] - 1
+    roulette, last_row = u_roul.shape[0] > 0, out.o.shape[0] - 1
     if facets is not None:
         n_mac, n_geo, rough, back = facets.n_mac, facets.n_geo, facets.rough, facets.back
-    kind, temperature, n1_real, has_coat, eps = media.kind, media.temperature, media.n1_real, media.has_coat, media.eps
-    # The loop body calls no helper that takes arrays: numba counts references to an array
-    # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
-    # than all of an interaction's arithmetic. Helpers here take and return scalars.
     n_out, n_back, drawn_off = 0, 0, 0
     for j in range(rows.shape[0]):
         i = rows[j]
         k, fm = sid[i], fm_a[i]
-        kd, t_body = kind[fm], temperature[fm]
+        kd, t_body = media.kind[fm], media.temperature[fm]
         nx, ny, nz = n_in[i, 0], n_in[i, 1], n_in[i, 2]
         dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
         tx, ty, tz = 0.0, 0.0, 0.0
         if facets is not None:
-            if rough.code[fm] != roughness.NOT_ROUGH:
-                tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
-            if facets.draw[fm]:  # the facet visible from the ray (GGX)
-                nx, ny, nz, w = _facet1(
-                    nx, ny, nz, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, dx, dy, dz,
-                    facets.u1[i], facets.u2[i], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
-                )  # fmt: skip
-                drawn_off += w != 1.0
-                if not w > 0.0:  # no facet visible (degenerate input only): the power emitted here, none goes on
-                    _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
-                    m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
+            nx, ny, nz, w, tx, ty, tz = _rough_normal(facets, i, fm, nx, ny, nz, dx, dy, dz)
+            drawn_off += w != 1.0
+            if not w > 0.0:  # no facet visible (degenerate input only): the power emitted here, none goes on
+                _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
+                m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
             cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0)
         else:
-            cos1 = cos1_a[i]
+            cos1 = hit.cos1[i]
         sx, sy, sz, px, py, pz, ml00, ml01, ml10, ml11 = _response1(
             nx, ny, nz, dx, dy, dz, (s_old[i, 0], s_old[i, 1], s_old[i, 2]), (p_old[i, 0], p_old[i, 1], p_old[i, 2]),
             m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
         )  # fmt: skip
-        if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(
-                fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d
-            )
-        else:
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(
-                kd, eps[cur_a[i]], eps[other_a[i]], cos1, temperature[cur_a[i]], t_body
-            )
-        # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
-        if As > A_ROUNDING or Ap > A_ROUNDING:
-            ea, eb = math.sqrt(As), math.sqrt(Ap)
-            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_abs, t_abs)
-        if kd == BLACKBODY or kd == OPAQUE:
-            ea, eb = math.sqrt(Ts), math.sqrt(Tp)
-            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_body, t_body)
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coefficients1(
+            fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d
+        )
+        _absorbed(acc, k, ml00, ml01, ml10, ml11, As, Ap, t_abs, kd == BLACKBODY or kd == OPAQUE, Ts, Tp, t_body)
         diel = kd == DIELECTRIC
         trans = (diel or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
-        keep_r, keep_t, gain_r, gain_t = True, trans, 1.0, 1.0
-        if choice.strategy != 0 and trans and (choice.strategy == 1 or depth[i] >= choice.split_depth):
-            keep_r, keep_t, gain_r, gain_t = _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u_choose[j])
-        tp_i, step = top[i], faces.offset[prim[i]]
+        u = u_choose[j] if u_choose.shape[0] else 0.0
+        keep_r, keep_t, gain_r, gain_t = _branches1(choice, trans, depth[i], ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u)
         for br in range(2):
             if not (keep_t if br else keep_r):
                 continue
             cx, cy, cz, a_s, a_p = _child1(
-                br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2c, n1_real[cur_a[i]], diel
+                br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2c, media.n1_real[cur_a[i]], diel
             )
             gain = gain_t if br else gain_r
             a_s, a_p = gain * a_s, gain * a_p
-            side, top_c = 1.0, tp_i
-            if br:
-                side = -1.0
-                if diel:
-                    top_c = tp_i - 1 if leaving_a[i] else tp_i + 1  # the body's medium popped or pushed
-            m00, m01, m10, m11 = ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p
-            depth_c = depth[i] + 1
-            leaves = True
-            if (
-                facets is not None and rough.code[fm] != roughness.NOT_ROUGH
-            ):  # masked by the microsurface? (as `settle`)
-                g1 = roughness.smith_g1(
-                    (side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz), (cx, cy, cz),
-                    rough.code[fm], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
+            side, top_c = _side1(br, diel, leaving_a[i], top[i])
+            mc, c, depth_c = (ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p), (cx, cy, cz), depth[i] + 1
+            o, s_c, leaves = (pos[i, 0], pos[i, 1], pos[i, 2]), (sx, sy, sz), True
+            if facets is not None and rough.code[fm] != roughness.NOT_ROUGH:  # masked by the microsurface?
+                leaves = _leaves1(
+                    side, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, cx, cy, cz, rough.code[fm],
+                    rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm], facets.u_leave[2 * j + br],
                 )  # fmt: skip
-                leaves = not facets.u_leave[2 * j + br] >= g1  # (NaN: leaves, as the masking test reads)
-            if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
-                g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
-                if g < 0.0:
-                    _end(acc, cut, k, m00, m01, m10, m11, t_body, limits.t_lo, limits.t_hi)
-                if g <= 0.0:
+            if leaves and (finish or facets is not None):  # terminated, then off the surface along its side
+                u = u_roul[2 * j + br] if roulette else 1.0
+                g = (n_geo[i, 0], n_geo[i, 1], n_geo[i, 2]) if facets is not None else (nx, ny, nz)
+                g = (side * g[0], side * g[1], side * g[2])
+                on, mc, o, c, s_c = _leave1(acc, cut, k, mc, depth_c, u, limits, t_body, o, c, s_c, g, faces.offset[prim[i]])  # fmt: skip
+                if not on:
                     continue
-                if g != 1.0:
-                    m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
-            gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
-            ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
-            sx_c, sy_c, sz_c = sx, sy, sz
-            row, depth_row, comes_back = n_out, depth_c, False
-            if facets is not None and leaves:  # off along the face's side normal (a wrong-side child mirrored)
-                ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
-                    ox, oy, oz, cx, cy, cz, sx, sy, sz, side * n_geo[i, 0], side * n_geo[i, 1], side * n_geo[i, 2], step
+            row, depth_row = n_out, depth_c
+            if facets is not None and not leaves:  # masked: back for a re-hit, at the rows from the end of `out`
+                on, cur, oth, lv, m00, m01, m10, m11 = _masked1(
+                    acc, k, mc[0], mc[1], mc[2], mc[3], facets.over, t_body, side, diel, cur_a[i], other_a[i],
+                    leaving_a[i], media, facets.wavelength,
                 )  # fmt: skip
-            elif facets is not None:  # masked: back for a re-hit after one wavelength of its side's medium
-                if facets.over:  # the chain's end: its power emitted where it is
-                    _add(acc, k, m00, m01, m10, m11, t_body, t_body)
+                if not on:
                     continue
-                cur, oth, lv = _masked_side1(side, diel, cur_a[i], other_a[i], leaving_a[i])
-                tau, e, g = _to_next_facet1(media.alpha[cur], facets.wavelength)
-                if tau < 1.0:
-                    tc = temperature[cur]
-                    _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
-                    m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
-                if not tau > A_ROUNDING:
-                    continue
-                row, depth_row, comes_back = last_row - n_back, depth_c + facets.rehit_depth, True
+                mc, row, depth_row = (m00, m01, m10, m11), last_row - n_back, depth_c + facets.rehit_depth
                 back.src[n_back], back.cur[n_back], back.other[n_back] = i, cur, oth
                 back.leaving[n_back], back.sign[n_back] = lv, side
                 n_back += 1
-            # the child, at its row: p = k x s with k = -d
-            od[row, 0], od[row, 1], od[row, 2] = cx, cy, cz
-            os_[row, 0], os_[row, 1], os_[row, 2] = sx_c, sy_c, sz_c
-            op[row, 0], op[row, 1], op[row, 2] = _k_cross(cx, cy, cz, sx_c, sy_c, sz_c)
-            if finish and cx * gx + cy * gy + cz * gz > 0.0:  # off the surface along its side
-                ox, oy, oz = ox + step * gx, oy + step * gy, oz + step * gz
-            oo[row, 0], oo[row, 1], oo[row, 2] = ox, oy, oz
-            if finish and not cx * gx + cy * gy + cz * gz > 0.0:  # (only rounding at grazing incidence)
-                _off_surface(oo, od, os_, op, row, gx, gy, gz, step)
-            om[row, 0, 0], om[row, 0, 1], om[row, 1, 0], om[row, 1, 1] = m00, m01, m10, m11
-            osid[row], odepth[row], otop[row], olast[row] = k, depth_row, top_c, t_body
-            okey[row] = child_key1(key[i], br)
-            for c in range(cap):
-                ostack[row, c] = stack[i, c]
-            if top_c > tp_i:
-                ostack[row, top_c] = fm
+            key_c = child_key1(wave.key[i], br)
+            _put_child(out, row, o, c, s_c, mc, k, depth_row, t_body, key_c, stack, i, top[i], top_c, fm)
             if mode == AT_POINT:
                 src[row], branch[row] = i, 1 - 2 * br
-            if not comes_back:
-                n_out += 1
+            n_out += leaves
     if facets is not None:
         facets.counts[0] += drawn_off
         facets.counts[2] = n_back
@@ -793,102 +851,49 @@ def settle(
     (int, int)
         How many children leave and how many re-hit.
     """
-    pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
-    kind, alpha, temperature = media.kind, media.alpha, media.temperature
-    b_src, b_cur, b_other, b_leaving, b_sign = (
-        back_side.src,
-        back_side.cur,
-        back_side.other,
-        back_side.leaving,
-        back_side.sign,
-    )
-    r_code, r_ax, r_ay, r_orient = rough.code, rough.alpha_x, rough.alpha_y, rough.orientation
-    over, t_end = chain_end.over, chain_end.t_end
-    l_src, l_sign = leave_side.src, leave_side.sign
-    o, d, s, p, m, sid, k_depth, k_last = kids.o, kids.d, kids.s, kids.p, kids.m, kids.sid, kids.depth, kids.last_t
+    n_geo, fm_a, m, sid, d = hit.n_in, hit.face_med, kids.m, kids.sid, kids.d
     u_roul, limits, cut = fate.u_roul, fate.limits, fate.cut
     roulette = u_roul.shape[0] > 0
     l_rows, b_rows = np.empty(src.shape[0], np.int64), np.empty(src.shape[0], np.int64)
     nl, nb = 0, 0
     for c in range(src.shape[0]):
-        i = src[c]
-        sg = float(branch[c])
-        gx, gy, gz = sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2]
+        i, sg = src[c], float(branch[c])
         fm = fm_a[i]
-        code = r_code[fm]
-        if code == roughness.OTHER_CODE:
-            g1 = p_leave[c]
+        code, leaves = rough.code[fm], True
+        if code == roughness.OTHER_CODE:  # (NaN: leaves, as the masking test reads)
+            leaves = not u_leave[c] >= p_leave[c]
         elif code != roughness.NOT_ROUGH:
-            g1 = roughness.smith_g1(
-                (sg * n_mac[i, 0], sg * n_mac[i, 1], sg * n_mac[i, 2]),
-                (tangent[i, 0], tangent[i, 1], tangent[i, 2]),
-                (d[c, 0], d[c, 1], d[c, 2]),
-                code,
-                r_ax[fm],
-                r_ay[fm],
-                r_orient[fm],
-            )
-        if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
-            if finish:  # terminated (as `scatter` does)
-                m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
-                g = _fate(
-                    m00, m01, m10, m11, k_depth[c], u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0, limits
-                )
-                if g < 0.0:
-                    _end(acc, cut, sid[c], m00, m01, m10, m11, k_last[c], limits.t_lo, limits.t_hi)
-                if g <= 0.0:
+            leaves = _leaves1(
+                sg, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tangent[i, 0], tangent[i, 1], tangent[i, 2],
+                d[c, 0], d[c, 1], d[c, 2], code, rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm], u_leave[c],
+            )  # fmt: skip
+        if leaves:
+            if finish:  # terminated, then off the surface (a wrong-side child mirrored), as `scatter` does
+                u = u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0
+                if not survive(acc, cut, sid[c], m, c, kids.depth[c], kids.last_t[c], u, limits):
                     continue
-                if g != 1.0:
-                    m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
-            l_src[nl], l_sign[nl] = i, sg
-            if finish:  # off the surface (a wrong-side child mirrored), written out here: see `scatter`
-                (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored) = (
-                    _off_surface1(
-                        o[c, 0],
-                        o[c, 1],
-                        o[c, 2],
-                        d[c, 0],
-                        d[c, 1],
-                        d[c, 2],
-                        s[c, 0],
-                        s[c, 1],
-                        s[c, 2],
-                        gx,
-                        gy,
-                        gz,
-                        step[i],
-                    )
-                )
-                if mirrored:
-                    p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
-            l_rows[nl] = c
+                gx, gy, gz = sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2]
+                _off_surface(kids.o, d, kids.s, kids.p, c, gx, gy, gz, step[i])
+            leave_side.src[nl], leave_side.sign[nl], l_rows[nl] = i, sg, c
             nl += 1
             continue
-        k = sid[c]
-        if over[i]:  # the chain's end: its power emitted where it is
-            te = t_end[i, 0] if sg > 0.0 else t_end[i, 1]
-            _add(acc, k, m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], te, te)
+        te = chain_end.t_end[i, 0] if sg > 0.0 else chain_end.t_end[i, 1]
+        on, cur, oth, lv, m00, m01, m10, m11 = _masked1(
+            acc, sid[c], m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], chain_end.over[i], te, sg,
+            media.kind[fm] == DIELECTRIC, hit.cur[i], hit.other[i], hit.leaving[i], media, wavelength,
+        )  # fmt: skip
+        m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00, m01, m10, m11
+        if not on:
             continue
-        cur, oth, lv = _masked_side1(sg, kind[fm_a[i]] == DIELECTRIC, cur_a[i], other_a[i], leaving_a[i])
-        tau, e, g = _to_next_facet1(alpha[cur], wavelength)
-        if tau < 1.0:
-            tc = temperature[cur]
-            _add(acc, k, m[c, 0, 0] * e, m[c, 0, 1] * e, m[c, 1, 0] * e, m[c, 1, 1] * e, tc, tc)
-            for a in range(2):
-                for b in range(2):
-                    m[c, a, b] *= g
-        if not tau > A_ROUNDING:
-            continue
-        b_rows[nb] = c
-        b_src[nb], b_cur[nb], b_other[nb], b_leaving[nb], b_sign[nb] = i, cur, oth, lv, sg
+        back_side.src[nb], back_side.cur[nb], back_side.other[nb] = i, cur, oth
+        back_side.leaving[nb], back_side.sign[nb], b_rows[nb] = lv, sg, c
         nb += 1
     gather(kids, l_rows[:nl], leave)
     gather(kids, b_rows[:nb], back)
-    b_o, b_depth = back.o, back.depth
     for j in range(nb):  # a re-hit starts at the hit point
-        i = b_src[j]
-        b_o[j, 0], b_o[j, 1], b_o[j, 2] = pos[i, 0], pos[i, 1], pos[i, 2]
-        b_depth[j] += rehit_depth
+        i = back_side.src[j]
+        back.o[j, 0], back.o[j, 1], back.o[j, 2] = hit.pos[i, 0], hit.pos[i, 1], hit.pos[i, 2]
+        back.depth[j] += rehit_depth
     return nl, nb
 
 
