@@ -236,6 +236,21 @@ def _off_surface1(ox, oy, oz, dx, dy, dz, sx, sy, sz, gx, gy, gz, step):
 
 
 @_inline
+def _scaled1(m, f):
+    """Jones entries ``m`` (a 4-tuple) times the factor ``f`` that `_fate` gave (unchanged for 1)."""
+    return m if f == 1.0 else (m[0] * f, m[1] * f, m[2] * f, m[3] * f)
+
+
+@_inline
+def _off_surface3(o, d, s, g, step):
+    """`_off_surface1` on 3-tuples: (o, d, s) off the surface along g."""
+    ox, oy, oz, dx, dy, dz, sx, sy, sz, _ = _off_surface1(
+        o[0], o[1], o[2], d[0], d[1], d[2], s[0], s[1], s[2], g[0], g[1], g[2], step
+    )
+    return (ox, oy, oz), (dx, dy, dz), (sx, sy, sz)
+
+
+@_inline
 def _off_surface(o, d, s, p, c, gx, gy, gz, step):
     """`_off_surface1` of ray c of a wave, in place."""
     (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored) = _off_surface1(
@@ -479,20 +494,17 @@ def _leaves1(side, mx, my, mz, tx, ty, tz, cx, cy, cz, code, ax, ay, orient, u):
 
 
 @_inline
-def _rough_normal(facets, i, fm, nx, ny, nz, dx, dy, dz):
-    """The normal a ray of direction d meets on a rough face (`Facets`, row ``i``, medium
-    ``fm``): the GGX facet drawn about the macro normal (`_facet1`) where the face's model has a
-    compiled draw, else the normal n it had (weight 1); and the tangent of the face's masking
-    frame (`_tangent1`; zeros on a smooth face). Returns (nx, ny, nz, w, tx, ty, tz)."""
-    rough, n_mac = facets.rough, facets.n_mac
+def _rough_normal1(nx, ny, nz, dx, dy, dz, mac, code, draw, u1, u2, ax, ay, orient):
+    """The normal a ray of direction d meets on a rough face of macro normal ``mac`` (3-tuple)
+    and roughness model ``code`` (widths ``ax``, ``ay``): the GGX facet drawn from ``u1``, ``u2``
+    (`_facet1`) where the model has a compiled draw (``draw``), else the normal n it had (weight
+    1); and the tangent of the face's masking frame (`_tangent1`; zeros on a smooth face).
+    Returns (nx, ny, nz, w, tx, ty, tz)."""
     tx, ty, tz, w = 0.0, 0.0, 0.0, 1.0
-    if rough.code[fm] != roughness.NOT_ROUGH:
-        tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
-    if facets.draw[fm]:
-        nx, ny, nz, w = _facet1(
-            nx, ny, nz, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, dx, dy, dz,
-            facets.u1[i], facets.u2[i], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
-        )  # fmt: skip
+    if code != roughness.NOT_ROUGH:
+        tx, ty, tz = _tangent1(mac[0], mac[1], mac[2])
+    if draw:
+        nx, ny, nz, w = _facet1(nx, ny, nz, mac[0], mac[1], mac[2], tx, ty, tz, dx, dy, dz, u1, u2, ax, ay, orient)
     return nx, ny, nz, w, tx, ty, tz
 
 
@@ -500,17 +512,13 @@ def _rough_normal(facets, i, fm, nx, ny, nz, dx, dy, dz):
 
 
 @_inline
-def _absorbed(acc, k, ml00, ml01, ml10, ml11, As, Ap, t_abs, sink, Ts, Tp, t_body):
-    """Deposit in ``acc[k]`` the emission of what an interface (or its films) absorbs, the
-    fractions (As, Ap) of the s and p columns of the ray's Jones matrix (``ml``, in the local
-    basis) emitting at ``t_abs`` (Murakowski 2014 eq. 2.36: emissivity = absorptivity), and with
-    ``sink`` (a blackbody or an opaque body) what it swallows, (Ts, Tp), at ``t_body`` [K]."""
-    if As > A_ROUNDING or Ap > A_ROUNDING:
-        ea, eb = math.sqrt(As), math.sqrt(Ap)
-        _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_abs, t_abs)
-    if sink:
-        ea, eb = math.sqrt(Ts), math.sqrt(Tp)
-        _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_body, t_body)
+def _emit_absorbed(acc, k, ml00, ml01, ml10, ml11, fa, fb, t):
+    """Deposit in ``acc[k]`` the emission of the power fractions ``fa``, ``fb`` that a face takes
+    from the s and p columns of a ray's Jones matrix (``ml``, in the local basis) and emits at
+    ``t`` [K] (Murakowski 2014 eq. 2.36: emissivity = absorptivity): what an interface or its films
+    absorb, or what a sink swallows. Straight-line on purpose (see `_scatter`)."""
+    ea, eb = math.sqrt(fa), math.sqrt(fb)
+    _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t, t)
 
 
 @_inline
@@ -551,52 +559,21 @@ def _side1(br, diel, leaving, top):
 
 
 @_inline
-def _terminate1(acc, cut, k, m00, m01, m10, m11, depth, u, limits, t_last):
-    """`survive` of one child on the entries of its Jones matrix: (goes on, m00, m01, m10, m11),
-    the entries scaled up after Russian roulette (Pharr et al. 2016 sec. 13.7), the path ended
-    on ``t_last`` by `_end` where `_fate` says so."""
-    g = _fate(m00, m01, m10, m11, depth, u, limits)
-    if g < 0.0:
-        _end(acc, cut, k, m00, m01, m10, m11, t_last, limits.t_lo, limits.t_hi)
-    if g <= 0.0:
-        return False, m00, m01, m10, m11
-    if g != 1.0:
-        return True, m00 * g, m01 * g, m10 * g, m11 * g
-    return True, m00, m01, m10, m11
-
-
-@_inline
-def _leave1(acc, cut, k, m, depth, u, limits, t_last, o, c, s, g, step):
-    """A child that leaves the surface: terminated (`_terminate1`), then moved off it by ``step``
-    [m] along the normal g of its side (`_off_surface1`: a child on the wrong side, a bump's
-    tilt, first mirrored through the face's plane). Returns (goes on, m, o, c, s), the Jones
-    entries ``m`` (m00, m01, m10, m11) and the origin, direction and basis vector s as 3-tuples."""
-    on, m00, m01, m10, m11 = _terminate1(acc, cut, k, m[0], m[1], m[2], m[3], depth, u, limits, t_last)
-    ox, oy, oz, cx, cy, cz, sx, sy, sz, _ = _off_surface1(
-        o[0], o[1], o[2], c[0], c[1], c[2], s[0], s[1], s[2], g[0], g[1], g[2], step
-    )
-    return on, (m00, m01, m10, m11), (ox, oy, oz), (cx, cy, cz), (sx, sy, sz)
-
-
-@_inline
-def _masked1(acc, k, m00, m01, m10, m11, over, t_over, side, diel, cur, other, leaving, media, wavelength):
-    """A masked child of a rough face (its side ``side``, `_masked_side1`): at the re-hit chain's
-    end (``over``) its power is emitted at ``t_over`` [K] and it ends; else it crosses one
-    ``wavelength`` [m] of its side's medium to the next facet (Heitz et al. 2016's walk on the
-    microsurface), emitting what that medium absorbs at its temperature (Murakowski 2014 eq.
-    2.37, 2.38). Returns (comes back, cur, other, leaving, m00, m01, m10, m11): the media of its
-    side seen from there and its Jones entries after the crossing; False when nothing is left
-    beyond rounding."""
+def _masked1(acc, k, m, over, t_over, alpha, t_medium, wavelength):
+    """A masked child of a rough face, Jones entries ``m`` (m00, m01, m10, m11): at the re-hit
+    chain's end (``over``) its power is emitted at ``t_over`` [K] and it ends; else it crosses one
+    ``wavelength`` [m] of its side's medium (`_masked_side1`; extinction ``alpha`` [1/m]) to the
+    next facet (Heitz et al. 2016's walk on the microsurface), emitting what that medium absorbs
+    at its temperature ``t_medium`` [K] (Murakowski 2014 eq. 2.37, 2.38). Returns (comes back,
+    m): its Jones entries after the crossing; False when nothing is left beyond rounding."""
     if over:
-        _add(acc, k, m00, m01, m10, m11, t_over, t_over)
-        return False, cur, other, leaving, m00, m01, m10, m11
-    cur, other, leaving = _masked_side1(side, diel, cur, other, leaving)
-    tau, e, g = _to_next_facet1(media.alpha[cur], wavelength)
+        _add(acc, k, m[0], m[1], m[2], m[3], t_over, t_over)
+        return False, m
+    tau, e, g = _to_next_facet1(alpha, wavelength)
     if tau < 1.0:
-        tc = media.temperature[cur]
-        _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
-        m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
-    return tau > A_ROUNDING, cur, other, leaving, m00, m01, m10, m11
+        _add(acc, k, m[0] * e, m[1] * e, m[2] * e, m[3] * e, t_medium, t_medium)
+        m = (m[0] * g, m[1] * g, m[2] * g, m[3] * g)
+    return tau > A_ROUNDING, m
 
 
 @_inline
@@ -625,45 +602,58 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
     """`scatter` with its ``settle`` unpacked: ``facets`` is None but with ``MASKED``, so that
     numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
     6 % of an interaction as run-time branches). For each ray, the surface's response (the
-    normal met `_rough_normal`, the local basis `_response1`, the coefficients
-    `_coefficients1`, each child's direction and amplitudes `_child1` and masking `_leaves1`)
-    and the integrator's bookkeeping around it: the emission of what the interface absorbs or a
-    sink swallows (`_absorbed`), the branch choice (`_branches1`), and each child's fate:
-    termination, roulette and the way off the surface (`_leave1`) or a masked child's way back
-    (`_masked1`), its side, medium stack and row (`_side1`, `_put_child`). The helpers take and
-    return scalars but for the sums, the tables and the rows written."""
+    normal met `_rough_normal1`, the local basis `_response1`, the coefficients `_coated1` or
+    `_bare1`, each child's direction and amplitudes `_child1` and masking `_leaves1`) and the
+    integrator's bookkeeping around it: the emission of what the face absorbs (`_emit_absorbed`),
+    the branch choice (`_branches1`), and each child's fate: termination and roulette (`_fate`,
+    `_end`: `survive`), the way off the surface (`_off_surface3`) or a masked child's way back
+    (`_masked1`), its side, medium stack and row (`_side1`, `_put_child`).
+
+    numba counts references to an array handed to a helper, and LLVM drops the counting where
+    it inlines straight-line code (`_add`, `_end`, `_emit_absorbed`) but not around every
+    branch: a first cut of this split that handed the tables and sums to helpers with branches
+    (the termination, the rough face's normal, the coefficients) ran the rough scene's trace at
+    `pmmw bench`'s trace x workers / Embree ratio 8.9-10.0 against 5.7-6.3. So the hot helpers
+    take scalars; the machine code has no more reference-count call sites than before the split."""
     finish = mode == FINISH
     d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top  # fmt: skip
-    pos, n_in, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
+    pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving  # fmt: skip
+    kind, temperature, n1_real, has_coat, eps = media.kind, media.temperature, media.n1_real, media.has_coat, media.eps
+    key, offset = wave.key, faces.offset
     buf_eps, buf_d = _film_buffers(films)
     roulette, last_row = u_roul.shape[0] > 0, out.o.shape[0] - 1
     if facets is not None:
-        n_mac, n_geo, rough, back = facets.n_mac, facets.n_geo, facets.rough, facets.back
+        n_mac, n_geo, rough, back, alpha = facets.n_mac, facets.n_geo, facets.rough, facets.back, media.alpha
     n_out, n_back, drawn_off = 0, 0, 0
     for j in range(rows.shape[0]):
         i = rows[j]
         k, fm = sid[i], fm_a[i]
-        kd, t_body = media.kind[fm], media.temperature[fm]
+        kd, t_body = kind[fm], temperature[fm]
         nx, ny, nz = n_in[i, 0], n_in[i, 1], n_in[i, 2]
         dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
-        tx, ty, tz = 0.0, 0.0, 0.0
         if facets is not None:
-            nx, ny, nz, w, tx, ty, tz = _rough_normal(facets, i, fm, nx, ny, nz, dx, dy, dz)
+            nx, ny, nz, w, tx, ty, tz = _rough_normal1(
+                nx, ny, nz, dx, dy, dz, (n_mac[i, 0], n_mac[i, 1], n_mac[i, 2]), rough.code[fm], facets.draw[fm],
+                facets.u1[i], facets.u2[i], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
+            )  # fmt: skip
             drawn_off += w != 1.0
             if not w > 0.0:  # no facet visible (degenerate input only): the power emitted here, none goes on
                 _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
                 m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
-            cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0)
-        else:
-            cos1 = hit.cos1[i]
+        cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0) if facets is not None else cos1_a[i]
         sx, sy, sz, px, py, pz, ml00, ml01, ml10, ml11 = _response1(
             nx, ny, nz, dx, dy, dz, (s_old[i, 0], s_old[i, 1], s_old[i, 2]), (p_old[i, 0], p_old[i, 1], p_old[i, 2]),
             m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
         )  # fmt: skip
-        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coefficients1(
-            fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d
-        )
-        _absorbed(acc, k, ml00, ml01, ml10, ml11, As, Ap, t_abs, kd == BLACKBODY or kd == OPAQUE, Ts, Tp, t_body)
+        if has_coat[fm]:  # (`_coefficients1`, the bare face's branch on scalars: see above)
+            coef = _coated1(fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d)
+        else:
+            coef = _bare1(kd, eps[cur_a[i]], eps[other_a[i]], cos1, temperature[cur_a[i]], t_body)
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = coef
+        if As > A_ROUNDING or Ap > A_ROUNDING:  # what the interface (or its films) absorbs
+            _emit_absorbed(acc, k, ml00, ml01, ml10, ml11, As, Ap, t_abs)
+        if kd == BLACKBODY or kd == OPAQUE:  # what a sink swallows
+            _emit_absorbed(acc, k, ml00, ml01, ml10, ml11, Ts, Tp, t_body)
         diel = kd == DIELECTRIC
         trans = (diel or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
         u = u_choose[j] if u_choose.shape[0] else 0.0
@@ -671,40 +661,38 @@ def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_rou
         for br in range(2):
             if not (keep_t if br else keep_r):
                 continue
-            cx, cy, cz, a_s, a_p = _child1(
-                br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2c, media.n1_real[cur_a[i]], diel
-            )
+            cx, cy, cz, a_s, a_p = _child1(br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2c,
+                                           n1_real[cur_a[i]], diel)  # fmt: skip
             gain = gain_t if br else gain_r
-            a_s, a_p = gain * a_s, gain * a_p
+            mc = (ml00 * (gain * a_s), ml01 * (gain * a_p), ml10 * (gain * a_s), ml11 * (gain * a_p))
             side, top_c = _side1(br, diel, leaving_a[i], top[i])
-            mc, c, depth_c = (ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p), (cx, cy, cz), depth[i] + 1
-            o, s_c, leaves = (pos[i, 0], pos[i, 1], pos[i, 2]), (sx, sy, sz), True
+            o, c, s_c, leaves = (pos[i, 0], pos[i, 1], pos[i, 2]), (cx, cy, cz), (sx, sy, sz), True
             if facets is not None and rough.code[fm] != roughness.NOT_ROUGH:  # masked by the microsurface?
                 leaves = _leaves1(
                     side, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, cx, cy, cz, rough.code[fm],
                     rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm], facets.u_leave[2 * j + br],
                 )  # fmt: skip
-            if leaves and (finish or facets is not None):  # terminated, then off the surface along its side
-                u = u_roul[2 * j + br] if roulette else 1.0
+            if leaves and (finish or facets is not None):  # terminated (`survive`), then off the surface
+                f = _fate(mc[0], mc[1], mc[2], mc[3], depth[i] + 1, u_roul[2 * j + br] if roulette else 1.0, limits)
+                if f < 0.0:
+                    _end(acc, cut, k, mc[0], mc[1], mc[2], mc[3], t_body, limits.t_lo, limits.t_hi)
+                if f <= 0.0:
+                    continue
+                mc = _scaled1(mc, f)
                 g = (n_geo[i, 0], n_geo[i, 1], n_geo[i, 2]) if facets is not None else (nx, ny, nz)
-                g = (side * g[0], side * g[1], side * g[2])
-                on, mc, o, c, s_c = _leave1(acc, cut, k, mc, depth_c, u, limits, t_body, o, c, s_c, g, faces.offset[prim[i]])  # fmt: skip
-                if not on:
-                    continue
-            row, depth_row = n_out, depth_c
+                o, c, s_c = _off_surface3(o, c, s_c, (side * g[0], side * g[1], side * g[2]), offset[prim[i]])
+            row, depth_row = n_out, depth[i] + 1
             if facets is not None and not leaves:  # masked: back for a re-hit, at the rows from the end of `out`
-                on, cur, oth, lv, m00, m01, m10, m11 = _masked1(
-                    acc, k, mc[0], mc[1], mc[2], mc[3], facets.over, t_body, side, diel, cur_a[i], other_a[i],
-                    leaving_a[i], media, facets.wavelength,
-                )  # fmt: skip
+                cur, oth, lv = _masked_side1(side, diel, cur_a[i], other_a[i], leaving_a[i])
+                on, mc = _masked1(acc, k, mc, facets.over, t_body, alpha[cur], temperature[cur], facets.wavelength)
                 if not on:
                     continue
-                mc, row, depth_row = (m00, m01, m10, m11), last_row - n_back, depth_c + facets.rehit_depth
+                row, depth_row = last_row - n_back, depth_row + facets.rehit_depth
                 back.src[n_back], back.cur[n_back], back.other[n_back] = i, cur, oth
                 back.leaving[n_back], back.sign[n_back] = lv, side
                 n_back += 1
-            key_c = child_key1(wave.key[i], br)
-            _put_child(out, row, o, c, s_c, mc, k, depth_row, t_body, key_c, stack, i, top[i], top_c, fm)
+            _put_child(out, row, o, c, s_c, mc, k, depth_row, t_body, child_key1(key[i], br), stack, i, top[i], top_c,
+                       fm)  # fmt: skip
             if mode == AT_POINT:
                 src[row], branch[row] = i, 1 - 2 * br
             n_out += leaves
@@ -851,7 +839,12 @@ def settle(
     (int, int)
         How many children leave and how many re-hit.
     """
-    n_geo, fm_a, m, sid, d = hit.n_in, hit.face_med, kids.m, kids.sid, kids.d
+    pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
+    o, d, s, p, m, sid, k_depth, k_last = kids.o, kids.d, kids.s, kids.p, kids.m, kids.sid, kids.depth, kids.last_t
+    kind, alpha, temperature, over, t_end = media.kind, media.alpha, media.temperature, chain_end.over, chain_end.t_end
+    r_code, r_ax, r_ay, r_orient = rough.code, rough.alpha_x, rough.alpha_y, rough.orientation
+    b_src, b_cur, b_other, b_leaving, b_sign = back_side.src, back_side.cur, back_side.other, back_side.leaving, back_side.sign  # fmt: skip
+    l_src, l_sign = leave_side.src, leave_side.sign
     u_roul, limits, cut = fate.u_roul, fate.limits, fate.cut
     roulette = u_roul.shape[0] > 0
     l_rows, b_rows = np.empty(src.shape[0], np.int64), np.empty(src.shape[0], np.int64)
@@ -859,41 +852,51 @@ def settle(
     for c in range(src.shape[0]):
         i, sg = src[c], float(branch[c])
         fm = fm_a[i]
-        code, leaves = rough.code[fm], True
+        code, leaves = r_code[fm], True
         if code == roughness.OTHER_CODE:  # (NaN: leaves, as the masking test reads)
             leaves = not u_leave[c] >= p_leave[c]
         elif code != roughness.NOT_ROUGH:
             leaves = _leaves1(
                 sg, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tangent[i, 0], tangent[i, 1], tangent[i, 2],
-                d[c, 0], d[c, 1], d[c, 2], code, rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm], u_leave[c],
+                d[c, 0], d[c, 1], d[c, 2], code, r_ax[fm], r_ay[fm], r_orient[fm], u_leave[c],
             )  # fmt: skip
         if leaves:
-            if finish:  # terminated, then off the surface (a wrong-side child mirrored), as `scatter` does
+            if finish:  # terminated (`survive`), then off the surface (a wrong-side child mirrored), as `scatter` does
+                mc = (m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1])
                 u = u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0
-                if not survive(acc, cut, sid[c], m, c, kids.depth[c], kids.last_t[c], u, limits):
+                f = _fate(mc[0], mc[1], mc[2], mc[3], k_depth[c], u, limits)
+                if f < 0.0:
+                    _end(acc, cut, sid[c], mc[0], mc[1], mc[2], mc[3], k_last[c], limits.t_lo, limits.t_hi)
+                if f <= 0.0:
                     continue
-                gx, gy, gz = sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2]
-                _off_surface(kids.o, d, kids.s, kids.p, c, gx, gy, gz, step[i])
-            leave_side.src[nl], leave_side.sign[nl], l_rows[nl] = i, sg, c
+                if f != 1.0:
+                    m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = mc[0] * f, mc[1] * f, mc[2] * f, mc[3] * f
+                g = (sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2])
+                o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored = _off_surface1(
+                    o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], g[0], g[1], g[2], step[i]
+                )  # fmt: skip
+                if mirrored:
+                    p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
+            l_src[nl], l_sign[nl], l_rows[nl] = i, sg, c
             nl += 1
             continue
-        te = chain_end.t_end[i, 0] if sg > 0.0 else chain_end.t_end[i, 1]
-        on, cur, oth, lv, m00, m01, m10, m11 = _masked1(
-            acc, sid[c], m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], chain_end.over[i], te, sg,
-            media.kind[fm] == DIELECTRIC, hit.cur[i], hit.other[i], hit.leaving[i], media, wavelength,
-        )  # fmt: skip
-        m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00, m01, m10, m11
+        te = t_end[i, 0] if sg > 0.0 else t_end[i, 1]
+        cur, oth, lv = _masked_side1(sg, kind[fm] == DIELECTRIC, cur_a[i], other_a[i], leaving_a[i])
+        mc = (m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1])
+        on, mc = _masked1(acc, sid[c], mc, over[i], te, alpha[cur], temperature[cur], wavelength)
+        m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = mc
         if not on:
             continue
-        back_side.src[nb], back_side.cur[nb], back_side.other[nb] = i, cur, oth
-        back_side.leaving[nb], back_side.sign[nb], b_rows[nb] = lv, sg, c
+        b_src[nb], b_cur[nb], b_other[nb] = i, cur, oth
+        b_leaving[nb], b_sign[nb], b_rows[nb] = lv, sg, c
         nb += 1
     gather(kids, l_rows[:nl], leave)
     gather(kids, b_rows[:nb], back)
+    b_o, b_depth = back.o, back.depth
     for j in range(nb):  # a re-hit starts at the hit point
-        i = back_side.src[j]
-        back.o[j, 0], back.o[j, 1], back.o[j, 2] = hit.pos[i, 0], hit.pos[i, 1], hit.pos[i, 2]
-        back.depth[j] += rehit_depth
+        i = b_src[j]
+        b_o[j, 0], b_o[j, 1], b_o[j, 2] = pos[i, 0], pos[i, 1], pos[i, 2]
+        b_depth[j] += rehit_depth
     return nl, nb
 
 
