@@ -236,6 +236,21 @@ def _off_surface1(ox, oy, oz, dx, dy, dz, sx, sy, sz, gx, gy, gz, step):
 
 
 @_inline
+def _scaled1(m, f):
+    """Jones entries ``m`` (a 4-tuple) times the factor ``f`` that `_fate` gave (unchanged for 1)."""
+    return m if f == 1.0 else (m[0] * f, m[1] * f, m[2] * f, m[3] * f)
+
+
+@_inline
+def _off_surface3(o, d, s, g, step):
+    """`_off_surface1` on 3-tuples: (o, d, s) off the surface along g."""
+    ox, oy, oz, dx, dy, dz, sx, sy, sz, _ = _off_surface1(
+        o[0], o[1], o[2], d[0], d[1], d[2], s[0], s[1], s[2], g[0], g[1], g[2], step
+    )
+    return (ox, oy, oz), (dx, dy, dz), (sx, sy, sz)
+
+
+@_inline
 def _off_surface(o, d, s, p, c, gx, gy, gz, step):
     """`_off_surface1` of ray c of a wave, in place."""
     (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored) = _off_surface1(
@@ -352,7 +367,7 @@ def scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul
 
     What the surface does to a ray (its response, as pbrt's BxDF: the facet drawn, `_facet1`;
     the local basis and the interface's coefficients, `_response1`; each child's direction and
-    amplitudes, `_child1`; its masking, `_masking1`) is apart from the integrator's bookkeeping
+    amplitudes, `_child1`; its masking, `_leaves1`) is apart from the integrator's bookkeeping
     in `_scatter` (the emission deposited, the branch choice, termination and Russian roulette,
     the child's row, offset and medium stack, a masked child's way back).
 
@@ -467,7 +482,43 @@ def _child1(br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2, n1, 
     return cx / norm, cy / norm, cz / norm, _amplitude(ts, Ts), _amplitude(tp, Tp)
 
 
+@_inline
+def _leaves1(side, mx, my, mz, tx, ty, tz, cx, cy, cz, code, ax, ay, orient, u):
+    """Whether a child of direction c leaves a rough face's microsurface: unless ``u`` (uniform)
+    is at or above Smith's masking probability G1 = (c . m') / A(c) (Heitz 2014; the model
+    ``code`` of widths ``ax``, ``ay``, `roughness.smith_g1`) about the macro normal m' =
+    ``side`` m of the child's side (m facing the incident side, tangent t). A NaN G1 lets it
+    leave, as the array code's masking test reads."""
+    g1 = roughness.smith_g1((side * mx, side * my, side * mz), (tx, ty, tz), (cx, cy, cz), code, ax, ay, orient)
+    return not u >= g1
+
+
+@_inline
+def _rough_normal1(nx, ny, nz, dx, dy, dz, mac, code, draw, u1, u2, ax, ay, orient):
+    """The normal a ray of direction d meets on a rough face of macro normal ``mac`` (3-tuple)
+    and roughness model ``code`` (widths ``ax``, ``ay``): the GGX facet drawn from ``u1``, ``u2``
+    (`_facet1`) where the model has a compiled draw (``draw``), else the normal n it had (weight
+    1); and the tangent of the face's masking frame (`_tangent1`; zeros on a smooth face).
+    Returns (nx, ny, nz, w, tx, ty, tz)."""
+    tx, ty, tz, w = 0.0, 0.0, 0.0, 1.0
+    if code != roughness.NOT_ROUGH:
+        tx, ty, tz = _tangent1(mac[0], mac[1], mac[2])
+    if draw:
+        nx, ny, nz, w = _facet1(nx, ny, nz, mac[0], mac[1], mac[2], tx, ty, tz, dx, dy, dz, u1, u2, ax, ay, orient)
+    return nx, ny, nz, w, tx, ty, tz
+
+
 # -- the integrator's bookkeeping ---------------------------------------------------------------
+
+
+@_inline
+def _emit_absorbed(acc, k, ml00, ml01, ml10, ml11, fa, fb, t):
+    """Deposit in ``acc[k]`` the emission of the power fractions ``fa``, ``fb`` that a face takes
+    from the s and p columns of a ray's Jones matrix (``ml``, in the local basis) and emits at
+    ``t`` [K] (Murakowski 2014 eq. 2.36: emissivity = absorptivity): what an interface or its films
+    absorb, or what a sink swallows. Straight-line on purpose (see `_scatter`)."""
+    ea, eb = math.sqrt(fa), math.sqrt(fb)
+    _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t, t)
 
 
 @_inline
@@ -484,48 +535,95 @@ def _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u):
     return False, True, 1.0, 1.0 / math.sqrt(1.0 - p_r)
 
 
+@_inline
+def _branches1(choice, trans, depth, ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u):
+    """Which children a ray makes (`Choice`): the reflected one, and the transmitted one where the
+    face transmits (``trans``); with ``stochastic``, or ``hybrid`` from ``split_depth`` on, one of
+    them drawn by power with uniform ``u`` (`_choose1`). Returns (keep_r, keep_t, gain_r, gain_t),
+    the gains the drawn child's amplitudes are scaled by (unbiased: 1 / sqrt(its probability))."""
+    if choice.strategy != 0 and trans and (choice.strategy == 1 or depth >= choice.split_depth):
+        return _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u)
+    return True, trans, 1.0, 1.0
+
+
+@_inline
+def _side1(br, diel, leaving, top):
+    """The side a child is on, +1 (reflected: the incident side) or -1 (transmitted: beyond the
+    face), and the top of its medium stack: a refracted child leaving the body pops its medium,
+    one entering it pushes it (a thin sheet's transmitted child keeps the stack)."""
+    if br == 0:
+        return 1.0, top
+    if diel:
+        return -1.0, (top - 1 if leaving else top + 1)
+    return -1.0, top
+
+
+@_inline
+def _masked1(acc, k, m, over, t_over, alpha, t_medium, wavelength):
+    """A masked child of a rough face, Jones entries ``m`` (m00, m01, m10, m11): at the re-hit
+    chain's end (``over``) its power is emitted at ``t_over`` [K] and it ends; else it crosses one
+    ``wavelength`` [m] of its side's medium (`_masked_side1`; extinction ``alpha`` [1/m]) to the
+    next facet (Heitz et al. 2016's walk on the microsurface), emitting what that medium absorbs
+    at its temperature ``t_medium`` [K] (Murakowski 2014 eq. 2.37, 2.38). Returns (comes back,
+    m): its Jones entries after the crossing; False when nothing is left beyond rounding."""
+    if over:
+        _add(acc, k, m[0], m[1], m[2], m[3], t_over, t_over)
+        return False, m
+    tau, e, g = _to_next_facet1(alpha, wavelength)
+    if tau < 1.0:
+        _add(acc, k, m[0] * e, m[1] * e, m[2] * e, m[3] * e, t_medium, t_medium)
+        m = (m[0] * g, m[1] * g, m[2] * g, m[3] * g)
+    return tau > A_ROUNDING, m
+
+
+@_inline
+def _put_child(out, row, o, c, s, m, k, depth, t_last, key, stack, i, stack_top, top, pushed):
+    """Write a child to row ``row`` of the wave ``out``: origin, direction and basis vector s
+    (3-tuples; p = k x s with k = -c), Jones entries ``m`` (m00, m01, m10, m11), sample ``k``,
+    ``depth``, the temperature of its last object ``t_last``, its ``key``, and its medium stack:
+    its parent's (row ``i`` of ``stack``, whose top is ``stack_top``) with ``pushed`` on top
+    where its ``top`` rose above that (a refracted child entering a body, `_side1`)."""
+    out.d[row, 0], out.d[row, 1], out.d[row, 2] = c
+    out.s[row, 0], out.s[row, 1], out.s[row, 2] = s
+    out.p[row, 0], out.p[row, 1], out.p[row, 2] = _k_cross(c[0], c[1], c[2], s[0], s[1], s[2])
+    out.o[row, 0], out.o[row, 1], out.o[row, 2] = o
+    out.m[row, 0, 0], out.m[row, 0, 1], out.m[row, 1, 0], out.m[row, 1, 1] = m
+    out.sid[row], out.depth[row], out.top[row], out.last_t[row], out.key[row] = k, depth, top, t_last, key
+    ostack = out.stack
+    for a in range(stack.shape[1]):
+        ostack[row, a] = stack[i, a]
+    if top > stack_top:
+        ostack[row, top] = pushed
+
+
 @_jit
-def _scatter(
-    rows,
-    wave,
-    hit,
-    films,
-    prim,
-    faces,
-    media,
-    choice,
-    u_choose,
-    u_roul,
-    limits,
-    acc,
-    cut,
-    out,
-    mode,
-    src,
-    branch,
-    facets,
-):
+def _scatter(rows, wave, hit, films, prim, faces, media, choice, u_choose, u_roul, limits, acc, cut, out, mode, src,
+             branch, facets):  # fmt: skip
     """`scatter` with its ``settle`` unpacked: ``facets`` is None but with ``MASKED``, so that
     numba compiles the smooth kernels without the rough faces' steps (they cost smooth scenes
-    6 % of an interaction as run-time branches). The integrator's bookkeeping of each ray's
-    interaction around the surface's response (`_facet1`, `_response1`, `_coated1`/`_bare1`,
-    `_child1`, `roughness.smith_g1`): the emission of what the interface absorbs or a sink
-    swallows (eq. 2.36), the branch choice (`_choose1`), and each child's fate (termination, a
-    masked child's way back, its row, offset and medium stack)."""
+    6 % of an interaction as run-time branches). For each ray, the surface's response (the
+    normal met `_rough_normal1`, the local basis `_response1`, the coefficients `_coated1` or
+    `_bare1`, each child's direction and amplitudes `_child1` and masking `_leaves1`) and the
+    integrator's bookkeeping around it: the emission of what the face absorbs (`_emit_absorbed`),
+    the branch choice (`_branches1`), and each child's fate: termination and roulette (`_fate`,
+    `_end`: `survive`), the way off the surface (`_off_surface3`) or a masked child's way back
+    (`_masked1`), its side, medium stack and row (`_side1`, `_put_child`).
+
+    numba counts references to an array handed to a helper, and LLVM drops the counting where
+    it inlines straight-line code (`_add`, `_end`, `_emit_absorbed`) but not around every
+    branch: a first cut of this split that handed the tables and sums to helpers with branches
+    (the termination, the rough face's normal, the coefficients) ran the rough scene's trace at
+    `pmmw bench`'s trace x workers / Embree ratio 8.9-10.0 against 5.7-6.3. So the hot helpers
+    take scalars; the machine code has no more reference-count call sites than before the split."""
     finish = mode == FINISH
     d, s_old, p_old, m, sid, depth, stack, top = wave.d, wave.s, wave.p, wave.m, wave.sid, wave.depth, wave.stack, wave.top  # fmt: skip
     pos, n_in, cos1_a, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cos1, hit.cur, hit.face_med, hit.other, hit.leaving  # fmt: skip
-    oo, od, os_, op, om = out.o, out.d, out.s, out.p, out.m
-    osid, odepth, ostack, otop, olast = out.sid, out.depth, out.stack, out.top, out.last_t
-    key, okey = wave.key, out.key
-    buf_eps, buf_d = _film_buffers(films)
-    roulette, cap, last_row = u_roul.shape[0] > 0, stack.shape[1], oo.shape[0] - 1
-    if facets is not None:
-        n_mac, n_geo, rough, back = facets.n_mac, facets.n_geo, facets.rough, facets.back
     kind, temperature, n1_real, has_coat, eps = media.kind, media.temperature, media.n1_real, media.has_coat, media.eps
-    # The loop body calls no helper that takes arrays: numba counts references to an array
-    # passed to (or unpacked inside) an inlined helper with atomic operations, which cost more
-    # than all of an interaction's arithmetic. Helpers here take and return scalars.
+    key, offset = wave.key, faces.offset
+    buf_eps, buf_d = _film_buffers(films)
+    roulette, last_row = u_roul.shape[0] > 0, out.o.shape[0] - 1
+    if facets is not None:
+        n_mac, n_geo, rough, back, alpha = facets.n_mac, facets.n_geo, facets.rough, facets.back, media.alpha
     n_out, n_back, drawn_off = 0, 0, 0
     for j in range(rows.shape[0]):
         i = rows[j]
@@ -533,123 +631,71 @@ def _scatter(
         kd, t_body = kind[fm], temperature[fm]
         nx, ny, nz = n_in[i, 0], n_in[i, 1], n_in[i, 2]
         dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
-        tx, ty, tz = 0.0, 0.0, 0.0
         if facets is not None:
-            if rough.code[fm] != roughness.NOT_ROUGH:
-                tx, ty, tz = _tangent1(n_mac[i, 0], n_mac[i, 1], n_mac[i, 2])
-            if facets.draw[fm]:  # the facet visible from the ray (GGX)
-                nx, ny, nz, w = _facet1(
-                    nx, ny, nz, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, dx, dy, dz,
-                    facets.u1[i], facets.u2[i], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
-                )  # fmt: skip
-                drawn_off += w != 1.0
-                if not w > 0.0:  # no facet visible (degenerate input only): the power emitted here, none goes on
-                    _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
-                    m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
-            cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0)
-        else:
-            cos1 = cos1_a[i]
+            nx, ny, nz, w, tx, ty, tz = _rough_normal1(
+                nx, ny, nz, dx, dy, dz, (n_mac[i, 0], n_mac[i, 1], n_mac[i, 2]), rough.code[fm], facets.draw[fm],
+                facets.u1[i], facets.u2[i], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
+            )  # fmt: skip
+            drawn_off += w != 1.0
+            if not w > 0.0:  # no facet visible (degenerate input only): the power emitted here, none goes on
+                _add(acc, k, m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1], t_body, t_body)
+                m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1] = 0j, 0j, 0j, 0j
+        cos1 = min(max(-(dx * nx + dy * ny + dz * nz), 0.0), 1.0) if facets is not None else cos1_a[i]
         sx, sy, sz, px, py, pz, ml00, ml01, ml10, ml11 = _response1(
             nx, ny, nz, dx, dy, dz, (s_old[i, 0], s_old[i, 1], s_old[i, 2]), (p_old[i, 0], p_old[i, 1], p_old[i, 2]),
             m[i, 0, 0], m[i, 0, 1], m[i, 1, 0], m[i, 1, 1],
         )  # fmt: skip
-        if has_coat[fm]:  # (`_coefficients1`, its common branch with the arrays indexed here)
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _coated1(
-                fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d
-            )
+        if has_coat[fm]:  # (`_coefficients1`, the bare face's branch on scalars: see above)
+            coef = _coated1(fm, cur_a[i], other_a[i], leaving_a[i], cos1, media, films, buf_eps, buf_d)
         else:
-            rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = _bare1(
-                kd, eps[cur_a[i]], eps[other_a[i]], cos1, temperature[cur_a[i]], t_body
-            )
-        # what the interface (or its films) absorbs, and what a sink swallows (eq. 2.36)
-        if As > A_ROUNDING or Ap > A_ROUNDING:
-            ea, eb = math.sqrt(As), math.sqrt(Ap)
-            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_abs, t_abs)
-        if kd == BLACKBODY or kd == OPAQUE:
-            ea, eb = math.sqrt(Ts), math.sqrt(Tp)
-            _add(acc, k, ml00 * ea, ml01 * eb, ml10 * ea, ml11 * eb, t_body, t_body)
+            coef = _bare1(kd, eps[cur_a[i]], eps[other_a[i]], cos1, temperature[cur_a[i]], t_body)
+        rs, rp, ts, tp, Rs, Rp, Ts, Tp, As, Ap, q2c, t_abs = coef
+        if As > A_ROUNDING or Ap > A_ROUNDING:  # what the interface (or its films) absorbs
+            _emit_absorbed(acc, k, ml00, ml01, ml10, ml11, As, Ap, t_abs)
+        if kd == BLACKBODY or kd == OPAQUE:  # what a sink swallows
+            _emit_absorbed(acc, k, ml00, ml01, ml10, ml11, Ts, Tp, t_body)
         diel = kd == DIELECTRIC
         trans = (diel or kd == THIN) and (Ts > 0.0 or Tp > 0.0)
-        keep_r, keep_t, gain_r, gain_t = True, trans, 1.0, 1.0
-        if choice.strategy != 0 and trans and (choice.strategy == 1 or depth[i] >= choice.split_depth):
-            keep_r, keep_t, gain_r, gain_t = _choose1(ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u_choose[j])
-        tp_i, step = top[i], faces.offset[prim[i]]
+        u = u_choose[j] if u_choose.shape[0] else 0.0
+        keep_r, keep_t, gain_r, gain_t = _branches1(choice, trans, depth[i], ml00, ml01, ml10, ml11, Rs, Rp, Ts, Tp, u)
         for br in range(2):
             if not (keep_t if br else keep_r):
                 continue
-            cx, cy, cz, a_s, a_p = _child1(
-                br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2c, n1_real[cur_a[i]], diel
-            )
+            cx, cy, cz, a_s, a_p = _child1(br, dx, dy, dz, nx, ny, nz, rs, rp, ts, tp, Rs, Rp, Ts, Tp, q2c,
+                                           n1_real[cur_a[i]], diel)  # fmt: skip
             gain = gain_t if br else gain_r
-            a_s, a_p = gain * a_s, gain * a_p
-            side, top_c = 1.0, tp_i
-            if br:
-                side = -1.0
-                if diel:
-                    top_c = tp_i - 1 if leaving_a[i] else tp_i + 1  # the body's medium popped or pushed
-            m00, m01, m10, m11 = ml00 * a_s, ml01 * a_p, ml10 * a_s, ml11 * a_p
-            depth_c = depth[i] + 1
-            leaves = True
-            if (
-                facets is not None and rough.code[fm] != roughness.NOT_ROUGH
-            ):  # masked by the microsurface? (as `settle`)
-                g1 = roughness.smith_g1(
-                    (side * n_mac[i, 0], side * n_mac[i, 1], side * n_mac[i, 2]), (tx, ty, tz), (cx, cy, cz),
-                    rough.code[fm], rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm],
+            mc = (ml00 * (gain * a_s), ml01 * (gain * a_p), ml10 * (gain * a_s), ml11 * (gain * a_p))
+            side, top_c = _side1(br, diel, leaving_a[i], top[i])
+            o, c, s_c, leaves = (pos[i, 0], pos[i, 1], pos[i, 2]), (cx, cy, cz), (sx, sy, sz), True
+            if facets is not None and rough.code[fm] != roughness.NOT_ROUGH:  # masked by the microsurface?
+                leaves = _leaves1(
+                    side, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tx, ty, tz, cx, cy, cz, rough.code[fm],
+                    rough.alpha_x[fm], rough.alpha_y[fm], rough.orientation[fm], facets.u_leave[2 * j + br],
                 )  # fmt: skip
-                leaves = not facets.u_leave[2 * j + br] >= g1  # (NaN: leaves, as the masking test reads)
-            if leaves and (finish or facets is not None):  # a child that leaves the surface: terminated
-                g = _fate(m00, m01, m10, m11, depth_c, u_roul[2 * j + br] if roulette else 1.0, limits)
-                if g < 0.0:
-                    _end(acc, cut, k, m00, m01, m10, m11, t_body, limits.t_lo, limits.t_hi)
-                if g <= 0.0:
+            if leaves and (finish or facets is not None):  # terminated (`survive`), then off the surface
+                f = _fate(mc[0], mc[1], mc[2], mc[3], depth[i] + 1, u_roul[2 * j + br] if roulette else 1.0, limits)
+                if f < 0.0:
+                    _end(acc, cut, k, mc[0], mc[1], mc[2], mc[3], t_body, limits.t_lo, limits.t_hi)
+                if f <= 0.0:
                     continue
-                if g != 1.0:
-                    m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
-            gx, gy, gz = side * nx, side * ny, side * nz  # the normal of the child's side
-            ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
-            sx_c, sy_c, sz_c = sx, sy, sz
-            row, depth_row, comes_back = n_out, depth_c, False
-            if facets is not None and leaves:  # off along the face's side normal (a wrong-side child mirrored)
-                ox, oy, oz, cx, cy, cz, sx_c, sy_c, sz_c, _ = _off_surface1(
-                    ox, oy, oz, cx, cy, cz, sx, sy, sz, side * n_geo[i, 0], side * n_geo[i, 1], side * n_geo[i, 2], step
-                )  # fmt: skip
-            elif facets is not None:  # masked: back for a re-hit after one wavelength of its side's medium
-                if facets.over:  # the chain's end: its power emitted where it is
-                    _add(acc, k, m00, m01, m10, m11, t_body, t_body)
-                    continue
+                mc = _scaled1(mc, f)
+                g = (n_geo[i, 0], n_geo[i, 1], n_geo[i, 2]) if facets is not None else (nx, ny, nz)
+                o, c, s_c = _off_surface3(o, c, s_c, (side * g[0], side * g[1], side * g[2]), offset[prim[i]])
+            row, depth_row = n_out, depth[i] + 1
+            if facets is not None and not leaves:  # masked: back for a re-hit, at the rows from the end of `out`
                 cur, oth, lv = _masked_side1(side, diel, cur_a[i], other_a[i], leaving_a[i])
-                tau, e, g = _to_next_facet1(media.alpha[cur], facets.wavelength)
-                if tau < 1.0:
-                    tc = temperature[cur]
-                    _add(acc, k, m00 * e, m01 * e, m10 * e, m11 * e, tc, tc)
-                    m00, m01, m10, m11 = m00 * g, m01 * g, m10 * g, m11 * g
-                if not tau > A_ROUNDING:
+                on, mc = _masked1(acc, k, mc, facets.over, t_body, alpha[cur], temperature[cur], facets.wavelength)
+                if not on:
                     continue
-                row, depth_row, comes_back = last_row - n_back, depth_c + facets.rehit_depth, True
+                row, depth_row = last_row - n_back, depth_row + facets.rehit_depth
                 back.src[n_back], back.cur[n_back], back.other[n_back] = i, cur, oth
                 back.leaving[n_back], back.sign[n_back] = lv, side
                 n_back += 1
-            # the child, at its row: p = k x s with k = -d
-            od[row, 0], od[row, 1], od[row, 2] = cx, cy, cz
-            os_[row, 0], os_[row, 1], os_[row, 2] = sx_c, sy_c, sz_c
-            op[row, 0], op[row, 1], op[row, 2] = _k_cross(cx, cy, cz, sx_c, sy_c, sz_c)
-            if finish and cx * gx + cy * gy + cz * gz > 0.0:  # off the surface along its side
-                ox, oy, oz = ox + step * gx, oy + step * gy, oz + step * gz
-            oo[row, 0], oo[row, 1], oo[row, 2] = ox, oy, oz
-            if finish and not cx * gx + cy * gy + cz * gz > 0.0:  # (only rounding at grazing incidence)
-                _off_surface(oo, od, os_, op, row, gx, gy, gz, step)
-            om[row, 0, 0], om[row, 0, 1], om[row, 1, 0], om[row, 1, 1] = m00, m01, m10, m11
-            osid[row], odepth[row], otop[row], olast[row] = k, depth_row, top_c, t_body
-            okey[row] = child_key1(key[i], br)
-            for c in range(cap):
-                ostack[row, c] = stack[i, c]
-            if top_c > tp_i:
-                ostack[row, top_c] = fm
+            _put_child(out, row, o, c, s_c, mc, k, depth_row, t_body, child_key1(key[i], br), stack, i, top[i], top_c,
+                       fm)  # fmt: skip
             if mode == AT_POINT:
                 src[row], branch[row] = i, 1 - 2 * br
-            if not comes_back:
-                n_out += 1
+            n_out += leaves
     if facets is not None:
         facets.counts[0] += drawn_off
         facets.counts[2] = n_back
@@ -794,93 +840,55 @@ def settle(
         How many children leave and how many re-hit.
     """
     pos, n_geo, cur_a, fm_a, other_a, leaving_a = hit.pos, hit.n_in, hit.cur, hit.face_med, hit.other, hit.leaving
-    kind, alpha, temperature = media.kind, media.alpha, media.temperature
-    b_src, b_cur, b_other, b_leaving, b_sign = (
-        back_side.src,
-        back_side.cur,
-        back_side.other,
-        back_side.leaving,
-        back_side.sign,
-    )
-    r_code, r_ax, r_ay, r_orient = rough.code, rough.alpha_x, rough.alpha_y, rough.orientation
-    over, t_end = chain_end.over, chain_end.t_end
-    l_src, l_sign = leave_side.src, leave_side.sign
     o, d, s, p, m, sid, k_depth, k_last = kids.o, kids.d, kids.s, kids.p, kids.m, kids.sid, kids.depth, kids.last_t
+    kind, alpha, temperature, over, t_end = media.kind, media.alpha, media.temperature, chain_end.over, chain_end.t_end
+    r_code, r_ax, r_ay, r_orient = rough.code, rough.alpha_x, rough.alpha_y, rough.orientation
+    b_src, b_cur, b_other, b_leaving, b_sign = back_side.src, back_side.cur, back_side.other, back_side.leaving, back_side.sign  # fmt: skip
+    l_src, l_sign = leave_side.src, leave_side.sign
     u_roul, limits, cut = fate.u_roul, fate.limits, fate.cut
     roulette = u_roul.shape[0] > 0
     l_rows, b_rows = np.empty(src.shape[0], np.int64), np.empty(src.shape[0], np.int64)
     nl, nb = 0, 0
     for c in range(src.shape[0]):
-        i = src[c]
-        sg = float(branch[c])
-        gx, gy, gz = sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2]
+        i, sg = src[c], float(branch[c])
         fm = fm_a[i]
-        code = r_code[fm]
-        if code == roughness.OTHER_CODE:
-            g1 = p_leave[c]
+        code, leaves = r_code[fm], True
+        if code == roughness.OTHER_CODE:  # (NaN: leaves, as the masking test reads)
+            leaves = not u_leave[c] >= p_leave[c]
         elif code != roughness.NOT_ROUGH:
-            g1 = roughness.smith_g1(
-                (sg * n_mac[i, 0], sg * n_mac[i, 1], sg * n_mac[i, 2]),
-                (tangent[i, 0], tangent[i, 1], tangent[i, 2]),
-                (d[c, 0], d[c, 1], d[c, 2]),
-                code,
-                r_ax[fm],
-                r_ay[fm],
-                r_orient[fm],
-            )
-        if code == roughness.NOT_ROUGH or not u_leave[c] >= g1:  # (NaN: leaves, as the masking test reads)
-            if finish:  # terminated (as `scatter` does)
-                m00, m01, m10, m11 = m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1]
-                g = _fate(
-                    m00, m01, m10, m11, k_depth[c], u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0, limits
-                )
-                if g < 0.0:
-                    _end(acc, cut, sid[c], m00, m01, m10, m11, k_last[c], limits.t_lo, limits.t_hi)
-                if g <= 0.0:
+            leaves = _leaves1(
+                sg, n_mac[i, 0], n_mac[i, 1], n_mac[i, 2], tangent[i, 0], tangent[i, 1], tangent[i, 2],
+                d[c, 0], d[c, 1], d[c, 2], code, r_ax[fm], r_ay[fm], r_orient[fm], u_leave[c],
+            )  # fmt: skip
+        if leaves:
+            if finish:  # terminated (`survive`), then off the surface (a wrong-side child mirrored), as `scatter` does
+                mc = (m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1])
+                u = u_roul[2 * i + (0 if sg > 0.0 else 1)] if roulette else 1.0
+                f = _fate(mc[0], mc[1], mc[2], mc[3], k_depth[c], u, limits)
+                if f < 0.0:
+                    _end(acc, cut, sid[c], mc[0], mc[1], mc[2], mc[3], k_last[c], limits.t_lo, limits.t_hi)
+                if f <= 0.0:
                     continue
-                if g != 1.0:
-                    m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = m00 * g, m01 * g, m10 * g, m11 * g
-            l_src[nl], l_sign[nl] = i, sg
-            if finish:  # off the surface (a wrong-side child mirrored), written out here: see `scatter`
-                (o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored) = (
-                    _off_surface1(
-                        o[c, 0],
-                        o[c, 1],
-                        o[c, 2],
-                        d[c, 0],
-                        d[c, 1],
-                        d[c, 2],
-                        s[c, 0],
-                        s[c, 1],
-                        s[c, 2],
-                        gx,
-                        gy,
-                        gz,
-                        step[i],
-                    )
-                )
+                if f != 1.0:
+                    m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = mc[0] * f, mc[1] * f, mc[2] * f, mc[3] * f
+                g = (sg * n_geo[i, 0], sg * n_geo[i, 1], sg * n_geo[i, 2])
+                o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], mirrored = _off_surface1(
+                    o[c, 0], o[c, 1], o[c, 2], d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2], g[0], g[1], g[2], step[i]
+                )  # fmt: skip
                 if mirrored:
                     p[c, 0], p[c, 1], p[c, 2] = _k_cross(d[c, 0], d[c, 1], d[c, 2], s[c, 0], s[c, 1], s[c, 2])
-            l_rows[nl] = c
+            l_src[nl], l_sign[nl], l_rows[nl] = i, sg, c
             nl += 1
             continue
-        k = sid[c]
-        if over[i]:  # the chain's end: its power emitted where it is
-            te = t_end[i, 0] if sg > 0.0 else t_end[i, 1]
-            _add(acc, k, m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1], te, te)
+        te = t_end[i, 0] if sg > 0.0 else t_end[i, 1]
+        cur, oth, lv = _masked_side1(sg, kind[fm] == DIELECTRIC, cur_a[i], other_a[i], leaving_a[i])
+        mc = (m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1])
+        on, mc = _masked1(acc, sid[c], mc, over[i], te, alpha[cur], temperature[cur], wavelength)
+        m[c, 0, 0], m[c, 0, 1], m[c, 1, 0], m[c, 1, 1] = mc
+        if not on:
             continue
-        cur, oth, lv = _masked_side1(sg, kind[fm_a[i]] == DIELECTRIC, cur_a[i], other_a[i], leaving_a[i])
-        tau, e, g = _to_next_facet1(alpha[cur], wavelength)
-        if tau < 1.0:
-            tc = temperature[cur]
-            _add(acc, k, m[c, 0, 0] * e, m[c, 0, 1] * e, m[c, 1, 0] * e, m[c, 1, 1] * e, tc, tc)
-            for a in range(2):
-                for b in range(2):
-                    m[c, a, b] *= g
-        if not tau > A_ROUNDING:
-            continue
-        b_rows[nb] = c
-        b_src[nb], b_cur[nb], b_other[nb], b_leaving[nb], b_sign[nb] = i, cur, oth, lv, sg
+        b_src[nb], b_cur[nb], b_other[nb] = i, cur, oth
+        b_leaving[nb], b_sign[nb], b_rows[nb] = lv, sg, c
         nb += 1
     gather(kids, l_rows[:nl], leave)
     gather(kids, b_rows[:nb], back)
