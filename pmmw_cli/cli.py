@@ -132,7 +132,7 @@ def render(
         "pipeline was imported, the outputs checked, the kernels loaded, the "
         "first tile sent and its first ray traced (seconds after the process started), then each phase "
         "(scenario, materials, meshes, atmosphere, kernels, the worker's Embree scene, "
-        "trace, then each step after it: imager model, region statistics, EXR, previews, "
+        "trace (of which the tiles traced), then each step after it: imager model, region statistics, EXR, previews, "
         "channel statistics, report, outputs flushed to disk, outputs moved into place, tiles removed, "
         "and their sum).",
     ),

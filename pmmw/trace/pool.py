@@ -90,6 +90,8 @@ def _reuse_freed_memory():
 
 #: `timings`' phase of a worker's set-up before its first tile (its Embree scene: the BVH).
 WORKER_SETUP = "worker's scene (Embree)"
+#: `timings` phase of the tiles' tracing alone (the workers' start-up in, the kernels' loading out)
+TILES = "tiles traced"
 
 
 def _init_worker(job: TraceJob, kind: str) -> float:
@@ -362,6 +364,8 @@ def render_tiles(
             _collect(r, time.perf_counter() - t0)
     elif todo:
         _render_on_workers(job, intersector, todo, workers, _collect)
+    if todo:  # the tiles alone: from their sending (kernels loaded) to the last one back
+        timings.add(TILES, time.perf_counter() - start)
     return [results[t[0]] for t in tiles]
 
 
