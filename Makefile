@@ -19,7 +19,7 @@ $(BIN)/python:
 
 # the tracer's kernels for smooth scenes compiled once at install (numba's disk cache), so that the
 # first render does not (pmmw.trace.compile; docs/benchmarks_command.md)
-COMPILE = @echo "compiling the tracer's kernels: once, about half a minute on 2 cores ..." && $(BIN)/python -m pmmw.trace.compile
+COMPILE = @echo "compiling the tracer's kernels: once, about 20 s on 2 cores ..." && $(BIN)/python -m pmmw.trace.compile
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -e .

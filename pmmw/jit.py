@@ -63,7 +63,7 @@ def _digest() -> str:
 def is_cached(rel: str, function: str | None = None) -> bool:
     """Whether the compiled code of the source ``rel`` (one of `SOURCES`; with ``function``, of
     that function of it) is cached on disk next to it, so that loading it takes a second rather
-    than compiling it (about half a minute for the tracer's kernels on 2 cores, once after an
+    than compiling it (about 20 s for the tracer's kernels on 2 cores, once after an
     install or an update). False also where numba caches elsewhere (a read-only install): the
     caller then says it may compile."""
     path = ROOT / rel

@@ -386,7 +386,7 @@ def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
     if cold and notify is not None:
         notify(
             "compiling the tracer's kernels: once after an install or an update of pmmw, "
-            "about half a minute on 2 cores (more with rough surfaces) ..."
+            "about 20 s on 2 cores (more with rough surfaces) ..."
         )
     t0 = time.perf_counter()
     if cold:  # in two processes at once (`compile.compile_kernels`)
