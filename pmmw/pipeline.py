@@ -65,7 +65,7 @@ from pmmw.scene.materials import MaterialDB
 from pmmw.scene.sky import make_sky
 from pmmw.surface.media import BLACKBODY, KIND_CODES, METAL, build_media  # build_media: also pipeline's, as before
 from pmmw.trace.job import RenderSettings, TraceJob
-from pmmw.trace.pool import assemble, default_workers, render_tiles
+from pmmw.trace.pool import TILES, assemble, default_workers, render_tiles
 
 if TYPE_CHECKING:
     from pmmw.atmosphere.model import AtmosphereModel
@@ -1418,6 +1418,7 @@ def _render_and_commit(
             client = staging.enter_context(dask_client(scheduler, cluster, n_workers))
         for f in scn.frequencies:
             t1 = time.perf_counter()
+            tiles_before = timings.recorded()[1].get(TILES, 0.0)
             try:
                 with timings.phase("trace"):
                     job, img, dirs = trace_frequency(
@@ -1437,8 +1438,11 @@ def _render_and_commit(
             if job is None or img is None:  # a shard (both None)
                 continue
             t_trace = time.perf_counter() - t1
+            t_tiles = timings.recorded()[1].get(TILES, 0.0) - tiles_before  # the tiles alone (`trace.pool.TILES`)
             staged = staging.enter_context(Staging(out_dir))
-            renders.append((staged, _finish_frequency(res, f, job, img, names[f], staged, shash, t_trace, n_workers)))
+            renders.append(
+                (staged, _finish_frequency(res, f, job, img, names[f], staged, shash, t_trace, n_workers, t_tiles))
+            )
             written.append(out_dir / names[f]["exr"])
         total = time.perf_counter() - t0
         for staged, r in renders:
@@ -1462,7 +1466,7 @@ def _render_and_commit(
             say(
                 f"{report['name']}: {r['pixels']} px x {spp_words(r['spp'], r['mean_samples_per_pixel'])}, "
                 f"{r['rays'] / 1e6:.2f} M rays, "
-                f"{r['timing']['trace_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}",
+                f"{r['timing']['tiles_s']:.1f} s trace, {total:.1f} s total -> {r['output_exr']}",
                 result=True,
             )
     return written, tile_dirs
@@ -1533,9 +1537,12 @@ def _finish_frequency(
     shash: str,
     t_trace: float,
     n_workers: int,
+    t_tiles: float = 0.0,
 ) -> dict:
     """Imager model, EXR and previews of one frequency, written into ``staged``; returns the
-    frequency's report entry (the caller adds the report and commits them together)."""
+    frequency's report entry (the caller adds the report and commits them together). ``t_trace``
+    [s] is the whole trace (the job, the kernels loaded or compiled, the tiles), ``t_tiles`` the
+    tiles' tracing alone: the report's ``timing.trace_s`` and ``timing.tiles_s``."""
     scn = res.scenario
     t1 = time.perf_counter()
     with timings.phase("imager model"):
@@ -1589,6 +1596,7 @@ def _finish_frequency(
         "rays": img.rays,
         "timing": {
             "trace_s": round(t_trace, 3),
+            "tiles_s": round(t_tiles, 3),
             "intersect_s": round(img.t_isect, 3),
             "frequency_total_s": round(t_total, 3),
         },
