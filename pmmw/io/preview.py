@@ -13,13 +13,19 @@ kelvin, a title, the regions named; matplotlib, about 0.3 s each with its import
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 import OpenImageIO as oiio
 
 from pmmw import __version__
 from pmmw.io.atomic import atomic_path
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 #: Fraction of the pixels clipped at each end of the display range (Murakowski 2014 sec. 3.2 footnote).
 CLIP_FRACTION = 1.0 / 256.0
@@ -34,7 +40,7 @@ MID_GREY = 128
 _PNG = {"format": "png", "pil_kwargs": {"compress_level": 1}, "metadata": {"Software": f"pmmw {__version__}"}}
 
 
-def display_range(img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+def display_range(img: npt.ArrayLike, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
     """Temperatures [K] shown as black and white.
 
     With n finite pixels sorted ascending as t, and k = floor(clip_fraction * n): low = t[k] and
@@ -66,7 +72,7 @@ def display_range(img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, flo
     return float(low), float(high)
 
 
-def scale_to_u8(img, low: float, high: float) -> np.ndarray:
+def scale_to_u8(img: npt.ArrayLike, low: float, high: float) -> np.ndarray:
     """Map temperatures [K] onto 256 equal bins between low and high, clipping outside.
 
     Returns an ndarray of img's shape, uint8. NaN -> 0, +inf -> 255, -inf -> 0. Without a range
@@ -90,7 +96,7 @@ def scale_to_u8(img, low: float, high: float) -> np.ndarray:
     return out.astype(np.uint8)
 
 
-def display_scale(img, clip_fraction: float = CLIP_FRACTION) -> np.ndarray:
+def display_scale(img: npt.ArrayLike, clip_fraction: float = CLIP_FRACTION) -> np.ndarray:
     """An 8-bit display image of a temperature image.
 
     Parameters
@@ -142,7 +148,9 @@ def write_png(path: str | os.PathLike, img_u8: np.ndarray) -> None:
             raise RuntimeError(f"cannot write {path}: {out.geterror() or oiio.geterror()}")
 
 
-def write_preview(path: str | os.PathLike, img, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+def write_preview(
+    path: str | os.PathLike, img: npt.ArrayLike, clip_fraction: float = CLIP_FRACTION
+) -> tuple[float, float]:
     """Write the display-scaled PNG preview of a temperature image [K]: one grey pixel per
     image pixel (row 0 at the top), without matplotlib.
 
@@ -158,12 +166,14 @@ REGION_COLOURS = ("#ff3b30", "#34c759", "#0a84ff", "#ffcc00", "#ff2dfc", "#00e5f
 REGION_COLOUR_NAMES = ("red", "green", "blue", "yellow", "magenta", "cyan")
 
 
-def region_colour_names(names) -> dict[str, str]:
+def region_colour_names(names: Iterable[str]) -> dict[str, str]:
     """Region name -> the colour word of its outline (`write_regions_png`, `write_regions_figure`)."""
     return {name: REGION_COLOUR_NAMES[k % len(REGION_COLOUR_NAMES)] for k, name in enumerate(names)}
 
 
-def write_regions_png(path: str | os.PathLike, img, masks, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+def write_regions_png(
+    path: str | os.PathLike, img: npt.ArrayLike, masks: Mapping[str, np.ndarray], clip_fraction: float = CLIP_FRACTION
+) -> tuple[float, float]:
     """The display-scaled image (`write_preview`'s grey) with each region outlined in its own
     colour (`REGION_COLOURS` in the order of ``masks``): the ring of pixels just outside the
     region's own pixels (the pixels its statistics average, left as they are), without matplotlib.
@@ -209,7 +219,7 @@ MIN_DISPLAY_WIDTH = 480
 
 def write_figure(
     path: str | os.PathLike,
-    panels,
+    panels: Sequence[tuple[str | None, npt.ArrayLike]],
     *,
     title: str,
     clip_fraction: float = CLIP_FRACTION,
@@ -239,7 +249,8 @@ def write_figure(
 
     imgs = [np.asarray(img, dtype=np.float64) for _, img in panels]
     ranges = panel_ranges(imgs, clip_fraction)
-    fig, axes = figure_for(*imgs[0].shape, len(imgs), extra_w=1.6 * len(imgs))
+    h, w = imgs[0].shape
+    fig, axes = figure_for(h, w, len(imgs), extra_w=1.6 * len(imgs))
     if len(imgs) > 1:  # room for each panel's colour bar and its label
         fig.set_layout_engine("constrained")
     for ax, (label, _), img, (low, high) in zip(axes[0], panels, imgs, ranges):
@@ -258,15 +269,15 @@ def write_figure(
     return ranges[0]
 
 
-def panel_ranges(imgs, clip_fraction: float = CLIP_FRACTION) -> list[tuple[float, float]]:
+def panel_ranges(imgs: Sequence[npt.ArrayLike], clip_fraction: float = CLIP_FRACTION) -> list[tuple[float, float]]:
     """The display range [K] of each image of a figure (`usable_range` of each on its own)."""
     return [usable_range(np.asarray(img, dtype=np.float64), clip_fraction) for img in imgs]
 
 
 def write_regions_figure(
     path: str | os.PathLike,
-    img,
-    shapes,
+    img: npt.ArrayLike,
+    shapes: Mapping[str, tuple | None],
     *,
     title: str,
     caption: str | None = None,
@@ -302,6 +313,7 @@ def write_regions_figure(
         if shape is None:
             continue
         colour = REGION_COLOURS[k % len(REGION_COLOURS)]
+        patch: mpatches.Patch
         if shape[0] == "circle":  # imshow puts pixel k's centre at k: the image coordinate minus 0.5
             _, u, v, r = shape
             patch, at = mpatches.Circle((u - 0.5, v - 0.5), r, fill=False, ec=colour, lw=1.5), (u - 0.5, v - 0.5 - r)
@@ -341,7 +353,9 @@ def write_regions_figure(
     return low, high
 
 
-def subplots(*args, figsize=None, dpi=None, **kwargs):
+def subplots(
+    *args: Any, figsize: tuple[float, float] | None = None, dpi: float | None = None, **kwargs: Any
+) -> tuple[Figure, Any]:
     """`matplotlib.pyplot.subplots` without pyplot: a `Figure` that pyplot does not know, so no
     backend is chosen or changed (a notebook's stays as it was) and nothing is left to close.
     ``figsize`` [in] and ``dpi`` make the figure, the rest goes to `Figure.subplots`."""
@@ -353,14 +367,14 @@ def subplots(*args, figsize=None, dpi=None, **kwargs):
     return fig, fig.subplots(*args, **kwargs)
 
 
-def save_figure(fig, path: str | os.PathLike, **savefig) -> Path:
+def save_figure(fig: Figure, path: str | os.PathLike, **savefig: Any) -> Path:
     """Write a matplotlib figure as PNG (`_PNG`) to ``path`` atomically."""
     with atomic_path(path) as tmp:
         fig.savefig(tmp, **{**_PNG, **savefig})
     return Path(path)
 
 
-def usable_range(values, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
+def usable_range(values: npt.ArrayLike, clip_fraction: float = CLIP_FRACTION) -> tuple[float, float]:
     """`display_range`, widened to 1 K around a constant image (and 0-1 K with no finite pixel),
     so that a colour scale can always be drawn."""
     low, high = display_range(values, clip_fraction)
@@ -369,7 +383,7 @@ def usable_range(values, clip_fraction: float = CLIP_FRACTION) -> tuple[float, f
     return low, high
 
 
-def figure_for(h: int, w: int, panels: int = 1, extra_w: float = 1.6):
+def figure_for(h: int, w: int, panels: int = 1, extra_w: float = 1.6) -> tuple[Figure, np.ndarray]:
     """A figure for ``panels`` images of h x w pixels side by side, small ones scaled up."""
     scale = max(1.0, MIN_DISPLAY_WIDTH / (w * panels))
     dpi = 100
@@ -378,7 +392,7 @@ def figure_for(h: int, w: int, panels: int = 1, extra_w: float = 1.6):
     return subplots(1, panels, figsize=(fig_w, fig_h), dpi=dpi, squeeze=False)
 
 
-def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
+def write_depth_figure(path: str | os.PathLike, depth: npt.ArrayLike, *, title: str) -> None:
     """``aux.depth`` [m] as a picture: distance to the first hit on a colour scale in metres,
     pixels whose every sample saw the sky in light blue."""
     import matplotlib
@@ -401,7 +415,9 @@ def write_depth_figure(path: str | os.PathLike, depth, *, title: str) -> None:
     save_figure(fig, path)
 
 
-def write_material_figure(path: str | os.PathLike, material, names, *, title: str) -> None:
+def write_material_figure(
+    path: str | os.PathLike, material: npt.ArrayLike, names: Sequence[str], *, title: str
+) -> None:
     """``aux.material`` as a picture: each material of the first hit in its own colour, with a
     legend of the database ids (``names[i]`` for index i; -1 is the sky)."""
     import matplotlib
@@ -409,12 +425,12 @@ def write_material_figure(path: str | os.PathLike, material, names, *, title: st
 
     m = np.rint(np.asarray(material, dtype=np.float64)).astype(int)
     present = [int(i) for i in np.unique(m)]
-    palette = matplotlib.colormaps["tab20"].colors
+    palette = matplotlib.colormaps["tab20"].colors  # type: ignore[attr-defined]  # a ListedColormap's
     colours = {i: ((0.74, 0.84, 0.93) if i < 0 else palette[k % len(palette)]) for k, i in enumerate(present)}
     rgb = np.zeros(m.shape + (3,))
     for i, c in colours.items():
         rgb[m == i] = c
-    fig, axes = figure_for(*m.shape, extra_w=2.6)
+    fig, axes = figure_for(m.shape[0], m.shape[1], extra_w=2.6)
     ax = axes[0, 0]
     ax.imshow(rgb, interpolation="nearest")
     ax.set_xticks([])

@@ -448,6 +448,7 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
     zipped = zipped_keys(spec)
     if not zipped or len(dict(spec.grid)[zipped[0]]) < 2:
         return []
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image
 
     from pmmw.io.exr import read_exr
@@ -482,8 +483,10 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
                 + (f" ({label})" if label else ""),
                 fontsize=8,
             )
-            fig.canvas.draw()
-            frames.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()))
+            canvas = fig.canvas
+            assert isinstance(canvas, FigureCanvasAgg)  # `preview.subplots` gives each figure its own
+            canvas.draw()
+            frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3].copy()))
         path = out / ("sequence_" + (re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "all") + ".gif")
         with atomic_path(path) as tmp:
             frames[0].save(tmp, format="GIF", save_all=True, append_images=frames[1:], duration=FRAME_MS, loop=0)
