@@ -197,15 +197,14 @@ def write_regions_png(
         m = np.asarray(m, dtype=bool)
         if not m.any():
             continue
-        ring = np.zeros_like(m)  # the 8 neighbours of the region, less the region
-        ring[1:, :] |= m[:-1, :]
-        ring[:-1, :] |= m[1:, :]
-        ring[:, 1:] |= m[:, :-1]
-        ring[:, :-1] |= m[:, 1:]
-        ring[1:, 1:] |= m[:-1, :-1]
-        ring[:-1, :-1] |= m[1:, 1:]
-        ring[1:, :-1] |= m[:-1, 1:]
-        ring[:-1, 1:] |= m[1:, :-1]
+        # the region dilated by its 8 neighbours, less the region (scipy.ndimage.binary_dilation
+        # with a 3 x 3 square; its import, 45-50 ms, would be a sixth of the after-trace budget)
+        padded = np.pad(m, 1)
+        h, w = m.shape
+        ring = np.zeros_like(m)
+        for dy in range(3):
+            for dx in range(3):
+                ring |= padded[dy : dy + h, dx : dx + w]
         ring &= ~m
         colour = REGION_COLOURS[k % len(REGION_COLOURS)]
         rgb[ring] = [int(colour[i : i + 2], 16) for i in (1, 3, 5)]
