@@ -415,7 +415,8 @@ class _Pace:
         self.done = 0
         self.busy = 0.0  # summed seconds of the tiles with a duration
         self.timed = 0
-        self.first = None  # elapsed when the first tile came back [s]
+        self.first: float | None = None  # elapsed when the first tile came back [s]
+        self.last = 0.0  # elapsed when the latest came back [s]
 
     def add(self, seconds: float | None, elapsed: float) -> None:
         """One tile done, ``seconds`` a worker spent on it (None: unknown), at ``elapsed``."""
@@ -434,7 +435,7 @@ class _Pace:
             return 0.0
         if self.timed:
             return self.busy / self.timed * remaining / min(self.workers, remaining)
-        if self.done >= 2:
+        if self.done >= 2 and self.first is not None:
             return (self.last - self.first) / (self.done - 1) * remaining
         return None
 
