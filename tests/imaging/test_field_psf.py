@@ -229,3 +229,29 @@ def test_a_region_at_the_edge_is_detected_through_its_own_wider_beam(monkeypatch
     # the centre: within a node spacing of the axis, the blend of near-axis beams (2 %)
     n_centre = detection.footprint_norm(masks["centre"], kernels["centre"])
     assert n_centre == pytest.approx(detection.footprint_norm(masks["centre"], on_axis), rel=0.02)
+
+
+def test_the_corner_beam_widens_radially_as_the_projected_aperture_narrows():
+    """The report's projected beam at the image corner: radially the aperture is foreshortened by
+    cos(theta_c), so the half-power width is 2 arcsin(u_half / (k a cos theta_c)), tangentially the
+    on-axis width. u_half = 1.6163 for a uniform circular aperture (the Airy pattern's half-power
+    point, (2 J1(u) / u)^2 = 1/2; HPBW 1.029 lambda / D); tolerance 1e-4 relative from that printed
+    constant's five digits. The control: the on-axis width (no cos) is 3 % off at this corner
+    (13.8 degrees), far outside it."""
+    from pmmw.pipeline import validate
+
+    cfg = Path(__file__).resolve().parents[2] / "configs" / "cwd_design_94ghz.yaml"
+    sets = [
+        "imager.antenna.off_axis=projected",
+        "imager.antenna.illumination=uniform",
+        "imager.antenna.edge_taper=null",
+    ]
+    sets += ["imager.antenna.blockage=0"]
+    (beam,) = [v["beam"] for v in validate(cfg, sets)["imager"].values()]
+    ka = 2 * np.pi * 94e9 / 299792458.0 * 0.6 / 2  # the scenario's 94 GHz and 0.6 m aperture
+    tc = np.radians(beam["off_axis"]["corner_field_angle_deg"])
+    want = 2e3 * np.arcsin(1.6163 / (ka * np.cos(tc)))
+    assert beam["off_axis"]["corner_hpbw_radial_mrad"] == pytest.approx(want, rel=1e-4)
+    on_axis = 2e3 * np.arcsin(1.6163 / ka)
+    assert beam["off_axis"]["corner_hpbw_tangential_mrad"] == pytest.approx(on_axis, rel=1e-4)
+    assert abs(want / on_axis - 1.0) > 0.02  # the control: the two widths differ at this corner
