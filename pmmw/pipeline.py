@@ -1020,8 +1020,8 @@ def imager_summary(scn: ScenarioConfig, job: TraceJob | SimpleNamespace, noise_m
         if scn.imager.antenna is not None and scn.imager.antenna.off_axis == "projected":
             cam = job.camera
             tc = float(pixel_field_angles(cam.width, cam.height, cam.fov)[0].max())
-            u_half = ap.beam_shape()["hpbw_u"] / 2.0
             ka = job.k0 * scn.imager.aperture_diameter / 2.0
+            u_half = ka * np.sin(out["beam"]["hpbw_mrad"] / 2e3)  # the on-axis half-power point (its u)
             out["beam"]["off_axis"] = {
                 "model": "projected aperture",
                 "corner_field_angle_deg": float(np.degrees(tc)),

@@ -84,7 +84,7 @@ def test_the_default_previews_are_the_images_clipped_at_the_1_256_quantiles(tmp_
     footnote), stated in the report. Checked against the EXR's channel: numpy.quantile's
     inverted CDF (the smallest value with at least that fraction of the pixels at or below it; 384
     pixels: the 2nd coldest and the 2nd hottest), to float32's rounding of the EXR (1e-6
-    relative, 16 times float32's); the grey levels against the thesis's linear map of that range,
+    relative: 16 times float32's unit roundoff 2^-24); the grey levels against the thesis's linear map of that range,
     within one level (a pixel on a bin edge may fall either side after float32's rounding)."""
     from pmmw.io.exr import read_exr
 
