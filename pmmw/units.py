@@ -106,9 +106,9 @@ _KINDS: dict[str, tuple[str, str | None, str, str]] = {
     "time": ("s", "s", "'10 ms' or '2 us'", "duration"),
 }
 
-_DEG = 0.017453292519943295  # pint's degree in radians (pi / 180)
-_MM_PER_H = 2.7777777777777776e-07  # pint's mm/h in m/s
-_DB_PER_KM = 0.0002302585092994046  # this registry's dB/km in Np/m (ln(10)/10 / 1000, as pint rounds it)
+_DEG = math.pi / 180.0  # pint's degree in radians
+_MM_PER_H = 1e-3 / 3600.0  # pint's mm/h in m/s
+_DB_PER_KM = _NEPER_PER_DB * 1e-3  # this registry's dB/km in Np/m (as pint forms it: ln(10) / 10 x 1e-3)
 
 #: kind -> {unit as written (``""``: a bare number): its factor to the kind's internal unit}, for
 #: the units that pint converts by one multiplication (no offset): ``parse_quantity`` multiplies
@@ -122,7 +122,7 @@ _EXACT: dict[str, dict[str, float]] = {
     "temperature_difference": {"": 1.0, "K": 1.0, "mK": 1e-3},
     "density": {"": 1e-3, "g/m3": 1e-3, "kg/m3": 1.0},
     "rate": {"": _MM_PER_H, "mm/h": _MM_PER_H, "m/s": 1.0},
-    "attenuation": {"": _DB_PER_KM, "dB/km": _DB_PER_KM, "dB/m": 0.23025850929940458, "Np/km": 1e-3, "Np/m": 1.0},
+    "attenuation": {"": _DB_PER_KM, "dB/km": _DB_PER_KM, "dB/m": _NEPER_PER_DB, "Np/km": 1e-3, "Np/m": 1.0},
     "time": {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6},
 }
 
