@@ -47,7 +47,7 @@ test: install-test
 
 # ruff's rules of pyproject.toml ([tool.ruff]): pyflakes, pycodestyle's errors, import order; ruff's
 # formatting (line length 120, checked, `ruff format` applies it); mypy on
-# the pure-numerics modules ([tool.mypy])
+# the numerics and the application layer ([tool.mypy] in pyproject.toml)
 lint: install-test
 	$(BIN)/ruff check pmmw pmmw_cli tests examples scenes docs bench
 	$(BIN)/ruff format --check pmmw pmmw_cli tests examples scenes docs bench

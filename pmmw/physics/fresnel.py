@@ -123,8 +123,8 @@ def _l1_norm(z):
 # The per-ray arithmetic below is compiled (numba, cached on disk; ``NUMBA_DISABLE_JIT=1`` runs it as
 # Python): scalar functions, and loops over flat arrays that the vectorized helpers call.
 _jit = njit()
-_inline = inline()  # one-ray helpers: numba inlines them into their callers (a call between
-# compiled functions is not inlined by LLVM and costs about a third of a bare interface)
+_inline = inline()  # one-ray helpers called from compiled code: LLVM inlines them where it pays
+# (`pmmw.jit.inline`; numba's own IR inlining re-typed them at every call site)
 
 
 @_inline

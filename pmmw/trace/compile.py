@@ -11,8 +11,9 @@ and finds its own compiled already. The kernels' code is numba's either way: the
 code, the same numbers.
 
 The two groups were chosen from the measured compile times (each about half of the total), split
-where kernels share no compiled helpers (a helper both groups call would compile in both). A
-kernel in neither group compiles in both processes (duplicate work, nothing worse); a name that
+so that the big shared code (the Fresnel and coating arithmetic) compiles in one process only;
+the small helpers both groups call (the tallies `_add`/`_end`/`_fate`, `_off_surface1`, the ray
+keys of `pmmw.rng`) compile in both, each writing the same cache entry. A kernel in neither group compiles in both processes (duplicate work, nothing worse); a name that
 no longer exists is skipped. Where ``fork`` is not available (Windows, macOS's default), with one
 core, or where the child fails, the kernels compile here one after the other as before: slower,
 never wrong.
@@ -106,8 +107,9 @@ def _child(stack_size: int, rough: bool) -> None:
 
 def compile_kernels(stack_size: int = 8, rough: bool = True) -> None:
     """`kernels.warm` with its compilation split between this process and a forked one (module
-    docstring); the same as `kernels.warm` when the kernels are cached (then nothing compiles and
-    the child is not started), without ``fork`` or with one core."""
+    docstring); without ``fork`` or with one core, `kernels.warm` alone. It always starts the
+    child: a caller with the kernels cached calls `kernels.warm` instead (`pool.kernels_to_compile`
+    tells which)."""
     if not (sys.platform.startswith("linux") and (os.cpu_count() or 1) > 1):
         kernels.warm(stack_size, rough=rough)
         return
