@@ -542,7 +542,9 @@ class LoadedScene:
         self._res = pipeline.resolve(scenario.path, (), **scenario._kw())
         self._warnings = list(pipeline.collected_warnings())  # the scene's own (meshes, materials)
         self.builds = {"geometry": 1, "materials": 1}
-        self._kernels: dict = {}  # the imager's PSF kernels, shared by the renders (`pipeline.imager_kernel`)
+        # the imager's PSF kernels (and field PSFs), shared by the renders (`pipeline.imager_kernel`):
+        # one per distinct pixel pitch, frequency and aperture tried, kept while the scene is
+        self._kernels: dict = {}
 
     def __repr__(self) -> str:
         return f"LoadedScene({self.scenario.path.name}: {self._res.geometry.faces.shape[0]} triangles)"

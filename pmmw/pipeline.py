@@ -909,8 +909,8 @@ def imager_kernel(scn: ScenarioConfig, pixel_angle: float, k0: float, cache: dic
     kernel the imager model blurs with and adaptive sampling sizes its error target by.
 
     ``cache`` (`Resolved.kernels`): kernels made before, keyed by all the kernel depends on (pixel
-    pitch, wavenumber, aperture diameter, the antenna's illumination); a kernel found there is
-    not computed again. Each caller gets its own copy.
+    pitch, wavenumber, aperture diameter, the whole aperture model `Aperture`); a kernel found
+    there is not computed again. Nothing is evicted: it holds one kernel per distinct set. Each caller gets its own copy.
     """
     im = scn.imager
     if not im.aperture_diameter > 0.0:
