@@ -57,7 +57,9 @@ def read_glb(data: bytes) -> list[tuple[str, str, np.ndarray, np.ndarray, np.nda
         return None  # whatever is odd, trimesh reads it and says what is wrong
 
 
-def _chunks(data: bytes) -> tuple[dict, bytes | None]:
+def _chunks(data: bytes) -> tuple[dict, memoryview | None]:
+    """The JSON tree and a view of the binary chunk (slices of a view share the file's bytes: a
+    large scene is not copied before its arrays are made)."""
     magic, version, length = struct.unpack_from("<4sII", data, 0)
     if magic != _MAGIC or version != 2 or length > len(data):
         raise ValueError("not a GLB 2.0 file")
@@ -70,13 +72,13 @@ def _chunks(data: bytes) -> tuple[dict, bytes | None]:
     if at + 8 <= length:
         size, kind = struct.unpack_from("<II", data, at)
         if kind == _BIN:
-            blob = data[at + 8 : at + 8 + size]
+            blob = memoryview(data)[at + 8 : at + 8 + size]
             if len(blob) != size:
                 raise ValueError("a truncated binary chunk")
     return tree, blob
 
 
-def _accessor(tree: dict, blob: bytes, index: int, kind: str, dtypes: dict) -> np.ndarray:
+def _accessor(tree: dict, blob: memoryview, index: int, kind: str, dtypes: dict) -> np.ndarray:
     """An accessor's values, (count, 3) for VEC3 and (count,) for SCALAR, read only if plain:
     tightly packed in a view of the file's own binary chunk, no sparse values, no extension."""
     a = tree["accessors"][index]
@@ -102,7 +104,7 @@ def _accessor(tree: dict, blob: bytes, index: int, kind: str, dtypes: dict) -> n
     return values.reshape((count, 3)) if kind == "VEC3" else values
 
 
-def _parts(tree: dict, blob: bytes | None):
+def _parts(tree: dict, blob: memoryview | None):
     if tree.get("extensionsRequired") or "scenes" not in tree:
         raise ValueError("extensions required, or no scene")
     nodes = tree.get("nodes", [])
