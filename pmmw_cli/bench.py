@@ -28,6 +28,7 @@ from pmmw.io.preview import save_figure
 from pmmw.pipeline import aux_channels, make_job, resolve, scenario_hash
 from pmmw.trace import kernels
 from pmmw.trace.pool import assemble, default_workers, render_tiles
+from pmmw_cli import bench_anchor
 
 STRATEGIES = ("split", "stochastic", "hybrid")
 REFERENCE_THRESHOLD = 1e-6
@@ -136,6 +137,8 @@ def bench(
     """Run the benchmark and write ``out_md`` and one plot per scenario beside it. ``anchor``: the
     Python of an environment with Mitsuba 3 (the ``bench`` extra): adds pmmw against Mitsuba on
     the speed anchor, ``anchor_rounds`` alternating rounds (`pmmw_cli.bench_anchor`)."""
+    if anchor is not None:
+        bench_anchor.check(anchor)  # before the scenarios: a wrong Python found after them costs minutes
     workers = workers or default_workers()
     sections, all_rows = [], {}
     for path in scenarios:
@@ -202,8 +205,6 @@ def bench(
         res_px, spp = (128, 128), 4
         sections.append(_scaling_section(scaling(resolution=res_px, spp=spp, workers=workers), res_px, spp))
     if anchor is not None:
-        from pmmw_cli import bench_anchor
-
         all_rows["anchor"] = bench_anchor.run(anchor, rounds=anchor_rounds, workers=workers)
         sections.append(bench_anchor.section(all_rows["anchor"], machine(), command or "pmmw bench"))
     write_text_atomic(out_md, header + "\n".join(sections))

@@ -27,13 +27,15 @@ import time
 from pathlib import Path
 
 from pmmw.errors import EnvironmentProblem, UserError
+from pmmw.trace.pool import TILES
 
 GROUNDS = ("rough", "smooth")
 #: pmmw's scenario of the anchor with a smooth ground (the anchor's own is rough)
 SMOOTH_SET = "materials.rough_ground={eps: {95 GHz: [3.7, 1.2]}, temperature: 288 K}"
 #: Dr.Jit's LLVM back end needs a libLLVM: Debian's libllvm19 puts it here
 DEBIAN_LIBLLVM = Path("/usr/lib/x86_64-linux-gnu/libLLVM-19.so")
-_TIMING = re.compile(r"^\s+(tiles traced|after the trace, together)\s+([0-9.]+) s$")
+#: a phase of ``pmmw render --timings`` that is read: the tiles' tracing and the work after the trace
+_TIMING = re.compile(rf"^\s+({re.escape(TILES)}|after the trace, together)\s+([0-9.]+) s$")
 _MARK = re.compile(r"^\s+(first tile sent|kernels loaded) at\s+([0-9.]+) s after the process started$")
 
 
@@ -92,22 +94,31 @@ def pmmw(scenario: Path, ground: str, out: Path, workers=None):
         m = _TIMING.match(ln) or _MARK.match(ln)
         if m:
             r[m.group(1)] = float(m.group(2))
-    if "tiles traced" not in r:
+    if TILES not in r:
         raise EnvironmentProblem("pmmw render --timings printed no time for its tiles", file="--anchor")
     # the tiles' tracing, as Mitsuba's render is timed with its kernels in memory; the "trace"
     # phase also holds loading the kernels from numba's cache and the job's set-up
-    r["trace_s"] = r.pop("tiles traced")
+    r["trace_s"] = r.pop(TILES)
     return r
 
 
-def run(python, *, rounds=3, workers=None, work=None, log=None):
+def check(python) -> None:
+    """What ``--anchor PYTHON`` needs before anything runs: ``python`` an executable file and the
+    anchor's scripts (`bench_dir`); a UserError of ``--anchor`` otherwise."""
+    p = Path(python)
+    if not p.is_file():
+        raise UserError(f"no Python at {python} (a virtual environment with pmmw's bench extra)", file="--anchor")
+    if not os.access(p, os.X_OK):
+        raise UserError(f"{python} is not executable (give the Python of a virtual environment)", file="--anchor")
+    bench_dir()
+
+
+def run(python, *, rounds=3, workers=None):
     """Alternate Mitsuba and pmmw on both grounds for ``rounds`` rounds (after one untimed run of
     each, which fills Dr.Jit's kernel cache and loads pmmw's); returns the rows, one per round and
-    ground."""
-    log = log or (lambda msg: print(msg, file=sys.stderr))
-    if not Path(python).is_file():
-        raise UserError(f"no Python at {python} (a virtual environment with pmmw's bench extra)", file="--anchor")
-    with tempfile.TemporaryDirectory(dir=work) as tmp:
+    ground (each also logged to stderr)."""
+    check(python)
+    with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
         _run([sys.executable, str(bench_dir() / "anchor_landing.py"), str(d), "--write-only"], "anchor_landing.py")
         scenario = d / "anchor_landing.yaml"
@@ -144,10 +155,11 @@ def run(python, *, rounds=3, workers=None, work=None, log=None):
                     "versions": f"Mitsuba {m['mitsuba']}, Dr.Jit {m['drjit']}",
                 }
                 rows.append(row)
-                log(
+                print(
                     f"anchor round {i + 1} {g}: Mitsuba render {m['render_s']:.2f} s, script {m['script_s']:.2f} s; "
                     f"pmmw trace {p['trace_s']:.2f} s, command {p['command_s']:.2f} s; "
-                    f"ratios {row['trace_ratio']:.2f} (trace), {row['command_ratio']:.2f} (command)"
+                    f"ratios {row['trace_ratio']:.2f} (trace), {row['command_ratio']:.2f} (command)",
+                    file=sys.stderr,
                 )
     return rows
 

@@ -712,6 +712,12 @@ def bench(
     name = "benchmarks_po.md" if po else "benchmarks.md"
     target = out or (Path("docs") / name if write_docs else Path("out") / "bench" / name)
     check_bench_target(target)
+    if anchor is not None:  # checked before anything runs: a typo would otherwise cost every benchmark first
+        if po:
+            raise UserError("--po measures physical optics only: give --anchor without --po", file="--anchor")
+        from pmmw_cli import bench_anchor
+
+        bench_anchor.check(anchor)
     target.parent.mkdir(parents=True, exist_ok=True)
     if po:
         from pmmw_cli.bench_po import run as run_po_bench

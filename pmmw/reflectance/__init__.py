@@ -8,7 +8,7 @@ Two methods share one surface description (`Stack`) and one output grid:
     coefficients of `pmmw.physics.fresnel` / `pmmw.physics.multilayer` about each facet,
     and are followed through the layers until they leave the top surface (collected), enter the
     substrate, or are absorbed. It is the renderer's own code: the stack becomes one medium of
-    the renderer's tables (`montecarlo.stack_media`: rough layers, films, roughness, a lossy
+    the renderer's tables (`pmmw.surface.media.stack_media`: rough layers, films, roughness, a lossy
     substrate as an ``opaque`` sink) and each wave of facet events runs through
     `pmmw.surface.Surfaces` (roughness module docstring, "How the renderer uses this"): exact
     visible normals, Smith masking, masked and wrong-side rays re-hit the same interface, nothing

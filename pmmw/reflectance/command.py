@@ -107,7 +107,7 @@ def _material_stack(mid, eps_val, metal, model, f):
     coating, as the renderer sees it. Coating layers without roughness are coherent films on the
     interface below them; a layer with its own ``roughness:`` is a rough layer of its own."""
     from pmmw.scene.materials import MaterialDB
-    from pmmw.trace.job import split_coating
+    from pmmw.surface.media import split_coating
 
     db = MaterialDB.load()
     mat = db.get(mid, file="command line", key="--material")

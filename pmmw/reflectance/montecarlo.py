@@ -23,10 +23,10 @@ from pmmw.physics.jones import basis_change
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jones
 from pmmw.reflectance.stack import Stack
 from pmmw.surface import Surfaces, Wave, kernels
-from pmmw.surface.media import stack_media  # noqa: F401  (re-exported: its home is the media module)
+from pmmw.surface.media import stack_media
 from pmmw.surface.records import Choice, Faces, Hit, HitCode, Limits
 
-__all__ = ["monte_carlo", "stack_media"]
+__all__ = ["monte_carlo"]
 
 # Paths are followed in chunks of this many rays (memory, not results: each sample has its own key, `pmmw.rng`).
 _CHUNK = 1 << 17

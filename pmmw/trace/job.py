@@ -14,7 +14,7 @@ import numpy as np
 
 from pmmw.constants import C0
 from pmmw.scene.camera import Camera
-from pmmw.surface.media import (  # noqa: F401  (the media and their builders live below the tracer; re-exported)
+from pmmw.surface.media import (  # noqa: F401  (the media live below the tracer; re-exported, build_media as docs/ARCHITECTURE.md says)
     BLACKBODY,
     DIELECTRIC,
     KIND_CODES,
@@ -26,7 +26,6 @@ from pmmw.surface.media import (  # noqa: F401  (the media and their builders li
     RoughLayer,
     build_media,
     split_coating,
-    stack_media,
 )
 
 if TYPE_CHECKING:

@@ -6,6 +6,8 @@ on this machine), so these tests run without Mitsuba and time nothing."""
 from __future__ import annotations
 
 import json
+import sys
+from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
@@ -95,3 +97,82 @@ def test_no_python_is_one_error_line(tmp_path):
     assert res.exit_code == 2, res.output
     assert "--anchor" in res.output and "no Python at" in res.output
     assert not out.exists()
+
+
+def _forbid_benchmarks(monkeypatch, seen):
+    """The scenario benchmark's first step (resolving a scenario) and the anchor's run, recorded;
+    the scenario's stops the command with a line of its own, so a test sees whether it was reached."""
+    import pmmw_cli.bench
+
+    def resolve(path, overrides):
+        seen.append(("scenario", path))
+        raise bench_anchor.UserError("the scenario benchmark was reached", file=str(path))
+
+    def run(python, **kw):
+        seen.append(("anchor", python))
+        return []
+
+    monkeypatch.setattr(pmmw_cli.bench, "resolve", resolve)
+    monkeypatch.setattr(bench_anchor, "run", run)
+
+
+def _error_lines(res):
+    return [ln for ln in res.output.splitlines() if ln.strip()]
+
+
+def test_a_wrong_python_stops_bench_before_any_scenario(monkeypatch, tmp_path):
+    """`pmmw bench SCENARIO --anchor PYTHON` where PYTHON is missing, or is not executable: one
+    `error: --anchor:` line, exit 2, and no scenario was benchmarked (it was, minutes of it, before
+    the Python was looked at); the output folder is not even made. The control: the same command
+    with this Python reaches the scenario benchmark."""
+    seen = []
+    _forbid_benchmarks(monkeypatch, seen)
+    scn, out = tmp_path / "s.yaml", tmp_path / "o" / "b.md"
+    not_exec = tmp_path / "python3"
+    not_exec.write_text("#!/bin/sh\n")
+    not_exec.chmod(0o644)
+    for python, why in ((tmp_path / "nopython", "no Python at"), (not_exec, "is not executable")):
+        res = CliRunner().invoke(app, ["bench", str(scn), "--anchor", str(python), "--out", str(out)])
+        assert res.exit_code == 2, res.output
+        assert len(_error_lines(res)) == 1 and _error_lines(res)[0].startswith("error: --anchor: "), res.output
+        assert why in res.output
+        assert seen == [] and not out.parent.exists()
+    # the control: a Python that is there gets past the check, to the scenario
+    res = CliRunner().invoke(app, ["bench", str(scn), "--anchor", sys.executable, "--out", str(out)])
+    assert res.exit_code == 2 and "the scenario benchmark was reached" in res.output, res.output
+    assert seen == [("scenario", scn)]
+
+
+def test_a_checkout_without_the_anchor_scripts_is_refused_first(monkeypatch, tmp_path):
+    """An installed pmmw (no bench/ folder beside the package) given --anchor: one error line before
+    anything runs. The control: in this checkout the same command runs the anchor (replaced here)."""
+    seen = []
+    _forbid_benchmarks(monkeypatch, seen)
+    out = tmp_path / "b.md"
+    monkeypatch.setattr(bench_anchor, "section", lambda rows, machine, command: "\n## anchor\n")
+    res = CliRunner().invoke(app, ["bench", "--anchor", sys.executable, "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert seen == [("anchor", Path(sys.executable))] and out.is_file()
+    # without the scripts (the module as if installed elsewhere)
+    seen.clear()
+    monkeypatch.setattr(bench_anchor, "__file__", str(tmp_path / "site" / "pmmw_cli" / "bench_anchor.py"))
+    res = CliRunner().invoke(app, ["bench", "--anchor", sys.executable, "--out", str(tmp_path / "c.md")])
+    assert res.exit_code == 2, res.output
+    assert len(_error_lines(res)) == 1 and "error: --anchor: " in res.output and "checkout" in res.output
+    assert seen == [] and not (tmp_path / "c.md").exists()
+
+
+def test_po_with_anchor_is_refused(monkeypatch, tmp_path):
+    """`--po --anchor PYTHON`: the physical-optics bench has no anchor, and it was silently dropped;
+    now one error line and exit 2, the physical-optics bench not run. The control: --po alone runs it."""
+    import pmmw_cli.bench_po
+
+    ran = []
+    monkeypatch.setattr(pmmw_cli.bench_po, "run", lambda out, **k: ran.append(out))
+    out = tmp_path / "po.md"
+    res = CliRunner().invoke(app, ["bench", "--po", "--anchor", sys.executable, "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    assert len(_error_lines(res)) == 1 and _error_lines(res)[0].startswith("error: --anchor: "), res.output
+    assert "--po" in res.output and ran == []
+    res = CliRunner().invoke(app, ["bench", "--po", "--out", str(out)])
+    assert res.exit_code == 0 and ran == [out], res.output

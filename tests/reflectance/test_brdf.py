@@ -548,7 +548,7 @@ def test_a_stack_becomes_one_medium_of_the_renderers_tables():
     where a thickness is given, none without one, Optics Express 2016 assumption 3), each with
     its films and roughness; the substrate is a sink (``opaque``) when lossy, ``metal`` when a
     perfect conductor, a dielectric when lossless."""
-    from pmmw.reflectance.montecarlo import stack_media
+    from pmmw.surface.media import stack_media
     from pmmw.trace.job import DIELECTRIC, METAL, OPAQUE
 
     f = 94e9
