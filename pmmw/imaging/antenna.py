@@ -111,7 +111,7 @@ class Aperture:
         u = np.asarray(u, dtype=float)
         if self.kind == "uniform" and self.blockage == 0.0:
             out = np.full(u.shape, 0.5)
-            nz = np.abs(u) > 1e-8  # J1(u) / u = 1/2 - u^2 / 16 + ...: 1/2 to 4e-18 below
+            nz = np.abs(u) > 1e-8  # J1(u) / u = 1/2 - u^2 / 16 + ...: 1/2 to 6.25e-18 below
             out[nz] = special.j1(u[nz]) / u[nz]
             return out
         flat = u.ravel()
@@ -361,9 +361,12 @@ class FieldPSF:
         self.rows = np.unique(np.round(np.linspace(0, height - 1, min(nodes, height))).astype(int))
         self.cols = np.unique(np.round(np.linspace(0, width - 1, min(nodes, width))).astype(int))
         table = power_table(aperture, k0 * aperture_diameter / 2.0)  # u = k a sin(.) <= k a
-        # the nodes lie symmetrically about the image's centre lines, where the beam is mirrored:
-        # the kernel of node (i, j) is that of (i, W-1-j) flipped left-right, and of (H-1-i, j)
-        # flipped up-down, so a quarter of them are computed
+        # the beam is mirrored about the image's centre lines: where node (i, W-1-j) exists, the
+        # kernel of node (i, j) is its kernel flipped left-right, and likewise (H-1-i, j)'s flipped
+        # up-down. Along an odd side the nodes lie symmetrically (np.round's ties mirror too), so a
+        # quarter of the kernels are computed; along an even side ties round to the even integer
+        # and some nodes have no mirror image (20 px: 0 3 6 10 13 16 19; 10 has no 9), and those
+        # are computed
         self.kernels: dict[tuple[int, int], np.ndarray] = {}
         for i in self.rows:
             for j in self.cols:

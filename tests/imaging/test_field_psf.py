@@ -255,3 +255,43 @@ def test_the_corner_beam_widens_radially_as_the_projected_aperture_narrows():
     on_axis = 2e3 * np.arcsin(1.6163 / ka)
     assert beam["off_axis"]["corner_hpbw_tangential_mrad"] == pytest.approx(on_axis, rel=1e-4)
     assert abs(want / on_axis - 1.0) > 0.02  # the control: the two widths differ at this corner
+
+
+@pytest.mark.parametrize("point, nodes", [((10, 35), ((10, 30), (10, 40))), ((35, 10), ((30, 10), (40, 10)))])
+def test_a_point_halfway_between_two_nodes_is_blurred_by_its_own_beams(point, nodes):
+    """`FieldPSF` against the operator it interpolates: each sensor pixel x reading the scene through
+    the beam of its own field angle and azimuth (`off_axis_kernel` at `pixel_field_angles` of x,
+    itself checked against the projected aperture's closed form above), so the response to one
+    bright pixel p is blur(delta_p, K_x)(x), on the 11 x 11 pixels around p (the beam's core: a
+    few pixels wide). p lies halfway between two nodes 10 px apart, 32 deg off axis (70 deg
+    over 41 px), once along a row and once along a column.
+
+    Tolerance, decided from the node spacing before the result: half the largest difference
+    between the two neighbouring nodes' responses, which is what either node's kernel alone makes
+    at the midpoint where the kernel changes linearly; the hat blend is exact for a linear change
+    and second order otherwise, so it must beat that. The control: each node's kernel alone is
+    further off than the blend (a nearest-node lookup would be)."""
+    w = h = 41
+    fov, d, ap = np.radians(70.0), 0.05, Aperture()  # the beam about 2 px wide on axis
+    pitch = 2 * np.arctan(np.tan(fov / 2) / w)
+    psf = FieldPSF(pitch, K0, d, ap, w, h, fov, nodes=5)
+    assert list(psf.rows) == list(psf.cols) == [0, 10, 20, 30, 40]
+    th, ph = pixel_field_angles(w, h, fov)
+    delta = np.zeros((h, w))
+    delta[point] = 1.0
+    near = np.ix_(np.arange(point[0] - 5, point[0] + 6), np.arange(point[1] - 5, point[1] + 6))
+    own = np.array(
+        [
+            [
+                blur(delta, off_axis_kernel(pitch, K0, d, ap, th[i, j], ph[i, j], psf.max_radius))[i, j]
+                for j in near[1][0]
+            ]
+            for i in near[0][:, 0]
+        ]
+    )
+    blend = psf.blur(delta)[near]
+    a, b = (blur(delta, psf.kernels[n])[near] for n in nodes)
+    tol = 0.5 * np.max(np.abs(a - b))
+    err = np.max(np.abs(blend - own))
+    assert err < tol, (err, tol)
+    assert np.max(np.abs(a - own)) > err and np.max(np.abs(b - own)) > err

@@ -76,7 +76,8 @@ def _padded_reference(img, k):
 @pytest.mark.parametrize("image_shape", [(40, 37), (16, 24), (7, 60), (1, 5), (3, 4)])
 def test_a_mirror_symmetric_kernel_blurs_as_scipy_does_on_the_mirrored_image(image_shape):
     """`blur` of a mirror-symmetric kernel (the Airy PSF) takes the DCT path (`mirror_symmetric`),
-    the kernel up to 4 times wider than the image (its wrap onto the mirrored image's period);
+    the kernel (25 px) wider than the image, up to 25 times on the 1-row image (its wrap onto the
+    mirrored image's period);
     against SciPy's convolution of the padded image. Tolerance 1e-10 K on 300 K images: both are
     FFTs of at most a few hundred points, whose round-off is about eps x log2(n) x 300 K, 1e-12 K.
     The control: the same kernel shifted by one pixel (no longer symmetric: the padded FFT path)

@@ -82,7 +82,9 @@ def test_the_bound_covers_what_a_deeper_render_changes():
 
 def test_blur_adjoint_is_the_transpose_of_blur():
     """<blur(x), y> = <x, blur_adjoint(y)> for random images, also when the kernel is wider than
-    the image (mirrored padding repeats). Rounding of two FFT convolutions: 1e-10 relative."""
+    the image (mirrored padding repeats). The Airy kernel is mirror-symmetric, so this is the
+    self-adjoint shortcut (`blur_adjoint` is `blur`, diagonal in the DCT-II basis): rounding of two
+    DCT blurs, 1e-10 relative. The general path: the next test."""
     rng = np.random.default_rng(3)
     for shape, kernel in (
         ((17, 23), psf_kernel(2e-3, 2 * np.pi * 95e9 / 3e8, 0.6)),
@@ -92,6 +94,37 @@ def test_blur_adjoint_is_the_transpose_of_blur():
         x, y = rng.normal(size=shape), rng.normal(size=shape)
         lhs, rhs = np.sum(blur(x, kernel) * y), np.sum(x * blur_adjoint(y, kernel))
         assert abs(lhs - rhs) <= 1e-10 * np.sum(np.abs(x)) * np.sum(np.abs(y))
+
+
+def test_blur_adjoint_of_an_asymmetric_kernel_folds_the_margin_back():
+    """The general adjoint (padded FFT convolution with the flipped kernel, the padded margin folded
+    back onto the pixels it was copied from), live for the off-axis beams of `FieldPSF.kernel_at`:
+    <blur(x), y> = <x, blur_adjoint(y)> for an off-axis beam (theta = 0.5 rad, phi = 0.7 rad:
+    elongated along a diagonal, not mirror-symmetric, though point-symmetric) and a random kernel
+    off centre (no symmetry at all, so the flip matters), each also wider than its image.
+
+    Tolerance 1e-12 of S = sum|x| sum|y| max|k|: every term x_i A_ij y_j of either sum is at most
+    |x_i| |y_j| times the few taps folded onto one pixel pair, and float64 FFT convolutions round
+    to about eps log2(n) = 2e-15 of that; 1e-12 leaves a factor of 100 over several taps. Controls:
+    `self_adjoint` is False for both kernels (the general path is the one taken), and the adjoint
+    without the fold (the flipped kernel's `blur`) misses the identity by far more than the
+    tolerance."""
+    from pmmw.imaging.antenna import Aperture, off_axis_kernel
+    from pmmw.imaging.imager import self_adjoint
+
+    rng = np.random.default_rng(8)
+    beam = off_axis_kernel(2e-3, 2 * np.pi * 95e9 / 3e8, 0.3, Aperture(), theta=0.5, phi=0.7, max_radius=40)
+    shifted = np.zeros((15, 15))
+    shifted[:, 3:] = rng.random((15, 12))  # off centre by 1.5 px on average, random taps
+    assert beam.shape == (81, 81)
+    for shape, kernel in (((17, 23), beam), ((9, 6), beam), ((17, 23), shifted), ((5, 4), shifted)):
+        assert not self_adjoint(kernel, shape)
+        x, y = rng.normal(size=shape), rng.normal(size=shape)
+        s = np.sum(np.abs(x)) * np.sum(np.abs(y)) * np.max(np.abs(kernel))
+        lhs, rhs = np.sum(blur(x, kernel) * y), np.sum(x * blur_adjoint(y, kernel))
+        assert abs(lhs - rhs) <= 1e-12 * s, (shape, kernel.shape)
+        unfolded = np.sum(x * blur(y, kernel[::-1, ::-1]))
+        assert abs(lhs - unfolded) > 1e-6 * s, (shape, kernel.shape)
 
 
 def _roulette_room(seed):
