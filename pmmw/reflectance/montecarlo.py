@@ -28,7 +28,8 @@ from pmmw.surface.records import Choice, Faces, Hit, HitCode, Limits
 
 __all__ = ["monte_carlo"]
 
-# Paths are followed in chunks of this many rays (memory, not results: each sample has its own key, `pmmw.rng`).
+# Paths are followed in chunks of this many rays (memory, not results: each sample has its own key,
+# `pmmw.rng`; only the sums' last bits change with it, their terms added in another order).
 _CHUNK = 1 << 17
 # Facet interactions after which a path is ended and counted as lost (never reached in practice:
 # reported in the summary as ``lost``).
@@ -100,7 +101,7 @@ def monte_carlo(
     phi_i = math.atan2(wi[1], wi[0])
     k_in = -np.asarray(wi, dtype=np.float64)
     h_in, v_in = _hv(k_in[None, :], np.array([phi_i + math.pi]))
-    for c, start in enumerate(range(0, samples, _CHUNK)):
+    for start in range(0, samples, _CHUNK):
         n = min(_CHUNK, samples - start)
         acc, cut = np.zeros((n, 4)), np.zeros((n, 2))
         surfaces.start(acc, cut)

@@ -3,8 +3,11 @@
 Each worker builds the Embree scene once and then renders whole tiles, one at a time, that the
 parent sends it over a pipe, two ahead (the next tile waits in the pipe while it renders, so a
 worker does not wait for the parent between tiles). A forked worker writes a finished tile's
-arrays into memory it shares with the parent (`_Slots`) and sends the rest through the pipe. Each ray's random numbers come from its own key (`pmmw.rng`), so
-images are identical whatever ``--workers`` and ``render.tile`` are.
+arrays into memory it shares with the parent (`_Slots`) and sends the rest through the pipe.
+Each ray's random numbers come from its own key (`pmmw.rng`) and a tile is rendered whole by one
+process, so an image is identical whatever ``--workers`` is. It is identical whatever
+``render.tile`` is only without adaptive sampling (``render.target_error``), whose neighbour rule
+looks at the pixels of a tile, so that its sample counts depend on the tiles by design.
 
 Finished tiles are saved atomically to ``tile_dir`` as they arrive; with ``resume`` the tiles
 already there are checked and loaded instead of re-rendered, so an interrupted render loses
