@@ -664,7 +664,7 @@ def region_stats(
     # detection: the ideal image's region means (weights mask / N, no blur) and the target's
     # blurred footprint (`detection.footprint_norm`)
     ideal_w = {name: (m / m.sum() if m.any() else None) for name, m in masks.items()}
-    norms = {name: float(np.sqrt(np.sum(np.square(fp)))) for name, fp in footprints.items()}  # footprint_norm
+    norms = {name: detection.norm_of(fp) for name, fp in footprints.items()}
     contrasts, verdicts = {}, {}
     unsettled = []  # (pair, channel, standard error [K]) of contrasts whose seeds would differ by more than `limit`
     for i, a in enumerate(names):

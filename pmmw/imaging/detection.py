@@ -70,8 +70,13 @@ def footprint(mask: np.typing.ArrayLike, kernel: np.ndarray | None = None) -> np
 
 def footprint_norm(mask: np.typing.ArrayLike, kernel: np.ndarray | None = None) -> float:
     """sqrt(sum_k (psf * 1_M)_k^2) [-]: sqrt(N) for an unblurred region of N pixels, less where
-    the blur spreads it."""
-    return float(np.sqrt(np.sum(np.square(footprint(mask, kernel)))))
+    the blur spreads it (`norm_of` its `footprint`)."""
+    return norm_of(footprint(mask, kernel))
+
+
+def norm_of(footprint: np.typing.ArrayLike) -> float:
+    """sqrt(sum_k f_k^2) [-] of a footprint already made (`footprint`)."""
+    return float(np.sqrt(np.sum(np.square(np.asarray(footprint, dtype=float)))))
 
 
 def matched_filter_snr(signal: np.typing.ArrayLike, sigma: float) -> float | None:

@@ -66,7 +66,9 @@ def at_point(src, branch):
 
 def masked(draw, u1, u2, n_geo, n_mac, u_leave, rough, over, wavelength, rehit_depth, back, counts):
     """`scatter`'s ``settle`` argument for rough faces (``MASKED``): a `Facets` record (see there
-    and `scatter`), its scalars as the kernels' types."""
+    and `scatter`), its scalars as the kernels' types. ``scatter`` is then called with ``rows``
+    = arange(n) (`surfaces.Surfaces._scatter_masked`): ``u1``, ``u2`` are read by the wave's row
+    and ``u_leave`` with the other uniforms by the position in ``rows``, the same index there."""
     facets = Facets(
         draw, u1, u2, n_geo, n_mac, u_leave, rough, bool(over), float(wavelength), int(rehit_depth), back, counts
     )
