@@ -36,7 +36,7 @@ def test_every_shipped_scene_reads_as_trimesh_reads_it(path):
         assert _same(got, geometry.load_entry_mesh(path, up_axis)), (path.name, up_axis)
 
 
-def _glb(nodes: list[dict], materials=("paint", None), extra: dict | None = None) -> bytes:
+def _glb(nodes: list[dict], materials=("paint", None), extra: dict | None = None, tweak=None) -> bytes:
     """A GLB of ``nodes``: each {name, mesh (its name), vertices (V, 3), faces (F, 3) or None
     (unindexed), dtype of the indices, matrix (16 numbers) or absent, material index or absent,
     primitives (how many copies of the primitive), any other node keys under ``node``}."""
@@ -75,6 +75,8 @@ def _glb(nodes: list[dict], materials=("paint", None), extra: dict | None = None
         "buffers": [{"byteLength": len(blob)}],
         **(extra or {}),
     }
+    if tweak is not None:  # a change to the tree that the node list cannot say
+        tweak(tree)
     text = json.dumps(tree).encode()
     text += b" " * (-len(text) % 4)
     body = struct.pack("<II", len(text), 0x4E4F534A) + text + struct.pack("<II", len(blob), 0x004E4942) + blob
@@ -111,6 +113,37 @@ NOT_READ = {
     "named world": [dict(_T, name="world")],
     "extension required": [dict(_T)],
 }
+
+
+def _set(where: str, key: str, value):
+    def tweak(tree):
+        tree[where][0][key] = value
+
+    return tweak
+
+
+# trees the reader must refuse (then trimesh reads them or says what is wrong): the accessor and
+# view forms it does not read, each on the first accessor (POSITION) or view of a plain file
+REFUSED = {
+    "an interleaved view (byteStride)": _set("bufferViews", "byteStride", 16),
+    "a normalized accessor": _set("accessors", "normalized", True),
+    "a sparse accessor": _set("accessors", "sparse", {"count": 1}),
+    "quantized positions (16-bit)": _set("accessors", "componentType", 5123),
+    "an accessor without a view": lambda tree: tree["accessors"][0].pop("bufferView"),
+    "a buffer outside the file": _set("buffers", "uri", "data.bin"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(REFUSED))
+def test_the_forms_the_reader_does_not_read_are_refused(case):
+    assert glb.read_glb(_glb([_T], tweak=REFUSED[case])) is None
+    assert glb.read_glb(_glb([_T])) is not None  # the control: the same file untouched is read
+
+
+def test_an_unindexed_mesh_of_a_count_not_a_multiple_of_three_is_refused():
+    four = dict(_T, vertices=_TET_V, faces=None)  # 4 vertices: no whole triangle list
+    assert glb.read_glb(_glb([four])) is None
+    assert glb.read_glb(_glb([dict(four, vertices=_TET_V[:3])])) is not None  # the control: 3 are one triangle
 
 
 @pytest.mark.parametrize("case", sorted(READ))
