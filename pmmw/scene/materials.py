@@ -13,12 +13,15 @@ An entry (the same schema in the database files and in a scenario's ``materials:
       thickness: 1 mm             # only for kind thin (the sheet's own thickness)
       roughness: {model: ggx, alpha: 0.3}   # optional microfacet roughness of the surface
       bump: {model: gaussian, rms: 3 mm, correlation: 3 cm, size: 1 m}   # optional bump map
+      extrapolate: hold           # beyond the table: hold (default) | trend
 
 ``eps: [eps', eps'']`` (no frequencies) is one value for every frequency. eps = eps' + i eps'',
 eps'' >= 0 lossy (``docs/ARCHITECTURE.md``). ``metal`` and ``blackbody`` have no ``eps``
 (Murakowski 2014 sec. 2.2.9); every other kind needs one. Between tabulated frequencies eps' and eps''
-are interpolated linearly in frequency; outside the table the nearest tabulated value is used and
-a warning names the material and its range.
+are interpolated linearly in frequency; outside the table the nearest tabulated value is used
+(``extrapolate: hold``) or, with ``extrapolate: trend``, eps' and eps'' each continue the power law
+a f^b through the table's two end rows (the form in which ITU-R P.2040 writes every material), and
+either way a warning names the material and its range.
 
 ``roughness:`` is a microfacet model of the surface (`pmmw.physics.roughness.make_model`:
 ``ashikhmin_shirley``, ``blinn_phong``, ``ggx``, ``beckmann``, ``blender_gloss``); without it the
@@ -75,11 +78,18 @@ _ENTRY_KEYS = (
     "roughness",
     "bump",
     "same_as",
+    "extrapolate",
 )
 _LAYER_KEYS = ("material", "thickness", "temperature", "roughness")
 _EPS_EXAMPLE = "[eps', eps''] or {35 GHz: [eps', eps''], 95 GHz: [eps', eps'']}"
 _LAYER_EXAMPLE = "{material: ID, thickness: '0.8 mm', temperature: '300 K'}"
 _REL_TOL = 1e-9  # frequencies closer than this (relative) are the same frequency
+Extrapolate = Literal["hold", "trend"]
+EXTRAPOLATE: tuple[str, ...] = get_args(Extrapolate)
+# [-] steepest power law `extrapolate: trend` continues: a f^b steeper than this between two rows is
+# a resonance or rows too close together, not a trend (ITU-R P.2040-4's steepest, the floorboard's
+# eps'' at 220-450 GHz, goes as f^6.3)
+TREND_EXPONENT_MAX = 10.0
 
 
 # ----------------------------------------------------------------------------------------------
@@ -142,6 +152,9 @@ class Material:
         Where the numbers come from.
     origin : str
         File the entry came from (the scenario file for an override), for error messages.
+    extrapolate : str
+        A table beyond its first and last rows: ``hold`` the end row's value, or continue the
+        ``trend`` (`_trend`); warned either way.
     """
 
     id: str
@@ -157,6 +170,7 @@ class Material:
     model: DielectricModel | None = None
     source: str = ""
     origin: str = ""
+    extrapolate: str = "hold"
 
     def has_eps(self) -> bool:
         """Whether the entry gives a permittivity (a table, a constant or a model)."""
@@ -178,7 +192,8 @@ class Material:
         """Relative permittivity at frequency `f` [Hz].
 
         Linear interpolation of eps' and eps'' in frequency between tabulated points; outside
-        the tabulated range the nearest tabulated value, with a warning (once per material)
+        the tabulated range the nearest tabulated value (or, with ``extrapolate: trend``, the
+        power law through the two end rows, `_trend`), with a warning (once per material)
         naming the material and its range. A frequency-independent entry returns its value.
         A model entry (`model`) is evaluated at `temperature` [K] (default: the material's own,
         else the model's reference temperature), with a warning outside the model's range.
@@ -208,7 +223,19 @@ class Material:
         table's nearest value, a model extrapolated, a P.2040 gap interpolated between its rows."""
         if self.model is not None:
             return self.model.outside(f, self.model_temperature(temperature)) or "inside the model's range"
+        if self.extrapolate == "trend" and len(self.freqs) >= 2:
+            (f1, e1), (f2, e2) = self._end_rows(f)
+            b_re, b_im = _exponent(f1, e1.real, f2, e2.real), _exponent(f1, e1.imag, f2, e2.imag)
+            return (
+                f"extrapolated by the power law through its rows at {_fmt_f(f1)} and {_fmt_f(f2)} "
+                f"(eps' as f^{b_re:.3g}, eps'' as f^{b_im:.3g}; extrapolate: trend)"
+            )
         return "the nearest tabulated value is used"
+
+    def _end_rows(self, f: float) -> tuple[tuple[float, complex], tuple[float, complex]]:
+        """The table's end row on f's side (f [Hz] outside the table) and the row next to it."""
+        i, j = (0, 1) if f < self.freqs[0] else (-1, -2)
+        return (self.freqs[i], self.eps[i]), (self.freqs[j], self.eps[j])
 
     def _lookup(self, f: float, temperature: float | None = None) -> tuple[complex, bool]:
         """(eps at f [Hz] and temperature [K] (a model's; default the material's), whether f or the
@@ -225,16 +252,32 @@ class Material:
             return complex(self.eps[0]), False
         fs = self.freqs
         lo, hi = fs[0], fs[-1]
-        if f < lo * (1 - _REL_TOL):
-            return complex(self.eps[0]), True
-        if f > hi * (1 + _REL_TOL):
-            return complex(self.eps[-1]), True
+        if f < lo * (1 - _REL_TOL) or f > hi * (1 + _REL_TOL):
+            if self.extrapolate != "trend" or len(fs) < 2:
+                return complex(self.eps[0] if f < lo else self.eps[-1]), True
+            (f1, e1), (f2, e2) = self._end_rows(f)
+            return complex(_trend(f, f1, e1.real, f2, e2.real), _trend(f, f1, e1.imag, f2, e2.imag)), True
         for fi, ei in zip(fs, self.eps):  # exact hits (and single-frequency tables)
             if abs(f - fi) <= _REL_TOL * fi:
                 return complex(ei), False
         re_ = float(np.interp(f, fs, [e.real for e in self.eps]))
         im_ = float(np.interp(f, fs, [e.imag for e in self.eps]))
         return complex(re_, im_), False
+
+
+def _exponent(f1: float, v1: float, f2: float, v2: float) -> float:
+    """b of the power law v = a f^b through (f1, v1) and (f2, v2); 0 (the value held) where either
+    value is not positive (no power law passes through zero)."""
+    if not (v1 > 0.0 and v2 > 0.0):
+        return 0.0
+    return math.log(v2 / v1) / math.log(f2 / f1)
+
+
+def _trend(f: float, f1: float, v1: float, f2: float, v2: float) -> float:
+    """The power law a f^b through the end row (f1, v1) and the row next to it (f2, v2), at f [Hz]
+    beyond f1: v1 (f / f1)^b. The exponent is bounded by `TREND_EXPONENT_MAX` when the entry is
+    built, so the value stays finite for every frequency a scenario accepts."""
+    return v1 * math.exp(_exponent(f1, v1, f2, v2) * math.log(f / f1))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -391,6 +434,7 @@ class _EntryIn(BaseModel):
     bump: Any = None  # checked by bump.make_bump
     model: Any = None  # checked by dielectric.make_dielectric
     same_as: Optional[StrictStr] = None  # another id whose fields this entry takes (resolved by _same_as)
+    extrapolate: Optional[Extrapolate] = None  # a table beyond its ends: hold (default) | trend
 
 
 def _suggest(word: object, choices: Iterable[str], n: int = 5) -> str:
@@ -430,6 +474,11 @@ def _wording(er: Mapping[str, Any], loc: list) -> str | None:
         return "expected a list of layers, outermost first, e.g. [{material: denim, thickness: 0.8 mm}]"
     if typ == "literal_error":
         got = er.get("input")
+        if loc and loc[-1] == "extrapolate":
+            return (
+                f"unknown extrapolate {got!r}{_suggest(got, EXTRAPOLATE, 1)} (expected hold: the end row's "
+                "value, or trend: the power law through the two end rows)"
+            )
         return f"unknown kind {got!r}{_suggest(got, KINDS, 1)} (expected one of {', '.join(KINDS)})"
     if typ == "string_type":
         return f"expected a string, got {er.get('input')!r}"
@@ -519,6 +568,7 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
             for i, layer in enumerate(fields.get("coating") or ())
             if layer.roughness is not None
         ]
+    errors += _extrapolate_errors(fields.get("extrapolate"), kind, eps, fields.get("model"), origin, base_key)
     if kind != "thin" and thickness is not None:
         errors.append(
             UserError(
@@ -543,8 +593,54 @@ def _build(mid: str, fields: dict, origin: str, base_key: str) -> tuple[Material
         model=fields.get("model"),
         source=fields.get("source") or "",
         origin=str(origin),
+        extrapolate=fields.get("extrapolate") or "hold",
     )
     return mat, []
+
+
+def _extrapolate_errors(
+    how: str | None, kind: str, eps: tuple | None, model: object, origin: str, base_key: str
+) -> list[UserError]:
+    """What is wrong with an entry's ``extrapolate``: it is for a table of at least two rows (and
+    ``trend`` only where the two end rows' power laws are no steeper than `TREND_EXPONENT_MAX`)."""
+    if how is None:
+        return []
+    key = _join(base_key, "extrapolate")
+    if kind in _NO_EPS_KINDS or model is not None:
+        what = f"a {kind} has none" if kind in _NO_EPS_KINDS else "a model extrapolates by its own formula"
+        return [UserError(f"`extrapolate` is for a permittivity table; {what}: remove it", origin, key)]
+    if eps is None:
+        return []  # the missing eps is reported already
+    freqs, values = eps
+    if len(freqs) < 2:
+        return [
+            UserError(
+                "`extrapolate` needs a table of at least two frequencies (one value holds at every "
+                "frequency): remove it, or give eps per frequency",
+                origin,
+                key,
+            )
+        ]
+    if how != "trend":
+        return []
+    ends = [((freqs[0], values[0]), (freqs[1], values[1]))]
+    if len(freqs) > 2:  # a table of two rows has one pair for both ends
+        ends.append(((freqs[-1], values[-1]), (freqs[-2], values[-2])))
+    errors = []
+    for (f1, e1), (f2, e2) in ends:
+        for part, v1, v2 in (("eps'", e1.real, e2.real), ("eps''", e1.imag, e2.imag)):
+            b = _exponent(f1, v1, f2, v2)
+            if abs(b) > TREND_EXPONENT_MAX:
+                errors.append(
+                    UserError(
+                        f"extrapolate: trend would continue {part} as f^{b:.3g} (its rows at {_fmt_f(f1)} and "
+                        f"{_fmt_f(f2)}); steeper than f^{TREND_EXPONENT_MAX:g} is a resonance or rows too "
+                        "close together, not a trend: use hold, or give rows further apart",
+                        origin,
+                        key,
+                    )
+                )
+    return errors
 
 
 def _check_id(mid: object, file: str | Path, base_key: str) -> list[UserError]:
@@ -584,6 +680,27 @@ def _same_as(
         base = known[target].get("source") or ""
         merged["source"] = f"as {target}: {base}" if base else f"as {target}"
     return merged, []
+
+
+def _same_as_order(raw: Mapping) -> tuple[list, list]:
+    """A scenario's ``materials:`` ids in the order they are applied: an entry with ``same_as: X``
+    after X's own override in the same map (whatever order the file gives), so that it starts from X
+    as the scenario leaves it. Returns (that order, the ids whose same_as goes round in a circle)."""
+
+    def target(mid: object) -> object:
+        entry = raw[mid]
+        t = entry.get("same_as") if isinstance(entry, Mapping) else None
+        return t if isinstance(t, str) and t != mid and t in raw else None
+
+    pending: list = list(raw)
+    order: list = []
+    while pending:
+        ready = [m for m in pending if target(m) not in pending]
+        if not ready:
+            return order, pending
+        order += ready
+        pending = [m for m in pending if m not in ready]
+    return order, []
 
 
 def _raise(errors: list[UserError]) -> None:
@@ -772,7 +889,15 @@ class MaterialDB:
         materials = dict(self._materials)
         fields = {k: dict(v) for k, v in self._fields.items()}
         keys = dict(self._keys)
-        for mid, entry in raw.items():
+        order, circles = _same_as_order(raw)
+        errors += [
+            UserError(
+                f"same_as {raw[mid]['same_as']!r} goes round in a circle", file, _join(key_prefix, mid, "same_as")
+            )
+            for mid in circles
+        ]
+        for mid in order:
+            entry = raw[mid]
             base_key = _join(key_prefix, mid if isinstance(mid, str) else str(mid))
             id_errors = _check_id(mid, file, base_key)
             if id_errors and mid not in self._materials:
@@ -795,6 +920,8 @@ class MaterialDB:
                 if "kind" in new:  # fields the new kind cannot have, unless given again
                     if kind in _NO_EPS_KINDS and "eps" not in new:
                         merged.pop("eps", None)
+                    if kind in _NO_EPS_KINDS and "extrapolate" not in new:
+                        merged.pop("extrapolate", None)
                     if kind != "thin" and "thickness" not in new:
                         merged.pop("thickness", None)
                 base_source = self._materials[mid].source
@@ -987,13 +1114,18 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
     else:
         for i, (f_, e) in enumerate(zip(mat.freqs, mat.eps)):
             row("eps" if i == 0 else "", f"{_fmt_f(f_):>8}  {_fmt_eps(e)}")
+        beyond = {"hold": "the end row's value", "trend": "the power law through the two end rows"}
+        row(
+            "extrapolate",
+            f"{mat.extrapolate} (outside the table, {_range_text(mat.freqs)}: {beyond[mat.extrapolate]}, warned)",
+        )
     if f is not None and mat.kind not in _NO_EPS_KINDS:
         value, clamped = mat._lookup(f)
         how = ""
         if clamped and mat.model is not None:
             how = f" (outside the model's range: {mat.outside_note(f)})"
         elif clamped:
-            how = f" (outside the table: nearest tabulated value; tabulated {_range_text(mat.freqs)})"
+            how = f" (outside the table, tabulated {_range_text(mat.freqs)}: {mat.outside_note(f)})"
         elif mat.freqs and not any(abs(f - g) <= _REL_TOL * g for g in mat.freqs):
             how = " (interpolated linearly)"
         row(f"eps at {_fmt_f(f)}", f"{_fmt_eps(value)}{how}")
@@ -1026,7 +1158,8 @@ def plot_materials(
 ) -> Path:
     """eps' and eps'' of materials against frequency [GHz] (log axes), 35-300 GHz shaded: a model
     as a curve (at ``temperature`` [K], else the material's), a table as its points (circles)
-    joined by the interpolation, and the nearest-value extension outside the table dashed."""
+    joined by the interpolation, and its extension outside the table (the nearest value, or the
+    trend) dashed."""
     from pmmw.io.preview import save_figure, subplots
 
     fig, (a1, a2) = subplots(1, 2, figsize=(10.0, 4.2), dpi=110)
@@ -1059,7 +1192,8 @@ def plot_materials(
             ax.plot(fs[inside] / 1e9, part[inside], "-", color=colour, lw=1)
             for side in (below, above):
                 ax.plot(fs[side] / 1e9, part[side], "--", color=colour, lw=0.8)
-            ax.plot(tf, tp, "o", color=colour, label=f"{mid} (table; dashed: nearest value, warned)")
+            beyond = "nearest value" if mat.extrapolate == "hold" else "power-law trend"
+            ax.plot(tf, tp, "o", color=colour, label=f"{mid} (table; dashed: {beyond}, warned)")
     for ax, name in ((a1, "eps'"), (a2, "eps'' (loss)")):
         ax.axvspan(35, 300, color="0.9", zorder=0)
         ax.set_xscale("log")
