@@ -333,7 +333,8 @@ def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None
         ax.axis("off")
     for ax, (r, png) in zip(axes.ravel(), shots):
         ax.imshow(mpimg.imread(png), cmap="gray", interpolation="nearest")
-        ax.set_title(f"{r['variant']}: " + ", ".join(f"{k.split('.')[-1]}={r[k]}" for k in keys), fontsize=7)
+        short = short_keys(keys)
+        ax.set_title(f"{r['variant']}: " + ", ".join(f"{short[k]}={r[k]}" for k in keys), fontsize=7)
     fig.tight_layout()
     path = out / "contact_sheet.png"
     save_figure(fig, path)
@@ -373,6 +374,20 @@ def _axis_label(spec: SweepSpec, key: str) -> str:
         return spec.axis["label"]
     units = {m.group(2).strip() for m in (_NUMBER_UNIT.match(str(v)) for v in dict(spec.grid)[key]) if m}
     return f"{key} [{units.pop()}]" if len(units) == 1 and "" not in units else key
+
+
+def short_keys(keys: list[str]) -> dict[str, str]:
+    """Each grid key by its last part (``imager.noise`` -> ``noise``), or by as many of its last
+    parts as tell it from the others (``materials.denim.extrapolate`` -> ``denim.extrapolate``
+    beside ``materials.leather.extrapolate``): the labels of titles and file names."""
+    out = {}
+    for k in keys:
+        parts = k.split(".")
+        n = 1
+        while n < len(parts) and any(o != k and o.split(".")[-n:] == parts[-n:] for o in keys):
+            n += 1
+        out[k] = ".".join(parts[-n:])
+    return out
 
 
 def _other_keys(spec: SweepSpec, used: Iterable[str]) -> list[str]:
@@ -455,10 +470,11 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
     from pmmw.io.preview import figure_for, usable_range
 
     others = _other_keys(spec, zipped)
+    short = short_keys([k for k, _ in spec.grid])
     groups: dict[str, list[dict]] = {}
     for r in table:
         if r["status"] == "done" and r.get("exr"):
-            groups.setdefault(", ".join(f"{k.split('.')[-1]}={r[k]}" for k in others), []).append(r)
+            groups.setdefault(", ".join(f"{short[k]}={r[k]}" for k in others), []).append(r)
     written = []
     for label, rows in list(groups.items())[:MAX_ANIMATIONS]:
         if len(rows) < 2:
@@ -479,7 +495,7 @@ def _animations(out: Path, spec: SweepSpec, table: list[dict]) -> list[Path]:
             shown.set_data(img)
             ax.set_title(
                 f"{spec.scenario.stem}: "
-                + ", ".join(f"{k.split('.')[-1]}={r[k]}" for k in zipped[:2])
+                + ", ".join(f"{short[k]}={r[k]}" for k in zipped[:2])
                 + (f" ({label})" if label else ""),
                 fontsize=8,
             )

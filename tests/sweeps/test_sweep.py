@@ -392,3 +392,20 @@ def test_a_sweep_over_known_material_ids_passes_the_check(tmp_path):
     res = runner.invoke(app, ["validate", str(sweep)])
     assert res.exit_code == 0, res.output
     assert "variants: 4" in res.stdout, res.stdout
+
+
+def test_grid_keys_are_labelled_by_the_parts_that_tell_them_apart():
+    """Titles and GIF names label a key by its last part, or by as many last parts as tell it from
+    the other keys: `denim.extrapolate` beside `leather.extrapolate` (both were `extrapolate`, and
+    the GIFs of two keys were named sequence_extrapolate_hold_extrapolate_trend)."""
+    from pmmw.sweeps.report import short_keys
+
+    keys = ["frequency", "imager.noise", "materials.denim.extrapolate", "materials.leather.extrapolate"]
+    assert short_keys(keys) == {
+        "frequency": "frequency",
+        "imager.noise": "noise",
+        "materials.denim.extrapolate": "denim.extrapolate",
+        "materials.leather.extrapolate": "leather.extrapolate",
+    }
+    # a key that is the tail of another keeps its whole name; the other needs one part more
+    assert short_keys(["a.b", "x.a.b"]) == {"a.b": "a.b", "x.a.b": "x.a.b"}
