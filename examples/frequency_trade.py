@@ -1,14 +1,19 @@
 """Which frequency? The frequency trade studies of the concealed-weapon scenes and the landing.
 
 Six sweeps (configs/*_frequency.yaml, *_frequency_scaled.yaml), each at 35, 94, 140, 220 and 300
-GHz, of scenes whose materials are valid across that band (docs/materials.md): the concealed
-weapon outdoors and indoors (the gun's grip against the torso) and the landing in extreme fog (the
-row of beacons against the runway). Each scene twice: the aperture fixed (the beam narrows as the
+GHz, of scenes whose materials are meant for that band (docs/materials.md): the concealed weapon
+outdoors and indoors (the gun's grip against the torso) and the landing in extreme fog (the row of
+beacons against the runway). Each scene twice: the aperture fixed (the beam narrows as the
 wavelength shortens) and scaled with the wavelength (the same beam at every frequency, so only the
 materials and the atmosphere change). The SNR is the reports' one detection criterion (docs/physics/accuracy.md,
 "Detection": matched-filter SNR >= 5) in the channel the reports lead with.
 
-    python examples/frequency_trade.py [OUT_DIR]   # 30 renders, about 10 minutes on 2 cores;
+The clothing (denim, leather) is tabulated only to 95 GHz. Above it the concealed-weapon studies are
+rendered twice: with its loss held at the 95 GHz value (the default, `extrapolate: hold`) and
+continuing its 35 -> 95 GHz rise (`extrapolate: trend`); the band between the two is shaded. It is
+the spread of two extrapolations, not a measured uncertainty.
+
+    python examples/frequency_trade.py [OUT_DIR]   # 42 renders, about 2 minutes on 2 cores;
                                                    # writes frequency_trade.csv and .png in OUT_DIR
 
 PMMW_EXAMPLE_SCALE=0.1 renders a tenth of the pixels per side (the documentation's gallery runs the
@@ -55,38 +60,74 @@ def scaled(grid: dict, scenario: Path) -> dict:
     return out
 
 
-STUDIES = {  # title -> (sweep file stem, the pair whose SNR is plotted)
-    "concealed weapon, outdoors": ("cwd_outdoor_frequency", "gun - torso"),
-    "concealed weapon, indoors": ("cwd_indoor_frequency", "gun - torso"),
-    "landing, extreme fog, 1000 m": ("landing_frequency", "beacons - runway"),
+STUDIES = {  # title -> (sweep file stem, the pair whose SNR is plotted, ids tabulated only to 95 GHz)
+    "concealed weapon, outdoors": ("cwd_outdoor_frequency", "gun - torso", ("denim", "leather")),
+    "concealed weapon, indoors": ("cwd_indoor_frequency", "gun - torso", ("denim", "leather")),
+    "landing, extreme fog, 1000 m": ("landing_frequency", "beacons - runway", ()),
 }
+TABLE_TOP_GHZ = 95.0  # denim's and leather's highest row (Murakowski 2014 Table 3.3)
 
-rows = ["study,aperture,frequency_GHz,aperture_m,channel,contrast_K,snr,detectable"]
+
+def ghz(value) -> float:
+    return float(str(value).split()[0])
+
+
+def beyond_table(grid: dict, zipped) -> dict:
+    """The grid's variants above TABLE_TOP_GHZ (the frequencies and the lists zipped with them)."""
+    keep = [i for i, f in enumerate(grid["frequency"]) if ghz(f) > TABLE_TOP_GHZ]
+    side = list(grid) if zipped is True else list(zipped or [])
+    return {
+        k: ([v[i] for i in keep] if k == "frequency" or ("frequency" in side and k in side) else v)
+        for k, v in grid.items()
+    }
+
+
+def render(stem: str, suffix: str, extra: dict | None = None):
+    """One sweep (resumed where rendered already): the sweep file's grid, or with ``extra`` the
+    variants above the clothing's table with those keys added."""
+    spec = yaml.safe_load((ROOT / "configs" / f"{stem}{suffix}.yaml").read_text())
+    scenario = ROOT / "configs" / spec["scenario"]
+    grid, name = spec["grid"], f"{stem}{suffix}"
+    if extra:
+        grid, name = {**beyond_table(grid, spec.get("zip")), **extra}, f"{stem}{suffix}_trend"
+    return pmmw.sweep(scenario, scaled(grid, scenario), out=out / name, zip=spec.get("zip", False), resume=True)
+
+
+rows = ["study,aperture,clothing,frequency_GHz,aperture_m,channel,contrast_K,snr,detectable"]
 fig, axes = plt.subplots(1, len(STUDIES), figsize=(13.0, 3.8), dpi=110)
-for ax, (title, (stem, pair)) in zip(axes, STUDIES.items()):
-    for suffix, how, style in (("", "fixed", "o-"), ("_scaled", "scaled with the wavelength", "s--")):
-        spec = yaml.safe_load((ROOT / "configs" / f"{stem}{suffix}.yaml").read_text())
-        scenario = ROOT / "configs" / spec["scenario"]
-        table = pmmw.sweep(
-            scenario,
-            scaled(spec["grid"], scenario),
-            out=out / f"{stem}{suffix}",
-            zip=spec.get("zip", False),
-            resume=True,
-        )
-        snr_col = next(c for c in table.columns if c.startswith(f"snr {pair} "))
-        channel = snr_col.rsplit(" ", 1)[1]
-        freqs = [float(str(f).split()[0]) for f in table["frequency"]]
-        apertures = table["imager.aperture_diameter"] if "imager.aperture_diameter" in table else [None] * len(freqs)
-        for f, a, k, snr, det in zip(
-            freqs,
-            apertures,
-            table[f"contrast {pair} {channel} [K]"],
-            table[snr_col],
-            table[f"detectable {pair} {channel}"],
-        ):
-            rows.append(f"{stem},{how},{f:g},{a if a is not None else ''},{channel},{k:.3f},{snr:.2f},{det}")
-        ax.plot(freqs, table[snr_col], style, label=f"aperture {how}")
+for ax, (title, (stem, pair, tabulated)) in zip(axes, STUDIES.items()):
+    for suffix, how, style, colour in (
+        ("", "fixed", "o-", "C0"),
+        ("_scaled", "scaled with the wavelength", "s--", "C1"),
+    ):
+        runs = [("hold", render(stem, suffix))]
+        if tabulated:  # the same variants with the clothing's loss continuing its 35 -> 95 GHz rise
+            runs.append(("trend", render(stem, suffix, {f"materials.{m}.extrapolate": ["trend"] for m in tabulated})))
+        snr = {}
+        for law, table in runs:
+            snr_col = next(c for c in table.columns if c.startswith(f"snr {pair} "))
+            channel = snr_col.rsplit(" ", 1)[1]
+            freqs = [ghz(f) for f in table["frequency"]]
+            apertures = (
+                table["imager.aperture_diameter"] if "imager.aperture_diameter" in table else [None] * len(freqs)
+            )
+            for f, a, k, s, det in zip(
+                freqs,
+                apertures,
+                table[f"contrast {pair} {channel} [K]"],
+                table[snr_col],
+                table[f"detectable {pair} {channel}"],
+            ):
+                rows.append(f"{stem},{how},{law},{f:g},{a if a is not None else ''},{channel},{k:.3f},{s:.2f},{det}")
+            snr[law] = dict(zip(freqs, table[snr_col]))
+        ax.plot(list(snr["hold"]), list(snr["hold"].values()), style, color=colour, label=f"aperture {how}")
+        if "trend" in snr:  # from the table's last row (where the two laws agree) to 300 GHz
+            fs = [f for f in snr["hold"] if f >= 90.0]
+            lo = [snr["hold"][f] if f not in snr["trend"] else snr["trend"][f] for f in fs]
+            ax.fill_between(fs, lo, [snr["hold"][f] for f in fs], color=colour, alpha=0.18, lw=0)
+            ax.plot(fs, lo, ":", color=colour, lw=1)
+    if tabulated:
+        ax.fill_between([], [], [], color="0.6", alpha=0.3, label="clothing's loss held / trend (shaded)")
     ax.axhline(5.0, color="k", lw=0.8, ls=":", label="detection threshold (SNR 5)")
     ax.set_xscale("log")
     ax.set_yscale("log" if stem.startswith("landing") else "linear")  # the landing spans 3 decades
