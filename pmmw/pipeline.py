@@ -22,6 +22,7 @@ import numpy as np
 from pmmw import __version__, timings
 from pmmw.config import load_scenario
 from pmmw.config.load import scenario_to_display
+from pmmw.config.schema import FREQUENCY_RANGE
 from pmmw.constants import C0
 from pmmw.errors import UserError, UserErrors, clear_warnings, collected_warnings, warn
 from pmmw.imaging import detection
@@ -61,7 +62,7 @@ from pmmw.io.tilestore import (
 from pmmw.physics.jones import stokes_images
 from pmmw.scene.camera import Camera
 from pmmw.scene.geometry import asset_files, build_geometry, file_up_axis
-from pmmw.scene.materials import MaterialDB
+from pmmw.scene.materials import MaterialDB, band_text, stated_band
 from pmmw.scene.sky import make_sky
 from pmmw.surface.media import BLACKBODY, KIND_CODES, METAL, build_media  # build_media: also pipeline's, as before
 from pmmw.trace.job import RenderSettings, TraceJob
@@ -1445,12 +1446,14 @@ def _render_and_commit(
             )
             written.append(out_dir / names[f]["exr"])
         total = time.perf_counter() - t0
+        band = materials_band(res) if renders else {}
         for staged, r in renders:
             report = {
                 "name": _stem(scn, r["frequency_hz"]),
                 "version": __version__,
                 **r,
                 "timing": {"resolve_s": round(t_resolve, 3), **r["timing"], "total_s": round(total, 3)},
+                "materials_band": band,
                 "warnings": collected_warnings(),
                 "scenario": scenario_to_display(scn),
             }
@@ -1660,6 +1663,19 @@ def write_previews(
     return shown
 
 
+def materials_band(res: Resolved) -> dict:
+    """Where the scene's materials are all inside their stated ranges (`stated_band` over the
+    frequencies a scenario accepts), and each material that limits it: what `pmmw validate` and the
+    render's report say."""
+    scn = res.scenario
+    band, limits = stated_band(res.db, res.geometry.material_ids, scn.render.default_temperature, FREQUENCY_RANGE)
+    return {
+        "within_stated_ranges": band_text(band),
+        "accepted": band_text([FREQUENCY_RANGE]),
+        "limited_by": {k: band_text(v) for k, v in limits.items()},
+    }
+
+
 def validate(
     path: str | Path,
     overrides: Sequence[str] = (),
@@ -1695,6 +1711,7 @@ def validate(
     }
     if scn.output.regions:
         out["regions"] = check_regions(scn)
+    out["materials_band"] = materials_band(res)
     for f in scn.frequencies:
         media = build_media(res.db, geom.material_ids, f, scn.render.default_temperature, scn.atmosphere)
         kinds = {v: k for k, v in KIND_CODES.items()}

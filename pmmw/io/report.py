@@ -2,7 +2,8 @@
 
 Expected report keys (any may be absent): ``name``, ``version``, ``frequency_hz``, ``output_exr``,
 ``channels`` {name: {min, mean, max, display_low, display_high}} [K], ``timing`` {step: seconds},
-``rays``, ``pixels``, ``spp``, ``workers``, ``warnings`` [str], ``scenario`` (the resolved scenario
+``rays``, ``pixels``, ``spp``, ``workers``, ``materials_band`` (`pipeline.materials_band`: where
+every material is inside its stated range, and what limits it), ``warnings`` [str], ``scenario`` (the resolved scenario
 as plain data), ``atmosphere`` (`pipeline.atmosphere_summary`: dB/km at the ground, zenith opacity
 and sky, path loss to the target), ``regions`` (`pipeline.region_stats`: the detection criterion,
 each contrast's verdict in words, region means and contrasts), ``regions_preview`` (the PNG with the
@@ -294,6 +295,19 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
         lines += ["## Timing", "", "| step | seconds |", "| --- | ---: |"]
         lines += [f"| {_cell(step)} | {_num(sec, '.3f')} |" for step, sec in timing.items()]
         lines.append("")
+
+    band = report.get("materials_band")
+    if band:
+        limits = band.get("limited_by") or {}
+        lines += [
+            "## Materials' stated ranges",
+            "",
+            f"Every material of the scene is inside its stated range (its table, model or fit) at "
+            f"{band['within_stated_ranges']} (of the {band.get('accepted', 'frequencies')} a scenario accepts); outside, a value "
+            "is extrapolated or interpolated and warned."
+            + (" Limited by: " + "; ".join(f"{_cell(k)} {v}" for k, v in limits.items()) + "." if limits else ""),
+            "",
+        ]
 
     warnings = report.get("warnings")
     if warnings is not None:

@@ -120,6 +120,13 @@ class CoatingLayer:
     temperature: float | None
     roughness: MicrofacetModel | None = None
 
+    def temperature_over(self, material: Material, below: float) -> float:
+        """The layer's temperature [K]: its own, else its material's (``material``, the layer's
+        database entry), else ``below``, the temperature of the surface it lies on."""
+        if self.temperature is not None:
+            return self.temperature
+        return material.temperature if material.temperature is not None else below
+
 
 @dataclass(frozen=True)
 class Material:
@@ -232,6 +239,21 @@ class Material:
             )
         return "the nearest tabulated value is used"
 
+    def range_edges(self) -> tuple[float, ...]:
+        """Frequencies [Hz] where the entry's stated range may begin or end: a table's rows, a
+        model's range (a published fit's own ``valid``, ITU-R P.2040's rows). Between two of them
+        whether a frequency is inside is the same everywhere (`stated_band`)."""
+        if self.model is None:
+            return tuple(self.freqs)
+        edges = list(self.model.spec.f_range)
+        if "valid" in self.model.params:
+            edges += list(self.model.params["valid"])
+        if self.model.spec.name == "p2040":
+            from pmmw.scene.itu_materials import p2040_valid_ranges
+
+            edges += [f for row in p2040_valid_ranges(self.model.params["material"]) for f in row]
+        return tuple(edges)
+
     def _end_rows(self, f: float) -> tuple[tuple[float, complex], tuple[float, complex]]:
         """The table's end row on f's side (f [Hz] outside the table) and the row next to it."""
         i, j = (0, 1) if f < self.freqs[0] else (-1, -2)
@@ -278,6 +300,70 @@ def _trend(f: float, f1: float, v1: float, f2: float, v2: float) -> float:
     beyond f1: v1 (f / f1)^b. The exponent is bounded by `TREND_EXPONENT_MAX` when the entry is
     built, so the value stays finite for every frequency a scenario accepts."""
     return v1 * math.exp(_exponent(f1, v1, f2, v2) * math.log(f / f1))
+
+
+def stated_band(
+    db: MaterialDB, material_ids: Iterable[str], t_default: float, f_range: tuple[float, float]
+) -> tuple[list[tuple[float, float]], dict[str, list[tuple[float, float]]]]:
+    """Where in ``f_range`` [Hz] a scene's materials are all inside their stated ranges.
+
+    Each material of ``material_ids`` with a permittivity, at its own temperature (else
+    ``t_default`` [K]), and each of its coating layers at theirs (`CoatingLayer.temperature_over`),
+    as the renderer takes them (`pmmw.surface.media.build_media`). Whether a frequency is inside can
+    change only at a material's `Material.range_edges`, so each edge and one frequency between each
+    two neighbours (their geometric mean) decide it; a log grid of 64 points is added for models
+    whose range the edges do not name.
+
+    Returns
+    -------
+    (band, limits)
+        ``band``: the closed intervals (f_lo, f_hi) [Hz] where every material is inside (a single
+        frequency as (f, f); empty: nowhere); ``limits``: per material (a coating layer as
+        ``'coated: layer'``) whose own inside set is not the whole ``f_range``, its intervals.
+    """
+    lo, hi = f_range
+    uses: dict[str, tuple[Material, float]] = {}
+    for mid in material_ids:
+        m = db.get(mid)
+        t_m = m.temperature if m.temperature is not None else t_default
+        if m.kind not in _NO_EPS_KINDS and m.has_eps():
+            uses[mid] = (m, t_m)
+        for layer in m.coating:
+            lm = db.get(layer.material)
+            uses[f"{mid}: {layer.material}"] = (lm, layer.temperature_over(lm, t_m))
+    edges = {lo, hi, *np.geomspace(lo, hi, 64)}
+    for m, _ in uses.values():
+        edges |= {f for f in m.range_edges() if lo <= f <= hi}
+    edges_sorted = sorted(edges)
+    points = [edges_sorted[0]]
+    for a, b in zip(edges_sorted, edges_sorted[1:]):
+        points += [math.sqrt(a * b), b]
+
+    def intervals(inside: list[bool]) -> list[tuple[float, float]]:
+        out: list[tuple[float, float]] = []
+        start = None
+        for k, ok in enumerate(inside):
+            if ok and start is None:
+                start = k
+            if start is not None and (not ok or k == len(inside) - 1):
+                end = k if ok else k - 1
+                out.append((points[start], points[end]))
+                start = None
+        return out
+
+    each = {name: [not m._lookup(f, t)[1] for f in points] for name, (m, t) in uses.items()}
+    band = intervals([all(col) for col in zip(*each.values())] if each else [True] * len(points))
+    limits = {name: intervals(ok) for name, ok in each.items() if not all(ok)}
+    return band, limits
+
+
+def band_text(intervals: list[tuple[float, float]]) -> str:
+    """``[(35e9, 95e9)]`` -> ``'35-95 GHz'``; a single frequency ``'35 GHz'``; several joined by
+    commas; none ``'nowhere'``."""
+    if not intervals:
+        return "nowhere"
+    parts = [f"{a / 1e9:.4g}" if a == b else f"{a / 1e9:.4g}-{b / 1e9:.4g}" for a, b in intervals]
+    return ", ".join(parts) + " GHz"
 
 
 # ----------------------------------------------------------------------------------------------

@@ -183,11 +183,7 @@ def build_media(db, material_ids, f: float, t_default: float = 290.0, atm=None) 
         layers = []
         for layer in m.coating:
             lm = db.get(layer.material)
-            t_l = (
-                layer.temperature
-                if layer.temperature is not None
-                else (lm.temperature if lm.temperature is not None else t_m)
-            )
+            t_l = layer.temperature_over(lm, t_m)
             layers.append((lm.eps_at(f, t_l), layer.thickness, t_l, layer.roughness))
         if code == THIN:
             layers.append((e, m.thickness or 0.0, t_m, None))
