@@ -45,7 +45,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from pmmw.imaging.imager import PSF_ENERGY_TAIL, FloatArray, _airy_encircled_energy, blur
+from pmmw.imaging.imager import FloatArray, blur, kernel_extent
 
 ILLUMINATIONS = ("uniform", "parabolic", "gaussian")
 _U_STEP = 0.01  # [-] table step in u = k a sin(theta): the pattern's finest structure has period ~pi
@@ -197,13 +197,8 @@ def antenna_kernel(
     ndarray, shape (2r+1, 2r+1), float64
     """
     a = aperture_diameter / 2.0
-    xs = np.linspace(1.0, 1.5 * 2.0 / (np.pi * PSF_ENERGY_TAIL), 20000)
-    x_max = xs[np.argmax(_airy_encircled_energy(xs) >= 1.0 - PSF_ENERGY_TAIL)]
-    theta_max = np.arcsin(min(1.0, x_max / (k0 * a)))
-    r = max(1, min(int(np.ceil(theta_max / pixel_angle)), max_radius))
-    core = 3.8317 / (k0 * a)
-    sub = int(np.clip(np.ceil(5.0 * pixel_angle / core), 3, 15)) | 1
-    offs = (np.arange(sub) + 0.5) / sub - 0.5
+    r, offs = kernel_extent(pixel_angle, k0, a, max_radius)
+    sub = offs.size
     grid = np.arange(-r, r + 1, dtype=float)
     gx = (grid[:, None] + offs[None, :]).ravel() * pixel_angle
     tx, ty = np.meshgrid(gx, gx)
@@ -309,13 +304,8 @@ def off_axis_kernel(
     """
     a = aperture_diameter / 2.0
     c = float(np.cos(theta))
-    xs = np.linspace(1.0, 1.5 * 2.0 / (np.pi * PSF_ENERGY_TAIL), 20000)
-    x_max = xs[np.argmax(_airy_encircled_energy(xs) >= 1.0 - PSF_ENERGY_TAIL)]
-    theta_max = np.arcsin(min(1.0, x_max / (k0 * a)))
-    r = max(1, min(int(np.ceil(theta_max / (pixel_angle * c**3))), max_radius))
-    core = 3.8317 / (k0 * a)
-    sub = int(np.clip(np.ceil(5.0 * pixel_angle / core), 3, 15)) | 1
-    offs = (np.arange(sub) + 0.5) / sub - 0.5
+    r, offs = kernel_extent(pixel_angle, k0, a, max_radius, radial_pixel_angle=pixel_angle * c**3)
+    sub = offs.size
     grid = np.arange(-r, r + 1, dtype=float)
     g = (grid[:, None] + offs[None, :]).ravel()
     du, dv = np.meshgrid(g, g)  # pixel offsets: du to the right, dv down the rows

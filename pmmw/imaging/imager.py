@@ -80,22 +80,37 @@ def psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radi
     return _psf_kernel(float(pixel_angle), float(k0), float(aperture_diameter), int(max_radius)).copy()
 
 
-@lru_cache(maxsize=8)
-def _psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int) -> FloatArray:
-    a = aperture_diameter / 2.0
-    # radius (in x = k a th) enclosing all but PSF_ENERGY_TAIL of the energy; the tail of the
-    # encircled energy goes as 2 / (pi x), so x_max ~ 2 / (pi tail)
+@lru_cache(maxsize=1)
+def _tail_x() -> float:
+    """x = k a sin(theta) enclosing all but `PSF_ENERGY_TAIL` of the Airy pattern's energy; the
+    tail of the encircled energy goes as 2 / (pi x), so it lies below 1.5 times 2 / (pi tail)."""
     x_max = 2.0 / (np.pi * PSF_ENERGY_TAIL)
     xs = np.linspace(1.0, x_max * 1.5, 20000)
     ok = _airy_encircled_energy(xs) >= 1.0 - PSF_ENERGY_TAIL
-    x_max = xs[np.argmax(ok)] if ok.any() else x_max
-    theta_max = np.arcsin(min(1.0, x_max / (k0 * a)))
-    r = int(np.ceil(theta_max / pixel_angle))
+    return float(xs[np.argmax(ok)]) if ok.any() else x_max
+
+
+def kernel_extent(
+    pixel_angle: float, k0: float, radius: float, max_radius: int, radial_pixel_angle: float | None = None
+) -> tuple[int, FloatArray]:
+    """(r, offsets) of a pixel-integrated beam kernel of an aperture of ``radius`` [m]: r pixels
+    each side, enough for all but `PSF_ENERGY_TAIL` of the Airy pattern's energy (at most
+    ``max_radius``; ``radial_pixel_angle`` [rad], the smallest angle a pixel step spans where it
+    is not ``pixel_angle``: an off-axis pixel's radial step), and the sub-sample offsets within a
+    pixel: at least 5 across the Airy core (its first zero, 1.22 lambda / D), 3 to 15, odd."""
+    theta_max = np.arcsin(min(1.0, _tail_x() / (k0 * radius)))
+    r = int(np.ceil(theta_max / (pixel_angle if radial_pixel_angle is None else radial_pixel_angle)))
     r = max(1, min(r, max_radius))
-    # supersample: at least 5 sub-samples across the Airy core (first zero 1.22 lambda / D)
-    core = 3.8317 / (k0 * a)
+    core = 3.8317 / (k0 * radius)
     sub = int(np.clip(np.ceil(5.0 * pixel_angle / core), 3, 15)) | 1
-    offs = (np.arange(sub) + 0.5) / sub - 0.5
+    return r, (np.arange(sub) + 0.5) / sub - 0.5
+
+
+@lru_cache(maxsize=8)
+def _psf_kernel(pixel_angle: float, k0: float, aperture_diameter: float, max_radius: int) -> FloatArray:
+    a = aperture_diameter / 2.0
+    r, offs = kernel_extent(pixel_angle, k0, a, max_radius)
+    sub = offs.size
     # one quadrant (pixels 0..r from the centre), mirrored: the pattern depends on |theta| alone,
     # and the sub-samples of pixel -i are those of pixel i mirrored; within the quadrant the
     # sub-samples' pattern is symmetric about its diagonal (hypot(x, y) = hypot(y, x)): half of it
