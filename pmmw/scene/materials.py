@@ -330,7 +330,8 @@ def stated_band(
             uses[mid] = (m, t_m)
         for layer in m.coating:
             lm = db.get(layer.material)
-            uses[f"{mid}: {layer.material}"] = (lm, layer.temperature_over(lm, t_m))
+            if lm.kind not in _NO_EPS_KINDS and lm.has_eps():
+                uses[f"{mid}: {layer.material}"] = (lm, layer.temperature_over(lm, t_m))
     edges = {lo, hi, *np.geomspace(lo, hi, 64)}
     for m, _ in uses.values():
         edges |= {f for f in m.range_edges() if lo <= f <= hi}
