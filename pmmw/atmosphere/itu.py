@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from pmmw.arrays import FloatArray
 from pmmw.atmosphere.data import p676, p838, rain_albedo, rain_asymmetry
 
 if TYPE_CHECKING:  # scipy.interpolate is imported where it is used (~0.3 s)
@@ -56,8 +57,6 @@ TROPOPAUSE_HEIGHT = {
 
 PROFILE_TOP = 100.0e3  # P.835 profiles are defined up to 100 km altitude [m]
 
-FloatArray = npt.NDArray[np.float64]
-ComplexArray = npt.NDArray[np.complex128]
 # a scalar or an array, for the closed forms that keep their arguments' kind (no np.asarray)
 FloatLike = float | FloatArray
 ComplexLike = complex | npt.NDArray[np.complexfloating]

@@ -83,6 +83,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from pmmw.arrays import FloatArray
 from pmmw.atmosphere import itu
 from pmmw.atmosphere.itu import NP_M_PER_DB_KM, PROFILES
 from pmmw.jit import inline, njit
@@ -90,7 +91,6 @@ from pmmw.jit import inline, njit
 if TYPE_CHECKING:  # scipy.interpolate is imported where it is used: ~0.3 s a command need not pay
     from scipy.interpolate import CubicSpline
 
-FloatArray = npt.NDArray[np.float64]
 
 T_CMB = 2.725  # cosmic microwave background [K]
 R_EARTH = 6371.0e3  # mean earth radius [m]

@@ -45,7 +45,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from pmmw.imaging.imager import FloatArray, blur, kernel_extent
+from pmmw.arrays import FloatArray
+from pmmw.imaging.imager import blur, kernel_extent
 
 ILLUMINATIONS = ("uniform", "parabolic", "gaussian")
 _U_STEP = 0.01  # [-] table step in u = k a sin(theta): the pattern's finest structure has period ~pi

@@ -19,7 +19,8 @@ from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
+
+from pmmw.arrays import FloatArray
 
 if TYPE_CHECKING:
     from pmmw.imaging.antenna import FieldPSF
@@ -27,8 +28,6 @@ if TYPE_CHECKING:
 
 PSF_ENERGY_TAIL = 2e-3  # fraction of the Airy energy allowed outside the kernel
 _MAX_RADIUS_PX = 256
-
-FloatArray = npt.NDArray[np.float64]
 
 
 def airy(theta: FloatArray, k0: float, radius: float) -> FloatArray:

@@ -34,9 +34,10 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from pmmw.arrays import FloatArray
+
 T0_NOISE_FIGURE = 290.0  # [K] the reference temperature of a noise figure (IEEE; Pozar 2012, ch. 10, noise figure)
 NETD_SCENE_K = 300.0  # [K] the scene temperature the NETD is stated at (a room-temperature scene)
-FloatArray = npt.NDArray[np.float64]
 
 MODES = ("total_power", "dicke")
 

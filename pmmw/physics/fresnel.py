@@ -35,11 +35,11 @@ from typing import Literal, NamedTuple, overload
 import numpy as np
 import numpy.typing as npt
 
+from pmmw.arrays import ComplexArray
 from pmmw.jit import inline, njit
 
 __all__ = ["Fresnel", "normal_component", "interface"]
 
-ComplexArray = npt.NDArray[np.complex128]
 
 # Tolerance on Im(eps - kpar2), in units of |eps| + |kpar2|, below which a negative imaginary part
 # is taken as rounding noise of an exactly real argument (a few ulp of the subtraction).

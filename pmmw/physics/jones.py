@@ -46,10 +46,8 @@ All four are Rayleigh-Jeans brightness temperatures [K] and add linearly over ra
 from __future__ import annotations
 
 import numpy as np
-import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
-ComplexArray = npt.NDArray[np.complex128]
+from pmmw.arrays import ComplexArray, FloatArray
 
 
 def basis_change(s_old: FloatArray, p_old: FloatArray, s_new: FloatArray, p_new: FloatArray) -> FloatArray:

@@ -139,6 +139,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
+from pmmw.arrays import FloatArray
 from pmmw.errors import UserError, UserErrors
 from pmmw.jit import inline, njit
 from pmmw.physics.vec import cross, dot, unit
@@ -173,8 +174,6 @@ _MAX_ROUNDS = 1 << 16
 _BATCH = 8192  # candidates per numpy call once few rays remain
 _TINY = 1e-300
 _SQRT_PI = math.sqrt(math.pi)
-
-FloatArray = npt.NDArray[np.float64]
 
 
 @runtime_checkable

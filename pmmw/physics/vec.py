@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["cross", "dot", "unit"]
+from pmmw.arrays import FloatArray
 
-FloatArray = npt.NDArray[np.float64]
+__all__ = ["cross", "dot", "unit"]
 
 
 def cross(a: npt.ArrayLike, b: npt.ArrayLike) -> FloatArray:
