@@ -194,6 +194,15 @@ class MicrofacetModel(Protocol):
 
     def pdf(self, n_macro: FloatArray, tangent: FloatArray | None, wo: FloatArray, m: FloatArray) -> FloatArray: ...
 
+    # `pmmw brdf --method analytic`'s quadratures (`pmmw.reflectance.analytic_model`)
+    def D(self, n_macro: FloatArray, tangent: FloatArray | None, m: FloatArray) -> FloatArray: ...
+
+    def projected_area(self, n_macro: FloatArray, tangent: FloatArray | None, w: FloatArray) -> FloatArray: ...
+
+    def sample_dcos(
+        self, n_macro: FloatArray, tangent: FloatArray | None, u1: FloatArray, u2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]: ...
+
 
 # ----------------------------------------------------------------------------------------------
 # Frames and small vector helpers

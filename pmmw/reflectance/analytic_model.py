@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from pmmw.arrays import FloatArray
 from pmmw.errors import UserError
 from pmmw.physics import roughness as rough
 from pmmw.physics.jones import basis_change
@@ -36,7 +37,17 @@ SHADOWING = ("smith", "ashikhmin", "torrance_sparrow", "none")
 _DOUBLE_STEP = 2
 
 
-def _facet_jones(itf: _Interface, m, k_in, k_out, s_in_basis, p_in_basis, s_out_basis, p_out_basis, out_basis=True):
+def _facet_jones(
+    itf: _Interface,
+    m: FloatArray,
+    k_in: FloatArray,
+    k_out: FloatArray,
+    s_in_basis: FloatArray,
+    p_in_basis: FloatArray,
+    s_out_basis: FloatArray | None,
+    p_out_basis: FloatArray | None,
+    out_basis: bool = True,
+) -> tuple[np.ndarray, FloatArray, FloatArray]:
     """Jones matrix of one specular facet reflection, shape (N, 2, 2), from the (s_in, p_in)
     basis of the incoming wave to the (s_out, p_out) basis of the outgoing one, or with
     ``out_basis=False`` to the facet's own (s, k_out x s); also returns that s and p."""
@@ -47,6 +58,7 @@ def _facet_jones(itf: _Interface, m, k_in, k_out, s_in_basis, p_in_basis, s_out_
     r = np.stack([_amplitude(co.rs, co.Rs), _amplitude(co.rp, co.Rp)], axis=1)
     j = r[:, :, None] * basis_change(s, p_in, s_in_basis, p_in_basis)
     if out_basis:
+        assert s_out_basis is not None and p_out_basis is not None  # given whenever out_basis is
         j = basis_change(s_out_basis, p_out_basis, s, p_out) @ j
     return j, s, p_out
 
@@ -143,7 +155,18 @@ def analytic_mueller(
     return single, dbl
 
 
-def _double_term(itf: _Interface, model, wi, wo, h_in, v_in, h_out, v_out, n_samples, seed):
+def _double_term(
+    itf: _Interface,
+    model: rough.MicrofacetModel,
+    wi: FloatArray,
+    wo: FloatArray,
+    h_in: FloatArray,
+    v_in: FloatArray,
+    h_out: FloatArray,
+    v_out: FloatArray,
+    n_samples: int,
+    seed: int,
+) -> FloatArray:
     """Stryjewski et al. 2009's double-reflection term for the Smith microsurface, shape (N, 4, 4) [1/sr].
 
     ``f2(wi, wo) = int f(w12) dw12`` over the direction w12 from facet 1 (h1 = unit(wi + w12))

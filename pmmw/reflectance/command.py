@@ -379,7 +379,7 @@ def run_brdf(
     return BrdfResult(methods=results, summary=summary, files=files)
 
 
-def _describe(st: Stack):
+def _describe(st: Stack) -> dict:
     layers = []
     for layer in st.layers:
         d = {"name": layer.name, "eps": [layer.eps.real, layer.eps.imag], "metal": layer.metal}

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pmmw import rng
+from pmmw.arrays import FloatArray
 from pmmw.physics.jones import basis_change
 from pmmw.reflectance.grid import N_PHI, N_THETA, _cells, _hv, mueller_from_jones
 from pmmw.reflectance.stack import Stack
@@ -147,7 +148,7 @@ def monte_carlo(
     return tally
 
 
-def _collect(g: Wave, tally: _Tally, stokes_in):
+def _collect(g: Wave, tally: _Tally, stokes_in: FloatArray) -> None:
     """Rays leaving the top surface: their forward Jones matrices (the transpose of the
     renderer's M) rotated to the outgoing (h, v) basis, their Mueller matrices binned."""
     phi = np.arctan2(g.d[:, 1], g.d[:, 0])

@@ -11,9 +11,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pmmw.arrays import FloatArray
 from pmmw.reflectance.grid import N_PHI, N_THETA, projected_solid_angle
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     from pmmw.reflectance.command import MethodResult
 
 __all__ = ["write_outputs"]
@@ -70,7 +73,7 @@ def write_outputs(
     return files
 
 
-def _plot_maps(path: Path, res: MethodResult, title: str):
+def _plot_maps(path: Path, res: MethodResult, title: str) -> None:
     from pmmw.io.atomic import atomic_path
     from pmmw.io.preview import subplots
 
@@ -108,7 +111,7 @@ def _plot_maps(path: Path, res: MethodResult, title: str):
         fig.savefig(tmp, dpi=80, format="png")
 
 
-def _plot_inplane(path: Path, results, wi):
+def _plot_inplane(path: Path, results: Mapping[str, MethodResult], wi: FloatArray) -> None:
     from pmmw.io.atomic import atomic_path
     from pmmw.io.preview import subplots
 

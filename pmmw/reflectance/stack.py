@@ -10,12 +10,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pmmw.constants import C0 as _C0
 from pmmw.errors import UserError, UserErrors
 from pmmw.io.records import check_keys
 from pmmw.io.yamlio import read_yaml
 from pmmw.physics import roughness as rough
+
+if TYPE_CHECKING:
+    from pmmw.scene.materials import MaterialDB
 
 __all__ = ["StackLayer", "Stack", "load_stack", "parse_complex"]
 
@@ -116,7 +120,9 @@ def _check_eps(eps, file, key):
         raise UserError("permittivity 0 is not a medium", file, key)
 
 
-def _medium_eps(entry: dict, *, frequency, file, key, db=None):
+def _medium_eps(
+    entry: dict, *, frequency: float, file: str | Path | None, key: str, db: MaterialDB | None = None
+) -> tuple[complex, bool]:
     """(eps, metal) from one of ``n``, ``eps``, ``material``, ``kind: metal``."""
     given = [k for k in ("n", "eps", "material") if k in entry]
     if entry.get("kind") == "metal":
