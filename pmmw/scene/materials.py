@@ -36,6 +36,7 @@ together (`pmmw.errors.UserErrors`).
 
 from __future__ import annotations
 
+import bisect
 import difflib
 import math
 import os
@@ -240,11 +241,11 @@ class Material:
         return "the nearest tabulated value is used"
 
     def range_edges(self) -> tuple[float, ...]:
-        """Frequencies [Hz] where the entry's stated range may begin or end: a table's rows, a
-        model's range (a published fit's own ``valid``, ITU-R P.2040's rows). Between two of them
+        """Frequencies [Hz] where the entry's stated range may begin or end: a table's first and
+        last rows, a model's range (a published fit's own ``valid``, ITU-R P.2040's rows). Between two of them
         whether a frequency is inside is the same everywhere (`stated_band`)."""
         if self.model is None:
-            return tuple(self.freqs)
+            return (self.freqs[0], self.freqs[-1]) if self.freqs else ()
         edges = list(self.model.spec.f_range)
         if "valid" in self.model.params:
             edges += list(self.model.params["valid"])
@@ -279,12 +280,14 @@ class Material:
                 return complex(self.eps[0] if f < lo else self.eps[-1]), True
             (f1, e1), (f2, e2) = self._end_rows(f)
             return complex(_trend(f, f1, e1.real, f2, e2.real), _trend(f, f1, e1.imag, f2, e2.imag)), True
-        for fi, ei in zip(fs, self.eps):  # exact hits (and single-frequency tables)
-            if abs(f - fi) <= _REL_TOL * fi:
-                return complex(ei), False
-        re_ = float(np.interp(f, fs, [e.real for e in self.eps]))
-        im_ = float(np.interp(f, fs, [e.imag for e in self.eps]))
-        return complex(re_, im_), False
+        j = bisect.bisect_left(fs, f)  # fs[j - 1] < f <= fs[j]: a table of any length in log time
+        for k in (j - 1, j):  # exact hits (and single-frequency tables)
+            if 0 <= k < len(fs) and abs(f - fs[k]) <= _REL_TOL * fs[k]:
+                return complex(self.eps[k]), False
+        pair, (e0, e1) = fs[j - 1 : j + 1], self.eps[j - 1 : j + 1]  # np.interp's own formula on its segment
+        return complex(
+            float(np.interp(f, pair, [e0.real, e1.real])), float(np.interp(f, pair, [e0.imag, e1.imag]))
+        ), False
 
 
 def _exponent(f1: float, v1: float, f2: float, v2: float) -> float:
@@ -468,8 +471,7 @@ def _eps(value):
         raise ValueError(f"expected {_EPS_EXAMPLE}, got {value!r}")
     if not value:
         raise ValueError(f"empty permittivity table; expected {_EPS_EXAMPLE}")
-    table: dict[float, complex] = {}
-    seen: dict[float, Any] = {}
+    rows: list[tuple[float, int, Any, tuple, complex]] = []
     for k, v in value.items():
         path = (str(k),)
         f = None
@@ -481,14 +483,19 @@ def _eps(value):
         except UserError as err:
             problems.append((path, err.message))
         e = _eps_pair(v, path, problems)
-        if f is None or e is None:
+        if f is not None and e is not None:
+            rows.append((f, len(rows), k, path, e))
+    # the same frequency twice (to _REL_TOL): neighbours once sorted, so a long table costs n log n
+    table: dict[float, complex] = {}
+    kept: tuple[float, Any] | None = None
+    twice = []
+    for f, i, k, path, e in sorted(rows, key=lambda r: (r[0], r[1])):
+        if kept is not None and abs(f - kept[0]) <= _REL_TOL * f:
+            twice.append((i, path, f"frequency {k!r} given twice (also as {kept[1]!r})"))
             continue
-        dup = next((g for g in seen if abs(g - f) <= _REL_TOL * f), None)
-        if dup is not None:
-            problems.append((path, f"frequency {k!r} given twice (also as {seen[dup]!r})"))
-            continue
-        seen[f] = k
+        kept = (f, k)
         table[f] = e
+    problems += [(path, message) for _, path, message in sorted(twice, key=lambda t: t[0])]
     if problems:
         raise _Problems(problems)
     freqs = tuple(sorted(table))

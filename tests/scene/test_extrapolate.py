@@ -189,3 +189,28 @@ def test_same_as_circles_in_a_scenario_are_an_error(db):
     # an entry's same_as itself (a database id) is not a circle: it starts from the database's
     d2 = db.with_overrides({"denim": {"same_as": "denim", "temperature": "300 K"}}, file=SCN)
     assert d2.get("denim").eps == db.get("denim").eps and d2.get("denim").temperature == 300.0
+
+
+def test_a_long_table_is_read_and_looked_up_as_numpy_interpolates_it(db):
+    """A table of 20 000 rows (a measured spectrum): its rows found by bisection and its values
+    between them equal to the bit numpy's interpolation over the whole table (each value is
+    np.interp's formula on its own segment); a repeated frequency still refused, naming both keys;
+    its stated band is its first to its last row."""
+    rng = np.random.default_rng(7)
+    fs = np.unique(np.round(np.geomspace(20.0, 400.0, 20000), 9))
+    re_, im_ = rng.uniform(1.5, 3.0, fs.size), rng.uniform(0.0, 0.2, fs.size)
+    raw = {f"{f:.9g} GHz": [float(a), float(b)] for f, a, b in zip(fs, re_, im_)}
+    mat = db.with_overrides({"spectrum": {"eps": raw}}, file=SCN).get("spectrum")
+    assert len(mat.freqs) == fs.size
+    table = np.array(mat.freqs)
+    for f in np.concatenate([rng.uniform(20.0, 400.0, 300) * GHZ, table[::997]]):
+        e = mat.eps_at(f)
+        assert e.real == float(np.interp(f, table, [x.real for x in mat.eps]))
+        assert e.imag == float(np.interp(f, table, [x.imag for x in mat.eps]))
+    twice = dict(raw, **{"0.02 THz": [2.0, 0.1]})  # 20 GHz again, in another unit
+    with pytest.raises(UserError, match="given twice"):
+        db.with_overrides({"spectrum": {"eps": twice}}, file=SCN)
+    from pmmw.scene.materials import band_text, stated_band
+
+    band, _ = stated_band(db.with_overrides({"spectrum": {"eps": raw}}, file=SCN), ["spectrum"], 290.0, (1e9, 1e12))
+    assert band_text(band) == "20-400 GHz"
