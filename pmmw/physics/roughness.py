@@ -299,6 +299,11 @@ def _hash_uniforms(u1, u2, round_no, count):
 # ----------------------------------------------------------------------------------------------
 
 
+# [-] below this a vector's length is taken after scaling it by its largest component: squares
+# of components under 1e-154 underflow (a normal 1e-162 long came out 0.94 long)
+_NORM_UNDERFLOW = 1e-150
+
+
 def _ggx_vndf_local(wo, ax, ay, u1, u2):
     """GGX visible normals by spherical caps (Dupuy and Benyoub 2023), any ``wo`` with |wo.z| < 1.
 
@@ -312,6 +317,11 @@ def _ggx_vndf_local(wo, ax, ay, u1, u2):
     h = np.stack([sin_t * np.cos(phi) + v[:, 0], sin_t * np.sin(phi) + v[:, 1], z + v[:, 2]], axis=1)
     m = np.stack([ax * h[:, 0], ay * h[:, 1], np.maximum(h[:, 2], 0.0)], axis=1)
     norm = np.linalg.norm(m, axis=1)
+    tiny = norm < _NORM_UNDERFLOW  # v within 1e-150 of -c: the squares underflow; scale them first
+    if np.any(tiny):
+        big = np.max(np.abs(m[tiny]), axis=1)
+        m[tiny] /= np.where(big > 0.0, big, 1.0)[:, None]
+        norm[tiny] = np.linalg.norm(m[tiny], axis=1)
     degenerate = norm <= 0.0  # c = -v exactly (measure zero)
     m = m / np.where(degenerate, 1.0, norm)[:, None]
     if np.any(degenerate):
@@ -475,6 +485,11 @@ def ggx_draw1(n, t, wo, u1, u2, ax, ay, orientation):
     sin_t = math.sqrt(min(max(1.0 - zc * zc, 0.0), 1.0))
     mx, my, mz = ax * (sin_t * math.cos(phi) + vx), ay * (sin_t * math.sin(phi) + vy), max(zc + vz, 0.0)
     nm = math.sqrt(mx * mx + my * my + mz * mz)
+    if nm < _NORM_UNDERFLOW:  # v within 1e-150 of -c: the squares underflow; scale them first
+        big = max(abs(mx), abs(my), abs(mz))
+        if big > 0.0:
+            mx, my, mz = mx / big, my / big, mz / big
+            nm = math.sqrt(mx * mx + my * my + mz * mz)
     if nm <= 0.0:  # c = -v exactly (measure zero)
         mx, my, mz = 0.0, 0.0, 1.0
     else:
