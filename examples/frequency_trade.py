@@ -93,7 +93,14 @@ def render(stem: str, suffix: str, extra: dict | None = None):
     return pmmw.sweep(scenario, scaled(grid, scenario), out=out / name, zip=spec.get("zip", False), resume=True)
 
 
-rows = ["study,aperture,clothing,frequency_GHz,aperture_m,channel,contrast_K,snr,detectable"]
+def inside_column(table) -> list:
+    """Whether each variant's materials are all inside their stated ranges (sweep.csv's ``inside
+    stated ranges``; True for variants rendered before pmmw reported it)."""
+    return list(table["inside stated ranges"]) if "inside stated ranges" in table else [True] * len(table)
+
+
+rows = ["study,aperture,clothing,frequency_GHz,aperture_m,channel,contrast_K,snr,detectable,inside_stated_ranges"]
+any_outside = False
 fig, axes = plt.subplots(1, len(STUDIES), figsize=(13.0, 3.8), dpi=110)
 for ax, (title, (stem, pair, tabulated)) in zip(axes, STUDIES.items()):
     for suffix, how, style, colour in (
@@ -111,16 +118,24 @@ for ax, (title, (stem, pair, tabulated)) in zip(axes, STUDIES.items()):
             apertures = (
                 table["imager.aperture_diameter"] if "imager.aperture_diameter" in table else [None] * len(freqs)
             )
-            for f, a, k, s, det in zip(
+            for f, a, k, s, det, ok in zip(
                 freqs,
                 apertures,
                 table[f"contrast {pair} {channel} [K]"],
                 table[snr_col],
                 table[f"detectable {pair} {channel}"],
+                inside_column(table),
             ):
-                rows.append(f"{stem},{how},{law},{f:g},{a if a is not None else ''},{channel},{k:.3f},{s:.2f},{det}")
+                rows.append(
+                    f"{stem},{how},{law},{f:g},{a if a is not None else ''},{channel},{k:.3f},{s:.2f},{det},{bool(ok)}"
+                )
             snr[law] = dict(zip(freqs, table[snr_col]))
+            if law == "hold":
+                outside = [f for f, ok in zip(freqs, inside_column(table)) if not ok]
         ax.plot(list(snr["hold"]), list(snr["hold"].values()), style, color=colour, label=f"aperture {how}")
+        # hollow: a point that rests on a material outside its stated range (extrapolated, warned)
+        ax.plot(outside, [snr["hold"][f] for f in outside], style[0], color=colour, mfc="white", zorder=3)
+        any_outside |= bool(outside)
         if "trend" in snr:  # from the table's last row (where the two laws agree) to 300 GHz
             fs = [f for f in snr["hold"] if f >= 90.0]
             lo = [snr["hold"][f] if f not in snr["trend"] else snr["trend"][f] for f in fs]
@@ -128,6 +143,8 @@ for ax, (title, (stem, pair, tabulated)) in zip(axes, STUDIES.items()):
             ax.plot(fs, lo, ":", color=colour, lw=1)
     if tabulated:
         ax.fill_between([], [], [], color="0.6", alpha=0.3, label="clothing's loss held / trend (shaded)")
+    if any_outside:
+        ax.plot([], [], "o", color="0.4", mfc="white", label="hollow: a material extrapolated")
     ax.axhline(5.0, color="k", lw=0.8, ls=":", label="detection threshold (SNR 5)")
     ax.set_xscale("log")
     ax.set_yscale("log" if stem.startswith("landing") else "linear")  # the landing spans 3 decades

@@ -1673,6 +1673,8 @@ def materials_band(res: Resolved) -> dict:
         "within_stated_ranges": band_text(band),
         "accepted": band_text([FREQUENCY_RANGE]),
         "limited_by": {k: band_text(v) for k, v in limits.items()},
+        "intervals_hz": [[lo, hi] for lo, hi in band],  # the same, for programs (`sweeps.run`)
+        "limited_by_hz": {k: [[lo, hi] for lo, hi in v] for k, v in limits.items()},
     }
 
 

@@ -335,9 +335,9 @@ def stated_band(
             lm = db.get(layer.material)
             if lm.kind not in _NO_EPS_KINDS and lm.has_eps():
                 uses[f"{mid}: {layer.material}"] = (lm, layer.temperature_over(lm, t_m))
-    edges = {lo, hi, *np.geomspace(lo, hi, 64)}
+    edges = {float(lo), float(hi), *map(float, np.geomspace(lo, hi, 64))}  # plain floats: reports are YAML
     for m, _ in uses.values():
-        edges |= {f for f in m.range_edges() if lo <= f <= hi}
+        edges |= {float(f) for f in m.range_edges() if lo <= f <= hi}
     edges_sorted = sorted(edges)
     points = [edges_sorted[0]]
     for a, b in zip(edges_sorted, edges_sorted[1:]):

@@ -8,7 +8,9 @@ grid key, ``status``, ``exr``, ``wall_s``, then every region's mean and every pa
 in K and in noise sigmas from the variant's report, and per contrast its ``snr`` and
 ``detectable`` by the one detection criterion (`imaging.detection`) in the channel the report
 leads with (``snr beacon - runway Ey2``), the SNR's Monte Carlo standard error (``snr_stderr``)
-and the probability of detection at the scenario's ``output.false_alarm`` (``pd``).
+and the probability of detection at the scenario's ``output.false_alarm`` (``pd``), and whether every
+material is inside its stated range at the variant's frequency (``inside stated ranges``; the
+materials that are not in ``outside stated range``: `pipeline.materials_band`).
 ``DIR/report.md`` adds plots of the SNRs against the swept values with the criterion's threshold,
 which variants are detectable, the detection limit along the first numeric axis (the largest range,
 or smallest aperture, ... at which each contrast is still detected, with its uncertainty:
@@ -360,6 +362,11 @@ def _row(spec: SweepSpec, out: Path, name: str, params: dict, result: dict) -> d
         for region, chans in (regions.get("means") or {}).items():
             for c, v in chans.items():
                 row[f"mean {region} {c} [K]"] = v
+        band, f = rep.get("materials_band"), rep.get("frequency_hz")
+        if band and "limited_by_hz" in band and f:
+            outside = [m for m, spans in band["limited_by_hz"].items() if not _inside(f, spans)]
+            row["inside stated ranges"] = not outside
+            row["outside stated range"] = "; ".join(outside)
         lead = regions.get("channel", "Ey2")
         for pair, chans in (regions.get("contrasts") or {}).items():
             for c, v in chans.items():
@@ -371,6 +378,12 @@ def _row(spec: SweepSpec, out: Path, name: str, params: dict, result: dict) -> d
                 row[f"snr_stderr {pair} {lead}"] = chans[lead].get("snr_stderr")
                 row[f"pd {pair} {lead}"] = chans[lead].get("pd")
     return row
+
+
+def _inside(f: float, spans: list) -> bool:
+    """Whether f [Hz] lies in one of the closed intervals ``spans`` ([[lo, hi], ...] [Hz], a
+    report's `materials_band`), to the 1e-9 that tells two frequencies apart."""
+    return any(lo * (1 - 1e-9) <= f <= hi * (1 + 1e-9) for lo, hi in spans)
 
 
 def write_table(path: Path, table: list[dict]) -> Path:

@@ -98,6 +98,10 @@ def test_validate_and_the_report_state_it(tmp_path):
     assert band["within_stated_ranges"] == "35-95 GHz" and band["accepted"] == "1-1000 GHz"
     assert band["limited_by"]["clothed_person: denim"] == "35-95 GHz"
     assert "pavement" in band["limited_by"] and "gun" not in str(band["limited_by"])
+    assert band["intervals_hz"] == [[35e9, 95e9]] and band["limited_by_hz"]["holster"] == [[35e9, 95e9]]
+    import yaml
+
+    yaml.safe_dump(band)  # plain floats: `pmmw validate` prints its result as YAML (numpy's failed there)
     text = render_markdown({"materials_band": band}, {})
     assert "inside its stated range (its table, model or fit) at 35-95 GHz (of the 1-1000 GHz" in text
     assert "clothed_person: denim 35-95 GHz" in text
@@ -116,3 +120,29 @@ def test_every_shipped_scenario_states_its_band(path):
     stated = re.search(r"^# Materials inside their stated ranges: (.+?) \(", path.read_text(), re.M)
     assert stated, f"{path.name} does not state its band"
     assert stated.group(1) == materials_band(resolve(path))["within_stated_ranges"]
+
+
+def test_a_sweep_row_says_whether_its_frequency_is_inside(tmp_path):
+    """`pmmw sweep`'s table: per variant, whether every material is inside its stated range at the
+    variant's frequency, and which are not, from the variant's report (`materials_band`). A real
+    two-variant sweep of the concealed-weapon band scene (44 x 74 pixels): inside at 94 GHz,
+    outside at 140 GHz by the skin, the denim and the leather, as the warnings say."""
+    import pandas as pd
+
+    import pmmw
+
+    table = pmmw.sweep(
+        ROOT / "configs" / "cwd_outdoor_band.yaml",
+        {
+            "frequency": ["94 GHz", "140 GHz"],
+            "imager.resolution": [[44, 74]],
+            "output.regions.gun.radius": [1],
+            "output.regions.torso.radius": [1],
+        },
+        out=tmp_path / "sweep",
+    )
+    inside = dict(zip(table["frequency"], table["inside stated ranges"]))
+    outside = dict(zip(table["frequency"], table["outside stated range"]))
+    assert inside == {"94 GHz": True, "140 GHz": False}
+    assert pd.isna(outside["94 GHz"])  # an empty cell of sweep.csv, as pandas reads it
+    assert set(outside["140 GHz"].split("; ")) == {"clothed_person", "clothed_person: denim", "holster", "shoes"}
