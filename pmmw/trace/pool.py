@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from pmmw import interrupt, jit, timings
-from pmmw.errors import EnvironmentProblem, exception_text
+from pmmw.errors import EnvironmentProblem, exception_text, warn
 from pmmw.io.atomic import save_npz_atomic
 from pmmw.trace import kernels
 from pmmw.trace.compile import compile_kernels
@@ -52,6 +52,11 @@ _WORKER: Integrator | None = None
 
 #: Renders more of a tile whose worker process died, each in another process.
 _RETRIES = 1
+# [s] a worker holding tiles whose CPU time has not moved for this long is hung, not slow (a tile
+# always computes): it is killed and its tile rendered again (`_stalled`). Seen once: a worker
+# forked while the parent's Embree (TBB) thread pool held a lock waited forever in rtcCommitScene.
+_STALL_S = 60.0
+_WATCH_S = 5.0  # [s] how often the workers' CPU time is looked at
 
 #: What a saved tile must hold (`TileResult`): per array, its channels after (h, w) (None: none),
 #: dtype kind, and the test every value passes. Depth is inf where every sample saw the sky.
@@ -455,9 +460,35 @@ class _Worker:
         self.tiles = deque()
         self.slot_of = deque()
         self.free_at = time.perf_counter()  # when it last said it was ready or sent a tile [s]
+        self.cpu = (self.free_at, -1.0)  # (when, its CPU seconds then): `_stalled`
 
     def free_slot(self) -> int:
         return min(set(range(_IN_FLIGHT)) - set(self.slot_of))
+
+
+def _cpu_seconds(pid: int) -> float | None:
+    """CPU time [s] a process has used (Linux: /proc/PID/stat utime + stime), None where unknown."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _stalled(w: _Worker, now: float) -> bool:
+    """Whether worker ``w``, holding tiles, has used no CPU for `_STALL_S` (hung); samples its CPU
+    time. A worker without tiles waits for them and is never stalled."""
+    if not w.tiles:
+        w.cpu = (now, -1.0)
+        return False
+    cpu = _cpu_seconds(w.process.pid)
+    if cpu is None:
+        return False
+    if cpu != w.cpu[1]:
+        w.cpu = (now, cpu)
+        return False
+    return now - w.cpu[0] >= _STALL_S
 
 
 class _WorkerTraceback(Exception):
@@ -542,7 +573,14 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
         for _ in range(n):
             start()
         while live:
-            ready = set(wait([w.conn for w in live] + [w.process.sentinel for w in live]))
+            ready = set(wait([w.conn for w in live] + [w.process.sentinel for w in live], timeout=_WATCH_S))
+            for w in [w for w in live if _stalled(w, time.perf_counter())]:
+                index = w.tiles[0][0]
+                warn(
+                    f"a worker process used no CPU for {_STALL_S:g} s while rendering tile {index}: hung, "
+                    "so it was stopped and the tile is rendered again"
+                )
+                w.process.kill()  # its sentinel says so next time round: a death, handled below
             for w in [w for w in live if w.conn in ready or w.process.sentinel in ready]:
                 reply = None
                 if w.conn in ready:

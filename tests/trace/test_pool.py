@@ -285,3 +285,39 @@ def test_the_report_times_the_tiles_apart_from_loading_the_kernels(monkeypatch, 
     run(scn, [], out=tmp_path / "out", workers=1, quiet=True)
     timing = json.loads((tmp_path / "out" / "report.json").read_text())["timing"]
     assert 0.0 < timing["tiles_s"] and timing["trace_s"] - timing["tiles_s"] >= 1.5, timing
+
+
+def test_a_hung_worker_is_stopped_and_its_tile_rendered_again(tmp_path, monkeypatch):
+    """A worker that stops using CPU while holding a tile (as one did, forked while the parent's
+    Embree thread pool held a lock: it waited in rtcCommitScene for good) is killed after
+    `_STALL_S` without CPU time, with a warning, and its tile rendered by a new worker: the image is
+    what one process renders. Here the first tile sent hangs in a sleep (no CPU), once (a marker
+    file), with the watch shortened to 1 s. Control: a worker that computes is never stopped
+    (the same render without the hang gives no warning)."""
+    import time
+
+    from pmmw.errors import clear_warnings, collected_warnings
+
+    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[24, 16]", "render.tile=8"])
+    job = make_job(res, res.scenario.frequencies[0])
+    one = pool.render_tiles(job, workers=1)
+    monkeypatch.setattr(pool, "_STALL_S", 1.0)
+    monkeypatch.setattr(pool, "_WATCH_S", 0.2)
+    clear_warnings()
+    pool.render_tiles(job, workers=2)
+    assert not [w for w in collected_warnings() if "hung" in w]  # the control
+    marker = tmp_path / "hung-once"
+    render = pool._render
+
+    def hang_once(tile):
+        if not marker.exists():
+            marker.touch()
+            time.sleep(3600)  # a hung worker: no CPU
+        return render(tile)
+
+    monkeypatch.setattr(pool, "_render", hang_once)  # the forked workers inherit it
+    two = pool.render_tiles(job, workers=2)
+    assert marker.exists() and [w for w in collected_warnings() if "used no CPU for 1 s" in w]
+    for a, b in zip(one, two):
+        for name, _ in pool._PLANES:
+            np.testing.assert_array_equal(getattr(b, name), getattr(a, name), err_msg=name)
