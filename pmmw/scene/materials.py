@@ -41,7 +41,7 @@ import difflib
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Iterable, Literal, Optional, get_args
@@ -89,7 +89,7 @@ Extrapolate = Literal["hold", "trend"]
 EXTRAPOLATE: tuple[str, ...] = get_args(Extrapolate)
 # [-] steepest power law `extrapolate: trend` continues: a f^b steeper than this between two rows is
 # a resonance or rows too close together, not a trend (ITU-R P.2040-4's steepest, the floorboard's
-# eps'' at 220-450 GHz, goes as f^6.3)
+# eps'' in its 220-300 GHz row, goes as f^6.3)
 TREND_EXPONENT_MAX = 10.0
 
 
@@ -768,25 +768,40 @@ def _same_as(
             )
         ]
     own = {k: v for k, v in fields.items() if k != "same_as"}
-    merged = {k: v for k, v in known[target].items() if k != "same_as"}
-    merged.update(own)
+    merged = _merged({k: v for k, v in known[target].items() if k != "same_as"}, own)
     if "source" not in own:
         base = known[target].get("source") or ""
         merged["source"] = f"as {target}: {base}" if base else f"as {target}"
     return merged, []
 
 
-def _same_as_order(raw: Mapping) -> tuple[list, list]:
-    """A scenario's ``materials:`` ids in the order they are applied: an entry with ``same_as: X``
-    after X's own override in the same map (whatever order the file gives), so that it starts from X
-    as the scenario leaves it. Returns (that order, the ids whose same_as goes round in a circle)."""
+def _merged(base: dict, own: dict) -> dict:
+    """An entry's fields over those it starts from (an override over the database's entry, a
+    ``same_as`` entry over its target), less what the result cannot have unless given again: a
+    new kind without a permittivity drops eps and extrapolate, another kind than thin its
+    thickness; a new eps of one value or one row drops an inherited extrapolate (it is for a table
+    of two rows or more)."""
+    merged = {**base, **own}
+    kind = merged.get("kind") or "dielectric"
+    if "kind" in own:
+        if kind in _NO_EPS_KINDS:
+            for key in ("eps", "extrapolate"):
+                if key not in own:
+                    merged.pop(key, None)
+        if kind != "thin" and "thickness" not in own:
+            merged.pop("thickness", None)
+    eps = own.get("eps")
+    if eps is not None and len(eps[0]) < 2 and "extrapolate" not in own:
+        merged.pop("extrapolate", None)
+    return merged
 
-    def target(mid: object) -> object:
-        entry = raw[mid]
-        t = entry.get("same_as") if isinstance(entry, Mapping) else None
-        return t if isinstance(t, str) and t != mid and t in raw else None
 
-    pending: list = list(raw)
+def _same_as_order(ids: Iterable, target: Callable[[Any], object]) -> tuple[list, list]:
+    """``ids`` in an order where each comes after the id its ``same_as`` names (``target(id)``:
+    that id when it is among ``ids`` and another, else None), whatever order they are given in:
+    a database's entries across its files, a scenario's ``materials:`` map. Returns (that order,
+    the ids whose same_as goes round in a circle)."""
+    pending: list = list(ids)
     order: list = []
     while pending:
         ready = [m for m in pending if target(m) not in pending]
@@ -795,6 +810,16 @@ def _same_as_order(raw: Mapping) -> tuple[list, list]:
         order += ready
         pending = [m for m in pending if m not in ready]
     return order, []
+
+
+def _circles(
+    circles: Iterable, same_as: Callable[[Any], object], file_of: Callable[[Any], Any], key_of: Callable[[Any], Any]
+) -> list[UserError]:
+    """One error per entry of a same_as circle, at its ``same_as`` key."""
+    return [
+        UserError(f"same_as {same_as(mid)!r} goes round in a circle", file_of(mid), _join(key_of(mid), "same_as"))
+        for mid in circles
+    ]
 
 
 def _raise(errors: list[UserError]) -> None:
@@ -919,29 +944,21 @@ class MaterialDB:
                     errors += errs
                     continue
                 fields[mid], keys[mid] = f, base_key
-        # entries with same_as, in any file order: resolve those whose target is resolved until none is left
-        pending = {mid for mid, f in fields.items() if f.get("same_as") is not None}
-        while pending:
-            ready = [mid for mid in pending if fields[mid]["same_as"] not in pending]
-            if not ready:
-                for mid in sorted(pending):
-                    errors.append(
-                        UserError(
-                            f"same_as {fields[mid]['same_as']!r} goes round in a circle",
-                            where[mid],
-                            _join(keys[mid], "same_as"),
-                        )
-                    )
-                    del fields[mid]
-                break
-            for mid in ready:
-                pending.discard(mid)
-                f, errs = _same_as(mid, fields[mid], fields, where[mid], keys[mid])
-                if f is None:
-                    errors += errs
-                    del fields[mid]
-                else:
-                    fields[mid] = f
+        # entries with same_as, in any file order: each after the entry it names
+        linked = sorted(mid for mid, f in fields.items() if f.get("same_as") is not None)
+        order, circles = _same_as_order(
+            linked, lambda m: fields[m]["same_as"] if fields[m]["same_as"] in linked else None
+        )
+        errors += _circles(circles, lambda m: fields[m]["same_as"], where.get, keys.get)
+        for mid in circles:
+            del fields[mid]
+        for mid in order:
+            f, errs = _same_as(mid, fields[mid], fields, where[mid], keys[mid])
+            if f is None:
+                errors += errs
+                del fields[mid]
+            else:
+                fields[mid] = f
         for mid in list(fields):
             mat, errs = _build(mid, fields[mid], str(where[mid]), keys[mid])
             if mat is None:
@@ -983,13 +1000,15 @@ class MaterialDB:
         materials = dict(self._materials)
         fields = {k: dict(v) for k, v in self._fields.items()}
         keys = dict(self._keys)
-        order, circles = _same_as_order(raw)
-        errors += [
-            UserError(
-                f"same_as {raw[mid]['same_as']!r} goes round in a circle", file, _join(key_prefix, mid, "same_as")
-            )
-            for mid in circles
-        ]
+
+        def named(mid: object) -> object:
+            entry = raw[mid]
+            return entry.get("same_as") if isinstance(entry, Mapping) else None
+
+        order, circles = _same_as_order(
+            raw, lambda m: t if isinstance(t := named(m), str) and t != m and t in raw else None
+        )
+        errors += _circles(circles, named, lambda m: file, lambda m: _join(key_prefix, m))
         for mid in order:
             entry = raw[mid]
             base_key = _join(key_prefix, mid if isinstance(mid, str) else str(mid))
@@ -1008,16 +1027,7 @@ class MaterialDB:
             if whole:
                 new["source"] = f"{new['source']} (in {file})"
             elif mid in self._materials:
-                merged = dict(self._fields[mid])
-                merged.update(new)
-                kind = merged.get("kind") or "dielectric"
-                if "kind" in new:  # fields the new kind cannot have, unless given again
-                    if kind in _NO_EPS_KINDS and "eps" not in new:
-                        merged.pop("eps", None)
-                    if kind in _NO_EPS_KINDS and "extrapolate" not in new:
-                        merged.pop("extrapolate", None)
-                    if kind != "thin" and "thickness" not in new:
-                        merged.pop("thickness", None)
+                merged = _merged(self._fields[mid], new)
                 base_source = self._materials[mid].source
                 changed = ", ".join(k for k in _ENTRY_KEYS if k in new and k not in ("source", "name"))
                 if "source" not in new and changed:

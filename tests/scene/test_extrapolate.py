@@ -214,3 +214,23 @@ def test_a_long_table_is_read_and_looked_up_as_numpy_interpolates_it(db):
 
     band, _ = stated_band(db.with_overrides({"spectrum": {"eps": raw}}, file=SCN), ["spectrum"], 290.0, (1e9, 1e12))
     assert band_text(band) == "20-400 GHz"
+
+
+@pytest.mark.parametrize("merge", ["override", "same_as"])
+def test_a_new_eps_or_kind_drops_an_inherited_extrapolate(db, merge):
+    """Both ways an entry starts from another (a scenario's change of a database entry, and
+    ``same_as``) drop what the result cannot have: a one-value eps or a metal kind does not
+    inherit ``extrapolate: trend`` (it was refused at a key the user never wrote). Control: a
+    two-row table keeps it."""
+    base = {"denim": {"extrapolate": "trend"}}
+    for change, kept in (
+        ({"eps": [2.0, 0.1]}, "hold"),
+        ({"kind": "metal"}, "hold"),
+        ({"eps": {"35 GHz": [2.0, 0.1], "95 GHz": [2.1, 0.2]}}, "trend"),
+    ):
+        if merge == "override":
+            d2 = db.with_overrides(base, file=SCN).with_overrides({"denim": change}, file=SCN)
+            mat = d2.get("denim")
+        else:
+            mat = db.with_overrides({**base, "x": {"same_as": "denim", **change}}, file=SCN).get("x")
+        assert mat.extrapolate == kept, change
