@@ -93,16 +93,10 @@ def render(stem: str, suffix: str, extra: dict | None = None):
     return pmmw.sweep(scenario, scaled(grid, scenario), out=out / name, zip=spec.get("zip", False), resume=True)
 
 
-def inside_column(table) -> list:
-    """Whether each variant's materials are all inside their stated ranges (sweep.csv's ``inside
-    stated ranges``; True for variants rendered before pmmw reported it)."""
-    return list(table["inside stated ranges"]) if "inside stated ranges" in table else [True] * len(table)
-
-
 rows = ["study,aperture,clothing,frequency_GHz,aperture_m,channel,contrast_K,snr,detectable,inside_stated_ranges"]
-any_outside = False
 fig, axes = plt.subplots(1, len(STUDIES), figsize=(13.0, 3.8), dpi=110)
 for ax, (title, (stem, pair, tabulated)) in zip(axes, STUDIES.items()):
+    any_outside = False
     for suffix, how, style, colour in (
         ("", "fixed", "o-", "C0"),
         ("_scaled", "scaled with the wavelength", "s--", "C1"),
@@ -124,20 +118,20 @@ for ax, (title, (stem, pair, tabulated)) in zip(axes, STUDIES.items()):
                 table[f"contrast {pair} {channel} [K]"],
                 table[snr_col],
                 table[f"detectable {pair} {channel}"],
-                inside_column(table),
+                table["inside stated ranges"],
             ):
                 rows.append(
                     f"{stem},{how},{law},{f:g},{a if a is not None else ''},{channel},{k:.3f},{s:.2f},{det},{bool(ok)}"
                 )
             snr[law] = dict(zip(freqs, table[snr_col]))
             if law == "hold":
-                outside = [f for f, ok in zip(freqs, inside_column(table)) if not ok]
+                outside = [f for f, ok in zip(freqs, table["inside stated ranges"]) if not ok]
         ax.plot(list(snr["hold"]), list(snr["hold"].values()), style, color=colour, label=f"aperture {how}")
         # hollow: a point that rests on a material outside its stated range (extrapolated, warned)
         ax.plot(outside, [snr["hold"][f] for f in outside], style[0], color=colour, mfc="white", zorder=3)
         any_outside |= bool(outside)
         if "trend" in snr:  # from the table's last row (where the two laws agree) to 300 GHz
-            fs = [f for f in snr["hold"] if f >= 90.0]
+            fs = [f for f in snr["hold"] if f >= max(g for g in snr["hold"] if g <= TABLE_TOP_GHZ)]
             lo = [snr["hold"][f] if f not in snr["trend"] else snr["trend"][f] for f in fs]
             ax.fill_between(fs, lo, [snr["hold"][f] for f in fs], color=colour, alpha=0.18, lw=0)
             ax.plot(fs, lo, ":", color=colour, lw=1)

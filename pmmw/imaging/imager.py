@@ -94,8 +94,9 @@ def kernel_extent(
 ) -> tuple[int, FloatArray]:
     """(r, offsets) of a pixel-integrated beam kernel of an aperture of ``radius`` [m]: r pixels
     each side, enough for all but `PSF_ENERGY_TAIL` of the Airy pattern's energy (at most
-    ``max_radius``; ``radial_pixel_angle`` [rad], the smallest angle a pixel step spans where it
-    is not ``pixel_angle``: an off-axis pixel's radial step), and the sub-sample offsets within a
+    ``max_radius``; ``radial_pixel_angle`` [rad]: a pixel step measured in the beam's own angle
+    where it is not ``pixel_angle``, off axis the radial step pitch cos^2(theta) times the
+    projected aperture's cos(theta)), and the sub-sample offsets within a
     pixel: at least 5 across the Airy core (its first zero, 1.22 lambda / D), 3 to 15, odd."""
     theta_max = np.arcsin(min(1.0, _tail_x() / (k0 * radius)))
     r = int(np.ceil(theta_max / (pixel_angle if radial_pixel_angle is None else radial_pixel_angle)))

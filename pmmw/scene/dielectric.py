@@ -104,6 +104,9 @@ class ModelSpec:
     params_text: Callable[[dict], str] | None = field(
         default=None, repr=False, compare=False
     )  # params_text(params) -> their text
+    edges: Callable[[dict], tuple[float, ...]] | None = field(
+        default=None, repr=False, compare=False
+    )  # edges(params) -> frequencies [Hz] where `outside` may change besides f_range's
 
 
 @dataclass(frozen=True)
@@ -173,6 +176,12 @@ def _p2040_outside(f, T, params):
 
     status = p2040_permittivity(f, params["material"])[1]
     return None if status.startswith("in row") else f"ITU-R P.2040-4's value is {status}"
+
+
+def _p2040_edges(params):
+    from pmmw.scene.itu_materials import p2040_valid_ranges
+
+    return tuple(f for row in p2040_valid_ranges(params["material"]) for f in row)
 
 
 def _p2040_ranges(params):
@@ -551,6 +560,7 @@ MODELS = {
         example="{name: debye, eps_inf: 2.0, terms: [[10.0, 8 ps]], valid: [10 GHz, 1 THz]}",
         outside=_debye_outside,
         ranges=_debye_ranges,
+        edges=lambda params: tuple(params["valid"]),
         params_text=_debye_text,
     ),
     "leaves": ModelSpec(
@@ -577,6 +587,7 @@ MODELS = {
         example="{name: p2040, material: concrete}",
         outside=_p2040_outside,
         ranges=_p2040_ranges,
+        edges=_p2040_edges,
     ),
     "vegetation": ModelSpec(
         "vegetation",

@@ -242,18 +242,13 @@ class Material:
 
     def range_edges(self) -> tuple[float, ...]:
         """Frequencies [Hz] where the entry's stated range may begin or end: a table's first and
-        last rows, a model's range (a published fit's own ``valid``, ITU-R P.2040's rows). Between two of them
+        last rows, a model's range and its `ModelSpec.edges` (a published fit's own ``valid``,
+        ITU-R P.2040's rows). Between two of them
         whether a frequency is inside is the same everywhere (`stated_band`)."""
         if self.model is None:
             return (self.freqs[0], self.freqs[-1]) if self.freqs else ()
-        edges = list(self.model.spec.f_range)
-        if "valid" in self.model.params:
-            edges += list(self.model.params["valid"])
-        if self.model.spec.name == "p2040":
-            from pmmw.scene.itu_materials import p2040_valid_ranges
-
-            edges += [f for row in p2040_valid_ranges(self.model.params["material"]) for f in row]
-        return tuple(edges)
+        spec = self.model.spec
+        return tuple(spec.f_range) + (spec.edges(self.model.params) if spec.edges is not None else ())
 
     def _end_rows(self, f: float) -> tuple[tuple[float, complex], tuple[float, complex]]:
         """The table's end row on f's side (f [Hz] outside the table) and the row next to it."""
@@ -1219,10 +1214,9 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
         for i, (f_, e) in enumerate(zip(mat.freqs, mat.eps)):
             row("eps" if i == 0 else "", f"{_fmt_f(f_):>8}  {_fmt_eps(e)}")
         beyond = {"hold": "the end row's value", "trend": "the power law through the two end rows"}
-        row(
-            "extrapolate",
-            f"{mat.extrapolate} (outside the table, {_range_text(mat.freqs)}: {beyond[mat.extrapolate]}, warned)",
-        )
+        if len(mat.freqs) >= 2:  # a one-row table holds its value (`extrapolate` is refused there)
+            text = f"{mat.extrapolate} (outside the table, {_range_text(mat.freqs)}: {beyond[mat.extrapolate]}, warned)"
+            row("extrapolate", text)
     if f is not None and mat.kind not in _NO_EPS_KINDS:
         value, clamped = mat._lookup(f)
         how = ""

@@ -331,9 +331,9 @@ def _contact_sheet(out: Path, spec: SweepSpec, table: list[dict]) -> Path | None
     keys = [k for k, _ in spec.grid]
     for ax in axes.ravel():
         ax.axis("off")
+    short = short_keys(keys)
     for ax, (r, png) in zip(axes.ravel(), shots):
         ax.imshow(mpimg.imread(png), cmap="gray", interpolation="nearest")
-        short = short_keys(keys)
         ax.set_title(f"{r['variant']}: " + ", ".join(f"{short[k]}={r[k]}" for k in keys), fontsize=7)
     fig.tight_layout()
     path = out / "contact_sheet.png"
@@ -379,7 +379,8 @@ def _axis_label(spec: SweepSpec, key: str) -> str:
 def short_keys(keys: list[str]) -> dict[str, str]:
     """Each grid key by its last part (``imager.noise`` -> ``noise``), or by as many of its last
     parts as tell it from the others (``materials.denim.extrapolate`` -> ``denim.extrapolate``
-    beside ``materials.leather.extrapolate``): the labels of titles and file names."""
+    beside ``materials.leather.extrapolate``): the labels in the figures' titles, and so in the
+    animations' file names."""
     out = {}
     for k in keys:
         parts = k.split(".")

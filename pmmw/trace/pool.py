@@ -56,7 +56,7 @@ _RETRIES = 1
 # always computes): it is killed and its tile rendered again (`_stalled`). Seen once: a worker
 # forked while the parent's Embree (TBB) thread pool held a lock waited forever in rtcCommitScene.
 _STALL_S = 60.0
-_WATCH_S = 5.0  # [s] how often the workers' CPU time is looked at
+_WATCH_S = 5.0  # [s] the longest the workers' CPU time (Linux: /proc; no watch elsewhere) goes unread
 
 #: What a saved tile must hold (`TileResult`): per array, its channels after (h, w) (None: none),
 #: dtype kind, and the test every value passes. Depth is inf where every sample saw the sky.
@@ -460,7 +460,8 @@ class _Worker:
         self.tiles = deque()
         self.slot_of = deque()
         self.free_at = time.perf_counter()  # when it last said it was ready or sent a tile [s]
-        self.cpu = (self.free_at, -1.0)  # (when, its CPU seconds then): `_stalled`
+        self.cpu: tuple[float, float] | None = None  # (when, its CPU seconds then): `_stalled`
+        self.hung = False  # stopped by `_stalled`: its death is a hang, not a lack of memory
 
     def free_slot(self) -> int:
         return min(set(range(_IN_FLIGHT)) - set(self.slot_of))
@@ -480,12 +481,12 @@ def _stalled(w: _Worker, now: float) -> bool:
     """Whether worker ``w``, holding tiles, has used no CPU for `_STALL_S` (hung); samples its CPU
     time. A worker without tiles waits for them and is never stalled."""
     if not w.tiles:
-        w.cpu = (now, -1.0)
+        w.cpu = None
         return False
     cpu = _cpu_seconds(w.process.pid)
     if cpu is None:
         return False
-    if cpu != w.cpu[1]:
+    if w.cpu is None or cpu != w.cpu[1]:
         w.cpu = (now, cpu)
         return False
     return now - w.cpu[0] >= _STALL_S
@@ -580,6 +581,7 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                     f"a worker process used no CPU for {_STALL_S:g} s while rendering tile {index}: hung, "
                     "so it was stopped and the tile is rendered again"
                 )
+                w.hung = True
                 w.process.kill()  # its sentinel says so next time round: a death, handled below
             for w in [w for w in live if w.conn in ready or w.process.sentinel in ready]:
                 reply = None
@@ -618,7 +620,13 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
                         index, x0, y0, x1, y1 = w.tiles[0]  # the one it was rendering
                         deaths[index] += 1
                         if deaths[index] > _RETRIES:
-                            how = _death(w.process.exitcode, "lower render.spp or render.tile, or use fewer --workers")
+                            how = (
+                                f"hung (no CPU for {_STALL_S:g} s; stopped)"
+                                if w.hung
+                                else _death(
+                                    w.process.exitcode, "lower render.spp or render.tile, or use fewer --workers"
+                                )
+                            )
                             raise EnvironmentProblem(
                                 f"tile {index} (pixels x {x0}..{x1 - 1}, y {y0}..{y1 - 1}): the "
                                 f"worker process rendering it {how}, on each of "

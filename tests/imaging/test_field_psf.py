@@ -10,7 +10,7 @@ from scipy.optimize import brentq
 from scipy.special import j1
 
 from pmmw.imaging.antenna import Aperture, FieldPSF, antenna_kernel, off_axis_kernel, pixel_field_angles
-from pmmw.imaging.imager import blur
+from pmmw.imaging.imager import blur, kernel_extent
 
 K0 = 2 * np.pi / 3.156e-3  # 95 GHz [1/m]
 D = 0.6  # [m]
@@ -331,9 +331,8 @@ def test_the_off_axis_kernel_is_the_exact_pattern_on_the_pinhole_s_pixels():
 
     kern = off_axis_kernel(pitch, k0, d, Aperture(), theta, phi)
     r = kern.shape[0] // 2
-    core = 3.8317 / ka
-    sub = int(np.clip(np.ceil(5.0 * pitch / core), 3, 15)) | 1  # the kernel's sub-samples
-    offs = (np.arange(sub) + 0.5) / sub - 0.5
+    offs = kernel_extent(pitch, k0, d / 2, r)[1]  # the kernel's own sub-samples
+    sub = offs.size
     g = (np.arange(-r, r + 1, dtype=float)[:, None] + offs[None, :]).ravel()
     du, dv = np.meshgrid(g, g)  # columns to the right, rows down
     a = a0 + du * pitch  # one pixel is `pitch` in the tan plane

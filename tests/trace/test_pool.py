@@ -300,12 +300,12 @@ def test_a_hung_worker_is_stopped_and_its_tile_rendered_again(tmp_path, monkeypa
 
     res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[24, 16]", "render.tile=8"])
     job = make_job(res, res.scenario.frequencies[0])
-    one = pool.render_tiles(job, workers=1)
     monkeypatch.setattr(pool, "_STALL_S", 1.0)
     monkeypatch.setattr(pool, "_WATCH_S", 0.2)
     clear_warnings()
-    pool.render_tiles(job, workers=2)
-    assert not [w for w in collected_warnings() if "hung" in w]  # the control
+    pool.render_tiles(job, workers=2)  # the control, forked before this test renders in-process
+    assert not [w for w in collected_warnings() if "hung" in w]
+    one = pool.render_tiles(job, workers=1)
     marker = tmp_path / "hung-once"
     render = pool._render
 
@@ -321,3 +321,20 @@ def test_a_hung_worker_is_stopped_and_its_tile_rendered_again(tmp_path, monkeypa
     for a, b in zip(one, two):
         for name, _ in pool._PLANES:
             np.testing.assert_array_equal(getattr(b, name), getattr(a, name), err_msg=name)
+
+
+def test_a_tile_that_hangs_twice_stops_the_render_naming_the_hang(monkeypatch):
+    """A tile whose worker hangs on each try (here: always, in a sleep) stops the render with one
+    line naming the tile and the hang, not the lack of memory a killed worker usually means."""
+    import time
+
+    from pmmw.errors import EnvironmentProblem
+
+    res = resolve(REPO / "configs" / "cinderblocks_35ghz.yaml", ["imager.resolution=[16, 8]", "render.tile=8"])
+    job = make_job(res, res.scenario.frequencies[0])
+    monkeypatch.setattr(pool, "_STALL_S", 1.0)
+    monkeypatch.setattr(pool, "_WATCH_S", 0.2)
+    monkeypatch.setattr(pool, "_render", lambda tile: time.sleep(3600))
+    with pytest.raises(EnvironmentProblem, match=r"hung \(no CPU for 1 s; stopped\)") as ex:
+        pool.render_tiles(job, workers=2)
+    assert "memory" not in str(ex.value)
