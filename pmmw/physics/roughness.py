@@ -142,7 +142,7 @@ import numpy.typing as npt
 from pmmw.arrays import FloatArray
 from pmmw.errors import UserError, UserErrors
 from pmmw.jit import inline, njit
-from pmmw.physics.vec import cross, dot, unit
+from pmmw.physics.vec import NORM_UNDERFLOW, cross, dot, unit
 
 __all__ = [
     "GGX",
@@ -299,11 +299,6 @@ def _hash_uniforms(u1, u2, round_no, count):
 # ----------------------------------------------------------------------------------------------
 
 
-# [-] below this a vector's length is taken after scaling it by its largest component: squares
-# of components under 1e-154 underflow (a normal 1e-162 long came out 0.94 long)
-_NORM_UNDERFLOW = 1e-150
-
-
 def _ggx_vndf_local(wo, ax, ay, u1, u2):
     """GGX visible normals by spherical caps (Dupuy and Benyoub 2023), any ``wo`` with |wo.z| < 1.
 
@@ -315,15 +310,8 @@ def _ggx_vndf_local(wo, ax, ay, u1, u2):
     z = (1.0 - u2) * (1.0 + v[:, 2]) - v[:, 2]
     sin_t = np.sqrt(np.clip(1.0 - z * z, 0.0, 1.0))
     h = np.stack([sin_t * np.cos(phi) + v[:, 0], sin_t * np.sin(phi) + v[:, 1], z + v[:, 2]], axis=1)
-    m = np.stack([ax * h[:, 0], ay * h[:, 1], np.maximum(h[:, 2], 0.0)], axis=1)
-    norm = np.linalg.norm(m, axis=1)
-    tiny = norm < _NORM_UNDERFLOW  # v within 1e-150 of -c: the squares underflow; scale them first
-    if np.any(tiny):
-        big = np.max(np.abs(m[tiny]), axis=1)
-        m[tiny] /= np.where(big > 0.0, big, 1.0)[:, None]
-        norm[tiny] = np.linalg.norm(m[tiny], axis=1)
-    degenerate = norm <= 0.0  # c = -v exactly (measure zero)
-    m = m / np.where(degenerate, 1.0, norm)[:, None]
+    m = unit(np.stack([ax * h[:, 0], ay * h[:, 1], np.maximum(h[:, 2], 0.0)], axis=1))
+    degenerate = ~np.any(m != 0.0, axis=1)  # c = -v exactly (measure zero)
     if np.any(degenerate):
         m[degenerate] = (0.0, 0.0, 1.0)
     return m
@@ -485,7 +473,7 @@ def ggx_draw1(n, t, wo, u1, u2, ax, ay, orientation):
     sin_t = math.sqrt(min(max(1.0 - zc * zc, 0.0), 1.0))
     mx, my, mz = ax * (sin_t * math.cos(phi) + vx), ay * (sin_t * math.sin(phi) + vy), max(zc + vz, 0.0)
     nm = math.sqrt(mx * mx + my * my + mz * mz)
-    if nm < _NORM_UNDERFLOW:  # v within 1e-150 of -c: the squares underflow; scale them first
+    if nm < NORM_UNDERFLOW:  # the squares underflow: scaled first, as `vec.unit` does
         big = max(abs(mx), abs(my), abs(mz))
         if big > 0.0:
             mx, my, mz = mx / big, my / big, mz / big

@@ -12,7 +12,11 @@ import numpy.typing as npt
 
 from pmmw.arrays import FloatArray
 
-__all__ = ["cross", "dot", "unit"]
+__all__ = ["cross", "dot", "unit", "NORM_UNDERFLOW"]
+
+# [-] below this a vector's length is taken after scaling it by its largest component: squares of
+# components under 1e-154 underflow (a facet normal 1e-162 long came out 0.94 long)
+NORM_UNDERFLOW = 1e-150
 
 
 def cross(a: npt.ArrayLike, b: npt.ArrayLike) -> FloatArray:
@@ -53,7 +57,8 @@ def dot(a: FloatArray, b: FloatArray) -> FloatArray:
 
 
 def unit(v: FloatArray) -> FloatArray:
-    """``v / |v|`` over the last axis; zero vectors are returned unchanged (no NaN).
+    """``v / |v|`` over the last axis; zero vectors are returned unchanged (no NaN), and vectors
+    shorter than `NORM_UNDERFLOW` are still made unit.
 
     Parameters
     ----------
@@ -64,4 +69,9 @@ def unit(v: FloatArray) -> FloatArray:
     ndarray, shape (..., 3), float64
     """
     n = np.linalg.norm(v, axis=-1, keepdims=True)
+    tiny = n < NORM_UNDERFLOW
+    if np.any(tiny):  # scaled by the largest component first (`NORM_UNDERFLOW`); others untouched
+        big = np.max(np.abs(v), axis=-1, keepdims=True)
+        v = np.where(tiny & (big > 0.0), v / np.where(big > 0.0, big, 1.0), v)
+        n = np.where(tiny, np.linalg.norm(v, axis=-1, keepdims=True), n)
     return v / np.where(n > 0.0, n, 1.0)

@@ -493,7 +493,7 @@ def _eps(value):
     problems += [(path, message) for _, path, message in sorted(twice, key=lambda t: t[0])]
     if problems:
         raise _Problems(problems)
-    freqs = tuple(sorted(table))
+    freqs = tuple(table)  # inserted in ascending order
     return (freqs, tuple(table[f] for f in freqs))
 
 

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
+from pmmw.config.schema import FREQUENCY_RANGE as F_RANGE  # pmmw's accepted frequencies
 from pmmw.scene.materials import MaterialDB, band_text, stated_band
 
 ROOT = Path(__file__).resolve().parents[2]
 GHZ = 1e9
 SCN = "scenario.yaml"
-F_RANGE = (1e9, 1000e9)  # pmmw's accepted frequencies (pmmw.config.schema.FREQUENCY_RANGE)
 
 
 @pytest.fixture(scope="module")
