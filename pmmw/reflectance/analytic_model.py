@@ -195,12 +195,25 @@ def _double_term(
     wo_c = wo[cells]
     k_in1 = -wi[None, :]
 
-    def area_up(w12):
+    def area_up(w12: FloatArray) -> FloatArray:
         up = w12.copy()
         up[:, 2] = np.abs(up[:, 2])  # A(-w) = A(w with z flipped): D is point-symmetric in x, y
         return model.projected_area(z, tx, up)
 
-    def accumulate(sel, h1, h2, w12, c1, c2, dc1, dc2, a12, ja, s_a, p_a):
+    def accumulate(
+        sel: np.ndarray,
+        h1: FloatArray,
+        h2: FloatArray,
+        w12: FloatArray,
+        c1: FloatArray | float,
+        c2: FloatArray,
+        dc1: FloatArray,
+        dc2: FloatArray,
+        a12: FloatArray | float,
+        ja: np.ndarray,
+        s_a: FloatArray,
+        p_a: FloatArray,
+    ) -> None:
         """acc[sel] += M(J) f/(q1 + q2), arrays over the cells ``sel`` (broadcastable)."""
         q = dc1 / (4.0 * c1) + dc2 / (4.0 * c2)
         fw = g1_i * g1_o[sel] * (dc1 / h1[..., 2]) * (dc2 / h2[..., 2]) / (16.0 * cos_i * cos_o[sel] * a12 * q)

@@ -10,9 +10,11 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from pmmw.arrays import FloatArray
 from pmmw.errors import UserError, UserErrors
 from pmmw.physics import roughness as rough
 from pmmw.reflectance.analytic_model import SHADOWING, analytic, analytic_totals
@@ -83,7 +85,14 @@ def _option_error(err: UserError) -> UserError:
     return UserError(err.message, _ROUGHNESS_OPTIONS.get(err.key, err.key.split(".")[0]))
 
 
-def _stack_from_options(n, eps, material, roughness_spec, frequency, wavelength):
+def _stack_from_options(
+    n: str | complex | None,
+    eps: str | complex | None,
+    material: str | None,
+    roughness_spec: dict | None,
+    frequency: str | float | None,
+    wavelength: str | float | None,
+) -> Stack:
     f = _frequency(frequency, wavelength, "command line", "--frequency", "--wavelength")
     given = [k for k, v in (("--n", n), ("--eps", eps), ("--material", material)) if v is not None]
     if len(given) != 1:
@@ -96,13 +105,14 @@ def _stack_from_options(n, eps, material, roughness_spec, frequency, wavelength)
     eps_val, metal = _medium_eps(entry, frequency=f, file="command line", key=given[0])
     model = rough.make_model(roughness_spec, file="command line", key="roughness") if roughness_spec else None
     if material is not None:
+        assert f is not None  # `_medium_eps` refused a material without a frequency
         return _material_stack(material, eps_val, metal, model, f)
     return Stack(
         layers=(StackLayer(eps=eps_val, roughness=model, metal=metal, name=given[0].lstrip("-")),), frequency=f
     )
 
 
-def _material_stack(mid, eps_val, metal, model, f):
+def _material_stack(mid: str, eps_val: complex, metal: bool, model: rough.MicrofacetModel | None, f: float) -> Stack:
     """A database material as a stack: its ``roughness:`` (unless the options give one) and its
     coating, as the renderer sees it. Coating layers without roughness are coherent films on the
     interface below them; a layer with its own ``roughness:`` is a rough layer of its own."""
@@ -115,7 +125,7 @@ def _material_stack(mid, eps_val, metal, model, f):
         [(db.get(x.material).eps_at(f), x.thickness, 0.0, x.roughness) for x in mat.coating], 2.0 * math.pi * f / _C0
     )
 
-    def pairs(coat):
+    def pairs(coat: Any) -> tuple:
         return () if coat is None else tuple(zip(coat.eps.tolist(), coat.thickness.tolist()))
 
     names = [x.material for x in mat.coating if x.roughness is not None]
@@ -173,24 +183,24 @@ def roughness_spec_from_options(
     return spec
 
 
-def _direction(theta_deg, phi_deg):
+def _direction(theta_deg: float, phi_deg: float) -> FloatArray:
     th, ph = math.radians(theta_deg), math.radians(phi_deg)
     return np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
 
 
-def _stokes_maps(mueller, stokes_in):
+def _stokes_maps(mueller: FloatArray, stokes_in: FloatArray) -> FloatArray:
     s = np.einsum("...ij,j->...i", mueller, stokes_in / stokes_in[0])
     return np.moveaxis(s, -1, 0)
 
 
-def _totals(mueller, stokes_in):
+def _totals(mueller: FloatArray, stokes_in: FloatArray) -> tuple[FloatArray, FloatArray]:
     proj = projected_solid_angle()
     tot = np.einsum("ij,ijab->ab", proj, mueller)  # hemispherical Mueller matrix [-]
     s = tot @ (stokes_in / stokes_in[0])
     return tot, s
 
 
-def _specular(mueller, wi):
+def _specular(mueller: FloatArray, wi: FloatArray) -> dict:
     ws = np.array([-wi[0], -wi[1], wi[2]])
     row, col = _cells(ws[None, :])
     m = mueller[row[0], col[0]]

@@ -6,7 +6,9 @@ the convention itself is `pmmw.physics.jones`'s).
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
+from pmmw.arrays import FloatArray
 from pmmw.physics.vec import cross
 
 __all__ = ["N_PHI", "N_THETA", "grid_directions", "mueller_from_jones", "projected_solid_angle"]
@@ -39,7 +41,7 @@ def projected_solid_angle() -> np.ndarray:
     return band[:, None] * np.ones((1, N_PHI))
 
 
-def _cells(d):
+def _cells(d: FloatArray) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """Grid cell (row, column) of upward unit directions d, shape (N, 3)."""
     th = np.degrees(np.arccos(np.clip(d[:, 2], -1.0, 1.0)))
     ph = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 360.0
@@ -48,7 +50,7 @@ def _cells(d):
     return row, col
 
 
-def _hv(k, phi_fallback):
+def _hv(k: FloatArray, phi_fallback: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Sky basis (h, v) of propagation directions k (N, 3); at the poles h follows phi_fallback."""
     h = np.stack([-k[:, 1], k[:, 0], np.zeros(k.shape[0])], axis=1)  # Z x k
     norm = np.linalg.norm(h, axis=1)

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from pmmw.arrays import FloatArray
 from pmmw.physics import fresnel, multilayer
 from pmmw.physics.fresnel import Fresnel
 from pmmw.physics.vec import cross, dot, unit
@@ -21,14 +22,14 @@ __all__ = ["flat_reflectance"]
 _TINY = 1e-300
 
 
-def _amplitude(amp, power):
+def _amplitude(amp: np.ndarray, power: np.ndarray) -> np.ndarray:
     """An amplitude with the phase of ``amp`` and the magnitude sqrt(power) (renormalized R, T)."""
     mag = np.abs(amp)
     phase = np.where(mag > 0.0, amp / np.where(mag > 0.0, mag, 1.0), 1.0)
     return phase * np.sqrt(np.maximum(power, 0.0))
 
 
-def _facet_basis(m, k, s_fallback):
+def _facet_basis(m: FloatArray, k: FloatArray, s_fallback: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Local s = unit(m x k) (jones.py with the facet normal), p = k x s; fallback at normal incidence."""
     s = cross(m, k)
     norm = np.linalg.norm(s, axis=1)
@@ -92,7 +93,7 @@ def flat_reflectance(stack: Stack, theta_i: float) -> float:
     nl = len(stack.layers)
     kpar2 = (media[0] * math.sin(theta_i) ** 2).real
 
-    def cos_in(j):
+    def cos_in(j: int) -> float:
         return math.sqrt(max(1.0 - kpar2 / media[j].real, 0.0)) if j > 0 else math.cos(theta_i)
 
     total = 0.0

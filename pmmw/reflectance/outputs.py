@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 __all__ = ["write_outputs"]
 
 
-def _dop_aop(stokes):
+def _dop_aop(stokes: FloatArray) -> tuple[FloatArray, FloatArray]:
     i, q, u, v = stokes
     with np.errstate(divide="ignore", invalid="ignore"):
         dop = np.where(i > 0.0, np.sqrt(q * q + u * u + v * v) / np.where(i > 0.0, i, 1.0), 0.0)
@@ -121,12 +121,12 @@ def _plot_inplane(path: Path, results: Mapping[str, MethodResult], wi: FloatArra
     proj = projected_solid_angle()
     theta = np.arange(N_THETA - 1)  # the horizon row holds the singular cos -> 0 cells
 
-    def profile(i_map, col, smooth):
+    def profile(i_map: FloatArray, col: int, smooth: bool) -> FloatArray:
         """Zenith profile at azimuth ``col``; Monte Carlo maps are averaged (projected solid
         angle weights) over +-2 degrees of azimuth, +-20 near the pole, all of row 0."""
         out = np.empty(theta.size)
         for r in theta:
-            half = 0 if not smooth else (180 if r == 0 else max(2, 20 // r))
+            half: int = 0 if not smooth else (180 if r == 0 else max(2, 20 // int(r)))
             cols = np.arange(col - half, col + half + 1) % N_PHI
             w = proj[r, cols]
             out[r] = np.sum(i_map[r, cols] * w) / np.sum(w)

@@ -111,7 +111,7 @@ def parse_complex(value: object, *, file: str | Path | None = None, key: str | N
     raise UserError(f"cannot read {value!r} as a complex number; expected e.g. 0.23+3.46j or [0.23, 3.46]", file, key)
 
 
-def _check_eps(eps, file, key):
+def _check_eps(eps: complex, file: str | Path | None, key: str) -> None:
     if not (math.isfinite(eps.real) and math.isfinite(eps.imag)):
         raise UserError(f"permittivity must be finite, got {eps}", file, key)
     if eps.imag < 0.0:
@@ -121,7 +121,7 @@ def _check_eps(eps, file, key):
 
 
 def _medium_eps(
-    entry: dict, *, frequency: float, file: str | Path | None, key: str, db: MaterialDB | None = None
+    entry: dict, *, frequency: float | None, file: str | Path | None, key: str, db: MaterialDB | None = None
 ) -> tuple[complex, bool]:
     """(eps, metal) from one of ``n``, ``eps``, ``material``, ``kind: metal``."""
     given = [k for k in ("n", "eps", "material") if k in entry]
@@ -163,7 +163,9 @@ _LAYER_KEYS = ("n", "eps", "material", "kind", "roughness", "thickness", "coatin
 _STACK_KEYS = ("frequency", "wavelength", "ambient", "layers")
 
 
-def _frequency(frequency, wavelength, file, key_f="frequency", key_w="wavelength"):
+def _frequency(
+    frequency: object, wavelength: object, file: str | Path | None, key_f: str = "frequency", key_w: str = "wavelength"
+) -> float | None:
     from pmmw.units import parse_quantity
 
     if frequency is not None and wavelength is not None:
