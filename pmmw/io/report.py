@@ -199,27 +199,19 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
             if _range(stats) != "-":
                 lines += [f"black {_num(stats.get('display_low'))} K, white {_num(stats.get('display_high'))} K", ""]
 
-    if report.get("figures"):
-        lines += [
-            "## Figures",
-            "",
-            "Each channel with its colour bar in kelvin (`output.previews: figures`), on the display "
-            "range of its preview.",
-            "",
-        ]
-        for name, rel in report["figures"].items():
-            lines += [f"### {name}", "", f"![{name}]({_md_link(str(rel))})", ""]
-
-    if report.get("side_by_side"):
-        lines += [
-            "## Ideal and sensor",
-            "",
-            "Left: the ideal image; right: after the imager's PSF and noise. Each on its own display "
-            "range (the coldest and hottest 1/256 of its pixels clip), stated on its colour bar.",
-            "",
-        ]
-        for name, rel in report["side_by_side"].items():
-            lines += [f"### {name}", "", f"![{name}: ideal | sensor]({_md_link(str(rel))})", ""]
+    lines += _image_section(
+        "Figures",
+        "Each channel with its colour bar in kelvin (`output.previews: figures`), on the display range of its preview.",
+        report.get("figures"),
+        "",
+    )
+    lines += _image_section(
+        "Ideal and sensor",
+        "Left: the ideal image; right: after the imager's PSF and noise. Each on its own display "
+        "range (the coldest and hottest 1/256 of its pixels clip), stated on its colour bar.",
+        report.get("side_by_side"),
+        ": ideal | sensor",
+    )
 
     if regions.get("means"):
         chans = list(next(iter(regions["means"].values())).keys())
@@ -320,6 +312,17 @@ def render_markdown(report: Mapping, previews: Mapping[str, str]) -> str:
         lines += ["## Resolved scenario", "", "```yaml", text.rstrip("\n"), "```", ""]
 
     return "\n".join(lines)
+
+
+def _image_section(title: str, intro: str, images: Mapping[str, str] | None, alt: str) -> list[str]:
+    """A section of images, one per channel ({channel: PNG}): its title, a line saying what they
+    are, then each under its channel's name (alt text: the name and ``alt``); none without images."""
+    if not images:
+        return []
+    lines = [f"## {title}", "", intro, ""]
+    for name, rel in images.items():
+        lines += [f"### {name}", "", f"![{name}{alt}]({_md_link(str(rel))})", ""]
+    return lines
 
 
 def _imager_lines(imager: Mapping) -> list[str]:

@@ -578,19 +578,24 @@ def test_a_unit_in_the_wrong_case_is_suggested(text, unit):
         parse_quantity(text, kind, file="--x")
 
 
+def _python_says(code: str) -> list[str]:
+    """The words ``code`` prints in a fresh Python (which modules a first import loads)."""
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+
+
 def test_units_import_without_dask_and_dask_still_imports_after():
     # pint imports Dask (and Jinja2) at its own import when installed: pmmw.units hides it, and
     # the control (dask imported afterwards) shows it is hidden only while pint is imported
-    import subprocess
-    import sys
 
     code = (
         "import sys\nimport pmmw.units as u\n"
         "print('dask' in sys.modules, 'jinja2' in sys.modules, u.parse_quantity('95 gigahertz', 'frequency'))\n"
         "import dask.array\nprint('dask' in sys.modules)\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
-    assert out == ["False", "False", "95000000000.0", "True"]
+    assert _python_says(code) == ["False", "False", "95000000000.0", "True"]
 
 
 # numbers of every magnitude and sign, with digits that no factor divides evenly
@@ -621,13 +626,10 @@ def test_units_parsed_without_pint_are_pints_to_the_bit(kind):
 def test_the_usual_units_need_no_pint():
     # a scenario in the usual units is parsed without importing pint; the control, a unit outside
     # the table, imports it
-    import subprocess
-    import sys
 
     code = (
         "import sys\nfrom pmmw.units import parse_quantity as p\n"
         "p('95 GHz', 'frequency'), p('10 deg', 'angle'), p('15 g/m3', 'density'), p(288, 'temperature')\n"
         "print('pint' in sys.modules)\np('0.5 inch', 'length')\nprint('pint' in sys.modules)\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
-    assert out == ["False", "True"]
+    assert _python_says(code) == ["False", "True"]
