@@ -575,7 +575,7 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
             start()
         while live:
             ready = set(wait([w.conn for w in live] + [w.process.sentinel for w in live], timeout=_WATCH_S))
-            for w in [w for w in live if _stalled(w, time.perf_counter())]:
+            for w in [w for w in live if not w.hung and _stalled(w, time.perf_counter())]:  # once each
                 index = w.tiles[0][0]
                 warn(
                     f"a worker process used no CPU for {_STALL_S:g} s while rendering tile {index}: hung, "
