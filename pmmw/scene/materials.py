@@ -84,7 +84,7 @@ _ENTRY_KEYS = (
 _LAYER_KEYS = ("material", "thickness", "temperature", "roughness")
 _EPS_EXAMPLE = "[eps', eps''] or {35 GHz: [eps', eps''], 95 GHz: [eps', eps'']}"
 _LAYER_EXAMPLE = "{material: ID, thickness: '0.8 mm', temperature: '300 K'}"
-_REL_TOL = 1e-9  # frequencies closer than this (relative) are the same frequency
+FREQ_REL_TOL = 1e-9  # frequencies closer than this (relative) are the same frequency
 Extrapolate = Literal["hold", "trend"]
 EXTRAPOLATE: tuple[str, ...] = get_args(Extrapolate)
 # [-] steepest power law `extrapolate: trend` continues: a f^b steeper than this between two rows is
@@ -270,14 +270,14 @@ class Material:
             return complex(self.eps[0]), False
         fs = self.freqs
         lo, hi = fs[0], fs[-1]
-        if f < lo * (1 - _REL_TOL) or f > hi * (1 + _REL_TOL):
+        if f < lo * (1 - FREQ_REL_TOL) or f > hi * (1 + FREQ_REL_TOL):
             if self.extrapolate != "trend" or len(fs) < 2:
                 return complex(self.eps[0] if f < lo else self.eps[-1]), True
             (f1, e1), (f2, e2) = self._end_rows(f)
             return complex(_trend(f, f1, e1.real, f2, e2.real), _trend(f, f1, e1.imag, f2, e2.imag)), True
         j = bisect.bisect_left(fs, f)  # fs[j - 1] < f <= fs[j]: a table of any length in log time
         for k in (j - 1, j):  # exact hits (and single-frequency tables)
-            if 0 <= k < len(fs) and abs(f - fs[k]) <= _REL_TOL * fs[k]:
+            if 0 <= k < len(fs) and abs(f - fs[k]) <= FREQ_REL_TOL * fs[k]:
                 return complex(self.eps[k]), False
         pair, (e0, e1) = fs[j - 1 : j + 1], self.eps[j - 1 : j + 1]  # np.interp's own formula on its segment
         return complex(
@@ -480,12 +480,12 @@ def _eps(value):
         e = _eps_pair(v, path, problems)
         if f is not None and e is not None:
             rows.append((f, len(rows), k, path, e))
-    # the same frequency twice (to _REL_TOL): neighbours once sorted, so a long table costs n log n
+    # the same frequency twice (to FREQ_REL_TOL): neighbours once sorted, so a long table costs n log n
     table: dict[float, complex] = {}
     kept: tuple[float, Any] | None = None
     twice = []
     for f, i, k, path, e in sorted(rows, key=lambda r: (r[0], r[1])):
-        if kept is not None and abs(f - kept[0]) <= _REL_TOL * f:
+        if kept is not None and abs(f - kept[0]) <= FREQ_REL_TOL * f:
             twice.append((i, path, f"frequency {k!r} given twice (also as {kept[1]!r})"))
             continue
         kept = (f, k)
@@ -1224,7 +1224,7 @@ def format_material(db: MaterialDB, mid: str, f: float | None = None) -> str:
             how = f" (outside the model's range: {mat.outside_note(f)})"
         elif clamped:
             how = f" (outside the table, tabulated {_range_text(mat.freqs)}: {mat.outside_note(f)})"
-        elif mat.freqs and not any(abs(f - g) <= _REL_TOL * g for g in mat.freqs):
+        elif mat.freqs and not any(abs(f - g) <= FREQ_REL_TOL * g for g in mat.freqs):
             how = " (interpolated linearly)"
         row(f"eps at {_fmt_f(f)}", f"{_fmt_eps(value)}{how}")
     row(

@@ -46,6 +46,7 @@ from pmmw.errors import EnvironmentProblem, UserError, exception_text
 from pmmw.io.atomic import write_text_atomic
 from pmmw.io.lock import output_lock
 from pmmw.io.progress import StatusLine, say
+from pmmw.scene.materials import FREQ_REL_TOL
 from pmmw.sweeps.spec import (  # noqa: F401
     MAX_VARIANTS,
     SweepSpec,
@@ -382,8 +383,8 @@ def _row(spec: SweepSpec, out: Path, name: str, params: dict, result: dict) -> d
 
 def _inside(f: float, spans: list) -> bool:
     """Whether f [Hz] lies in one of the closed intervals ``spans`` ([[lo, hi], ...] [Hz], a
-    report's `materials_band`), to the 1e-9 that tells two frequencies apart."""
-    return any(lo * (1 - 1e-9) <= f <= hi * (1 + 1e-9) for lo, hi in spans)
+    report's `materials_band`), to the `FREQ_REL_TOL` that tells two frequencies apart."""
+    return any(lo * (1 - FREQ_REL_TOL) <= f <= hi * (1 + FREQ_REL_TOL) for lo, hi in spans)
 
 
 def write_table(path: Path, table: list[dict]) -> Path:
