@@ -351,7 +351,7 @@ def _numeric_axes(spec: SweepSpec) -> list[tuple[str, dict]]:
     def positions(key):
         pos = spec.axis.get("values") if spec.axis.get("key") == key else None
         pos = pos or _numeric(grid[key])
-        return None if pos is None else dict(zip((_label(spec, key, v) for v in grid[key]), pos))
+        return None if pos is None else dict(zip((_label(spec, key, i) for i in range(len(grid[key]))), pos))
 
     axes = []
     if zipped:

@@ -58,6 +58,7 @@ from pmmw.sweeps.spec import (  # noqa: F401
     load_sweep_file,
     overrides_of,
     parse_grid_options,
+    variant_steps,
     variants,
     zipped_keys,
 )
@@ -201,6 +202,7 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
 
 def _sweep_into(spec: SweepSpec, out: Path, *, resume: bool, quiet: bool) -> int:
     """`run_sweep` in the locked output folder ``out``."""
+    steps = variant_steps(spec)
     combos = variants(spec)
     names = [f"v{i:03d}" for i in range(len(combos))]
     plans, rows = [], {}
@@ -225,7 +227,7 @@ def _sweep_into(spec: SweepSpec, out: Path, *, resume: bool, quiet: bool) -> int
     lost = None  # the address of a Dask scheduler that went away
     if spec.executor == "dask" and plans:
         lost = _render_on_dask(spec, plans, rows, log)
-    table = [_row(spec, out, name, params, rows[name]) for name, params in zip(names, combos)]
+    table = [_row(spec, out, name, step, rows[name]) for name, step in zip(names, steps)]
     write_table(out / "sweep.csv", table)
     from pmmw.sweeps.report import write_report
 
@@ -348,10 +350,12 @@ class _Log:
         )
 
 
-def _row(spec: SweepSpec, out: Path, name: str, params: dict, result: dict) -> dict:
+def _row(spec: SweepSpec, out: Path, name: str, step: dict, result: dict) -> dict:
+    """The table's row of variant ``name``: its values' labels (``step``: each key's position in
+    its list, `variant_steps`), how it went, and its report's numbers."""
     row = {
         "variant": name,
-        **{k: _label(spec, k, v) for k, v in params.items()},
+        **{k: _label(spec, k, i) for k, i in step.items()},
         "status": result["status"],
         "exr": (str(Path(result["exr"]).relative_to(out)) if result.get("exr") else ""),
         "wall_s": result["wall_s"],

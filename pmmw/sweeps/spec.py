@@ -161,11 +161,12 @@ def zipped_keys(spec: SweepSpec) -> list[str]:
     return list(spec.zip)
 
 
-def variants(spec: SweepSpec) -> list[dict]:
-    """Every combination of the grid's values; zipped keys go side by side as one axis (a
-    flight path of poses), in product with the others."""
+def variant_steps(spec: SweepSpec) -> list[dict]:
+    """Every combination of the grid, as each key's position in its list: zipped keys go side by
+    side as one axis (a flight path of poses), in product with the others. Positions, not values,
+    so that a value written twice in a list (a zipped list's control) keeps its own label."""
     zipped = zipped_keys(spec)
-    axes = []  # each axis: a list of {key: value} steps
+    axes = []  # each axis: a list of {key: position} steps
     if zipped:
         lists = [dict(spec.grid)[k] for k in zipped]
         if len({len(v) for v in lists}) != 1:
@@ -182,11 +183,17 @@ def variants(spec: SweepSpec) -> list[dict]:
             spec.source,
         )
     if zipped:
-        axes.append([dict(zip(zipped, c)) for c in zip(*lists)])
-    axes += [[{k: v} for v in values] for k, values in spec.grid if k not in zipped]
+        axes.append([dict.fromkeys(zipped, i) for i in range(lengths[0])])
+    axes += [[{k: i} for i in range(len(values))] for k, values in spec.grid if k not in zipped]
     combos = [dict(kv for step in c for kv in step.items()) for c in itertools.product(*axes)]
     order = [k for k, _ in spec.grid]
     return [{k: c[k] for k in order} for c in combos]
+
+
+def variants(spec: SweepSpec) -> list[dict]:
+    """Every combination of the grid's values (`variant_steps`), as {key: value}."""
+    grid = dict(spec.grid)
+    return [{k: grid[k][i] for k, i in steps.items()} for steps in variant_steps(spec)]
 
 
 def _yaml_value(v: object) -> str:
@@ -198,10 +205,12 @@ def overrides_of(params: dict) -> list[str]:
     return [f"{k}={_yaml_value(v)}" for k, v in params.items()]
 
 
-def _label(spec: SweepSpec, key: str, value: object) -> object:
-    """A value as the table shows it: its name from ``names``, or itself (YAML for lists)."""
+def _label(spec: SweepSpec, key: str, i: int) -> object:
+    """The ``i``-th value of ``key``'s list as the table shows it: its name from ``names``, or
+    itself (YAML for lists)."""
     if key in spec.names:
-        return spec.names[key][[_yaml_value(v) for v in dict(spec.grid)[key]].index(_yaml_value(value))]
+        return spec.names[key][i]
+    value = dict(spec.grid)[key][i]
     return value if isinstance(value, (int, float, str)) else _yaml_value(value)
 
 

@@ -118,6 +118,49 @@ def test_handgun_differs_from_the_torso_by_more_than_the_noise_outdoors():
         assert abs(m["gun"] - m["torso"]) > 4.0, (chan, m)
 
 
+def test_a_plastic_gun_shows_by_its_loss_and_temperature_and_an_empty_holster_not():
+    """configs/cwd_plastic_gun_sweep.yaml's physics, on the ideal image at a quarter of the pixels.
+    A lossier polycarbonate grip absorbs more of what lies behind it and emits more at its own
+    temperature: worn at the holster's 310 K it reads warmer in Ex2 the lossier it is (its
+    emission replaces the skin's reflection of the colder surroundings); the 14 K between 296 and
+    310 K moves the lossiest gun far more than the nearly lossless one, which emits little. The
+    metal gun is the coldest, in both channels. Control: with no gun (`absent`) the grip's place reads warmer than
+    the torso in Ey2, so the nearly lossless gun's contrast there is its own. Margins: each step of
+    the Ex2 ordering > 1 K (seen 3.5 K at least; the variants share their random numbers, so the
+    ~0.5 K Monte Carlo noise of a region's mean mostly cancels); the temperature's effect on the
+    lossless gun under a quarter of that on the lossiest (seen 0.85 against 13.8 K, emission being
+    proportional to absorption); the lossless gun 4 K (the imager's noise) below the empty holster
+    in Ey2 (seen 8.3 K)."""
+    path = REPO / "configs/cwd_outdoor_plastic_gun.yaml"
+    regions = {
+        "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
+        "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
+    }
+
+    def contrast(gun, loss, temperature):
+        job, img = _render(
+            path,
+            [
+                "imager.resolution=[110, 185]",
+                "render.spp=2",
+                f"materials.polycarbonate.eps=[2.74, {loss}]",
+                f"materials.polycarbonate.temperature={temperature}",
+                f"scene[0].materials.gun={gun}",
+            ],
+        )
+        return {chan: (lambda m: m["gun"] - m["torso"])(_means(job, img, regions, chan)) for chan in ("Ex2", "Ey2")}
+
+    losses = (0.00137, 0.0103, 0.0959)  # tan delta 0.0005, 0.0038, 0.035 at eps' 2.74
+    worn = [contrast("polycarbonate", x, "310 K") for x in losses]
+    cool = [contrast("polycarbonate", x, "296 K") for x in (losses[0], losses[-1])]
+    metal, none = contrast("metal", 0.0103, "310 K"), contrast("absent", 0.0103, "310 K")
+    ex = [c["Ex2"] for c in worn]
+    assert all(b - a > 1.0 for a, b in zip(ex, ex[1:])), worn
+    assert abs(worn[0]["Ex2"] - cool[0]["Ex2"]) < 0.25 * abs(worn[-1]["Ex2"] - cool[-1]["Ex2"]), (worn, cool)
+    assert all(metal[k] < c[k] - 1.0 for c in worn + cool for k in ("Ex2", "Ey2")), (metal, worn, cool)
+    assert none["Ey2"] - worn[0]["Ey2"] > 4.0, (none, worn)
+
+
 SAR = REPO / "configs/sar_cessna_95ghz.yaml"
 
 

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from pmmw import pipeline
 from pmmw.errors import UserError
 from pmmw.io.exr import read_exr
-from pmmw.sweeps.run import SweepSpec, linspace, parse_grid_options, variants
+from pmmw.sweeps.run import SweepSpec, linspace, parse_grid_options, variant_steps, variants
 from pmmw_cli.cli import app
 from tests.scenes import ground_and_block
 
@@ -50,6 +50,20 @@ def test_product_zip_and_partial_zip():
     assert [(v["a"], v["b"], v["c"]) for v in part] == [(1, "x", 10), (1, "y", 10), (2, "x", 20), (2, "y", 20)]
     with pytest.raises(UserError, match="one length"):
         variants(SweepSpec(Path("s.yaml"), [("a", [1, 2]), ("b", [1])], zip=True))
+
+
+def test_a_value_written_twice_keeps_the_label_of_its_place():
+    """A zipped list may hold one value twice (a control row beside the others, as
+    configs/cwd_plastic_gun_sweep.yaml's metal gun): each variant's row takes the label of its own
+    place in the list, not of the value's first place."""
+    from pmmw.sweeps.run import _row
+
+    grid = [("eps", [[2.7, 0.001], [2.7, 0.01], [2.7, 0.01]]), ("gun", ["plastic", "plastic", "metal"])]
+    spec = SweepSpec(Path("s.yaml"), grid, zip=True, names={"eps": ["low", "mid", "(metal)"]})
+    failed = {"status": "failed: not rendered", "exr": "", "wall_s": 0.0}
+    rows = [_row(spec, Path("out"), f"v{i}", step, failed) for i, step in enumerate(variant_steps(spec))]
+    assert [(r["eps"], r["gun"]) for r in rows] == [("low", "plastic"), ("mid", "plastic"), ("(metal)", "metal")]
+    assert [v["eps"] for v in variants(spec)] == [[2.7, 0.001], [2.7, 0.01], [2.7, 0.01]]
 
 
 def test_linspace_with_and_without_units():
