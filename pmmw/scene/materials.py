@@ -1282,7 +1282,7 @@ def plot_materials(
                 ax.axhline(v, color=colour, ls="--", label=f"{mid} (one value at every frequency)")
             continue
         e = np.array([mat._lookup(f)[0] for f in fs])
-        inside = (fs >= mat.freqs[0] * (1 - 1e-9)) & (fs <= mat.freqs[-1] * (1 + 1e-9))
+        inside = (fs >= mat.freqs[0] * (1 - FREQ_REL_TOL)) & (fs <= mat.freqs[-1] * (1 + FREQ_REL_TOL))
         tf = np.array(mat.freqs) / 1e9
         te = np.array(mat.eps)
         below, above = fs < mat.freqs[0], fs > mat.freqs[-1]

@@ -63,7 +63,9 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
     snr_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.startswith("snr ")]
     k_cols = [f"contrast {' '.join(_pair_channel(c))} [K]" for c in snr_cols]
     det_cols = [c.replace("snr ", "detectable ", 1) for c in snr_cols]
-    head = ["variant", *keys, "status", *k_cols, *snr_cols, *det_cols]
+    any_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.endswith(" in any channel")]
+    best_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.startswith("best channel ")]
+    head = ["variant", *keys, "status", *k_cols, *snr_cols, *det_cols, *best_cols, *any_cols]
     lines.append("| " + " | ".join(head) + " |")
     lines.append("| " + " | ".join("---" for _ in head) + " |")
     for r in table:
@@ -79,6 +81,7 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
             "",
         ]
         lines += _detection_lines(spec, table, snr_cols)
+        lines += _any_channel_lines(table, any_cols)
     limit_lines, limit_plots = _limits_against(out, spec, table, snr_cols)
     lines += limit_lines
     lines += _warning_lines(out, table)
@@ -147,6 +150,22 @@ def _detection_lines(spec: SweepSpec, table: list[dict], snr_cols: list[str]) ->
             if x_key and len(rows) > 1:
                 lines[-1] += f"; {_limit_words(_axis_label(spec, x_key), _limit(rows, col, x_key, x_of))}"
     return lines + [""]
+
+
+def _any_channel_lines(table: list[dict], any_cols: list[str]) -> list[str]:
+    """Per contrast, the variants detectable in some channel (each variant's own verdict, as its
+    report.md states it), where the lines above judge the lead channel only."""
+    lines = []
+    for col in any_cols:
+        pair = col.removeprefix("detectable ").removesuffix(" in any channel")
+        done = [r for r in table if r["status"] == "done" and col in r]
+        yes = [r["variant"] for r in done if r[col]]
+        no = [r["variant"] for r in done if not r[col]]
+        words = (f"detectable in {', '.join(yes)}" if yes else "not detectable") + (
+            f"; not in {', '.join(no)}" if yes and no else f" in {', '.join(no)}" if no else ""
+        )
+        lines.append(f"- {pair} (in any channel, each variant's own verdict): {words}")
+    return lines + ([""] if lines else [])
 
 
 def _limit(rows: list[dict], col: str, x_key: str, x_of: dict) -> dict:

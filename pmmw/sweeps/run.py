@@ -203,7 +203,7 @@ def run_sweep(spec: SweepSpec, *, resume: bool = False, quiet: bool = False, dry
 def _sweep_into(spec: SweepSpec, out: Path, *, resume: bool, quiet: bool) -> int:
     """`run_sweep` in the locked output folder ``out``."""
     steps = variant_steps(spec)
-    combos = variants(spec)
+    combos = variants(spec, steps)
     names = [f"v{i:03d}" for i in range(len(combos))]
     plans, rows = [], {}
     for name, params in zip(names, combos):
@@ -382,6 +382,11 @@ def _row(spec: SweepSpec, out: Path, name: str, step: dict, result: dict) -> dic
                 row[f"detectable {pair} {lead}"] = chans[lead]["detectable"]
                 row[f"snr_stderr {pair} {lead}"] = chans[lead].get("snr_stderr")
                 row[f"pd {pair} {lead}"] = chans[lead].get("pd")
+            judged = {c: v for c, v in chans.items() if isinstance(v.get("snr"), (int, float))}
+            if judged:  # the variant's own verdict: the criterion in every channel (report.json's `verdicts`)
+                best = max(judged, key=lambda c: judged[c]["snr"])
+                row[f"detectable {pair} in any channel"] = any(bool(v.get("detectable")) for v in judged.values())
+                row[f"best channel {pair}"] = f"{best} (SNR {judged[best]['snr']:.3g})"
     return row
 
 

@@ -190,10 +190,11 @@ def variant_steps(spec: SweepSpec) -> list[dict]:
     return [{k: c[k] for k in order} for c in combos]
 
 
-def variants(spec: SweepSpec) -> list[dict]:
-    """Every combination of the grid's values (`variant_steps`), as {key: value}."""
+def variants(spec: SweepSpec, steps: list[dict] | None = None) -> list[dict]:
+    """Every combination of the grid's values, as {key: value}: ``steps`` (`variant_steps`, made
+    here when not given) with each position replaced by its value."""
     grid = dict(spec.grid)
-    return [{k: grid[k][i] for k, i in steps.items()} for steps in variant_steps(spec)]
+    return [{k: grid[k][i] for k, i in step.items()} for step in (variant_steps(spec) if steps is None else steps)]
 
 
 def _yaml_value(v: object) -> str:

@@ -1,5 +1,7 @@
 """The imager model (Murakowski 2014 sec. 2.2.8) against closed forms of the Airy pattern."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.special import j1
@@ -8,6 +10,7 @@ from pmmw.config.load import load_scenario
 from pmmw.imaging.imager import PSF_ENERGY_TAIL, airy, apply_imager, blur, kernel_extent, psf_kernel
 
 C0 = 299_792_458.0
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_airy_matches_closed_form_and_first_zero():
@@ -72,10 +75,10 @@ def test_the_airy_kernel_s_near_energy_against_the_exact_pixels(name, low_pct):
     sub-samples are the kernel's own, so only the geometry differs. Tolerance: the doc's last digit
     (half a unit of it), so a change in the kernel's tails or sizing that the doc would no longer
     describe fails here."""
-    s = load_scenario(f"configs/{name}.yaml", [])
+    s = load_scenario(REPO / "configs" / f"{name}.yaml", [])
     k0, d = 2 * np.pi * s.frequencies[0] / C0, s.imager.aperture_diameter
     half, width = np.tan(s.imager.fov / 2), s.imager.resolution[0]
-    pixel_angle, pitch = 2 * np.arctan(half / width), 2 * half / width
+    pixel_angle, pitch = 2 * np.arctan(half / width), 2 * half / width  # Camera.pixel_angle's formula
     kern = psf_kernel(pixel_angle, k0, d)
     r = kern.shape[0] // 2
     offs = kernel_extent(pixel_angle, k0, d / 2, r)[1]

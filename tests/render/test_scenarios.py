@@ -118,7 +118,7 @@ def test_handgun_differs_from_the_torso_by_more_than_the_noise_outdoors():
         assert abs(m["gun"] - m["torso"]) > 4.0, (chan, m)
 
 
-def test_a_plastic_gun_shows_by_its_loss_and_temperature_and_an_empty_holster_not():
+def test_a_plastic_gun_shows_by_its_loss_and_temperature_against_an_empty_holster():
     """configs/cwd_plastic_gun_sweep.yaml's physics, on the ideal image at a quarter of the pixels.
     A lossier polycarbonate grip absorbs more of what lies behind it and emits more at its own
     temperature: worn at the holster's 310 K it reads warmer in Ex2 the lossier it is (its
@@ -130,7 +130,8 @@ def test_a_plastic_gun_shows_by_its_loss_and_temperature_and_an_empty_holster_no
     ~0.5 K Monte Carlo noise of a region's mean mostly cancels); the temperature's effect on the
     lossless gun under a quarter of that on the lossiest (seen 0.85 against 13.8 K, emission being
     proportional to absorption); the lossless gun 4 K (the imager's noise) below the empty holster
-    in Ey2 (seen 8.3 K)."""
+    in Ey2 (seen 8.3 K), the empty holster itself warmer than the torso there (seen +1.9 K, about four
+    times the noise of a region's mean)."""
     path = REPO / "configs/cwd_outdoor_plastic_gun.yaml"
     regions = {
         "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
@@ -150,15 +151,15 @@ def test_a_plastic_gun_shows_by_its_loss_and_temperature_and_an_empty_holster_no
         )
         return {chan: (lambda m: m["gun"] - m["torso"])(_means(job, img, regions, chan)) for chan in ("Ex2", "Ey2")}
 
-    losses = (0.00137, 0.0103, 0.0959)  # tan delta 0.0005, 0.0038, 0.035 at eps' 2.74
+    losses = (0.00137, 0.0104, 0.0959)  # tan delta 0.0005, 0.0038, 0.035 at eps' 2.74
     worn = [contrast("polycarbonate", x, "310 K") for x in losses]
     cool = [contrast("polycarbonate", x, "296 K") for x in (losses[0], losses[-1])]
-    metal, none = contrast("metal", 0.0103, "310 K"), contrast("absent", 0.0103, "310 K")
+    metal, none = contrast("metal", 0.0104, "310 K"), contrast("absent", 0.0104, "310 K")
     ex = [c["Ex2"] for c in worn]
     assert all(b - a > 1.0 for a, b in zip(ex, ex[1:])), worn
     assert abs(worn[0]["Ex2"] - cool[0]["Ex2"]) < 0.25 * abs(worn[-1]["Ex2"] - cool[-1]["Ex2"]), (worn, cool)
     assert all(metal[k] < c[k] - 1.0 for c in worn + cool for k in ("Ex2", "Ey2")), (metal, worn, cool)
-    assert none["Ey2"] - worn[0]["Ey2"] > 4.0, (none, worn)
+    assert none["Ey2"] > 0.0 and none["Ey2"] - worn[0]["Ey2"] > 4.0, (none, worn)
 
 
 SAR = REPO / "configs/sar_cessna_95ghz.yaml"
