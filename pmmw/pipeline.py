@@ -328,10 +328,12 @@ def atmosphere_summary(job: TraceJob) -> dict:
 
 
 def _target_distance(job: TraceJob) -> float:
-    """Distance along the optical axis to the scene (first hit of the central ray), or 1 km."""
+    """Distance along the optical axis to the scene (first hit of the central ray), or 1 km. One
+    ray: the NumPy intersector, so that this process builds no Embree scene and its next render's
+    workers are forked (`trace.pool._context`)."""
     from pmmw.trace.intersect import make_intersector
 
-    isect = make_intersector(job.vertices, job.faces)
+    isect = make_intersector(job.vertices, job.faces, kind="numpy")
     t, _ = isect.intersect(job.camera.position[None, :], job.camera.k[None, :])
     return float(t[0]) if np.isfinite(t[0]) else 1000.0
 

@@ -35,6 +35,17 @@ RAY_EPS_ULPS = 8
 RAY_EPS_FLOOR = 1e-9  # [m]
 
 
+_embree_built = False  # whether this process has built an Embree scene (`embree_used`)
+
+
+def embree_used() -> bool:
+    """Whether this process has built an Embree scene. Embree's thread pool (TBB) then has threads
+    of its own, and a process forked from this one copies the pool without them: its own scene
+    build can wait for good on a lock one of them held at the fork (seen once), so
+    `pmmw.trace.pool` spawns its workers instead of forking them."""
+    return _embree_built
+
+
 # Distances come from the face plane in float64 when |cos(ray, normal)| exceeds this; at more
 # grazing incidence the plane equation amplifies rounding and Embree's float32 tfar is used.
 _REFINE_MIN_COS = 1e-6
@@ -103,8 +114,10 @@ class EmbreeIntersector(_TriangleSoup):
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
 
+        global _embree_built
         self._scene = None
         if self.n_faces:
+            _embree_built = True  # before the build: a build interrupted midway has started the pool too
             self._scene = rtcore_scene.EmbreeScene()
             tri32 = np.ascontiguousarray(self.vertices[self.faces], dtype=EMBREE_DTYPE)
             TriangleMesh(self._scene, tri32)

@@ -23,6 +23,7 @@ SIGINT; the parent kills and reaps them on every way out (`pmmw.interrupt`).
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import mmap
 import multiprocessing as mp
@@ -32,6 +33,7 @@ import signal
 import sys
 import time
 import traceback
+import types
 from collections import deque
 from dataclasses import dataclass
 from multiprocessing.connection import wait
@@ -45,7 +47,7 @@ from pmmw.io.atomic import save_npz_atomic
 from pmmw.trace import kernels
 from pmmw.trace.compile import compile_kernels
 from pmmw.trace.integrator import Integrator, TileResult, prime
-from pmmw.trace.intersect import make_intersector
+from pmmw.trace.intersect import embree_used, make_intersector
 from pmmw.trace.job import TraceJob
 
 _WORKER: Integrator | None = None
@@ -336,7 +338,7 @@ def render_tiles(
     workers = min(workers, max(1, len(todo)))
     if todo and client is None:
         with timings.phase("kernels"):
-            prepare_kernels(job, notify, intersector)
+            prepare_kernels(job, notify)
         timings.mark("kernels loaded")
     start = time.perf_counter()
     rays = sum(r.rays for r in results.values())
@@ -385,11 +387,13 @@ def kernels_to_compile(job: TraceJob) -> bool:
     return job.media.any_rough and not jit.is_cached("surface/kernels.py", "settle")
 
 
-def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
+def prepare_kernels(job: TraceJob, notify=None) -> float:
     """Compile (once after an install or an update) or load the tracer's kernels in this process,
     telling ``notify`` (a callable taking one line) before and after when they are not cached yet;
     then one pixel of the job is traced here, so that the camera's, sky's and atmosphere's compiled
-    code is ready too and the first tile's time is its own. Returns the seconds it took."""
+    code is ready too and the first tile's time is its own (with the NumPy intersector: Embree
+    here would make the workers spawned rather than forked, `_context`). Returns the seconds it
+    took."""
     cold = kernels_to_compile(job)
     if cold and notify is not None:
         notify(
@@ -403,7 +407,9 @@ def prepare_kernels(job: TraceJob, notify=None, kind: str = "embree") -> float:
         kernels.warm(job.settings.stack_size, rough=job.media.any_rough)
     if cold:  # the camera's, sky's and atmosphere's compiled code too, with this job's types: one pixel
         idx, x0, y0 = job.tiles()[0][:3]
-        Integrator(job, make_intersector(job.vertices, job.faces, kind=kind)).render_tile((idx, x0, y0, x0 + 1, y0 + 1))
+        Integrator(job, make_intersector(job.vertices, job.faces, kind="numpy")).render_tile(
+            (idx, x0, y0, x0 + 1, y0 + 1)
+        )
     took = time.perf_counter() - t0
     if cold and notify is not None:
         notify(f"kernels compiled in {took:.0f} s; rendering")
@@ -544,9 +550,35 @@ _KEPT = "finished tiles are kept: run again with --resume"
 _IN_FLIGHT = 2  # tiles sent to a worker ahead of its results (`_render_on_workers`)
 
 
+def _context():
+    """How the workers start: forked on Linux (they inherit the loaded kernels and the sky tables,
+    and start at once), spawned elsewhere, and spawned on Linux too once this process has built an
+    Embree scene (`intersect.embree_used`: a fork then copies Embree's thread pool without its
+    threads, and a worker's own scene build can wait for good on a lock they held). The command
+    line's renders never build one here (`prepare_kernels`' pixel uses the NumPy intersector); the
+    Python API's and the tests' renders in this process (``workers=1``) do. A spawned worker costs
+    about 1 s more to start (it imports pmmw and loads the cached kernels)."""
+    fork = sys.platform.startswith("linux") and not embree_used()
+    return mp.get_context("fork" if fork else "spawn")
+
+
+@contextlib.contextmanager
+def _bare_main():
+    """An empty ``__main__`` while a spawned worker starts. Multiprocessing has a spawned process
+    run the parent's main script again (as ``__mp_main__``), for the functions it may define: an
+    unguarded script would render again in each worker, and ``python -`` fails (no file
+    '<stdin>'). A worker needs pmmw alone, so it is given no main script to run."""
+    main = sys.modules["__main__"]
+    sys.modules["__main__"] = types.ModuleType("__main__")
+    try:
+        yield
+    finally:
+        sys.modules["__main__"] = main
+
+
 def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
     """Render the tiles ``todo`` on ``n`` worker processes, calling ``collect`` with each result."""
-    ctx = mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
+    ctx = _context()
     forked = ctx.get_start_method() == "fork"
     if forked:  # the kernels are compiled or loaded here already (`prepare_kernels`): every worker inherits them
         with timings.phase("sky tables"):
@@ -565,7 +597,8 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
         slots = _Slots(_IN_FLIGHT, pixels) if forked else None
         with interrupt.deferred():
             p = ctx.Process(target=_work, args=(theirs, job, kind, inherited, slots), daemon=True)
-            p.start()
+            with contextlib.nullcontext() if forked else _bare_main():
+                p.start()
             live.append(_Worker(p, ours, slots))
         theirs.close()
 

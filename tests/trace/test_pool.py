@@ -15,6 +15,14 @@ from pmmw.trace import pool
 REPO = Path(__file__).resolve().parents[2]
 
 
+def _forked(monkeypatch):
+    """Workers forked whatever this process rendered before (`pool._context` spawns them once it
+    has built an Embree scene), for a test whose patch of the pool the workers must inherit."""
+    import multiprocessing as mp
+
+    monkeypatch.setattr(pool, "_context", lambda: mp.get_context("fork"))
+
+
 def test_workers_return_every_array_of_every_tile_as_one_process_renders_it():
     # adaptive sampling (per-pixel sample counts differ), tiles of three sizes (37 x 21 in tiles
     # of 8: the slots that held a full tile then hold smaller ones), more tiles than slots
@@ -244,6 +252,7 @@ def test_the_first_estimate_leaves_out_the_workers_start_up(monkeypatch):
         return real_init(job, kind)
 
     monkeypatch.setattr(pool, "_init_worker", slow_init)
+    _forked(monkeypatch)
     calls = []
     pool.render_tiles(job, workers=2, progress=lambda d, t, r, e, left: calls.append((d, t, e, left)))
     done, total, elapsed, left = calls[0]
@@ -316,6 +325,7 @@ def test_a_hung_worker_is_stopped_and_its_tile_rendered_again(tmp_path, monkeypa
         return render(tile)
 
     monkeypatch.setattr(pool, "_render", hang_once)  # the forked workers inherit it
+    _forked(monkeypatch)  # this process rendered in-process just before
     two = pool.render_tiles(job, workers=2)
     assert marker.exists() and [w for w in collected_warnings() if "used no CPU for 1 s" in w]
     for a, b in zip(one, two):
@@ -335,6 +345,53 @@ def test_a_tile_that_hangs_twice_stops_the_render_naming_the_hang(monkeypatch):
     monkeypatch.setattr(pool, "_STALL_S", 1.0)
     monkeypatch.setattr(pool, "_WATCH_S", 0.2)
     monkeypatch.setattr(pool, "_render", lambda tile: time.sleep(3600))
+    _forked(monkeypatch)
     with pytest.raises(EnvironmentProblem, match=r"hung \(no CPU for 1 s; stopped\)") as ex:
         pool.render_tiles(job, workers=2)
     assert "memory" not in str(ex.value)
+
+
+_AFTER_EMBREE = """
+import contextlib, sys
+import numpy as np
+from pmmw.pipeline import make_job, resolve
+from pmmw.trace import intersect, pool
+if sys.argv[1:] == ["unguarded"]:  # the control: the spawned workers get the main script
+    pool._bare_main = contextlib.nullcontext
+print("main script runs", flush=True)
+if __name__ == "__mp_main__":  # a worker running this script (the control): no further
+    sys.exit(0)
+res = resolve(%r, ["imager.resolution=[24, 16]", "render.tile=8", "render.spp=1"])
+job = make_job(res, res.scenario.frequencies[0])
+a = pool.render_tiles(job, workers=2)
+print("after a pooled render:", intersect.embree_used(), pool._context().get_start_method(), flush=True)
+b = pool.render_tiles(job, workers=1)
+print("after an in-process one:", intersect.embree_used(), pool._context().get_start_method(), flush=True)
+c = pool.render_tiles(job, workers=2)
+same = all(np.array_equal(getattr(x, n), getattr(y, n)) for r in (b, c) for x, y in zip(a, r) for n, _ in pool._PLANES)
+print("the same image:", same)
+"""
+
+
+def test_after_building_an_embree_scene_a_process_spawns_its_workers_without_its_main_script(tmp_path):
+    """A process that has built an Embree scene (an in-process render, as the Python API and the
+    tests do) spawns its render workers rather than forking them: a fork copies Embree's thread
+    pool without its threads, and a worker once waited for good on a lock they held. The command
+    line's own renders never build one in the parent, so they fork (the first render here). The
+    spawned workers render the same image, and do not run the parent's main script: read from
+    stdin (`python -`, which multiprocessing's spawn cannot re-run) here, printed once. Control: with
+    the main script given to the workers (multiprocessing's default), a script file run so prints
+    its line again in each worker."""
+    script = _AFTER_EMBREE % str(REPO / "configs" / "cinderblocks_35ghz.yaml")
+    out = subprocess.run([sys.executable, "-"], input=script, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-3000:]
+    lines = out.stdout.splitlines()
+    assert lines.count("main script runs") == 1, out.stdout
+    assert "after a pooled render: False fork" in lines and "after an in-process one: True spawn" in lines
+    assert "the same image: True" in lines, out.stdout
+    path = tmp_path / "unguarded.py"
+    path.write_text(script)
+    control = subprocess.run(
+        [sys.executable, str(path), "unguarded"], capture_output=True, text=True, timeout=300, cwd=tmp_path
+    )
+    assert control.stdout.splitlines().count("main script runs") > 1, (control.stdout, control.stderr[-2000:])
