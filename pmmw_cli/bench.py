@@ -267,7 +267,6 @@ def scaling(levels=(2, 3, 4, 5, 6, 7, 8), resolution=(128, 128), spp=4, workers=
 
     from pmmw.scene.camera import Camera
     from pmmw.scene.sky import UniformSky
-    from pmmw.trace.intersect import make_intersector
     from pmmw.trace.job import Media, RenderSettings, TraceJob
 
     workers = workers or default_workers()
@@ -303,9 +302,7 @@ def scaling(levels=(2, 3, 4, 5, 6, 7, 8), resolution=(128, 128), spp=4, workers=
             35e9,
             RenderSettings(spp=spp, max_depth=6, threshold=1e-3, tile=64),
         )
-        t0 = time.perf_counter()
-        make_intersector(verts, faces)
-        build = time.perf_counter() - t0
+        build = _in_a_fork(_build_seconds, verts, faces, 1)[0]
         img, wall = _render(job, workers)
         rows.append(
             {"triangles": int(len(faces)), "build_s": build, "wall_s": wall, "isect_s": img.t_isect, "rays": img.rays}
@@ -431,6 +428,29 @@ class _RecordingSky:
         return getattr(self._inner, name)
 
 
+def _in_a_fork(fn, *args):
+    """``fn(*args)`` in a forked child process: what builds an Embree scene stays out of this one,
+    so that the renders measured here fork their workers as the command line's do, rather than
+    spawning them (`pmmw.trace.pool._context`), which would add their start-up to the times."""
+    import concurrent.futures
+    import multiprocessing
+
+    with concurrent.futures.ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as ex:
+        return ex.submit(fn, *args).result()
+
+
+def _build_seconds(vertices, faces, repeats):
+    """Seconds to build the Embree scene of this triangle soup, ``repeats`` times."""
+    from pmmw.trace.intersect import make_intersector
+
+    out = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        make_intersector(vertices, faces)
+        out.append(time.perf_counter() - t0)
+    return out
+
+
 def _instrumented(job):
     """One in-process render that counts hits per medium, ambient segments sent to the layered
     atmosphere, and records the rays that reach the sky."""
@@ -512,7 +532,6 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
     from pmmw.imaging.imager import error_footprint
     from pmmw.scene.sky import AtmosphereSky
     from pmmw.trace.integrator import atmosphere_skip_length
-    from pmmw.trace.intersect import make_intersector
     from pmmw.trace.job import BLACKBODY, METAL, OPAQUE
 
     workers = workers or default_workers()
@@ -528,16 +547,11 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
         per_ray = row["render_s"] * workers / img.rays
 
         # geometry and Embree scene once per worker, not per tile
-        builds = []
-        for _ in range(3):
-            t0 = time.perf_counter()
-            make_intersector(job.vertices, job.faces)
-            builds.append(time.perf_counter() - t0)
-        row["build_s"] = float(np.median(builds))
+        row["build_s"] = float(np.median(_in_a_fork(_build_seconds, job.vertices, job.faces, 3)))
         row["tiles"] = len(job.tiles())
 
         # no transmitted branch into metal, blackbody, opaque: one child per such hit avoided
-        inst = _instrumented(job)
+        inst = _in_a_fork(_instrumented, job)
         sinks = np.isin(job.media.kind, (METAL, BLACKBODY, OPAQUE))
         row["sink_hits"] = int(inst["hits"][sinks].sum())
         row["sink_child_s"] = row["sink_hits"] * per_ray / workers
@@ -562,7 +576,7 @@ def skips(configs, *, workers=None, cache_dir=Path(".pmmw-cache"), ref_spp=32):
             off = dataclasses.replace(j, settings=dataclasses.replace(j.settings, atmosphere_tolerance=0.0))
             a["with_s"], a["none_s"] = _paired(workers, j, dataclasses.replace(j, atmosphere=None))
             a["skip_on_s"], a["skip_off_s"] = _paired(workers, j, off)
-            i_on, i_off = _instrumented(j), _instrumented(off)
+            i_on, i_off = _in_a_fork(_instrumented, j), _in_a_fork(_instrumented, off)
             a["segments_on"], a["segments_off"] = i_on["atm_segments"], i_off["atm_segments"]
             a["path_on_s"], a["path_off_s"], a["inproc_s"] = i_on["atm_path_s"], i_off["atm_path_s"], i_off["wall_s"]
             # the bias of the skip alone: deterministic termination, so that no random stream shifts
