@@ -440,9 +440,11 @@ def _in_a_fork(fn, *args):
 
 
 def _build_seconds(vertices, faces, repeats):
-    """Seconds to build the Embree scene of this triangle soup, ``repeats`` times."""
+    """Seconds to build the Embree scene of this triangle soup, ``repeats`` times, after a
+    one-triangle build that starts Embree (its device, once per process) untimed."""
     from pmmw.trace.intersect import make_intersector
 
+    make_intersector(np.eye(3), np.array([[0, 1, 2]]))
     out = []
     for _ in range(repeats):
         t0 = time.perf_counter()

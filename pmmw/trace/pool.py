@@ -25,12 +25,14 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import dataclasses
 import mmap
 import multiprocessing as mp
 import os
 import pickle
 import signal
 import sys
+import threading
 import time
 import traceback
 import types
@@ -301,7 +303,10 @@ def render_tiles(
     ----------
     job : TraceJob
     workers : int, optional
-        Processes; default all cores. 1 renders in this process.
+        Processes; default all cores, at most one per tile to render. 1 renders in this process
+        (which then has built an Embree scene: its later renders spawn their workers, `_context`);
+        more than 1 renders on worker processes even when one tile is left, so that a command
+        line render's own process builds none.
     tile_dir : Path, optional
         Where finished tiles are saved (and, with ``resume``, loaded from).
     progress : callable(done, total, rays, elapsed, left), optional
@@ -334,8 +339,8 @@ def render_tiles(
     todo = [t for t in tiles if t[0] not in results]
     if counts is not None:
         counts.update(reused=len(tiles) - len(todo), rendered=len(todo))
-    workers = default_workers() if workers is None else max(1, int(workers))
-    workers = min(workers, max(1, len(todo)))
+    asked = default_workers() if workers is None else max(1, int(workers))
+    workers = min(asked, max(1, len(todo)))
     if todo and client is None:
         with timings.phase("kernels"):
             prepare_kernels(job, notify)
@@ -364,7 +369,7 @@ def render_tiles(
                 f"the Dask scheduler at {e} went away during the render ({len(results)} of "
                 f"{len(tiles)} tiles done{kept})"
             ) from None
-    elif todo and workers == 1:
+    elif todo and asked == 1:
         timings.mark("first tile sent")
         timings.add(WORKER_SETUP, _init_worker(job, intersector))
         timings.mark("first ray")
@@ -407,7 +412,9 @@ def prepare_kernels(job: TraceJob, notify=None) -> float:
         kernels.warm(job.settings.stack_size, rough=job.media.any_rough)
     if cold:  # the camera's, sky's and atmosphere's compiled code too, with this job's types: one pixel
         idx, x0, y0 = job.tiles()[0][:3]
-        Integrator(job, make_intersector(job.vertices, job.faces, kind="numpy")).render_tile(
+        # at 1 spp: the NumPy intersector is O(faces) per ray, and one sample compiles as many
+        one = dataclasses.replace(job, settings=dataclasses.replace(job.settings, spp=1))
+        Integrator(one, make_intersector(job.vertices, job.faces, kind="numpy")).render_tile(
             (idx, x0, y0, x0 + 1, y0 + 1)
         )
     took = time.perf_counter() - t0
@@ -557,22 +564,35 @@ def _context():
     threads, and a worker's own scene build can wait for good on a lock they held). The command
     line's renders never build one here (`prepare_kernels`' pixel uses the NumPy intersector); the
     Python API's and the tests' renders in this process (``workers=1``) do. A spawned worker costs
-    about 1 s more to start (it imports pmmw and loads the cached kernels)."""
+    about 1 s more to start on 2 cores (it imports pmmw, loads the cached kernels and builds the
+    sky tables itself; more when the workers outnumber the cores), and its tiles' arrays come back
+    through its pipe rather than shared memory (`_Slots`: a few per cent)."""
     fork = sys.platform.startswith("linux") and not embree_used()
     return mp.get_context("fork" if fork else "spawn")
 
 
 @contextlib.contextmanager
-def _bare_main():
-    """An empty ``__main__`` while a spawned worker starts. Multiprocessing has a spawned process
-    run the parent's main script again (as ``__mp_main__``), for the functions it may define: an
-    unguarded script would render again in each worker, and ``python -`` fails (no file
-    '<stdin>'). A worker needs pmmw alone, so it is given no main script to run."""
+def _spawning():
+    """While a spawned worker starts (within `interrupt.deferred`):
+
+    - an empty ``__main__``. Multiprocessing has a spawned process run the parent's main script
+      again (as ``__mp_main__``), for the functions it may define: an unguarded script would
+      render again in each worker, and ``python -`` fails (no file '<stdin>'). A worker needs
+      pmmw's code alone; a job holding an object of a class defined in the main script cannot be
+      sent to it (a PicklingError names the class), nor to a Dask worker.
+    - SIGINT ignored, which the new process keeps through its exec until `interrupt.as_worker`
+      ignores it for good: a Ctrl-C while it imports pmmw would end it with a traceback. SIGINT is
+      blocked here, so one that comes meanwhile waits for the parent's own handler (in the main
+      thread only: signal handlers are the main thread's)."""
     main = sys.modules["__main__"]
     sys.modules["__main__"] = types.ModuleType("__main__")
+    quiet = threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is not None
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN) if quiet else None
     try:
         yield
     finally:
+        if quiet:
+            signal.signal(signal.SIGINT, old)
         sys.modules["__main__"] = main
 
 
@@ -597,7 +617,7 @@ def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
         slots = _Slots(_IN_FLIGHT, pixels) if forked else None
         with interrupt.deferred():
             p = ctx.Process(target=_work, args=(theirs, job, kind, inherited, slots), daemon=True)
-            with contextlib.nullcontext() if forked else _bare_main():
+            with contextlib.nullcontext() if forked else _spawning():
                 p.start()
             live.append(_Worker(p, ours, slots))
         theirs.close()

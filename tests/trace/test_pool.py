@@ -1,7 +1,9 @@
 """The worker pool hands back exactly what one process renders: every array of every tile, with
 the tiles' arrays coming back through memory shared with the forked workers (`pool._Slots`)."""
 
+import contextlib
 import platform
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -357,7 +359,7 @@ import numpy as np
 from pmmw.pipeline import make_job, resolve
 from pmmw.trace import intersect, pool
 if sys.argv[1:] == ["unguarded"]:  # the control: the spawned workers get the main script
-    pool._bare_main = contextlib.nullcontext
+    pool._spawning = contextlib.nullcontext
 print("main script runs", flush=True)
 if __name__ == "__mp_main__":  # a worker running this script (the control): no further
     sys.exit(0)
@@ -370,6 +372,9 @@ print("after an in-process one:", intersect.embree_used(), pool._context().get_s
 c = pool.render_tiles(job, workers=2)
 same = all(np.array_equal(getattr(x, n), getattr(y, n)) for r in (b, c) for x, y in zip(a, r) for n, _ in pool._PLANES)
 print("the same image:", same)
+other = make_job(resolve(%r, ["imager.resolution=[24, 16]", "render.tile=8", "render.spp=1", "render.seed=9"]), job.frequency)
+d = pool.render_tiles(other, workers=2)  # the control of "the same": another seed's image differs
+print("another seed's differs:", not all(np.array_equal(x.mean, y.mean) for x, y in zip(a, d)))
 """
 
 
@@ -382,16 +387,42 @@ def test_after_building_an_embree_scene_a_process_spawns_its_workers_without_its
     stdin (`python -`, which multiprocessing's spawn cannot re-run) here, printed once. Control: with
     the main script given to the workers (multiprocessing's default), a script file run so prints
     its line again in each worker."""
-    script = _AFTER_EMBREE % str(REPO / "configs" / "cinderblocks_35ghz.yaml")
+    script = _AFTER_EMBREE % ((str(REPO / "configs" / "cinderblocks_35ghz.yaml"),) * 2)
     out = subprocess.run([sys.executable, "-"], input=script, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-3000:]
     lines = out.stdout.splitlines()
     assert lines.count("main script runs") == 1, out.stdout
     assert "after a pooled render: False fork" in lines and "after an in-process one: True spawn" in lines
-    assert "the same image: True" in lines, out.stdout
+    assert "the same image: True" in lines and "another seed's differs: True" in lines, out.stdout
     path = tmp_path / "unguarded.py"
     path.write_text(script)
     control = subprocess.run(
         [sys.executable, str(path), "unguarded"], capture_output=True, text=True, timeout=300, cwd=tmp_path
     )
     assert control.stdout.splitlines().count("main script runs") > 1, (control.stdout, control.stderr[-2000:])
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc (Linux)")
+def test_a_spawned_worker_ignores_ctrl_c_from_its_start():
+    """A spawned worker starts a new interpreter, which does not keep the parent's blocked signals
+    (`interrupt.deferred`): a Ctrl-C while it imports pmmw would end it with a traceback before
+    `interrupt.as_worker` ignores SIGINT. Started within `_spawning` it ignores SIGINT from its
+    fork on, through its exec (the kernel's SigIgn mask in /proc). Control: started without it, it
+    does not (it has the parent's handler, then the default, then its interpreter's own)."""
+    import multiprocessing as mp
+    import time
+
+    from pmmw import interrupt
+
+    seen = []
+    for quiet in (True, False):
+        p = mp.get_context("spawn").Process(target=time.sleep, args=(5,), daemon=True)
+        with interrupt.deferred(), pool._spawning() if quiet else contextlib.nullcontext():
+            p.start()
+        try:
+            fields = dict(line.split(":", 1) for line in Path(f"/proc/{p.pid}/status").read_text().splitlines())
+            seen.append(bool(int(fields["SigIgn"], 16) & (1 << (signal.SIGINT - 1))))
+        finally:
+            p.kill()
+            p.join()
+    assert seen == [True, False]
