@@ -303,10 +303,9 @@ def render_tiles(
     ----------
     job : TraceJob
     workers : int, optional
-        Processes; default all cores, at most one per tile to render. 1 renders in this process
-        (which then has built an Embree scene: its later renders spawn their workers, `_context`);
-        more than 1 renders on worker processes even when one tile is left, so that a command
-        line render's own process builds none.
+        Processes; default all cores, at most one per tile to render. 1 (or one tile to render)
+        renders in this process, which then has built an Embree scene: its later renders spawn
+        their workers (`_context`).
     tile_dir : Path, optional
         Where finished tiles are saved (and, with ``resume``, loaded from).
     progress : callable(done, total, rays, elapsed, left), optional
@@ -339,8 +338,8 @@ def render_tiles(
     todo = [t for t in tiles if t[0] not in results]
     if counts is not None:
         counts.update(reused=len(tiles) - len(todo), rendered=len(todo))
-    asked = default_workers() if workers is None else max(1, int(workers))
-    workers = min(asked, max(1, len(todo)))
+    workers = default_workers() if workers is None else max(1, int(workers))
+    workers = min(workers, max(1, len(todo)))
     if todo and client is None:
         with timings.phase("kernels"):
             prepare_kernels(job, notify)
@@ -369,7 +368,7 @@ def render_tiles(
                 f"the Dask scheduler at {e} went away during the render ({len(results)} of "
                 f"{len(tiles)} tiles done{kept})"
             ) from None
-    elif todo and asked == 1:
+    elif todo and workers == 1:
         timings.mark("first tile sent")
         timings.add(WORKER_SETUP, _init_worker(job, intersector))
         timings.mark("first ray")
@@ -562,8 +561,9 @@ def _context():
     and start at once), spawned elsewhere, and spawned on Linux too once this process has built an
     Embree scene (`intersect.embree_used`: a fork then copies Embree's thread pool without its
     threads, and a worker's own scene build can wait for good on a lock they held). The command
-    line's renders never build one here (`prepare_kernels`' pixel uses the NumPy intersector); the
-    Python API's and the tests' renders in this process (``workers=1``) do. A spawned worker costs
+    line's renders build none here (`prepare_kernels`' pixel uses the NumPy intersector) unless
+    one renders in this process (``--workers 1``, or a single tile to render); the Python API's
+    and the tests' renders with ``workers=1`` do. A spawned worker costs
     about 1 s more to start on 2 cores (it imports pmmw, loads the cached kernels and builds the
     sky tables itself; more when the workers outnumber the cores), and its tiles' arrays come back
     through its pipe rather than shared memory (`_Slots`: a few per cent)."""
