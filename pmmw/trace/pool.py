@@ -563,10 +563,10 @@ def _context():
     threads, and a worker's own scene build can wait for good on a lock they held). The command
     line's renders build none here (`prepare_kernels`' pixel uses the NumPy intersector) unless
     one renders in this process (``--workers 1``, or a single tile to render); the Python API's
-    and the tests' renders with ``workers=1`` do. A spawned worker costs
-    about 1 s more to start on 2 cores (it imports pmmw, loads the cached kernels and builds the
-    sky tables itself; more when the workers outnumber the cores), and its tiles' arrays come back
-    through its pipe rather than shared memory (`_Slots`: a few per cent)."""
+    and the tests' renders with ``workers=1`` do. A spawned worker costs about 1 s more to start
+    on 2 cores (it imports pmmw, loads the cached kernels and builds the sky tables itself; more
+    when the workers outnumber the cores), and its tiles' arrays come back through its pipe rather
+    than shared memory (`_Slots`: a few per cent)."""
     fork = sys.platform.startswith("linux") and not embree_used()
     return mp.get_context("fork" if fork else "spawn")
 
@@ -584,7 +584,7 @@ def _spawning():
       ignores it for good: a Ctrl-C while it imports pmmw would end it with a traceback. SIGINT is
       blocked here, so one that comes meanwhile waits for the parent's own handler (in the main
       thread only: signal handlers are the main thread's)."""
-    main = sys.modules["__main__"]
+    main = sys.modules.get("__main__")  # none in some embedding interpreters
     sys.modules["__main__"] = types.ModuleType("__main__")
     quiet = threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is not None
     old = signal.signal(signal.SIGINT, signal.SIG_IGN) if quiet else None
@@ -593,7 +593,10 @@ def _spawning():
     finally:
         if quiet:
             signal.signal(signal.SIGINT, old)
-        sys.modules["__main__"] = main
+        if main is None:
+            del sys.modules["__main__"]
+        else:
+            sys.modules["__main__"] = main
 
 
 def _render_on_workers(job: TraceJob, kind: str, todo: list, n: int, collect):
