@@ -30,6 +30,8 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
+from pmmw import procfs
+
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 #: From a signal to the forced exit when the orderly one has not happened [s].
@@ -140,10 +142,11 @@ def _children() -> list[int]:
     """Process ids whose parent is this process (Linux /proc; none found elsewhere)."""
     me, pids = os.getpid(), []
     for stat in Path("/proc").glob("[0-9]*/stat"):
+        fields = procfs.stat_fields(stat.parent.name)  # None: it ended meanwhile
         try:
-            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == me:
+            if fields and int(fields[procfs.PPID]) == me:
                 pids.append(int(stat.parent.name))
-        except (OSError, ValueError, IndexError):  # it ended meanwhile
+        except (ValueError, IndexError):
             continue
     return pids
 

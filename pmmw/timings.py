@@ -12,6 +12,8 @@ import contextlib
 import os
 import time
 
+from pmmw import procfs
+
 __all__ = ["AFTER_TRACE", "add", "clear", "lines", "mark", "phase", "process_start", "recorded"]
 
 #: The phases of a render after its trace: what the image costs beyond its rays.
@@ -34,11 +36,13 @@ _PHASES: dict[str, float] = {}  # step -> seconds, summed over repeats (one per 
 def _started_ago() -> float | None:
     """Seconds since this process started (Linux: its start in clock ticks after boot, from
     ``/proc``, against the boot-time clock: to a tick, 10 ms); None where that cannot be read."""
+    fields = procfs.stat_fields(os.getpid())
+    if fields is None:
+        return None
     try:
-        with open(f"/proc/{os.getpid()}/stat") as f:
-            ticks = int(f.read().rsplit(")", 1)[1].split()[19])  # field 22: start time after boot [ticks]
+        ticks = int(fields[procfs.STARTTIME])  # start time after boot [ticks]
         return time.clock_gettime(time.CLOCK_BOOTTIME) - ticks / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError, AttributeError):
+    except (ValueError, IndexError, AttributeError, OSError):
         return None
 
 

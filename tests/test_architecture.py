@@ -18,7 +18,7 @@ PACKAGES = ("pmmw", "pmmw_cli")
 # module's layer is that of its package's first-level name (``pmmw.trace.pool`` -> ``trace``);
 # the command line's modules are named with their package (``pmmw_cli.cli``).
 LAYERS = (
-    {"__init__", "arrays", "constants", "errors", "units", "jit", "rng", "memory", "interrupt", "timings"},
+    {"__init__", "arrays", "constants", "errors", "units", "jit", "rng", "memory", "interrupt", "timings", "procfs"},
     {"io", "distributed", "blender"},
     {"physics", "atmosphere", "config", "sweeps.spec"},
     {"scene", "surface", "imaging"},

@@ -32,6 +32,7 @@ import threading
 import time
 from pathlib import Path
 
+from pmmw import procfs
 from pmmw.errors import EnvironmentProblem, UserError
 
 LOCK_NAME = ".pmmw-lock"
@@ -45,11 +46,10 @@ _SHARD_RE = re.compile(re.escape(SHARD_PREFIX) + r"[^/]+-\d+-[0-9a-f]{16}$")
 
 def process_start(pid: int) -> int | None:
     """The start time of process ``pid`` in clock ticks since boot (Linux ``/proc``), or None."""
+    fields = procfs.stat_fields(pid)
     try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            stat = f.read().decode("ascii", "replace")
-        return int(stat[stat.rindex(")") + 2 :].split()[19])  # field 22, after the command name
-    except (OSError, ValueError, IndexError):
+        return int(fields[procfs.STARTTIME]) if fields else None
+    except (ValueError, IndexError):
         return None
 
 

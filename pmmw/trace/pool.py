@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pmmw import interrupt, jit, timings
+from pmmw import interrupt, jit, procfs, timings
 from pmmw.errors import EnvironmentProblem, exception_text, warn
 from pmmw.io.atomic import save_npz_atomic
 from pmmw.trace import kernels
@@ -481,11 +481,10 @@ class _Worker:
 
 def _cpu_seconds(pid: int) -> float | None:
     """CPU time [s] a process has used (Linux: /proc/PID/stat utime + stime), None where unknown."""
+    fields = procfs.stat_fields(pid)
     try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            fields = f.read().rsplit(b")", 1)[1].split()
-        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError):
+        return (int(fields[procfs.UTIME]) + int(fields[procfs.STIME])) / os.sysconf("SC_CLK_TCK") if fields else None
+    except (ValueError, IndexError):
         return None
 
 
