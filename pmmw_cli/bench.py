@@ -431,10 +431,13 @@ class _RecordingSky:
 def _in_a_fork(fn, *args):
     """``fn(*args)`` in a forked child process: what builds an Embree scene stays out of this one,
     so that the renders measured here fork their workers as the command line's do, rather than
-    spawning them (`pmmw.trace.pool._context`), which would add their start-up to the times."""
+    spawning them (`pmmw.trace.pool._context`), which would add their start-up to the times.
+    Where the workers are spawned anyway (not Linux), here."""
     import concurrent.futures
     import multiprocessing
 
+    if not sys.platform.startswith("linux"):
+        return fn(*args)
     with concurrent.futures.ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as ex:
         return ex.submit(fn, *args).result()
 

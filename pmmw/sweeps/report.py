@@ -60,11 +60,12 @@ def write_report(out: Path, spec: SweepSpec, table: list[dict]) -> Path:
         f"- executor: {spec.executor}; {sum(r['status'] == 'done' for r in table)} of {len(table)} done",
         "",
     ]
-    snr_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.startswith("snr ")]
+    cols = list(dict.fromkeys(k for r in table for k in r))
+    snr_cols = [c for c in cols if c.startswith("snr ")]
     k_cols = [f"contrast {' '.join(_pair_channel(c))} [K]" for c in snr_cols]
     det_cols = [c.replace("snr ", "detectable ", 1) for c in snr_cols]
-    any_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.endswith(" in any channel")]
-    best_cols = [c for c in dict.fromkeys(k for r in table for k in r) if c.startswith("best channel ")]
+    any_cols = [c for c in cols if c.endswith(" in any channel")]
+    best_cols = [c for c in cols if c.startswith("best channel ")]
     head = ["variant", *keys, "status", *k_cols, *snr_cols, *det_cols, *best_cols, *any_cols]
     lines.append("| " + " | ".join(head) + " |")
     lines.append("| " + " | ".join("---" for _ in head) + " |")
