@@ -314,8 +314,8 @@ def test_water_s_second_relaxation_moves_skin_by_little():
     100 GHz is water's second relaxation (ITU-R P.527-6 eqs. (9), (10), (13): d_eps = eps_1 -
     eps_inf at f_2 = 39.8 f_1). Carried at the skin's free-water fraction that Gabriel's own first
     term implies (its d_eps 32.0 over water's eps_s - eps_1 at 37 C), it lowers skin's nadir
-    emissivity by 0.0012-0.0035 at 94-300 GHz, as the doc states. Tolerance 2e-4: the doc's last
-    digit. The water parameters are checked against P.527's permittivity itself (to 1e-12), which
+    emissivity by 0.0012-0.0035 at 94-300 GHz, as the doc states. Tolerance 5e-5: half a unit of
+    the doc's last digit (its rounding). The water parameters are checked against P.527's permittivity itself (to 1e-12), which
     tests/scene/test_materials_reference.py checks against SMRT's Liebe water. Control: with
     water's own fraction (1, not 0.46) the change is twice as large, so the fraction matters."""
     import numpy as np
@@ -345,5 +345,5 @@ def test_water_s_second_relaxation_moves_skin_by_little():
     phi = GABRIEL_1996["skin_dry"][1][0][0] / (eps_s - eps_1)
     assert phi == pytest.approx(0.46, abs=0.005)
     for f, stated in ((94, -0.0012), (140, -0.0021), (220, -0.0032), (300, -0.0035)):
-        assert change(f, phi) == pytest.approx(stated, abs=2e-4)
+        assert change(f, phi) == pytest.approx(stated, abs=5e-5)
         assert abs(change(f, 1.0)) > 1.9 * abs(change(f, phi))  # the control
