@@ -280,7 +280,7 @@ def materials_page() -> str:
             params = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in m.model.params.items())
             eps = f"model `{spec.name}`" + (f" ({params})" if params else "")
             try:
-                rng = spec.ranges(m.model.params) if spec.ranges else None
+                rng = spec.ranges(m.model.params) if spec.intervals else None
             except Exception:  # a range text is only shown; the entry itself loaded
                 rng = None
             rng = rng or (

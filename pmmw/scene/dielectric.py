@@ -98,15 +98,26 @@ class ModelSpec:
     outside: Callable[[float, float, dict], str | None] | None = field(
         default=None, repr=False, compare=False
     )  # outside(f, T, params) -> reason or None
-    ranges: Callable[[dict], str] | None = field(
-        default=None, repr=False, compare=False
-    )  # ranges(params) -> text of the valid range
     params_text: Callable[[dict], str] | None = field(
         default=None, repr=False, compare=False
     )  # params_text(params) -> their text
-    edges: Callable[[dict], tuple[float, ...]] | None = field(
+    intervals: Callable[[dict], tuple[tuple[float, float], ...]] | None = field(
         default=None, repr=False, compare=False
-    )  # edges(params) -> frequencies [Hz] where `outside` may change besides f_range's
+    )  # intervals(params) -> the stated frequency ranges [Hz] when the parameters set them
+    intervals_words: tuple[str, str] = ("", "")  # the text before and after the intervals' list
+
+    def edges(self, params: dict) -> tuple[float, ...]:
+        """Frequencies [Hz] where `outside` may change besides `f_range`'s: the intervals' ends."""
+        return tuple(f for row in self.intervals(params) for f in row) if self.intervals is not None else ()
+
+    def ranges(self, params: dict) -> str:
+        """The text of the stated frequency range for these parameters."""
+        if self.intervals is None:
+            f0, f1 = self.f_range
+            return f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e8 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
+        before, after = self.intervals_words
+        rows = ", ".join(f"{lo / 1e9:g}-{hi / 1e9:g} GHz" for lo, hi in self.intervals(params))
+        return f"{before}{rows}{after}"
 
 
 @dataclass(frozen=True)
@@ -139,10 +150,8 @@ class DielectricModel:
         extra = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in self.params.items())
         if self.spec.params_text is not None:
             extra = self.spec.params_text(self.params)
-        (f0, f1), (t0, t1) = self.spec.f_range, self.spec.t_range
-        f_text = f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e8 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
-        if self.spec.ranges is not None:
-            f_text = self.spec.ranges(self.params)
+        t0, t1 = self.spec.t_range
+        f_text = self.spec.ranges(self.params)
         t_text = "at any temperature" if t0 <= 0.0 and t1 >= 1e4 else f"{t0:g}-{t1:g} K"
         return (
             f"model {self.spec.name}{' (' + extra + ')' if extra else ''}: {self.spec.source}; valid {f_text}, {t_text}"
@@ -178,17 +187,10 @@ def _p2040_outside(f, T, params):
     return None if status.startswith("in row") else f"ITU-R P.2040-4's value is {status}"
 
 
-def _p2040_edges(params):
+def _p2040_intervals(params):
     from pmmw.scene.itu_materials import p2040_valid_ranges
 
-    return tuple(f for row in p2040_valid_ranges(params["material"]) for f in row)
-
-
-def _p2040_ranges(params):
-    from pmmw.scene.itu_materials import p2040_valid_ranges
-
-    rows = sorted(p2040_valid_ranges(params["material"]))
-    return "the rows " + ", ".join(f"{lo / 1e9:g}-{hi / 1e9:g} GHz" for lo, hi in rows)
+    return tuple(sorted(p2040_valid_ranges(params["material"])))
 
 
 def _p2040_material(v, file, key):
@@ -297,11 +299,6 @@ def _debye_text(params):
     terms = " + ".join(f"{d:g} at tau {tau * 1e12:g} ps" for d, tau in params["terms"])
     sigma = params.get("conductivity", 0.0)
     return f"eps_inf {params['eps_inf']:g}, relaxations {terms}" + (f", conductivity {sigma:g} S/m" if sigma else "")
-
-
-def _debye_ranges(params):
-    lo, hi = params["valid"]
-    return f"{lo / 1e9:g}-{hi / 1e9:g} GHz (the entry's stated range)"
 
 
 _SECONDS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "ps": 1e-12, "fs": 1e-15}
@@ -559,8 +556,8 @@ MODELS = {
         },
         example="{name: debye, eps_inf: 2.0, terms: [[10.0, 8 ps]], valid: [10 GHz, 1 THz]}",
         outside=_debye_outside,
-        ranges=_debye_ranges,
-        edges=lambda params: tuple(params["valid"]),
+        intervals=lambda params: (tuple(params["valid"]),),
+        intervals_words=("", " (the entry's stated range)"),
         params_text=_debye_text,
     ),
     "leaves": ModelSpec(
@@ -586,8 +583,8 @@ MODELS = {
         parsers={"material": _p2040_material},
         example="{name: p2040, material: concrete}",
         outside=_p2040_outside,
-        ranges=_p2040_ranges,
-        edges=_p2040_edges,
+        intervals=_p2040_intervals,
+        intervals_words=("the rows ", ""),
     ),
     "vegetation": ModelSpec(
         "vegetation",

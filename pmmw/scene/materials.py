@@ -242,13 +242,13 @@ class Material:
 
     def range_edges(self) -> tuple[float, ...]:
         """Frequencies [Hz] where the entry's stated range may begin or end: a table's first and
-        last rows, a model's range and its `ModelSpec.edges` (a published fit's own ``valid``,
+        last rows, a model's range and its `ModelSpec.intervals` (a published fit's own ``valid``,
         ITU-R P.2040's rows). Between two of them
         whether a frequency is inside is the same everywhere (`stated_band`)."""
         if self.model is None:
             return (self.freqs[0], self.freqs[-1]) if self.freqs else ()
         spec = self.model.spec
-        return tuple(spec.f_range) + (spec.edges(self.model.params) if spec.edges is not None else ())
+        return tuple(spec.f_range) + spec.edges(self.model.params)
 
     def _end_rows(self, f: float) -> tuple[tuple[float, complex], tuple[float, complex]]:
         """The table's end row on f's side (f [Hz] outside the table) and the row next to it."""
