@@ -279,13 +279,9 @@ def materials_page() -> str:
             spec = m.model.spec
             params = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in m.model.params.items())
             eps = f"model `{spec.name}`" + (f" ({params})" if params else "")
-            try:
-                rng = spec.ranges(m.model.params) if spec.intervals else None
-            except Exception:  # a range text is only shown; the entry itself loaded
-                rng = None
-            rng = rng or (
-                f"{spec.f_range[0] / 1e9:g}-{spec.f_range[1] / 1e9:g} GHz, {spec.t_range[0]:g}-{spec.t_range[1]:g} K"
-            )
+            rng = spec.ranges(m.model.params)
+            if spec.intervals is None:  # the parameters leave the range the model's own, temperature too
+                rng += f", {spec.temperatures()}"
         elif m.freqs:
             eps = "table: " + "; ".join(f"{f / 1e9:g} GHz: {e.real:.4g}{e.imag:+.3g}j" for f, e in zip(m.freqs, m.eps))
             rng = (

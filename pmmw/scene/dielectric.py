@@ -110,11 +110,19 @@ class ModelSpec:
         """Frequencies [Hz] where `outside` may change besides `f_range`'s: the intervals' ends."""
         return tuple(f for row in self.intervals(params) for f in row) if self.intervals is not None else ()
 
+    def temperatures(self) -> str:
+        """The text of the stated temperature range."""
+        t0, t1 = self.t_range
+        return "at any temperature" if t0 <= 0.0 and t1 >= 1e4 else f"{t0:g}-{t1:g} K"
+
     def ranges(self, params: dict) -> str:
         """The text of the stated frequency range for these parameters."""
         if self.intervals is None:
             f0, f1 = self.f_range
-            return f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz" if f0 >= 1e8 else f"{f0:g} Hz-{f1 / 1e9:g} GHz"
+            if f0 >= 1e8:
+                return f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz"
+            scale, unit = next((s, u) for s, u in ((1e6, "MHz"), (1e3, "kHz"), (1.0, "Hz")) if f0 >= s or s == 1.0)
+            return f"{f0 / scale:g} {unit}-{f1 / 1e9:g} GHz"
         before, after = self.intervals_words
         rows = ", ".join(f"{lo / 1e9:g}-{hi / 1e9:g} GHz" for lo, hi in self.intervals(params))
         return f"{before}{rows}{after}"
@@ -150,9 +158,7 @@ class DielectricModel:
         extra = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in self.params.items())
         if self.spec.params_text is not None:
             extra = self.spec.params_text(self.params)
-        t0, t1 = self.spec.t_range
-        f_text = self.spec.ranges(self.params)
-        t_text = "at any temperature" if t0 <= 0.0 and t1 >= 1e4 else f"{t0:g}-{t1:g} K"
+        f_text, t_text = self.spec.ranges(self.params), self.spec.temperatures()
         return (
             f"model {self.spec.name}{' (' + extra + ')' if extra else ''}: {self.spec.source}; valid {f_text}, {t_text}"
         )
