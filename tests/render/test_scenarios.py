@@ -21,7 +21,7 @@ CONFIGS = sorted(p for p in REPO.glob("configs/*.yaml") if not (p.stem.startswit
 def _render(path, overrides):
     res = resolve(path, overrides)
     job = make_job(res, res.scenario.frequencies[0])
-    return job, stokes_images(assemble(job, render_tiles(job, workers=2)).mean)
+    return job, stokes_images(assemble(job, render_tiles(job, workers=1)).mean)
 
 
 def _means(job, img, regions, chan="Ey2"):

@@ -28,7 +28,7 @@ SMALL_CWD = ["imager.resolution=[48, 48]", "render.spp=32", "render.target_error
 
 @pytest.fixture(scope="module")
 def measure():
-    return v.Measure(workers=2, log=lambda s: None)
+    return v.Measure(workers=1, log=lambda s: None)
 
 
 def _landing(measure, weather="cloudy", beacon_swap="absent", f=95, r=400):

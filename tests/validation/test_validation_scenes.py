@@ -42,7 +42,7 @@ def _region_means(path, overrides=(), values=None, names=None) -> dict:
     (those in ``names``, default all); their pixel counts in `PIXELS`."""
     res = resolve(path, [*QUICK, *overrides], values=values)
     job = make_job(res, res.scenario.frequencies[0])
-    img = stokes_images(assemble(job, render_tiles(job, workers=2)).mean)
+    img = stokes_images(assemble(job, render_tiles(job, workers=1)).mean)
     regions = {
         n: Region(**r.model_dump()) for n, r in res.scenario.output.regions.items() if names is None or n in names
     }
