@@ -420,6 +420,19 @@ def test_pure_water_at_body_temperature_bounds_a_flat_skin_s_emissivity(db):
     assert nadir_emissivity(db.get("human_skin").eps_at(94e9, 310.15)) == pytest.approx(0.691, abs=5e-4)
 
 
+def test_the_asphalt_numbers_the_documents_print(db):
+    """docs/materials.md and docs/guide/sweeps.md, "asphalt": the nadir emissivities of the printed
+    asphalts (Murakowski 2014's runway 0.96, P.2040-4's asphalt concrete at 95 GHz 0.85, Kurz et
+    al. 2021's effective 8.3 and 10.4: 0.77 and 0.72; two decimals, 0.005), the assumed eps'' 0.5
+    moving the last by under 0.001, and P.2040-4's asphalt concrete at 35 GHz, 4.83 + 0.80j (its
+    digits, 0.005)."""
+    for eps, e in ((2.25 + 0.18j, 0.96), (4.83 + 1.18j, 0.85), (8.3, 0.77), (10.4, 0.72)):
+        assert nadir_emissivity(eps) == pytest.approx(e, abs=0.005), eps
+    assert abs(nadir_emissivity(10.4 + 0.5j) - nadir_emissivity(10.4)) < 0.001
+    assert db.get("asphalt_concrete").eps_at(35e9) == pytest.approx(4.83 + 0.80j, abs=0.005)
+    assert db.get("asphalt_concrete").eps_at(95e9) == pytest.approx(4.83 + 1.18j, abs=0.005)
+
+
 def test_the_skin_numbers_the_documents_print(db):
     """docs/materials.md and docs/guide/sweeps.md, "skin as radiometers measure it": `human_skin`'s
     nadir emissivity at 10, 30, 94, 140, 220 and 300 GHz (to the docs' last digit, 5e-4); the NICT
