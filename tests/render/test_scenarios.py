@@ -205,6 +205,32 @@ def test_a_skin_that_emits_less_hides_the_metal_gun_in_ex2_and_shows_the_empty_h
     assert max(asphalt[0::2]) - min(asphalt[0::2]) < 0.5 and max(asphalt[1::2]) - min(asphalt[1::2]) < 0.5, asphalt
 
 
+def test_indoors_a_skin_that_emits_less_takes_most_of_the_metal_gun_s_contrast():
+    """configs/cwd_indoor_skin_emissivity_sweep.yaml's physics, on the ideal image at a quarter of
+    the pixels. In the closed 296 K room the metal grip mirrors the room, and the torso beside it
+    differs from the room only by what its skin emits above it, e (310 - 296 K) under the denim: from
+    the thesis's skin (0.65) to 0.20 the gun's I contrast, negative at both, shrinks by more than 5
+    K (as in the outdoor test; seen 10.7 K, from -19.6 to -8.9 K). Control: the empty holster stays
+    within 2 K of the torso in Ex2 at both (half the imager's noise; seen +0.5 and +1.1 K), so what
+    moves is the gun's contrast."""
+    path = REPO / "configs/cwd_indoor_95ghz.yaml"
+    regions = {
+        "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
+        "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
+    }
+
+    def contrast(gun, eps, chans=("Ex2", "Ey2")):
+        ov = ["imager.resolution=[110, 185]", "render.spp=2", f"materials.clothed_skin.eps={eps}"]
+        job, img = _render(path, [*ov, f"scene[0].materials.gun={gun}"])
+        return {c: (lambda m: m["gun"] - m["torso"])(_means(job, img, regions, c)) for c in chans}
+
+    thesis, low = (contrast("metal", e) for e in ("[5.9, 9.4]", "[130.8, 208.5]"))
+    gun_i = [sum(c.values()) for c in (thesis, low)]
+    assert gun_i[0] < gun_i[1] - 5.0 and gun_i[1] < 0.0, gun_i
+    empty = [contrast("absent", e, ("Ex2",))["Ex2"] for e in ("[5.9, 9.4]", "[130.8, 208.5]")]
+    assert all(abs(c) < 2.0 for c in empty), empty
+
+
 def test_the_landing_does_not_rest_on_the_disputed_asphalt_but_a_view_from_above_would():
     """configs/landing_asphalt_sweep.yaml's physics, on the ideal image at a quarter of the pixels,
     in cloudy air at 95 GHz. The printed runway asphalts (Murakowski 2014's 2.25 + 0.18j, ITU-R

@@ -438,7 +438,7 @@ def test_the_skin_numbers_the_documents_print(db):
     nadir emissivity at 10, 30, 94, 140, 220 and 300 GHz (to the docs' last digit, 5e-4); the NICT
     database's measured skin at 94 GHz, 7.82 + 6.63j (its file's digits), emits 0.696 with an eps' 35 %
     above `human_skin`'s (to 1 %); and each effective skin of configs/cwd_skin_emissivity_sweep.yaml
-    gives the nadir emissivity its name says (to half a unit of its two decimals, 0.005)."""
+    and cwd_indoor_skin_emissivity_sweep.yaml gives the nadir emissivity its name says (to half a unit of its two decimals, 0.005)."""
     from pmmw.sweeps.run import load_sweep_file
 
     for f, e in zip((10e9, 30e9, 94e9, 140e9, 220e9, 300e9), (0.489, 0.542, 0.691, 0.752, 0.811, 0.840)):
@@ -446,12 +446,13 @@ def test_the_skin_numbers_the_documents_print(db):
     nict = 7.820455 + 6.628460j
     assert nadir_emissivity(nict) == pytest.approx(0.696, abs=5e-4)
     assert nict.real / db.get("human_skin").eps_at(94e9, 310.15).real - 1.0 == pytest.approx(0.35, abs=0.01)
-    spec = load_sweep_file(ROOT / "configs" / "cwd_skin_emissivity_sweep.yaml")
-    values = dict(spec.grid)["materials.clothed_skin.eps"]
-    names = spec.names["materials.clothed_skin.eps"]
-    assert len(values) == len(names) == 5
-    for (re_, im), name in zip(values, names):
-        assert nadir_emissivity(complex(re_, im)) == pytest.approx(float(name.split()[-1]), abs=0.005), name
+    for stem in ("cwd_skin_emissivity_sweep", "cwd_indoor_skin_emissivity_sweep"):
+        spec = load_sweep_file(ROOT / "configs" / f"{stem}.yaml")
+        values = dict(spec.grid)["materials.clothed_skin.eps"]
+        names = spec.names["materials.clothed_skin.eps"]
+        assert len(values) == len(names) == 5
+        for (re_, im), name in zip(values, names):
+            assert nadir_emissivity(complex(re_, im)) == pytest.approx(float(name.split()[-1]), abs=0.005), name
 
 
 def test_every_model_states_its_range_in_plain_units(db):
