@@ -31,6 +31,26 @@ def _means(job, img, regions, chan="Ey2"):
     return {n: float(img[chan][m].mean()) for n, m in masks.items()}
 
 
+# the concealed-weapon scenes at a quarter of their pixels, and their grip (under the shirt) and torso
+CWD_QUARTER = ["imager.resolution=[110, 185]", "render.spp=2"]
+GRIP = {
+    "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},
+    "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
+}
+
+
+def _cwd_means(path, overrides, regions=GRIP, chans=("Ex2", "Ey2")) -> dict:
+    """{channel: {region: mean [K]}} of a concealed-weapon scene's ideal image at a quarter of its
+    pixels, with ``overrides``."""
+    job, img = _render(path, [*CWD_QUARTER, *overrides])
+    return {c: _means(job, img, regions, c) for c in chans}
+
+
+def _grip_contrast(means: dict) -> dict:
+    """{channel: grip - torso [K]} of `_cwd_means`."""
+    return {c: m["gun"] - m["torso"] for c, m in means.items()}
+
+
 @pytest.mark.parametrize("path", CONFIGS, ids=[p.stem for p in CONFIGS])
 def test_every_shipped_config_validates_and_renders_small(path):
     out = validate(path)
@@ -107,15 +127,8 @@ def test_landing_beacons_are_colder_than_the_runway_and_fog_lowers_the_contrast(
 def test_handgun_differs_from_the_torso_by_more_than_the_noise_outdoors():
     """Sec. 3.2.2, 95 GHz, 4 m, outdoors: the gun (a mirror of the sky and ground, under the denim)
     differs from the torso by more than the imager's 4 K noise."""
-    path = Path(__file__).resolve().parents[2] / "configs/cwd_outdoor_95ghz.yaml"
-    job, img = _render(path, ["imager.resolution=[110, 185]", "render.spp=2"])
-    regions = {
-        "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
-        "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
-    }
-    for chan in ("Ex2", "Ey2"):
-        m = _means(job, img, regions, chan)
-        assert abs(m["gun"] - m["torso"]) > 4.0, (chan, m)
+    for chan, c in _grip_contrast(_cwd_means(REPO / "configs/cwd_outdoor_95ghz.yaml", [])).items():
+        assert abs(c) > 4.0, (chan, c)
 
 
 def test_a_plastic_gun_shows_by_its_loss_and_temperature_against_an_empty_holster():
@@ -133,23 +146,10 @@ def test_a_plastic_gun_shows_by_its_loss_and_temperature_against_an_empty_holste
     in Ey2 (seen 8.3 K), the empty holster itself warmer than the torso there (seen +1.9 K, about four
     times the noise of a region's mean)."""
     path = REPO / "configs/cwd_outdoor_plastic_gun.yaml"
-    regions = {
-        "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
-        "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
-    }
 
     def contrast(gun, loss, temperature):
-        job, img = _render(
-            path,
-            [
-                "imager.resolution=[110, 185]",
-                "render.spp=2",
-                f"materials.polycarbonate.eps=[2.74, {loss}]",
-                f"materials.polycarbonate.temperature={temperature}",
-                f"scene[0].materials.gun={gun}",
-            ],
-        )
-        return {chan: (lambda m: m["gun"] - m["torso"])(_means(job, img, regions, chan)) for chan in ("Ex2", "Ey2")}
+        eps, t = f"materials.polycarbonate.eps=[2.74, {loss}]", f"materials.polycarbonate.temperature={temperature}"
+        return _grip_contrast(_cwd_means(path, [eps, t, f"scene[0].materials.gun={gun}"]))
 
     losses = (0.00137, 0.0104, 0.0959)  # tan delta 0.0005, 0.0038, 0.035 at eps' 2.74
     worn = [contrast("polycarbonate", x, "310 K") for x in losses]
@@ -174,23 +174,10 @@ def test_a_skin_that_emits_less_hides_the_metal_gun_in_ex2_and_shows_the_empty_h
     holster's Ex2 contrast > 2 K (seen 4.3 and 3.6 K); the asphalt within 0.5 K (a region's Monte
     Carlo noise; seen equal, the variants sharing their random numbers)."""
     path = REPO / "configs/cwd_outdoor_95ghz.yaml"
-    regions = {
-        "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
-        "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
-        "asphalt": {"center": [0.4, -0.3, 0.0], "radius": 1.5},  # beside the right shoe
-    }
+    regions = {**GRIP, "asphalt": {"center": [0.4, -0.3, 0.0], "radius": 1.5}}  # beside the right shoe
 
     def means(gun, eps):
-        job, img = _render(
-            path,
-            [
-                "imager.resolution=[110, 185]",
-                "render.spp=2",
-                f"materials.clothed_skin.eps={eps}",
-                f"scene[0].materials.gun={gun}",
-            ],
-        )
-        return {chan: _means(job, img, regions, chan) for chan in ("Ex2", "Ey2")}
+        return _cwd_means(path, [f"materials.clothed_skin.eps={eps}", f"scene[0].materials.gun={gun}"], regions)
 
     skins = ("[5.9, 9.4]", "[26.7, 42.5]", "[130.8, 208.5]")  # bare skin's nadir emissivity 0.65, 0.39, 0.20
     metal = [means("metal", e) for e in skins]
@@ -214,15 +201,10 @@ def test_indoors_a_skin_that_emits_less_takes_most_of_the_metal_gun_s_contrast()
     within 2 K of the torso in Ex2 at both (half the imager's noise; seen +0.5 and +1.1 K), so what
     moves is the gun's contrast."""
     path = REPO / "configs/cwd_indoor_95ghz.yaml"
-    regions = {
-        "gun": {"center": [0.165, -0.2, 1.25], "radius": 1.5},  # the grip, under the shirt
-        "torso": {"center": [-0.1, -0.18, 1.05], "radius": 1.5},
-    }
 
     def contrast(gun, eps, chans=("Ex2", "Ey2")):
-        ov = ["imager.resolution=[110, 185]", "render.spp=2", f"materials.clothed_skin.eps={eps}"]
-        job, img = _render(path, [*ov, f"scene[0].materials.gun={gun}"])
-        return {c: (lambda m: m["gun"] - m["torso"])(_means(job, img, regions, c)) for c in chans}
+        ov = [f"materials.clothed_skin.eps={eps}", f"scene[0].materials.gun={gun}"]
+        return _grip_contrast(_cwd_means(path, ov, chans=chans))
 
     thesis, low = (contrast("metal", e) for e in ("[5.9, 9.4]", "[130.8, 208.5]"))
     gun_i = [sum(c.values()) for c in (thesis, low)]
