@@ -121,7 +121,7 @@ class ModelSpec:
             f0, f1 = self.f_range
             if f0 >= 1e8:
                 return f"{f0 / 1e9:g}-{f1 / 1e9:g} GHz"
-            scale, unit = next((s, u) for s, u in ((1e6, "MHz"), (1e3, "kHz"), (1.0, "Hz")) if f0 >= s or s == 1.0)
+            scale, unit = (1e6, "MHz") if f0 >= 1e6 else (1e3, "kHz") if f0 >= 1e3 else (1.0, "Hz")
             return f"{f0 / scale:g} {unit}-{f1 / 1e9:g} GHz"
         before, after = self.intervals_words
         rows = ", ".join(f"{lo / 1e9:g}-{hi / 1e9:g} GHz" for lo, hi in self.intervals(params))

@@ -166,8 +166,8 @@ def test_the_table_rows_are_its_index_and_loss_tangent(db):
     source; its last table row (where the row applies) is eps' = n^2, eps'' = n^2 tan d. Control:
     the slip of writing n for eps' is caught."""
     rows = {m: _GOLDSMITH_ROW.search(db.get(m).source) for m in db.ids() if "Goldsmith 1998" in db.get(m).source}
-    expected = {"polyethylene", "ptfe", "polypropylene", "nylon", "acrylic", "mylar", "tpx", "polystyrene", "rexolite"}
-    assert expected | {"styrofoam"} <= set(rows)
+    table = "polyethylene ptfe polypropylene nylon acrylic mylar tpx polystyrene rexolite styrofoam".split()
+    assert set(table) <= set(rows)
     for mid, row in rows.items():
         assert row is not None, mid
         n, tan_d = float(row.group(1)), float(row.group(2))
@@ -354,8 +354,9 @@ def test_water_s_second_relaxation_moves_skin_by_little():
     eps_inf at f_2 = 39.8 f_1). Carried at the skin's free-water fraction that Gabriel's own first
     term implies (its d_eps 32.0 over water's eps_s - eps_1 at 37 C), it lowers skin's nadir
     emissivity by 0.0012-0.0035 at 94-300 GHz, as the doc states. Tolerance 5e-5: half a unit of
-    the doc's last digit (its rounding). The water parameters are checked against P.527's permittivity itself (to 1e-12), which
-    tests/scene/test_materials_reference.py checks against SMRT's Liebe water. Control: with
+    the doc's last digit (its rounding). The water parameters are checked against P.527's
+    permittivity itself (to 1e-12), which tests/scene/test_materials_reference.py checks against
+    SMRT's Liebe water. Control: with
     water's own fraction (1, not 0.46) the change is twice as large, so the fraction matters."""
 
     from pmmw.atmosphere.itu import p527_water_permittivity
@@ -438,7 +439,8 @@ def test_the_skin_numbers_the_documents_print(db):
     nadir emissivity at 10, 30, 94, 140, 220 and 300 GHz (to the docs' last digit, 5e-4); the NICT
     database's measured skin at 94 GHz, 7.82 + 6.63j (its file's digits), emits 0.696 with an eps' 35 %
     above `human_skin`'s (to 1 %); and each effective skin of configs/cwd_skin_emissivity_sweep.yaml
-    and cwd_indoor_skin_emissivity_sweep.yaml gives the nadir emissivity its name says (to half a unit of its two decimals, 0.005)."""
+    and cwd_indoor_skin_emissivity_sweep.yaml gives the nadir emissivity its name says (to half a
+    unit of its two decimals, 0.005)."""
     from pmmw.sweeps.run import load_sweep_file
 
     for f, e in zip((10e9, 30e9, 94e9, 140e9, 220e9, 300e9), (0.489, 0.542, 0.691, 0.752, 0.811, 0.840)):
